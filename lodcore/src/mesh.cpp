@@ -1,0 +1,195 @@
+// Mesh validation, bounds, polygon triangulation (fan for convex faces, ear clipping otherwise) and
+// area-weighted vertex normals.
+#include "scenelod/lodcore/mesh.h"
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+namespace scenelod {
+
+float Aabb::diagonal() const { return glm::length(max - min); }
+
+namespace {
+
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_count, const char* kind,
+                   const std::string& what) {
+  if (idx.size() % per != 0)
+    return {Status::kInvalidMesh, what + ": " + kind + " index count " + std::to_string(idx.size()) +
+                                      " is not a multiple of " + std::to_string(per)};
+  for (size_t i = 0; i < idx.size(); ++i)
+    if (idx[i] >= vertex_count)
+      return {Status::kInvalidMesh, what + ": " + kind + " " +
+                                        std::to_string(i / per) + " uses vertex index " + std::to_string(idx[i]) +
+                                        " but the mesh has " + std::to_string(vertex_count) + " vertices"};
+  return {};
+}
+
+glm::vec3 newellNormal(const Mesh& m, size_t begin, size_t end) {
+  glm::vec3 n(0.0f);
+  for (size_t i = begin; i < end; ++i) {
+    const glm::vec3& a = m.positions[m.face_corners[i]];
+    const glm::vec3& b = m.positions[m.face_corners[i + 1 < end ? i + 1 : begin]];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n;
+}
+
+}  // namespace
+
+Error validateMesh(const Mesh& m, const std::string& what) {
+  const size_t n = m.positions.size();
+  for (size_t i = 0; i < n; ++i)
+    if (!finite3(m.positions[i]))
+      return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate"};
+  if (!m.normals.empty() && m.normals.size() != n)
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.normals.size()) + " normals for " +
+                                      std::to_string(n) + " vertices"};
+  if (!m.colors.empty() && m.colors.size() != n)
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.colors.size()) + " colours for " +
+                                      std::to_string(n) + " vertices"};
+  if (!m.uvs.empty() && m.uvs.size() != n)
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.uvs.size()) + " texture coordinates for " +
+                                      std::to_string(n) + " vertices"};
+  if (Error e = checkIndices(m.triangles, 3, n, "triangle", what)) return e;
+  if (Error e = checkIndices(m.edges, 2, n, "edge", what)) return e;
+  if (Error e = checkIndices(m.points, 1, n, "point", what)) return e;
+  if (!m.edge_thickness.empty()) {
+    if (m.edge_thickness.size() != m.edgeCount())
+      return {Status::kInvalidMesh, what + ": " + std::to_string(m.edge_thickness.size()) +
+                                        " edge thicknesses for " + std::to_string(m.edgeCount()) + " edges"};
+    for (size_t e = 0; e < m.edge_thickness.size(); ++e)
+      if (!std::isfinite(m.edge_thickness[e]) || m.edge_thickness[e] < 0.0f)
+        return {Status::kInvalidMesh, what + ": edge " + std::to_string(e) + " has a negative or non-finite thickness"};
+  }
+  if (!m.face_offsets.empty()) {
+    if (m.face_offsets.front() != 0 || m.face_offsets.back() != m.face_corners.size())
+      return {Status::kInvalidMesh, what + ": face offsets do not span the corner list"};
+    for (size_t f = 0; f + 1 < m.face_offsets.size(); ++f)
+      if (m.face_offsets[f] > m.face_offsets[f + 1])
+        return {Status::kInvalidMesh, what + ": face offsets decrease at face " + std::to_string(f)};
+    if (Error e = checkIndices(m.face_corners, 1, n, "face corner", what)) return e;
+  } else if (!m.face_corners.empty()) {
+    return {Status::kInvalidMesh, what + ": face corners without face offsets"};
+  }
+  return {};
+}
+
+Error meshFromView(const MeshView& v, Mesh& out, const std::string& what) {
+  out = Mesh{};
+  if (v.positions.count > 0 && v.positions.data == nullptr)
+    return {Status::kInvalidArgument, what + ": positions pointer is null"};
+  if (v.triangles.count > 0 && v.triangles.data == nullptr)
+    return {Status::kInvalidArgument, what + ": index pointer is null"};
+  if (v.positions.stride < sizeof(glm::vec3) && v.positions.count > 1)
+    return {Status::kInvalidArgument, what + ": position stride " + std::to_string(v.positions.stride) +
+                                          " is smaller than 12 bytes"};
+  out.positions.resize(v.positions.count);
+  for (size_t i = 0; i < v.positions.count; ++i) out.positions[i] = v.positions[i];
+  if (!v.normals.empty()) {
+    out.normals.resize(v.normals.count);
+    for (size_t i = 0; i < v.normals.count; ++i) out.normals[i] = v.normals[i];
+  }
+  if (!v.colors.empty()) {
+    out.colors.resize(v.colors.count);
+    for (size_t i = 0; i < v.colors.count; ++i) out.colors[i] = v.colors[i];
+  }
+  out.triangles.assign(v.triangles.begin(), v.triangles.end());
+  return validateMesh(out, what);
+}
+
+Aabb computeBounds(Span<const glm::vec3> p) {
+  Aabb b;
+  if (p.empty()) return b;
+  b.min = b.max = p[0];
+  for (const glm::vec3& v : p) {
+    b.min = glm::min(b.min, v);
+    b.max = glm::max(b.max, v);
+  }
+  return b;
+}
+
+Aabb computeBounds(const Mesh& mesh) {
+  return computeBounds(Span<const glm::vec3>(mesh.positions.data(), mesh.positions.size()));
+}
+
+size_t triangulateFaces(Mesh& m) {
+  m.triangles.clear();
+  std::vector<uint32_t> ring;
+  std::vector<glm::vec2> flat;
+  for (size_t f = 0; f + 1 < m.face_offsets.size(); ++f) {
+    const size_t begin = m.face_offsets[f], end = m.face_offsets[f + 1], k = end - begin;
+    if (k < 3) continue;
+    if (k == 3) {
+      m.triangles.insert(m.triangles.end(), m.face_corners.begin() + begin, m.face_corners.begin() + end);
+      continue;
+    }
+    // project onto the plane of the Newell normal and ear-clip; convex faces come out as fans
+    glm::vec3 n = newellNormal(m, begin, end);
+    const float len = glm::length(n);
+    if (!(len > 0.0f)) {  // degenerate face: a fan keeps its connectivity
+      for (size_t i = 1; i + 1 < k; ++i)
+        m.triangles.insert(m.triangles.end(), {m.face_corners[begin], m.face_corners[begin + i], m.face_corners[begin + i + 1]});
+      continue;
+    }
+    n /= len;
+    const glm::vec3 t = glm::normalize(std::fabs(n.x) > 0.9f ? glm::cross(n, glm::vec3(0, 1, 0)) : glm::cross(n, glm::vec3(1, 0, 0)));
+    const glm::vec3 s = glm::cross(n, t);
+    ring.assign(m.face_corners.begin() + begin, m.face_corners.begin() + end);
+    flat.resize(k);
+    for (size_t i = 0; i < k; ++i) {
+      const glm::vec3& p = m.positions[ring[i]];
+      flat[i] = glm::vec2(glm::dot(p, t), glm::dot(p, s));
+    }
+    std::vector<size_t> live(k);
+    for (size_t i = 0; i < k; ++i) live[i] = i;
+    auto cross2 = [](glm::vec2 a, glm::vec2 b, glm::vec2 c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); };
+    size_t guard = 0;
+    while (live.size() > 3 && guard < k * k) {
+      ++guard;
+      bool clipped = false;
+      for (size_t i = 0; i < live.size(); ++i) {
+        const size_t ia = live[(i + live.size() - 1) % live.size()], ib = live[i], ic = live[(i + 1) % live.size()];
+        const glm::vec2 a = flat[ia], b = flat[ib], c = flat[ic];
+        if (cross2(a, b, c) <= 0.0f) continue;  // reflex or flat corner
+        bool inside = false;
+        for (size_t j : live) {
+          if (j == ia || j == ib || j == ic) continue;
+          const glm::vec2 p = flat[j];
+          if (cross2(a, b, p) >= 0.0f && cross2(b, c, p) >= 0.0f && cross2(c, a, p) >= 0.0f) { inside = true; break; }
+        }
+        if (inside) continue;
+        m.triangles.insert(m.triangles.end(), {ring[ia], ring[ib], ring[ic]});
+        live.erase(live.begin() + static_cast<std::ptrdiff_t>(i));
+        clipped = true;
+        break;
+      }
+      if (!clipped) break;  // self-intersecting polygon: finish with a fan below
+    }
+    for (size_t i = 1; i + 1 < live.size(); ++i)
+      m.triangles.insert(m.triangles.end(), {ring[live[0]], ring[live[i]], ring[live[i + 1]]});
+  }
+  return m.triangleCount();
+}
+
+void computeVertexNormals(Mesh& m) {
+  m.normals.assign(m.positions.size(), glm::vec3(0.0f));
+  for (size_t t = 0; t + 2 < m.triangles.size(); t += 3) {
+    const uint32_t a = m.triangles[t], b = m.triangles[t + 1], c = m.triangles[t + 2];
+    // the unnormalised cross product weights each face by twice its area
+    const glm::vec3 n = glm::cross(m.positions[b] - m.positions[a], m.positions[c] - m.positions[a]);
+    m.normals[a] += n;
+    m.normals[b] += n;
+    m.normals[c] += n;
+  }
+  for (glm::vec3& n : m.normals) {
+    const float len = glm::length(n);
+    n = len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
+  }
+}
+
+}  // namespace scenelod

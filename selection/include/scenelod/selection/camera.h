@@ -1,0 +1,30 @@
+#pragma once
+// The camera selection looks through, and the pixel size R of Low & Tan 1997 §4.
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+namespace scenelod::selection {
+
+enum class Projection : uint8_t { kPerspective, kOrthographic };
+
+struct Camera {
+  glm::vec3 eye{0.0f, 0.0f, 5.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float fov_y_rad = 1.0471976f;      // vertical field of view (perspective), 60 degrees
+  float ortho_height = 2.0f;         // world-space height of the view (orthographic)
+  float near_plane = 0.01f;
+  float far_plane = 1.0e6f;
+  uint32_t viewport_width_px = 1280;
+  uint32_t viewport_height_px = 720;
+  Projection projection = Projection::kPerspective;
+};
+
+// Object-space width of one pixel at distance `distance` from the eye:
+// R = 2 * D * tan(FOV/2) / viewport height (Low & Tan 1997 §4); for an orthographic camera the
+// distance does not matter: R = ortho_height / viewport height. Distances below the near plane are
+// clamped to it. Cost: a few flops, no allocation, thread-safe.
+float pixelSize(const Camera& camera, float distance);
+
+}  // namespace scenelod::selection
