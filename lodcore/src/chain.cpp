@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
@@ -90,10 +91,15 @@ Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, 
 
 namespace {
 
-Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChain& out) {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats& stats) {
   params.progress(0.0, "grading");
   PreparedMesh p;
+  Clock::time_point t0 = Clock::now();
   if (Error e = prepareMesh(original, params.cluster, p)) return e;
+  stats.prepare_seconds = since(t0);
   out.levels.resize(1);
   LodLevel& base = out.levels[0];
   base.mesh = original;
@@ -107,6 +113,7 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   }
 
   float w1 = params.first_cell_width;
+  t0 = Clock::now();
   if (w1 == 0.0f) {
     params.progress(0.05, "choosing w1");
     const size_t tn = original.triangleCount();
@@ -116,23 +123,27 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
       w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
     }
   }
+  stats.first_width_seconds = since(t0);
   if (Error e = detail::checkCellWidth(p, w1)) return e;
 
   const size_t n = params.level_count;
   out.levels.resize(n + 1);
   std::vector<Error> errors(n);
+  stats.level_seconds.assign(n, 0.0);
   std::mutex progress_mutex;
   std::atomic<size_t> done{0};
   tbb::parallel_for(size_t(0), n, [&](size_t k) {
+    const Clock::time_point start = Clock::now();
     ClusterParams cp = params.cluster;
     cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
     LodLevel& level = out.levels[k + 1];
-    ClusterStats stats;
-    errors[k] = clusterPrepared(p, cp, level.mesh, &stats);
+    ClusterStats cs;
+    errors[k] = clusterPrepared(p, cp, level.mesh, &cs);
     level.cell_width = cp.cell_width;
-    level.max_error = stats.max_error;
+    level.max_error = cs.max_error;
     level.method = cp.method;
     level.bounds = computeBoundingSphere(level.mesh);
+    stats.level_seconds[k] = since(start);
     const size_t d = ++done;
     if (params.progress.fn) {
       std::lock_guard<std::mutex> lock(progress_mutex);
@@ -149,8 +160,11 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
 
 }  // namespace
 
-Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out) {
+Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats* stats_out) {
   out.levels.clear();
+  ChainStats local;
+  ChainStats& stats = stats_out ? *stats_out : local;
+  stats = ChainStats();
   if (!std::isfinite(params.first_cell_width) || params.first_cell_width < 0.0f)
     return {Status::kInvalidArgument,
             "first cell width " + std::to_string(params.first_cell_width) + " is negative or not finite"};
@@ -160,7 +174,12 @@ Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out)
     case LodMethod::kUniform:
     case LodMethod::kFloatingHeaviest:
     case LodMethod::kFloatingNearest:
-      return buildClusterChain(original, params, out);
+    {
+      const Clock::time_point t0 = Clock::now();
+      const Error e = buildClusterChain(original, params, out, stats);
+      stats.total_seconds = since(t0);
+      return e;
+    }
     case LodMethod::kZhang:
     case LodMethod::kScrooge:
       return {Status::kUnsupported, std::string("the '") + lodMethodName(params.cluster.method) +

@@ -51,9 +51,11 @@ struct Quadric {
 void symmetricEigen(double a[3][3], double w[3], double v[3][3]) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
+  const double scale = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2] +
+                       2.0 * (a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2]);
   for (int sweep = 0; sweep < 16; ++sweep) {
     const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-    if (off < 1e-30) break;
+    if (off <= 1e-24 * scale) break;  // off-diagonal part negligible relative to the matrix
     for (int p = 0; p < 2; ++p)
       for (int q = p + 1; q < 3; ++q) {
         if (std::fabs(a[p][q]) < 1e-300) continue;

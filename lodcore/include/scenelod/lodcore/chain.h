@@ -3,6 +3,7 @@
 // the original (Low & Tan §3.2.2), levels are built in parallel with TBB and the result does not
 // depend on the thread count.
 #include <cstddef>
+#include <vector>
 
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/lod_chain.h"
@@ -28,7 +29,15 @@ struct ChainParams {
 // Errors: invalid mesh (as validateMesh), first_cell_width negative or not finite, growth not finite
 // or <= 1, a method that is not a generator. An empty mesh, or level_count 0, gives a chain with only
 // level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB.
-Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out);
+Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, struct ChainStats* stats = nullptr);
+
+// Where a chain's build time went (filled by buildChain when asked).
+struct ChainStats {
+  double prepare_seconds = 0.0;       // validation, grading and the sort by weight
+  double first_width_seconds = 0.0;   // the search for w_1 (0 when given)
+  std::vector<double> level_seconds;  // per simplified level (levels run in parallel: these overlap)
+  double total_seconds = 0.0;         // wall time of the whole call
+};
 
 // Finds by bisection (on log width) a cell width whose clustering gives a triangle count within
 // `tolerance` (relative) of `target_triangles`, or the closest found. Errors: target 0, empty mesh
