@@ -27,56 +27,58 @@ class GridHash {
   explicit GridHash(size_t expected) {
     size_t cap = 64;
     while (cap < expected * 2) cap <<= 1;
-    keys_.resize(cap);
-    values_.assign(cap, kNone);
+    slots_.assign(cap, Slot{0, 0, 0, kNone});
   }
 
   // returns the value stored for `k`, or kNone
   uint32_t find(const GridKey& k) const {
-    const size_t mask = keys_.size() - 1;
+    const size_t mask = slots_.size() - 1;
     for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      if (values_[i] == kNone) return kNone;
-      if (keys_[i] == k) return values_[i];
+      const Slot& s = slots_[i];
+      if (s.value == kNone) return kNone;
+      if (s.x == k.x && s.y == k.y && s.z == k.z) return s.value;
     }
   }
 
   // returns a reference to the value of `k`; a new key's value is kNone and must be set at once
   uint32_t& at(const GridKey& k) {
-    if ((size_ + 1) * 2 > keys_.size()) grow();
-    const size_t mask = keys_.size() - 1;
+    if ((size_ + 1) * 2 > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
     for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      if (values_[i] == kNone) {
-        keys_[i] = k;
+      Slot& s = slots_[i];
+      if (s.value == kNone) {
+        s.x = k.x, s.y = k.y, s.z = k.z;
         ++size_;
-        return values_[i];
+        return s.value;
       }
-      if (keys_[i] == k) return values_[i];
+      if (s.x == k.x && s.y == k.y && s.z == k.z) return s.value;
     }
   }
 
   size_t size() const { return size_; }
 
  private:
+  struct Slot {  // 16 bytes: key and value in one cache line access
+    int32_t x, y, z;
+    uint32_t value;
+  };
   static size_t hash(const GridKey& k) {
-    uint64_t h = static_cast<uint32_t>(k.x) * 0x9E3779B97F4A7C15ull;
-    h ^= static_cast<uint32_t>(k.y) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
-    h ^= static_cast<uint32_t>(k.z) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    uint64_t h = uint64_t(uint32_t(k.x)) * 0x9E3779B97F4A7C15ull + uint64_t(uint32_t(k.y)) * 0xC2B2AE3D27D4EB4Full +
+                 uint64_t(uint32_t(k.z)) * 0x165667B19E3779F9ull;
+    h ^= h >> 32;
+    h *= 0xff51afd7ed558ccdull;
     return static_cast<size_t>(h ^ (h >> 29));
   }
   void grow() {
-    std::vector<GridKey> old_keys;
-    std::vector<uint32_t> old_values;
-    old_keys.swap(keys_);
-    old_values.swap(values_);
-    keys_.resize(old_keys.size() * 2);
-    values_.assign(keys_.size(), kNone);
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(old.size() * 2, Slot{0, 0, 0, kNone});
     size_ = 0;
-    for (size_t i = 0; i < old_keys.size(); ++i)
-      if (old_values[i] != kNone) at(old_keys[i]) = old_values[i];
+    for (const Slot& s : old)
+      if (s.value != kNone) at({s.x, s.y, s.z}) = s.value;
   }
 
-  std::vector<GridKey> keys_;
-  std::vector<uint32_t> values_;
+  std::vector<Slot> slots_;
   size_t size_ = 0;
 };
 
@@ -93,6 +95,12 @@ struct Assignment {
   // the box a representative of cluster c is clamped to (a sphere cell clamps in synthesis)
   void cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const;
 };
+
+// floor to int32 without a libm call (inputs are checked to stay within +-2^30)
+inline int32_t floorToInt(float x) {
+  const int32_t i = static_cast<int32_t>(x);
+  return i - static_cast<int32_t>(x < static_cast<float>(i));
+}
 
 // Largest cell-grid coordinate we accept along an axis (keeps GridKey in int32 with headroom).
 constexpr double kMaxGridCoordinate = 1073741824.0;  // 2^30

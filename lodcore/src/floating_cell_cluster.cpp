@@ -42,19 +42,23 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
 
   std::vector<glm::vec3> centre;  // per cell: its centre position (12 bytes, the hot data of the search)
   std::vector<uint32_t> next;     // per cell: next cell listed in the same grid cube
-  const size_t expected = p.order.size() / 4 + 16;
+  // cells: about one per w x w patch of surface, never more than the vertices
+  const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
+  const size_t expected = static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16;
   centre.reserve(expected);
   next.reserve(expected);
   out.heaviest.reserve(expected);
   GridHash grid(expected);
 
-  for (uint32_t v : p.order) {
-    const glm::vec3 pv = m.positions[v];
+  const size_t n = p.order.size();
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t v = p.order[i];
+    const glm::vec3 pv = p.sorted_positions[i];
     const glm::vec3 q = pv * inv;
     int32_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = static_cast<int32_t>(std::floor(q[a] - 0.5f - kSearchSlack));
-      hi[a] = static_cast<int32_t>(std::floor(q[a] + 0.5f + kSearchSlack));
+      lo[a] = floorToInt(q[a] - 0.5f - kSearchSlack);
+      hi[a] = floorToInt(q[a] + 0.5f + kSearchSlack);
     }
     uint32_t best = kNone;
     float best_d2 = std::numeric_limits<float>::infinity();
@@ -77,8 +81,8 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       best = out.cluster_count++;
       centre.push_back(pv);
       out.heaviest.push_back(v);
-      uint32_t& head = grid.at({static_cast<int32_t>(std::floor(q.x)), static_cast<int32_t>(std::floor(q.y)),
-                                static_cast<int32_t>(std::floor(q.z))});
+      uint32_t& head = grid.at({floorToInt(q.x), floorToInt(q.y),
+                                floorToInt(q.z)});
       next.push_back(head);
       head = best;
     }

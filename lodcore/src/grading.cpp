@@ -195,13 +195,21 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   }
   std::sort(keys.begin(), keys.end());
   out.order.resize(keys.size());
-  for (size_t i = 0; i < keys.size(); ++i) out.order[i] = static_cast<uint32_t>(keys[i] & 0xffffffffu);
+  out.sorted_positions.resize(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    out.order[i] = static_cast<uint32_t>(keys[i] & 0xffffffffu);
+    out.sorted_positions[i] = in.positions[out.order[i]];
+  }
 
-  double sum = 0.0;
+  double sum = 0.0, area = 0.0;
   const size_t tn = in.triangleCount();
-  for (size_t t = 0; t < tn; ++t)
-    for (int k = 0; k < 3; ++k)
-      sum += glm::length(in.positions[in.triangles[3 * t + k]] - in.positions[in.triangles[3 * t + (k + 1) % 3]]);
+  for (size_t t = 0; t < tn; ++t) {
+    const glm::vec3 a = in.positions[in.triangles[3 * t]], b = in.positions[in.triangles[3 * t + 1]],
+                    c = in.positions[in.triangles[3 * t + 2]];
+    sum += double(glm::length(b - a)) + double(glm::length(c - b)) + double(glm::length(a - c));
+    area += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
+  }
+  out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);
   const size_t count = 3 * tn + in.edgeCount();

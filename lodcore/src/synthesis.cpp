@@ -120,10 +120,13 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   std::vector<glm::vec4> sum(nc, glm::vec4(0.0f));   // xyz: sum of offsets, w: vertex count
   std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
   if (colors) vertex_color.assign(nc, glm::vec4(0.0f));
-  for (uint32_t v : p.order) {
+  std::vector<glm::vec3> centre(nc);  // the heaviest vertex of each cluster, the local origin
+  for (uint32_t c = 0; c < nc; ++c) centre[c] = pos[a.heaviest[c]];
+  for (size_t i = 0; i < p.order.size(); ++i) {
+    const uint32_t v = p.order[i];
     const uint32_t c = a.cluster_of[v];
     const float w = p.weights[v];
-    const glm::vec3 d = pos[v] - pos[a.heaviest[c]];
+    const glm::vec3 d = p.sorted_positions[i] - centre[c];
     wsum[c] += glm::vec4(d * w, w);
     sum[c] += glm::vec4(d, 1.0f);
     if (colors) vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
@@ -151,7 +154,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
       }
       if (quadric) {
         Quadric& q = quadrics[c];
-        const float d = -glm::dot(n, pos[i0] - pos[a.heaviest[c]]);
+        const float d = -glm::dot(n, pos[i0] - centre[c]);
         q.a00 += area * n.x * n.x; q.a01 += area * n.x * n.y; q.a02 += area * n.x * n.z;
         q.a11 += area * n.y * n.y; q.a12 += area * n.y * n.z; q.a22 += area * n.z * n.z;
         q.b0 += area * n.x * d; q.b1 += area * n.y * d; q.b2 += area * n.z * d;
@@ -161,7 +164,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
 
   const float half = 0.5f * a.cell_width;
   for (uint32_t c = 0; c < nc; ++c) {
-    const glm::vec3 centre = pos[a.heaviest[c]];
+    const glm::vec3 cc = centre[c];
     glm::vec3 x(0.0f);  // relative to centre
     if (synthesis != Synthesis::kHeaviest) {
       const float floor_w = kMeanWeightFloor * p.weights[a.heaviest[c]];
@@ -172,13 +175,13 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
       x = solveQuadric(quadrics[c], x);
       glm::vec3 lo, hi;
       a.cellBox(m, c, lo, hi);
-      x = glm::clamp(x, lo - centre, hi - centre);
+      x = glm::clamp(x, lo - cc, hi - cc);
       if (!a.uniform && a.shape == CellShape::kSphere) {
         const float l = glm::length(x);
         if (l > half) x *= half / l;
       }
     }
-    out.positions[c] = centre + x;
+    out.positions[c] = cc + x;
     const float nl = glm::length(out.normals[c]);
     out.normals[c] = nl > 0.0f ? out.normals[c] / nl : glm::vec3(0.0f, 0.0f, 1.0f);
     if (colors) {

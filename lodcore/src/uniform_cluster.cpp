@@ -1,6 +1,7 @@
 // Uniform-subdivision clustering (Rossignac & Borrel 1993): the bounding box is cut into cubes of
 // the cell width, starting at its minimum corner, and the vertices in one cube form a cluster. The
 // baseline Low & Tan 1997 §3.2 compares floating cells with.
+#include <algorithm>
 #include <cmath>
 
 #include "cluster_internal.h"
@@ -17,12 +18,14 @@ void assignUniform(const PreparedMesh& p, float cell_width, Assignment& out) {
   out.grid_origin = p.bounds.min;
   out.shape = CellShape::kCube;
   const float inv = 1.0f / cell_width;
-  GridHash grid(p.order.size() / 4 + 16);
+  const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
+  GridHash grid(static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16);
   // visiting vertices heaviest first makes each cluster's id order and its first vertex the heaviest
-  for (uint32_t v : p.order) {
-    const glm::vec3 q = (m.positions[v] - out.grid_origin) * inv;
-    const GridKey key{static_cast<int32_t>(std::floor(q.x)), static_cast<int32_t>(std::floor(q.y)),
-                      static_cast<int32_t>(std::floor(q.z))};
+  for (size_t i = 0; i < p.order.size(); ++i) {
+    const uint32_t v = p.order[i];
+    const glm::vec3 q = (p.sorted_positions[i] - out.grid_origin) * inv;
+    const GridKey key{floorToInt(q.x), floorToInt(q.y),
+                      floorToInt(q.z)};
     uint32_t& c = grid.at(key);
     if (c == kNone) {
       c = out.cluster_count++;

@@ -121,6 +121,8 @@ TEST(FloatingCell, NearestCentreVariantCollapsesTheThinTriangleOfFigure4) {
   ASSERT_TRUE(prepareMesh(m, params, p).ok());
   // the rule under test is the assignment, so fix the weight order V1 > P > Q1 > Q2 > V2 > V3
   p.order = {0, 3, 4, 5, 1, 2};
+  p.sorted_positions.clear();
+  for (uint32_t v : p.order) p.sorted_positions.push_back(m.positions[v]);
   p.weights = {1.0f, 0.5f, 0.4f, 0.9f, 0.8f, 0.7f};
 
   params.method = LodMethod::kFloatingHeaviest;

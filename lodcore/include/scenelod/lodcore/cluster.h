@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/mesh.h"
 #include "scenelod/lodcore/status.h"
@@ -54,9 +56,11 @@ struct PreparedMesh {
   bool boost_features = true;
   std::vector<float> weights;    // one per vertex: angular factor x (longest incident edge / longest edge)
   std::vector<uint32_t> order;   // referenced vertices only, heaviest first, ties by vertex index
+  std::vector<glm::vec3> sorted_positions;  // positions[order[i]], so that levels stream through them
   Aabb bounds;                   // of the referenced vertices
   float longest_edge = 0.0f;     // longest edge of the mesh (the length normaliser)
   float mean_edge_length = 0.0f;
+  double surface_area = 0.0;     // of all triangles (sizes the per-level grid hash)
 
   size_t referencedVertexCount() const { return order.size(); }
 };
@@ -75,7 +79,7 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
 
 // Validates `in`, grades its vertices and sorts the referenced ones by weight. `what` names the mesh
 // in error messages. Errors: invalid mesh (NaN, index out of range, size mismatch).
-// Cost: O(V log V) for the sort; allocates weights and order (8 bytes per vertex).
+// Cost: O(V log V) for the sort; allocates weights, order and sorted positions (20 bytes per vertex).
 Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out,
                   const std::string& what = "mesh");
 
