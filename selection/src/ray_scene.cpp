@@ -1,0 +1,342 @@
+// The Embree ray scene behind picking and occlusion: one prototype scene per (mesh, level), objects as
+// single-level instances (Embree 3 as packaged supports one instance level), two top-level scenes:
+// the drawn levels (picking) and the occluder levels (occlusion, Funkhouser & Séquin 1993 use
+// visibility to cut benefit; the occluder choice bounds wrong 'hidden' answers, docs/VISIBILITY.md).
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+#include "ray_scene_impl.h"
+
+namespace scenelod::selection {
+namespace {
+
+bool finiteMatrix(const glm::mat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+float largestScale(const glm::mat4& m) {
+  const float sx = glm::length(glm::vec3(m[0]));
+  const float sy = glm::length(glm::vec3(m[1]));
+  const float sz = glm::length(glm::vec3(m[2]));
+  return std::max(sx, std::max(sy, sz));
+}
+
+std::string deviceErrorText(RTCDevice device) {
+  const RTCError e = rtcGetDeviceError(device);
+  switch (e) {
+    case RTC_ERROR_NONE: return "";
+    case RTC_ERROR_OUT_OF_MEMORY: return "Embree ran out of memory";
+    case RTC_ERROR_INVALID_ARGUMENT: return "Embree reported an invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "Embree reported an invalid operation";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "Embree does not support this CPU";
+    case RTC_ERROR_CANCELLED: return "Embree build cancelled";
+    default: return "Embree reported an unknown error";
+  }
+}
+
+RTCScene buildPrototype(RTCDevice device, const Mesh& mesh) {
+  const size_t tri_count = mesh.triangleCount();
+  if (tri_count == 0) return nullptr;
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                        3 * sizeof(float), mesh.vertexCount()));
+  auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                           3 * sizeof(uint32_t), tri_count));
+  if (!v || !t) {
+    rtcReleaseGeometry(geom);
+    return nullptr;
+  }
+  for (size_t i = 0; i < mesh.vertexCount(); ++i) {
+    v[3 * i + 0] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  std::copy(mesh.triangles.begin(), mesh.triangles.end(), t);
+  rtcCommitGeometry(geom);
+  RTCScene scene = rtcNewScene(device);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+  return scene;
+}
+
+RTCScene newTopScene(RTCDevice device) {
+  RTCScene s = rtcNewScene(device);
+  // rebuilt on every commit while objects move: a fast low-quality build
+  rtcSetSceneFlags(s, RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+  rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_LOW);
+  return s;
+}
+
+}  // namespace
+
+void RayScene::Impl::release() {
+  for (RTCGeometry g : pick_instance)
+    if (g) rtcReleaseGeometry(g);
+  for (RTCGeometry g : occluder_instance)
+    if (g) rtcReleaseGeometry(g);
+  pick_instance.clear();
+  occluder_instance.clear();
+  if (pick_scene) rtcReleaseScene(pick_scene);
+  if (occluder_scene) rtcReleaseScene(occluder_scene);
+  pick_scene = occluder_scene = nullptr;
+  for (ChainPrototypes& c : chains)
+    for (RTCScene s : c.levels)
+      if (s) rtcReleaseScene(s);
+  chains.clear();
+  if (device) rtcReleaseDevice(device);
+  device = nullptr;
+  world_sphere.clear();
+  occluder_error_world.clear();
+  inverse_world.clear();
+  world.clear();
+  chain.clear();
+  drawn_level.clear();
+  generation.clear();
+  live.clear();
+  free_ids.clear();
+}
+
+RayScene::RayScene() : impl_(new Impl) {}
+
+RayScene::~RayScene() {
+  impl_->release();
+  delete impl_;
+}
+
+Error RayScene::init(Span<const LodChain* const> chains, const RaySceneParams& params) {
+  Impl& m = *impl_;
+  m.release();
+  m.params = params;
+  if (!(params.occluder_relative_error >= 0.0f) || !(params.occluder_error_px >= 0.0f))
+    return Error(Status::kInvalidArgument, "ray scene: occluder_relative_error and occluder_error_px must be >= 0");
+  m.device = rtcNewDevice(params.device_config);
+  if (!m.device) return Error(Status::kUnsupported, "ray scene: could not create the Embree device");
+  m.chains.resize(chains.count);
+  for (size_t c = 0; c < chains.count; ++c) {
+    const LodChain* chain = chains[c];
+    const std::string what = "ray scene: chain " + std::to_string(c);
+    if (!chain) return Error(Status::kInvalidArgument, what + " is null");
+    if (chain->empty()) return Error(Status::kInvalidArgument, what + " has no levels");
+    ChainPrototypes& p = m.chains[c];
+    p.levels.assign(chain->levelCount(), nullptr);
+    p.max_error.assign(chain->levelCount(), 0.0f);
+    glm::vec3 lo(3.0e38f), hi(-3.0e38f);
+    for (size_t l = 0; l < chain->levelCount(); ++l) {
+      const Mesh& mesh = chain->levels[l].mesh;
+      Error e = validateMesh(mesh, what + " level " + std::to_string(l));
+      if (e) return e;
+      for (const glm::vec3& q : mesh.positions) {
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+      }
+    }
+    if (lo.x > hi.x) return Error(Status::kInvalidMesh, what + " has no vertices");
+    p.center = 0.5f * (lo + hi);
+    float r2 = 0.0f;
+    for (size_t l = 0; l < chain->levelCount(); ++l)
+      for (const glm::vec3& q : chain->levels[l].mesh.positions) {
+        const glm::vec3 d = q - p.center;
+        r2 = std::max(r2, glm::dot(d, d));
+      }
+    p.radius = std::sqrt(r2);
+    if (chain->levels[0].mesh.triangleCount() == 0)
+      return Error(Status::kInvalidMesh, what + " level 0 has no triangles to ray-trace");
+    p.occluder_level = 0;
+    for (size_t l = 0; l < chain->levelCount(); ++l) {
+      p.max_error[l] = std::max(0.0f, chain->levels[l].max_error);
+      p.levels[l] = buildPrototype(m.device, chain->levels[l].mesh);
+      const std::string err = deviceErrorText(m.device);
+      if (!err.empty()) return Error(Status::kOutOfMemory, what + " level " + std::to_string(l) + ": " + err);
+      // levels get coarser with l: the last one within the error allowance wins
+      if (p.levels[l] && p.max_error[l] <= params.occluder_relative_error * p.radius)
+        p.occluder_level = static_cast<int32_t>(l);
+    }
+  }
+  m.pick_scene = newTopScene(m.device);
+  m.occluder_scene = newTopScene(m.device);
+  rtcCommitScene(m.pick_scene);
+  rtcCommitScene(m.occluder_scene);
+  const std::string err = deviceErrorText(m.device);
+  if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: " + err);
+  return {};
+}
+
+namespace {
+
+Error checkObject(const RayScene::Impl& m, const glm::mat4& world, uint32_t chain, int32_t level,
+                  const std::string& what) {
+  if (chain >= m.chains.size())
+    return Error(Status::kInvalidArgument, what + ": chain id " + std::to_string(chain) + " out of range (" +
+                                               std::to_string(m.chains.size()) + " chains)");
+  const int32_t count = static_cast<int32_t>(m.chains[chain].levels.size());
+  if (level < -1 || level >= count)
+    return Error(Status::kInvalidArgument, what + ": drawn level " + std::to_string(level) +
+                                               " outside [-1, " + std::to_string(count) + ")");
+  if (!finiteMatrix(world)) return Error(Status::kInvalidArgument, what + ": world transform is not finite");
+  const float det = glm::determinant(glm::mat3(world));
+  if (!(std::fabs(det) > 1e-30f)) return Error(Status::kInvalidArgument, what + ": world transform is singular");
+  return {};
+}
+
+void growTo(RayScene::Impl& m, size_t n) {
+  if (m.live.size() >= n) return;
+  m.world_sphere.resize(n, glm::vec4(0.0f));
+  m.occluder_error_world.resize(n, 0.0f);
+  m.inverse_world.resize(n, glm::mat4(1.0f));
+  m.world.resize(n, glm::mat4(1.0f));
+  m.chain.resize(n, 0);
+  m.drawn_level.resize(n, -1);
+  m.generation.resize(n, 0);
+  m.live.resize(n, 0);
+  m.pick_instance.resize(n, nullptr);
+  m.occluder_instance.resize(n, nullptr);
+}
+
+void updateDerived(RayScene::Impl& m, uint32_t id) {
+  const ChainPrototypes& p = m.chains[m.chain[id]];
+  const glm::mat4& w = m.world[id];
+  const float scale = largestScale(w);
+  m.world_sphere[id] = glm::vec4(glm::vec3(w * glm::vec4(p.center, 1.0f)), p.radius * scale);
+  m.occluder_error_world[id] = p.max_error[p.occluder_level] * scale;
+  m.inverse_world[id] = glm::inverse(w);
+}
+
+void setInstanceLevel(RayScene::Impl& m, RTCGeometry g, uint32_t chain, int32_t level) {
+  RTCScene proto = level >= 0 ? m.chains[chain].levels[level] : nullptr;
+  if (proto) {
+    rtcSetGeometryInstancedScene(g, proto);
+    rtcCommitGeometry(g);
+    rtcEnableGeometry(g);
+  } else {
+    rtcDisableGeometry(g);
+  }
+}
+
+// Places object `id` (storage already grown) with its instances; the caller committed nothing yet.
+void placeObject(RayScene::Impl& m, uint32_t id, const glm::mat4& world, uint32_t chain, int32_t level) {
+  m.world[id] = world;
+  m.chain[id] = chain;
+  m.drawn_level[id] = level;
+  m.live[id] = 1;
+  ++m.generation[id];
+  updateDerived(m, id);
+  for (int which = 0; which < 2; ++which) {
+    RTCGeometry& g = which == 0 ? m.pick_instance[id] : m.occluder_instance[id];
+    if (!g) {
+      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcAttachGeometryByID(which == 0 ? m.pick_scene : m.occluder_scene, g, id);
+    }
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
+    setInstanceLevel(m, g, chain, which == 0 ? level : m.chains[chain].occluder_level);
+  }
+}
+
+}  // namespace
+
+Error RayScene::setObjects(Span<const glm::mat4> world, Span<const uint32_t> chain_ids,
+                           Span<const int32_t> drawn_levels) {
+  Impl& m = *impl_;
+  if (!m.device) return Error(Status::kInvalidArgument, "ray scene: setObjects before init");
+  if (world.count != chain_ids.count || world.count != drawn_levels.count)
+    return Error(Status::kInvalidArgument, "ray scene: setObjects got " + std::to_string(world.count) +
+                                               " transforms, " + std::to_string(chain_ids.count) + " chain ids and " +
+                                               std::to_string(drawn_levels.count) + " drawn levels");
+  for (size_t i = 0; i < world.count; ++i) {
+    Error e = checkObject(m, world[i], chain_ids[i], drawn_levels[i], "ray scene: object " + std::to_string(i));
+    if (e) return e;
+  }
+  for (size_t i = 0; i < m.live.size(); ++i) {
+    if (m.pick_instance[i]) rtcDisableGeometry(m.pick_instance[i]);
+    if (m.occluder_instance[i]) rtcDisableGeometry(m.occluder_instance[i]);
+    m.live[i] = 0;
+    m.world_sphere[i] = glm::vec4(0.0f);
+  }
+  growTo(m, world.count);
+  m.free_ids.clear();
+  for (size_t i = world.count; i < m.live.size(); ++i) m.free_ids.push_back(static_cast<uint32_t>(i));
+  for (size_t i = 0; i < world.count; ++i)
+    placeObject(m, static_cast<uint32_t>(i), world[i], chain_ids[i], drawn_levels[i]);
+  const std::string err = deviceErrorText(m.device);
+  if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: setObjects: " + err);
+  return {};
+}
+
+Error RayScene::addObject(const glm::mat4& world, uint32_t chain_id, int32_t drawn_level, uint32_t& id) {
+  Impl& m = *impl_;
+  if (!m.device) return Error(Status::kInvalidArgument, "ray scene: addObject before init");
+  Error e = checkObject(m, world, chain_id, drawn_level, "ray scene: new object");
+  if (e) return e;
+  if (!m.free_ids.empty()) {
+    auto it = std::min_element(m.free_ids.begin(), m.free_ids.end());
+    id = *it;
+    *it = m.free_ids.back();
+    m.free_ids.pop_back();
+  } else {
+    id = static_cast<uint32_t>(m.live.size());
+    growTo(m, m.live.size() + 1);
+  }
+  placeObject(m, id, world, chain_id, drawn_level);
+  const std::string err = deviceErrorText(m.device);
+  if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: addObject: " + err);
+  return {};
+}
+
+Error RayScene::removeObject(uint32_t id) {
+  Impl& m = *impl_;
+  if (id >= m.live.size() || !m.live[id])
+    return Error(Status::kNotFound, "ray scene: removeObject: no live object with id " + std::to_string(id));
+  rtcDisableGeometry(m.pick_instance[id]);
+  rtcDisableGeometry(m.occluder_instance[id]);
+  m.live[id] = 0;
+  m.world_sphere[id] = glm::vec4(0.0f);
+  m.free_ids.push_back(id);
+  return {};
+}
+
+void RayScene::setTransform(uint32_t id, const glm::mat4& world) {
+  Impl& m = *impl_;
+  m.world[id] = world;
+  updateDerived(m, id);
+  rtcSetGeometryTransform(m.pick_instance[id], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
+  rtcCommitGeometry(m.pick_instance[id]);
+  rtcSetGeometryTransform(m.occluder_instance[id], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
+  rtcCommitGeometry(m.occluder_instance[id]);
+}
+
+void RayScene::setDrawnLevel(uint32_t id, int32_t level) {
+  Impl& m = *impl_;
+  if (m.drawn_level[id] == level) return;
+  m.drawn_level[id] = level;
+  setInstanceLevel(m, m.pick_instance[id], m.chain[id], level);
+}
+
+void RayScene::commit() {
+  Impl& m = *impl_;
+  if (!m.device) return;
+  rtcCommitScene(m.pick_scene);
+  rtcCommitScene(m.occluder_scene);
+}
+
+size_t RayScene::chainCount() const { return impl_->chains.size(); }
+size_t RayScene::objectCapacity() const { return impl_->live.size(); }
+bool RayScene::isLive(uint32_t id) const { return id < impl_->live.size() && impl_->live[id]; }
+uint32_t RayScene::objectGeneration(uint32_t id) const { return impl_->generation[id]; }
+uint32_t RayScene::chainOf(uint32_t id) const { return impl_->chain[id]; }
+int32_t RayScene::drawnLevel(uint32_t id) const { return impl_->drawn_level[id]; }
+int32_t RayScene::occluderLevel(uint32_t chain_id) const { return impl_->chains[chain_id].occluder_level; }
+Span<const glm::vec4> RayScene::worldSpheres() const {
+  return Span<const glm::vec4>(impl_->world_sphere.data(), impl_->world_sphere.size());
+}
+const glm::mat4& RayScene::worldTransform(uint32_t id) const { return impl_->world[id]; }
+const RaySceneParams& RayScene::params() const { return impl_->params; }
+
+}  // namespace scenelod::selection
