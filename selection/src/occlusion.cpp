@@ -14,47 +14,15 @@ namespace scenelod::selection {
 namespace {
 
 constexpr float kGoldenAngle = 2.39996323f;  // pi * (3 - sqrt(5))
-constexpr uint32_t kNever = 0;               // generations of live objects start at 1
+constexpr uint32_t kNever = 0;  // generations of live objects start at 1
 
-// The Embree context handed to the filter: RTCIntersectContext must stay the first member.
-struct OcclusionContext {
-  RTCIntersectContext base;
-  uint32_t self = RTC_INVALID_GEOMETRY_ID;
-  const float* occluder_error_world = nullptr;
-  float error_limit_const = 0.0f;   // accepted world error at t: const + per_t * t
-  float error_limit_per_t = 0.0f;
+// Accepted world-space error of an occluder hit at ray parameter t: const + per_t * t, i.e.
+// occluder_error_px pixels at distance t.
+struct ErrorLimit {
+  float at_zero = 0.0f;
+  float per_t = 0.0f;
+  float operator()(float t) const { return at_zero + per_t * t; }
 };
-
-// Rejects hits on the tested object itself, and hits on occluders whose level's error projects to
-// more than occluder_error_px pixels at the hit distance (Embree passes that distance in tfar).
-void occluderFilter(const RTCFilterFunctionNArguments* args) {
-  const auto* c = reinterpret_cast<const OcclusionContext*>(args->context);
-  for (unsigned i = 0; i < args->N; ++i) {
-    if (args->valid[i] != -1) continue;
-    const unsigned inst = RTCHitN_instID(args->hit, args->N, i, 0);
-    if (inst == c->self) {
-      args->valid[i] = 0;
-      continue;
-    }
-    const float t = RTCRayN_tfar(args->ray, args->N, i);
-    if (c->occluder_error_world[inst] > c->error_limit_const + c->error_limit_per_t * t) args->valid[i] = 0;
-  }
-}
-
-void fillRay(RTCRay& r, const glm::vec3& o, const glm::vec3& d, float t_near, float t_far) {
-  r.org_x = o.x;
-  r.org_y = o.y;
-  r.org_z = o.z;
-  r.dir_x = d.x;
-  r.dir_y = d.y;
-  r.dir_z = d.z;
-  r.tnear = t_near;
-  r.tfar = t_far;
-  r.time = 0.0f;
-  r.mask = 0xFFFFFFFFu;
-  r.id = 0;
-  r.flags = 0;
-}
 
 struct View {
   glm::vec3 eye, forward, right, up;
@@ -151,7 +119,7 @@ bool OcclusionEstimator::validate(const RayScene& scene, Span<float> visible_fra
   const size_t cap = scene.objectCapacity();
   if (state_->max_objects == 0 || cap > state_->max_objects) return false;
   if (visible_fraction.count != 0 && (visible_fraction.data == nullptr || visible_fraction.count < cap)) return false;
-  return scene.impl_ != nullptr && scene.impl_->occluder_scene != nullptr;
+  return scene.impl_ != nullptr && scene.impl_->device != nullptr;
 }
 
 bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Span<float> visible_fraction) {
@@ -199,18 +167,14 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
                      [prio](uint32_t a, uint32_t b) { return prio[a] > prio[b] || (prio[a] == prio[b] && a < b); });
   }
 
-  OcclusionContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.base.filter = occluderFilter;
-  ctx.occluder_error_world = m.occluder_error_world.data();
+  ErrorLimit limit;
   const float err_px = m.params.occluder_error_px;
   if (view.ortho) {
-    ctx.error_limit_const = err_px / view.px_per_unit_at_1;
+    limit.at_zero = err_px / view.px_per_unit_at_1;
   } else {
-    ctx.error_limit_per_t = err_px / view.px_per_unit_at_1;
+    limit.per_t = err_px / view.px_per_unit_at_1;
   }
-  RTCIntersectContext plain;
-  rtcInitIntersectContext(&plain);
+  const float t_near = view.near_plane;
 
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
   for (size_t c = 0; c < test_count; ++c) {
@@ -220,7 +184,6 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     const float r = sph.w;
     const ChainPrototypes& proto = m.chains[m.chain[id]];
     RTCScene self_scene = proto.levels[static_cast<size_t>(proto.occluder_level)];
-    const glm::mat4& inv = m.inverse_world[id];
 
     glm::vec3 w;
     float disc_r = r;
@@ -237,7 +200,6 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     const glm::vec3 u = glm::normalize(glm::cross(w, ref));
     const glm::vec3 v = glm::cross(u, w);
 
-    ctx.self = id;
     uint32_t counted = 0, hidden = 0;
     for (uint32_t k = 0; k < n; ++k) {
       const float rho = disc_r * std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(n));
@@ -251,24 +213,36 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
         o = view.eye;
         dir = glm::normalize(p - view.eye);
       }
-      // where the ray meets the object itself (its occluder level, in object space; an affine map
-      // keeps the ray parameter t)
-      RTCRayHit self;
-      const glm::vec3 lo(inv * glm::vec4(o, 1.0f));
-      const glm::vec3 ld(inv * glm::vec4(dir, 0.0f));
-      fillRay(self.ray, lo, ld, view.near_plane, std::numeric_limits<float>::infinity());
-      self.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      self.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(self_scene, &plain, &self);
-      if (self.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      // where the ray meets the object itself, at its occluder level
+      float t_self = std::numeric_limits<float>::infinity();
+      if (!intersectObject(m, id, self_scene, o, dir, t_near, t_self)) continue;
       ++counted;
-      const float t_self = self.ray.tfar * (1.0f - 1e-4f);
-      if (t_self <= view.near_plane) continue;
-      RTCRay occ;
-      fillRay(occ, o, dir, view.near_plane, t_self);
-      rtcOccluded1(m.occluder_scene, &ctx.base, &occ);
+      t_self *= 1.0f - 1e-4f;
+      if (t_self <= t_near) continue;
       ++s.stats.occlusion_rays;
-      if (occ.tfar == -std::numeric_limits<float>::infinity()) ++hidden;
+      bool blocked = false;
+      traverse(m.bvh, m.box_lo, m.box_hi, o, dir, t_near, t_self,
+               [&](uint32_t other, float t_enter, float t_exit, float& t_max) {
+                 if (other == id || !m.live[other]) return false;  // never its own occluder
+                 // cheap reject: the ray (unit direction) passes outside the bounding sphere
+                 const glm::vec4 sp = m.world_sphere[other];
+                 const glm::vec3 oc = glm::vec3(sp) - o;
+                 const float along = glm::dot(oc, dir);
+                 if (glm::dot(oc, oc) - along * along > sp.w * sp.w) return false;
+                 const ChainPrototypes& op = m.chains[m.chain[other]];
+                 RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
+                 const float e = m.occluder_error_world[other];
+                 if (e <= limit(t_enter)) {
+                   // every hit in the box is trusted
+                   blocked = occludedByObject(m, other, occluder, o, dir, t_near, t_max);
+                 } else if (e <= limit(std::min(t_exit, t_max))) {
+                   // trusted only beyond some distance: find the hit and check it
+                   float t_hit = t_max;
+                   blocked = intersectObject(m, other, occluder, o, dir, t_near, t_hit) && e <= limit(t_hit);
+                 }
+                 return blocked;
+               });
+      if (blocked) ++hidden;
     }
     s.stats.samples += n;
     s.stats.self_hits += counted;

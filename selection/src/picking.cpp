@@ -34,31 +34,22 @@ Ray pixelRay(const Camera& c, glm::vec2 pixel_px) {
 PickHit RayScene::intersect(const Ray& ray, float t_near, float t_far) const {
   const Impl& m = *impl_;
   PickHit out;
-  if (!m.pick_scene) return out;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh;
-  rh.ray.org_x = ray.origin.x;
-  rh.ray.org_y = ray.origin.y;
-  rh.ray.org_z = ray.origin.z;
-  rh.ray.dir_x = ray.direction.x;
-  rh.ray.dir_y = ray.direction.y;
-  rh.ray.dir_z = ray.direction.z;
-  rh.ray.tnear = t_near;
-  rh.ray.tfar = t_far;
-  rh.ray.time = 0.0f;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(m.pick_scene, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return out;
-  const uint32_t id = rh.hit.instID[0];
+  if (!m.device) return out;
+  int64_t best = -1;
+  traverse(m.bvh, m.box_lo, m.box_hi, ray.origin, ray.direction, t_near, t_far,
+           [&](uint32_t id, float, float, float& t_max) {
+             const int32_t level = m.drawn_level[id];
+             if (!m.live[id] || level < 0) return false;
+             RTCScene proto = m.chains[m.chain[id]].levels[static_cast<size_t>(level)];
+             if (proto && intersectObject(m, id, proto, ray.origin, ray.direction, t_near, t_max)) best = id;
+             return false;
+           });
+  if (best < 0) return out;
+  const uint32_t id = static_cast<uint32_t>(best);
   out.object = static_cast<int32_t>(id);
   out.level = m.drawn_level[id];
-  out.distance = rh.ray.tfar * glm::length(ray.direction);
-  out.point = ray.origin + rh.ray.tfar * ray.direction;
+  out.distance = t_far * glm::length(ray.direction);
+  out.point = ray.origin + t_far * ray.direction;
   return out;
 }
 

@@ -1,7 +1,8 @@
-// The Embree ray scene behind picking and occlusion: one prototype scene per (mesh, level), objects as
-// single-level instances (Embree 3 as packaged supports one instance level), two top-level scenes:
-// the drawn levels (picking) and the occluder levels (occlusion, Funkhouser & Séquin 1993 use
-// visibility to cut benefit; the occluder choice bounds wrong 'hidden' answers, docs/VISIBILITY.md).
+// The ray scene behind picking and occlusion (Funkhouser & Séquin 1993 use visibility to cut benefit):
+// one Embree scene per (mesh, level), objects as instances of them with flattened world transforms.
+// The instance level is our own BVH over object boxes (top_bvh.h), refitted when objects move:
+// committing 10 000 moved Embree 3 instances rebuilt Embree's top level at 35-90 ms on the project
+// machine (docs/VISIBILITY.md), a refit costs well under a millisecond.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -61,39 +62,26 @@ RTCScene buildPrototype(RTCDevice device, const Mesh& mesh) {
   std::copy(mesh.triangles.begin(), mesh.triangles.end(), t);
   rtcCommitGeometry(geom);
   RTCScene scene = rtcNewScene(device);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcAttachGeometry(scene, geom);
   rtcReleaseGeometry(geom);
   rtcCommitScene(scene);
   return scene;
 }
 
-RTCScene newTopScene(RTCDevice device) {
-  RTCScene s = rtcNewScene(device);
-  // rebuilt on every commit while objects move: a fast low-quality build
-  rtcSetSceneFlags(s, RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
-  rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_LOW);
-  return s;
-}
-
 }  // namespace
 
 void RayScene::Impl::release() {
-  for (RTCGeometry g : pick_instance)
-    if (g) rtcReleaseGeometry(g);
-  for (RTCGeometry g : occluder_instance)
-    if (g) rtcReleaseGeometry(g);
-  pick_instance.clear();
-  occluder_instance.clear();
-  if (pick_scene) rtcReleaseScene(pick_scene);
-  if (occluder_scene) rtcReleaseScene(occluder_scene);
-  pick_scene = occluder_scene = nullptr;
+  bvh = TopBvh();
+  built = moved = false;
+  dead_in_bvh = 0;
   for (ChainPrototypes& c : chains)
     for (RTCScene s : c.levels)
       if (s) rtcReleaseScene(s);
   chains.clear();
   if (device) rtcReleaseDevice(device);
   device = nullptr;
+  box_lo.clear();
+  box_hi.clear();
   world_sphere.clear();
   occluder_error_world.clear();
   inverse_world.clear();
@@ -140,6 +128,8 @@ Error RayScene::init(Span<const LodChain* const> chains, const RaySceneParams& p
       }
     }
     if (lo.x > hi.x) return Error(Status::kInvalidMesh, what + " has no vertices");
+    p.box_lo = lo;
+    p.box_hi = hi;
     p.center = 0.5f * (lo + hi);
     float r2 = 0.0f;
     for (size_t l = 0; l < chain->levelCount(); ++l)
@@ -161,10 +151,6 @@ Error RayScene::init(Span<const LodChain* const> chains, const RaySceneParams& p
         p.occluder_level = static_cast<int32_t>(l);
     }
   }
-  m.pick_scene = newTopScene(m.device);
-  m.occluder_scene = newTopScene(m.device);
-  rtcCommitScene(m.pick_scene);
-  rtcCommitScene(m.occluder_scene);
   const std::string err = deviceErrorText(m.device);
   if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: " + err);
   return {};
@@ -187,8 +173,12 @@ Error checkObject(const RayScene::Impl& m, const glm::mat4& world, uint32_t chai
   return {};
 }
 
+constexpr float kEmpty = 3.0e38f;
+
 void growTo(RayScene::Impl& m, size_t n) {
   if (m.live.size() >= n) return;
+  m.box_lo.resize(n, glm::vec3(kEmpty));
+  m.box_hi.resize(n, glm::vec3(-kEmpty));
   m.world_sphere.resize(n, glm::vec4(0.0f));
   m.occluder_error_world.resize(n, 0.0f);
   m.inverse_world.resize(n, glm::mat4(1.0f));
@@ -197,8 +187,13 @@ void growTo(RayScene::Impl& m, size_t n) {
   m.drawn_level.resize(n, -1);
   m.generation.resize(n, 0);
   m.live.resize(n, 0);
-  m.pick_instance.resize(n, nullptr);
-  m.occluder_instance.resize(n, nullptr);
+}
+
+void clearObject(RayScene::Impl& m, size_t id) {
+  m.live[id] = 0;
+  m.world_sphere[id] = glm::vec4(0.0f);
+  m.box_lo[id] = glm::vec3(kEmpty);
+  m.box_hi[id] = glm::vec3(-kEmpty);
 }
 
 void updateDerived(RayScene::Impl& m, uint32_t id) {
@@ -206,22 +201,17 @@ void updateDerived(RayScene::Impl& m, uint32_t id) {
   const glm::mat4& w = m.world[id];
   const float scale = largestScale(w);
   m.world_sphere[id] = glm::vec4(glm::vec3(w * glm::vec4(p.center, 1.0f)), p.radius * scale);
+  // world box of the object-space box: centre mapped, half extent through |M|
+  const glm::vec3 c(w * glm::vec4(0.5f * (p.box_lo + p.box_hi), 1.0f));
+  const glm::vec3 h = 0.5f * (p.box_hi - p.box_lo);
+  const glm::vec3 e = glm::abs(glm::vec3(w[0])) * h.x + glm::abs(glm::vec3(w[1])) * h.y + glm::abs(glm::vec3(w[2])) * h.z;
+  m.box_lo[id] = c - e;
+  m.box_hi[id] = c + e;
   m.occluder_error_world[id] = p.max_error[p.occluder_level] * scale;
   m.inverse_world[id] = glm::inverse(w);
 }
 
-void setInstanceLevel(RayScene::Impl& m, RTCGeometry g, uint32_t chain, int32_t level) {
-  RTCScene proto = level >= 0 ? m.chains[chain].levels[level] : nullptr;
-  if (proto) {
-    rtcSetGeometryInstancedScene(g, proto);
-    rtcCommitGeometry(g);
-    rtcEnableGeometry(g);
-  } else {
-    rtcDisableGeometry(g);
-  }
-}
-
-// Places object `id` (storage already grown) with its instances; the caller committed nothing yet.
+// Places object `id` (storage already grown); the tree learns of it at commit().
 void placeObject(RayScene::Impl& m, uint32_t id, const glm::mat4& world, uint32_t chain, int32_t level) {
   m.world[id] = world;
   m.chain[id] = chain;
@@ -229,15 +219,6 @@ void placeObject(RayScene::Impl& m, uint32_t id, const glm::mat4& world, uint32_
   m.live[id] = 1;
   ++m.generation[id];
   updateDerived(m, id);
-  for (int which = 0; which < 2; ++which) {
-    RTCGeometry& g = which == 0 ? m.pick_instance[id] : m.occluder_instance[id];
-    if (!g) {
-      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
-      rtcAttachGeometryByID(which == 0 ? m.pick_scene : m.occluder_scene, g, id);
-    }
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
-    setInstanceLevel(m, g, chain, which == 0 ? level : m.chains[chain].occluder_level);
-  }
 }
 
 }  // namespace
@@ -254,19 +235,13 @@ Error RayScene::setObjects(Span<const glm::mat4> world, Span<const uint32_t> cha
     Error e = checkObject(m, world[i], chain_ids[i], drawn_levels[i], "ray scene: object " + std::to_string(i));
     if (e) return e;
   }
-  for (size_t i = 0; i < m.live.size(); ++i) {
-    if (m.pick_instance[i]) rtcDisableGeometry(m.pick_instance[i]);
-    if (m.occluder_instance[i]) rtcDisableGeometry(m.occluder_instance[i]);
-    m.live[i] = 0;
-    m.world_sphere[i] = glm::vec4(0.0f);
-  }
+  for (size_t i = 0; i < m.live.size(); ++i) clearObject(m, i);
   growTo(m, world.count);
   m.free_ids.clear();
   for (size_t i = world.count; i < m.live.size(); ++i) m.free_ids.push_back(static_cast<uint32_t>(i));
   for (size_t i = 0; i < world.count; ++i)
     placeObject(m, static_cast<uint32_t>(i), world[i], chain_ids[i], drawn_levels[i]);
-  const std::string err = deviceErrorText(m.device);
-  if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: setObjects: " + err);
+  m.built = false;
   return {};
 }
 
@@ -285,8 +260,8 @@ Error RayScene::addObject(const glm::mat4& world, uint32_t chain_id, int32_t dra
     growTo(m, m.live.size() + 1);
   }
   placeObject(m, id, world, chain_id, drawn_level);
-  const std::string err = deviceErrorText(m.device);
-  if (!err.empty()) return Error(Status::kOutOfMemory, "ray scene: addObject: " + err);
+  // found by the linear pass over pending objects until the next rebuild
+  if (m.built) m.bvh.pending.push_back(id);
   return {};
 }
 
@@ -294,11 +269,16 @@ Error RayScene::removeObject(uint32_t id) {
   Impl& m = *impl_;
   if (id >= m.live.size() || !m.live[id])
     return Error(Status::kNotFound, "ray scene: removeObject: no live object with id " + std::to_string(id));
-  rtcDisableGeometry(m.pick_instance[id]);
-  rtcDisableGeometry(m.occluder_instance[id]);
-  m.live[id] = 0;
-  m.world_sphere[id] = glm::vec4(0.0f);
+  clearObject(m, id);
   m.free_ids.push_back(id);
+  auto& pending = m.bvh.pending;
+  auto it = std::find(pending.begin(), pending.end(), id);
+  if (it != pending.end()) {
+    pending.erase(it);
+  } else {
+    ++m.dead_in_bvh;  // its empty box leaves the tree at the next refit
+    m.moved = true;
+  }
   return {};
 }
 
@@ -306,24 +286,36 @@ void RayScene::setTransform(uint32_t id, const glm::mat4& world) {
   Impl& m = *impl_;
   m.world[id] = world;
   updateDerived(m, id);
-  rtcSetGeometryTransform(m.pick_instance[id], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
-  rtcCommitGeometry(m.pick_instance[id]);
-  rtcSetGeometryTransform(m.occluder_instance[id], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &world[0][0]);
-  rtcCommitGeometry(m.occluder_instance[id]);
+  m.moved = true;
 }
 
 void RayScene::setDrawnLevel(uint32_t id, int32_t level) {
   Impl& m = *impl_;
-  if (m.drawn_level[id] == level) return;
   m.drawn_level[id] = level;
-  setInstanceLevel(m, m.pick_instance[id], m.chain[id], level);
 }
 
 void RayScene::commit() {
   Impl& m = *impl_;
   if (!m.device) return;
-  rtcCommitScene(m.pick_scene);
-  rtcCommitScene(m.occluder_scene);
+  const size_t live_count = m.live.size() - m.free_ids.size();
+  // rebuild when the tree is missing, when many objects wait outside it or sit dead in it, or when
+  // refits loosened it (summed inner-node area doubled)
+  const size_t slack = std::max<size_t>(64, live_count / 8);
+  bool rebuild = !m.built || m.bvh.pending.size() > slack || m.dead_in_bvh > slack;
+  if (!rebuild && m.moved) {
+    m.bvh.refit(m.box_lo, m.box_hi);
+    rebuild = m.bvh.area > 2.0f * m.bvh.built_area;
+  }
+  if (rebuild) {
+    std::vector<uint32_t> ids;
+    ids.reserve(live_count);
+    for (size_t i = 0; i < m.live.size(); ++i)
+      if (m.live[i]) ids.push_back(static_cast<uint32_t>(i));
+    m.bvh.build(ids, m.box_lo, m.box_hi);
+    m.built = true;
+    m.dead_in_bvh = 0;
+  }
+  m.moved = false;
 }
 
 size_t RayScene::chainCount() const { return impl_->chains.size(); }

@@ -1,6 +1,9 @@
 #include "scenelod/selection/visibility.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -450,4 +453,95 @@ TEST(Visibility, FocusPeaksAtThePickAndFallsToOneAtTheRadius) {
   EXPECT_FALSE(none.enabled);
   computeFocusFactors(rs.worldSpheres(), none, Span<float>(focus));
   for (float v : focus) EXPECT_EQ(v, 1.0f);
+}
+
+namespace {
+
+// closest hit of a ray with the surface of an axis-aligned box (the exit face when the origin is
+// inside), or +inf
+float slabHit(const Ray& r, glm::vec3 lo, glm::vec3 hi) {
+  float t0 = -1e30f, t1 = 1e30f;
+  for (int a = 0; a < 3; ++a) {
+    const float inv = 1.0f / r.direction[a];
+    float ta = (lo[a] - r.origin[a]) * inv, tb = (hi[a] - r.origin[a]) * inv;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (t0 > t1 || t1 < 0.0f) return std::numeric_limits<float>::infinity();
+  return t0 >= 0.0f ? t0 : t1;
+}
+
+}  // namespace
+
+TEST(Visibility, TopLevelMatchesBruteForceThroughMovesAddsAndRemoves) {
+  // 400 cubes (translation and uniform scale keep them axis-aligned, so a slab test is the truth);
+  // then rounds of moving every object (refits), removing and adding some (pending list, rebuilds)
+  LodChain cube = singleLevel(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)));
+  const LodChain* chains[] = {&cube};
+  RayScene rs;
+  ASSERT_TRUE(rs.init(Span<const LodChain* const>(chains, 1)).ok());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 2.0f);
+  struct Box {
+    glm::vec3 c;
+    float s;
+  };
+  std::vector<Box> boxes(400);
+  std::vector<glm::mat4> world;
+  for (Box& b : boxes) {
+    b = {{u(rng), u(rng), u(rng)}, size(rng)};
+    world.push_back(glm::scale(at(b.c), glm::vec3(b.s)));
+  }
+  const std::vector<uint32_t> chain_ids(400, 0);
+  const std::vector<int32_t> levels(400, 0);
+  ASSERT_TRUE(rs.setObjects(world, chain_ids, levels).ok());
+  rs.commit();
+  std::vector<bool> live(400, true);
+  for (int round = 0; round < 6; ++round) {
+    if (round > 0) {
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        if (!live[i]) continue;
+        boxes[i].c += glm::vec3(u(rng), u(rng), u(rng)) * (round % 2 ? 0.05f : 0.5f);
+        rs.setTransform(static_cast<uint32_t>(i), glm::scale(at(boxes[i].c), glm::vec3(boxes[i].s)));
+      }
+      for (int k = 0; k < 20 * round; ++k) {
+        const uint32_t id = static_cast<uint32_t>(rng() % boxes.size());
+        if (live[id]) {
+          ASSERT_TRUE(rs.removeObject(id).ok());
+          live[id] = false;
+        }
+      }
+      for (int k = 0; k < 10 * round; ++k) {
+        const Box b{{u(rng), u(rng), u(rng)}, size(rng)};
+        uint32_t id = 0;
+        ASSERT_TRUE(rs.addObject(glm::scale(at(b.c), glm::vec3(b.s)), 0, 0, id).ok());
+        if (id >= boxes.size()) {
+          boxes.resize(id + 1);
+          live.resize(id + 1, false);
+        }
+        boxes[id] = b;
+        live[id] = true;
+      }
+      rs.commit();
+    }
+    for (int q = 0; q < 300; ++q) {
+      const Ray r{{u(rng), u(rng), u(rng)}, glm::normalize(glm::vec3(u(rng), u(rng), u(rng)))};
+      float best = std::numeric_limits<float>::infinity();
+      int32_t best_id = -1;
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        if (!live[i]) continue;
+        const float t = slabHit(r, boxes[i].c - 0.5f * boxes[i].s, boxes[i].c + 0.5f * boxes[i].s);
+        if (t < best) {
+          best = t;
+          best_id = static_cast<int32_t>(i);
+        }
+      }
+      const PickHit h = rs.intersect(r);
+      ASSERT_EQ(h.object, best_id) << "round " << round << " ray " << q;
+      if (best_id >= 0) {
+        EXPECT_NEAR(h.distance, best, 1e-3f * std::max(1.0f, best));
+      }
+    }
+  }
 }

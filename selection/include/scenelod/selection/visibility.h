@@ -55,15 +55,19 @@ struct PickHit {
   float distance = 0.0f;      // from the ray origin (the eye for a perspective camera), world units
 };
 
-// An Embree scene mirroring the objects: per chain one prototype per level with triangles, and per
-// object two instances with its world transform (one instance level, so callers flatten their
-// hierarchy into world matrices): one at the level drawn this frame (for picking), one at the chain's
-// occluder level (for occlusion). Object ids are small integers: setObjects() numbers 0..n-1,
+// A ray scene mirroring the objects: per chain one Embree scene per level with triangles, and per
+// object an instance of it with the object's world transform (one instance level, so callers flatten
+// their hierarchy into world matrices). Picking sees each object at the level drawn this frame,
+// occlusion at its chain's occluder level. The instance level is a BVH over the objects' world
+// boxes: moving objects refits it, added objects wait in a short list tested linearly, removed ones
+// leave empty boxes, and commit() rebuilds only when those lists grow past max(64, n/8) or refits
+// doubled the tree's summed box area. Object ids are small integers: setObjects() numbers 0..n-1,
 // addObject() takes the lowest free id. Edges and points of a level are not ray-traced (triangles
 // only).
 //
-// Thread safety: setters and commit() are single-threaded; after commit(), pick() and the occlusion
-// estimator may run concurrently from several threads until the next setter call.
+// Thread safety: setters and commit() are single-threaded; after commit(), pick(), intersect() and
+// OcclusionEstimator::update() (each estimator on its own thread) may run concurrently until the next
+// setter call.
 class RayScene {
  public:
   RayScene();
@@ -71,8 +75,8 @@ class RayScene {
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
 
-  // Creates the Embree device and one prototype per chain level with triangles. `chains` outlive
-  // nothing: geometry is copied. Replaces any previous content. Errors: a null chain, an empty chain,
+  // Creates the Embree device and one prototype per chain level with triangles. `chains` need
+  // not outlive the call: geometry is copied. Replaces any previous content. Errors: a null chain, an empty chain,
   // a mesh failing validateMesh, an Embree device or build error. Allocates; O(total triangles).
   Error init(Span<const LodChain* const> chains, const RaySceneParams& params = {});
 
@@ -85,18 +89,19 @@ class RayScene {
   // Adds one object (same preconditions as setObjects) without rebuilding the others; writes its id
   // (the lowest free id) to `id`. Call commit() after. May allocate.
   Error addObject(const glm::mat4& world, uint32_t chain_id, int32_t drawn_level, uint32_t& id);
-  // Removes an object: its instances are disabled and its id becomes free. Errors: unknown id.
+  // Removes an object (no rebuild: its box becomes empty) and frees its id. Errors: unknown id.
   Error removeObject(uint32_t id);
 
-  // Moves a live object (only its instance transforms change). Precondition: id live, matrix finite
-  // and invertible (asserted in debug builds). O(1), no allocation.
+  // Moves a live object (its instance transform and world box change; the tree is refitted at
+  // commit). Precondition: id live, matrix finite and invertible. O(1), no allocation.
   void setTransform(uint32_t id, const glm::mat4& world);
-  // Sets the level drawn this frame (-1 = not drawn), which is the level pick() hits.
-  // Precondition: id live, level in [-1, level count). O(1), no allocation.
+  // Sets the level drawn this frame (-1 = not drawn), which is the level pick() hits; takes effect
+  // at once (no commit needed). Precondition: id live, level in [-1, level count). O(1), no allocation.
   void setDrawnLevel(uint32_t id, int32_t level);
 
-  // Commits pending changes to Embree (rebuilds the two top-level BVHs over the instances; prototypes
-  // are untouched). Must be called after changes and before queries. Allocates inside Embree.
+  // Commits pending changes: refits the instance BVH after moves (O(n), no allocation), rebuilds it
+  // (O(n log n), allocates) when it is missing or the thresholds above are passed; prototypes are
+  // untouched. Must be called after changes and before queries.
   void commit();
 
   // The first drawn object along the ray through `pixel_px` (see pixelRay), against the level each
@@ -171,7 +176,7 @@ struct OcclusionStats {
 // from the eye through a fixed stratified (golden-angle) disc pattern facing the camera, covering the
 // object's bounding sphere footprint and rotated on every test; it counts when it meets the object's
 // own occluder level at t_self, and it is hidden when any other object's occluder level is hit before
-// t_self. visible fraction = unhidden / counted samples of the latest test (1 when no sample met the
+// t_self where that level's error projects to at most RaySceneParams::occluder_error_px pixels. visible fraction = unhidden / counted samples of the latest test (1 when no sample met the
 // object). Objects never tested (or whose id was reused) read as 1, i.e. visible.
 class OcclusionEstimator {
  public:
