@@ -289,9 +289,16 @@ RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, flo
     n = len > 0.0f ? n / len : -dir;
     out.normal = glm::dot(n, dir) > 0.0f ? -n : n;
     out.kind = 0;
+    out.shading = out.normal;
+    const size_t k = static_cast<size_t>(rh.hit.primID) * 3;
+    const float u = rh.hit.u, v = rh.hit.v;
+    if (mesh_->normals.size() == mesh_->vertexCount()) {
+      const glm::vec3 s = (1.0f - u - v) * mesh_->normals[mesh_->triangles[k]] +
+                          u * mesh_->normals[mesh_->triangles[k + 1]] + v * mesh_->normals[mesh_->triangles[k + 2]];
+      const float sl = glm::length(s);
+      if (sl > 1e-12f) out.shading = glm::dot(s, dir) > 0.0f ? -s / sl : s / sl;
+    }
     if (mesh_->colors.size() == mesh_->vertexCount()) {
-      const size_t k = static_cast<size_t>(rh.hit.primID) * 3;
-      const float u = rh.hit.u, v = rh.hit.v;
       out.color = (1.0f - u - v) * mesh_->colors[mesh_->triangles[k]] + u * mesh_->colors[mesh_->triangles[k + 1]] +
                   v * mesh_->colors[mesh_->triangles[k + 2]];
     } else {
@@ -313,6 +320,7 @@ RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, flo
       const float nl = glm::length(n);
       out.normal = nl > 1e-6f ? n / nl : -dir;
     }
+    out.shading = out.normal;
   }
   return out;
 }

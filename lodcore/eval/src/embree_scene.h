@@ -25,7 +25,8 @@ struct RoundPrim {
 struct RayHit {
   bool hit = false;
   float t = 0.0f;
-  glm::vec3 normal{0.0f};  // unit, facing the ray origin (two-sided)
+  glm::vec3 normal{0.0f};  // unit, facing the ray origin (two-sided): face normal of a triangle
+  glm::vec3 shading{0.0f}; // unit, facing the ray origin: interpolated vertex normal when present
   glm::vec3 color{0.0f};   // linear RGB from vertex colours, or the kind's default
   int kind = 0;            // 0 triangle, 1 edge, 2 point
 };
