@@ -180,17 +180,24 @@ bool intersectCapsule(const glm::vec3& o, const glm::vec3& d, const glm::vec3& a
   return true;
 }
 
+namespace {
+// one device for the process: creating a device starts Embree's task system, which costs far more
+// than building a small scene; devices are thread-safe
+RTCDevice sharedDevice() {
+  static RTCDevice device = rtcNewDevice(nullptr);
+  return device;
+}
+}  // namespace
+
 EmbreeScene::~EmbreeScene() {
   if (scene_) rtcReleaseScene(scene_);
-  if (device_) rtcReleaseDevice(device_);
 }
 
 Error EmbreeScene::build(const Mesh& mesh, float min_radius) {
   mesh_ = &mesh;
-  device_ = rtcNewDevice(nullptr);
+  device_ = sharedDevice();
   if (!device_) return {Status::kUnsupported, "Embree: cannot create a device"};
   scene_ = rtcNewScene(device_);
-  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
   tri_count_ = mesh.triangleCount();
   if (tri_count_ > 0) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -244,19 +251,24 @@ Error EmbreeScene::build(const Mesh& mesh, float min_radius) {
   return {};
 }
 
-float EmbreeScene::closestDistance(const glm::vec3& p) const {
-  if (empty()) return std::numeric_limits<float>::infinity();
-  RTCPointQuery q;
-  q.x = p.x;
-  q.y = p.y;
-  q.z = p.z;
-  q.time = 0.0f;
-  q.radius = std::numeric_limits<float>::infinity();
-  RTCPointQueryContext ctx;
-  rtcInitPointQueryContext(&ctx);
-  QueryState st{this, std::numeric_limits<float>::infinity()};
-  rtcPointQuery(scene_, &q, &ctx, closestCallback, &st);
-  return st.best;
+float EmbreeScene::closestDistance(const glm::vec3& p, float hint) const {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  if (empty()) return kInf;
+  for (float radius : {hint > 0.0f ? hint : kInf, kInf}) {
+    RTCPointQuery q;
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.time = 0.0f;
+    q.radius = radius;
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    // primitives farther than the radius are never visited, so only a find within it counts
+    QueryState st{this, radius};
+    rtcPointQuery(scene_, &q, &ctx, closestCallback, &st);
+    if (st.best < radius || radius == kInf) return st.best;
+  }
+  return kInf;
 }
 
 RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, float t_max) const {

@@ -42,8 +42,10 @@ class EmbreeScene {
   Error build(const Mesh& mesh, float min_radius = 0.0f);
 
   // Distance from p to the nearest geometry (triangle surface, or capsule/sphere solid: 0 inside).
-  // Thread-safe after build. Returns +inf for an empty scene.
-  float closestDistance(const glm::vec3& p) const;
+  // `hint` > 0 first searches only that radius (much faster when the answer is inside it) and falls
+  // back to an unbounded search; the result is exact either way. Thread-safe after build. Returns
+  // +inf for an empty scene.
+  float closestDistance(const glm::vec3& p, float hint = 0.0f) const;
 
   // First hit along origin + t * dir (dir unit) for t in [0, t_max]. Thread-safe after build.
   RayHit intersect(const glm::vec3& origin, const glm::vec3& dir, float t_max) const;

@@ -118,10 +118,16 @@ std::vector<glm::vec3> samplePoints(const Mesh& m, const DistanceParams& params)
   return out;
 }
 
-OneSidedDistance measureOneSided(const std::vector<glm::vec3>& samples, const detail::EmbreeScene& target) {
+OneSidedDistance measureOneSided(const std::vector<glm::vec3>& samples, const detail::EmbreeScene& target,
+                                 float scale) {
   std::vector<float> d(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) d[i] = target.closestDistance(samples[i]);
+    // search radius hint from the previous answer; answers are exact whatever the hint
+    float hint = 0.01f * scale;
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      d[i] = target.closestDistance(samples[i], hint);
+      hint = std::max(2.0f * d[i], 1e-4f * scale);
+    }
   });
   OneSidedDistance out;
   out.sample_count = d.size();
@@ -158,8 +164,9 @@ Error measureSurfaceDistance(const Mesh& original, const Mesh& simplified, const
   if (Error e = original_scene.build(original)) return e;
   if (Error e = simplified_scene.build(simplified)) return e;
 
-  out.forward = measureOneSided(samplePoints(original, params), simplified_scene);
-  out.backward = measureOneSided(samplePoints(simplified, params), original_scene);
+  const float scale = static_cast<float>(out.diagonal > 0.0 ? out.diagonal : 1.0);
+  out.forward = measureOneSided(samplePoints(original, params), simplified_scene, scale);
+  out.backward = measureOneSided(samplePoints(simplified, params), original_scene, scale);
   const double diag = out.diagonal > 0.0 ? out.diagonal : 1.0;
   out.hausdorff = std::max(out.forward.max, out.backward.max) / diag;
   out.rms = std::max(out.forward.rms, out.backward.rms) / diag;
