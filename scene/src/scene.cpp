@@ -22,15 +22,24 @@ glm::mat4 composeTrs(const Trs& trs) {
   return m;
 }
 
-float maxScaleBound(const glm::mat4& m) {
-  const glm::vec3 a(m[0]), b(m[1]), c(m[2]);
-  const float aa = glm::dot(a, a), bb = glm::dot(b, b), cc = glm::dot(c, c);
-  const float ab = std::fabs(glm::dot(a, b)), ac = std::fabs(glm::dot(a, c)), bc = std::fabs(glm::dot(b, c));
+namespace {
+
+// inlined into the update pass; see maxScaleBound
+inline float scaleBound(const float* m) {
+  const float a0 = m[0], a1 = m[1], a2 = m[2], b0 = m[4], b1 = m[5], b2 = m[6], c0 = m[8], c1 = m[9], c2 = m[10];
+  const float aa = a0 * a0 + a1 * a1 + a2 * a2, bb = b0 * b0 + b1 * b1 + b2 * b2, cc = c0 * c0 + c1 * c1 + c2 * c2;
+  const float ab = std::fabs(a0 * b0 + a1 * b1 + a2 * b2), ac = std::fabs(a0 * c0 + a1 * c1 + a2 * c2),
+              bc = std::fabs(b0 * c0 + b1 * c1 + b2 * c2);
   // gershgorin: every eigenvalue of the gram matrix is at most its largest absolute row sum
-  const float row = std::max(aa + ab + ac, std::max(bb + ab + bc, cc + ac + bc));
-  // one ulp up so float rounding of the products never makes the bound too small
+  const float ra = aa + ab + ac, rb = bb + ab + bc, rc = cc + ac + bc;
+  const float row = ra > rb ? (ra > rc ? ra : rc) : (rb > rc ? rb : rc);
+  // a few ulps up so float rounding of the products never makes the bound too small
   return std::sqrt(row) * (1.0f + 4.0f * 1.1920929e-7f);
 }
+
+}  // namespace
+
+float maxScaleBound(const glm::mat4& m) { return scaleBound(&m[0][0]); }
 
 Sphere transformSphere(const Sphere& s, const glm::mat4& m) {
   Sphere out;
@@ -370,16 +379,26 @@ size_t Scene::update() {
   const size_t m = object_chain_.size();
   size_t recomputed = 0;
   const bool all = all_objects_dirty_;
+  const uint32_t* node_of = object_node_slot_.data();
+  const uint32_t* dense_of = node_dense_.data();
+  const uint32_t* chain_of = object_chain_.data();
+  const Sphere* chains = chain_spheres_.data();
+  uint8_t* object_dirty = object_dirty_.data();
+  glm::vec3* centers = world_center_.data();
+  float* radii = world_radius_.data();
+  float* scales = max_scale_.data();
   for (size_t k = 0; k < m; ++k) {
-    const uint32_t node = node_dense_[object_node_slot_[k]];
-    if (!(all || object_dirty_[k] || dirty[node])) continue;
-    const glm::mat4& w = world_[node];
-    const Sphere& s = chain_spheres_[object_chain_[k]];
-    const float scale = maxScaleBound(w);
-    world_center_[k] = glm::vec3(w * glm::vec4(s.center, 1.0f));
-    world_radius_[k] = s.radius * scale;
-    max_scale_[k] = scale;
-    object_dirty_[k] = 0;
+    const uint32_t node = dense_of[node_of[k]];
+    if (!(all | object_dirty[k] | dirty[node])) continue;
+    const float* w = &world_[node][0][0];
+    const Sphere& s = chains[chain_of[k]];
+    const float scale = scaleBound(w);
+    const float x = s.center.x, y = s.center.y, z = s.center.z;
+    centers[k] = glm::vec3(w[0] * x + w[4] * y + w[8] * z + w[12], w[1] * x + w[5] * y + w[9] * z + w[13],
+                           w[2] * x + w[6] * y + w[10] * z + w[14]);
+    radii[k] = s.radius * scale;
+    scales[k] = scale;
+    object_dirty[k] = 0;
     ++recomputed;
   }
   std::fill(node_dirty_.begin(), node_dirty_.end(), uint8_t(0));
