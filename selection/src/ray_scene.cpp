@@ -11,6 +11,7 @@
 #include <glm/matrix.hpp>
 
 #include "ray_scene_impl.h"
+#include "scenelod/scene/scene.h"
 
 namespace scenelod::selection {
 namespace {
@@ -91,6 +92,7 @@ void RayScene::Impl::release() {
   generation.clear();
   live.clear();
   free_ids.clear();
+  scene_handle.clear();
 }
 
 RayScene::RayScene() : impl_(new Impl) {}
@@ -278,6 +280,57 @@ Error RayScene::removeObject(uint32_t id) {
   } else {
     ++m.dead_in_bvh;  // its empty box leaves the tree at the next refit
     m.moved = true;
+  }
+  return {};
+}
+
+Error RayScene::syncFromScene(const scene::Scene& sc, Span<const int32_t> drawn_levels) {
+  Impl& m = *impl_;
+  if (!m.device) return Error(Status::kInvalidArgument, "ray scene: syncFromScene before init");
+  const size_t n = sc.objectCount();
+  if (!drawn_levels.empty() && drawn_levels.count != n)
+    return Error(Status::kInvalidArgument, "ray scene: syncFromScene got " + std::to_string(drawn_levels.count) +
+                                               " drawn levels for " + std::to_string(n) + " scene objects");
+  auto fetch = [&](size_t i, scene::ObjectDesc& desc, glm::mat4& world) -> Error {
+    const scene::ObjectHandle h = sc.objectAt(i);
+    Error e = sc.getObject(h, desc);
+    if (!e) e = sc.getWorld(desc.node, world);
+    if (e) return Error(e.status, "ray scene: scene object " + std::to_string(i) + ": " + e.message);
+    return {};
+  };
+  // check everything first, so a refused sync leaves the ray scene as it was
+  for (size_t i = 0; i < n; ++i) {
+    scene::ObjectDesc desc;
+    glm::mat4 world;
+    Error e = fetch(i, desc, world);
+    if (!e) e = checkObject(m, world, desc.chain, drawn_levels.empty() ? 0 : drawn_levels[i],
+                            "ray scene: scene object " + std::to_string(i));
+    if (e) return e;
+  }
+  for (size_t id = n; id < m.live.size(); ++id)
+    if (m.live[id]) removeObject(static_cast<uint32_t>(id));
+  growTo(m, n);
+  m.scene_handle.resize(m.live.size(), ~uint64_t(0));
+  for (size_t i = 0; i < n; ++i) {
+    scene::ObjectDesc desc;
+    glm::mat4 world;
+    fetch(i, desc, world);
+    const int32_t level = drawn_levels.empty() ? 0 : drawn_levels[i];
+    const scene::ObjectHandle h = sc.objectAt(i);
+    const uint64_t key = (uint64_t(h.slot) << 32) | h.generation;
+    const uint32_t id = static_cast<uint32_t>(i);
+    if (m.live[i] && m.scene_handle[i] == key && m.chain[i] == desc.chain) {
+      if (m.world[i] != world) setTransform(id, world);
+      m.drawn_level[i] = level;
+      continue;
+    }
+    // a different object now sits at this index: replace it under a new generation
+    if (m.live[i]) removeObject(id);
+    auto it = std::find(m.free_ids.rbegin(), m.free_ids.rend(), id);
+    if (it != m.free_ids.rend()) m.free_ids.erase(std::next(it).base());
+    placeObject(m, id, world, desc.chain, level);
+    if (m.built) m.bvh.pending.push_back(id);
+    m.scene_handle[i] = key;
   }
   return {};
 }

@@ -42,6 +42,7 @@ struct RayScene::Impl {
   std::vector<uint32_t> generation;           // 4 B: bumped when the id is (re)used
   std::vector<uint8_t> live;                  // 1 B
   std::vector<uint32_t> free_ids;
+  std::vector<uint64_t> scene_handle;         // syncFromScene: (slot << 32 | generation) per id
 
   void release();
 };

@@ -1,5 +1,7 @@
 #include "scenelod/selection/visibility.h"
 
+#include "scenelod/scene/scene.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -544,4 +546,69 @@ TEST(Visibility, TopLevelMatchesBruteForceThroughMovesAddsAndRemoves) {
       }
     }
   }
+}
+
+TEST(Visibility, SyncFromSceneMirrorsMovesAndSwapRemovals) {
+  // root -> a (unit cube at x = -2), b (small cube at x = 0), c (unit cube at x = 2)
+  scene::SceneData data;
+  data.meshes.resize(2);
+  data.meshes[0].mesh = boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f));
+  data.meshes[1].mesh = boxMesh(glm::vec3(-0.2f), glm::vec3(0.2f));
+  data.nodes.resize(4);
+  data.roots = {0};
+  data.nodes[0].children = {1, 2, 3};
+  const float xs[3] = {-2.0f, 0.0f, 2.0f};
+  const int32_t meshes[3] = {0, 1, 0};
+  for (int k = 0; k < 3; ++k) {
+    data.nodes[1 + k].parent = 0;
+    data.nodes[1 + k].local = at({xs[k], 0.0f, 0.0f});
+    data.nodes[1 + k].mesh = meshes[k];
+  }
+  scene::Scene sc;
+  ASSERT_TRUE(scene::Scene::fromSceneData(data, sc).ok());
+  ASSERT_EQ(sc.objectCount(), 3u);
+  LodChain c0 = singleLevel(data.meshes[0].mesh), c1 = singleLevel(data.meshes[1].mesh);
+  const LodChain* chains[] = {&c0, &c1};
+  RayScene rs;
+  ASSERT_TRUE(rs.init(Span<const LodChain* const>(chains, 2)).ok());
+  ASSERT_TRUE(rs.syncFromScene(sc).ok());
+  rs.commit();
+  const Camera cam = frontCamera();
+  auto hitAt = [&](float x) {
+    return rs.intersect(Ray{cam.eye, glm::normalize(glm::vec3(x, 0.0f, 0.0f) - cam.eye)});
+  };
+  EXPECT_EQ(hitAt(-2.0f).object, 0);
+  EXPECT_EQ(hitAt(0.0f).object, 1);
+  EXPECT_NEAR(hitAt(0.0f).distance, 9.8f, 1e-4f);
+  EXPECT_EQ(hitAt(2.0f).object, 2);
+
+  // move the root: every object follows
+  ASSERT_TRUE(sc.setLocal(sc.nodeAt(0), at({0.0f, 0.0f, 1.0f})).ok());
+  sc.update();
+  const uint32_t gen0 = rs.objectGeneration(0);
+  ASSERT_TRUE(rs.syncFromScene(sc).ok());
+  rs.commit();
+  EXPECT_NEAR(hitAt(0.0f).distance, 8.8f, 1e-4f);
+  EXPECT_EQ(rs.objectGeneration(0), gen0);  // moved, not replaced
+
+  // remove object 0: the scene swaps object 2 into index 0
+  ASSERT_TRUE(sc.removeObject(sc.objectAt(0)).ok());
+  sc.update();
+  ASSERT_EQ(sc.objectCount(), 2u);
+  ASSERT_TRUE(rs.syncFromScene(sc).ok());
+  rs.commit();
+  EXPECT_FALSE(rs.isLive(2));
+  EXPECT_NE(rs.objectGeneration(0), gen0);
+  EXPECT_EQ(hitAt(-2.0f).object, -1);
+  EXPECT_EQ(hitAt(2.0f).object, 0);
+
+  // drawn levels per dense index: -1 hides object 1 from picking
+  const std::vector<int32_t> levels{0, -1};
+  ASSERT_TRUE(rs.syncFromScene(sc, levels).ok());
+  EXPECT_EQ(hitAt(0.0f).object, -1);
+  const std::vector<int32_t> bad_levels{0, 3};
+  const Error e = rs.syncFromScene(sc, bad_levels);
+  EXPECT_NE(e.message.find("scene object 1: drawn level 3 outside [-1, 1)"), std::string::npos) << e.message;
+  const std::vector<int32_t> short_levels{0};
+  EXPECT_NE(rs.syncFromScene(sc, short_levels).message.find("1 drawn levels for 2 scene objects"), std::string::npos);
 }

@@ -86,6 +86,16 @@ class RayScene {
   // Allocates; O(n).
   Error setObjects(Span<const glm::mat4> world, Span<const uint32_t> chain_ids, Span<const int32_t> drawn_levels);
 
+  // Mirrors a scene::Scene whose update() has run: ray-scene object i is the scene's object at dense
+  // index i, with its node's world transform and its chain id (an index into the chains given to
+  // init()). drawn_levels holds one level per dense index, or is empty (every object at level 0).
+  // Only what changed is touched: a moved object gets setTransform, an object whose handle or chain
+  // changed at an index (the scene swap-removes) is replaced (a new generation, so its occlusion
+  // estimate restarts as untested), indices past the scene's object count are removed. Call commit()
+  // after. Errors: a chain id out of range, drawn_levels of the wrong size or with a level out of
+  // range, a singular world transform. O(objects); allocates only when the object count grows.
+  Error syncFromScene(const scene::Scene& scene, Span<const int32_t> drawn_levels = {});
+
   // Adds one object (same preconditions as setObjects) without rebuilding the others; writes its id
   // (the lowest free id) to `id`. Call commit() after. May allocate.
   Error addObject(const glm::mat4& world, uint32_t chain_id, int32_t drawn_level, uint32_t& id);
