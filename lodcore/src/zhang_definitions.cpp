@@ -115,7 +115,8 @@ float superHeightOfStar(const glm::vec3& pv, const StarPair* pairs, size_t n, co
 }
 
 void measureStar(const glm::vec3& pv, const StarPair* pairs, size_t n, const glm::vec3* positions,
-                 float max_angle_rad, const ZhangParams& params, StarScratch& s, StarMeasure& out) {
+                 float max_angle_rad, const ZhangParams& params, StarScratch& s, StarMeasure& out,
+                 bool always_height) {
   out = StarMeasure{};
   if (n == 0) {
     out.vertex_class = ZhangVertexClass::kIsolated;
@@ -139,9 +140,11 @@ void measureStar(const glm::vec3& pv, const StarPair* pairs, size_t n, const glm
       out.vertex_class = ZhangVertexClass::kComplex;  // pinched: two or more fans share the vertex
       return;
     }
-    fanHeight(pv, positions, s.ring, out.super_area, out.super_volume);
-    out.super_height = out.super_area > 0.0f ? 3.0f * out.super_volume / out.super_area : 0.0f;
     const float feature = params.feature_angle_deg * 3.14159265f / 180.0f;
+    if (always_height || max_angle_rad > feature) {
+      fanHeight(pv, positions, s.ring, out.super_area, out.super_volume);
+      out.super_height = out.super_area > 0.0f ? 3.0f * out.super_volume / out.super_area : 0.0f;
+    }
     if (max_angle_rad <= feature) {
       out.vertex_class = ZhangVertexClass::kSimple;
     } else {

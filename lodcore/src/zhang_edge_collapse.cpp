@@ -22,7 +22,6 @@
 namespace scenelod {
 namespace {
 
-using zhang_detail::angleBetweenUnit;
 using zhang_detail::kNone;
 using zhang_detail::StarPair;
 using zhang_detail::StarScratch;
@@ -103,6 +102,20 @@ class IndexedHeap {
   std::vector<float> key_;
 };
 
+// acos to within 7e-5 rad (Abramowitz & Stegun 4.4.45); CA only ranks collapses, and libm's acosf
+// was a tenth of the run time
+inline float fastAcos(float x) {
+  const float ax = std::min(std::fabs(x), 1.0f);
+  const float r = std::sqrt(1.0f - ax) * (1.5707288f + ax * (-0.2121144f + ax * (0.0742610f - 0.0187293f * ax)));
+  return x >= 0.0f ? r : 3.14159265f - r;
+}
+
+// angle between unit vectors, 0 when either is zero (a degenerate triangle's normal)
+inline float fastAngle(const glm::vec3& a, const glm::vec3& b) {
+  if (glm::dot(a, a) == 0.0f || glm::dot(b, b) == 0.0f) return 0.0f;
+  return fastAcos(glm::dot(a, b));
+}
+
 glm::vec3 safeNormalize(const glm::vec3& v) {
   const float len = glm::length(v);
   return len > 0.0f ? v / len : glm::vec3(0.0f);
@@ -135,7 +148,16 @@ class ZhangEngine {
   void refreshVertex(uint32_t v);
 
   // contraction of the set S (2 or 3 vertices) into survivor k at (p, n): checks, new CA(k)
-  bool evaluate(const uint32_t* s, int s_count, const glm::vec3& p, const glm::vec3& n, float& new_ca);
+  // a triangle that survives a contraction: its id and the two vertices after the merged one
+  struct StarEntry {
+    uint32_t t, u, w;
+  };
+  void gatherStar(uint32_t v, std::vector<StarEntry>& out);
+  // checks the contraction whose surviving triangles are `entries` (the merged vertex moved to p with
+  // carried normal n) and gives the new CA of the merged vertex; candidates whose CA reaches `bound`
+  // stop early (they cannot win) and return false
+  bool evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p, const glm::vec3& n,
+                float bound, float& new_ca);
   void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
   void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
 
@@ -173,6 +195,7 @@ class ZhangEngine {
   StarScratch star_;
   std::vector<StarPair> pairs_;
   std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
+  std::vector<StarEntry> star_i_, star_j_, union_;
   uint32_t mark_gen_ = 0;
 };
 
@@ -214,7 +237,7 @@ void ZhangEngine::updateTriangle(uint32_t t) {
 float ZhangEngine::visionOf(uint32_t v) {
   float ca = 0.0f;
   const glm::vec3 nv = nrm_[v];
-  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, angleBetweenUnit(nv, tri_n_[t]) * tri_a_[t]); });
+  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, tri_n_[t]) * tri_a_[t]); });
   return ca;
 }
 
@@ -314,12 +337,13 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     float max_angle = 0.0f, ca = 0.0f;
     forStar(v, [&](uint32_t t, uint32_t k) {
       pairs.push_back({tri_[3 * t + (k + 1) % 3], tri_[3 * t + (k + 2) % 3]});
-      const float angle = angleBetweenUnit(nrm_[v], tri_n_[t]);
+      const float angle = fastAngle(nrm_[v], tri_n_[t]);
       max_angle = std::max(max_angle, angle);
       ca = std::max(ca, angle * tri_a_[t]);
     });
     zhang_detail::StarMeasure m;
-    zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m);
+    zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
+                              params_.influence == ZhangInfluence::kSuperHeight);
     ca_[v] = ca;
     kept_[v] = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
                (params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle);
@@ -362,63 +386,54 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
   if (glm::dot(n, n) == 0.0f) n = nrm_[k];
 }
 
-bool ZhangEngine::evaluate(const uint32_t* s, int s_count, const glm::vec3& p, const glm::vec3& n, float& new_ca) {
-  auto in_s = [&](uint32_t v) {
-    for (int i = 0; i < s_count; ++i)
-      if (s[i] == v) return true;
-    return false;
-  };
-  star_.reset();
-  pairs_.clear();
+void ZhangEngine::gatherStar(uint32_t v, std::vector<StarEntry>& out) {
+  out.clear();
+  forStar(v, [&](uint32_t t, uint32_t corner) {
+    out.push_back({t, tri_[3 * t + (corner + 1) % 3], tri_[3 * t + (corner + 2) % 3]});
+  });
+}
+
+bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p,
+                           const glm::vec3& n, float bound, float& new_ca) {
   new_ca = 0.0f;
-  bool ok = true;
-  bool any_removed = false;
-  for (int si = 0; si < s_count && ok; ++si) {
-    forStar(s[si], [&](uint32_t t, uint32_t corner) {
-      if (!ok) return;
-      const uint32_t u = tri_[3 * t + (corner + 1) % 3], w = tri_[3 * t + (corner + 2) % 3];
-      if (in_s(u) || in_s(w)) {  // the triangle disappears
-        any_removed = true;
-        return;
-      }
-      const glm::vec3 &pu = pos_[u], &pw = pos_[w];
-      const glm::vec3 x = glm::cross(pu - p, pw - p);
-      const float len = glm::length(x);
-      const float scale = glm::dot(pu - p, pu - p) + glm::dot(pw - p, pw - p) + glm::dot(pw - pu, pw - pu);
-      const bool was_degenerate = glm::dot(tri_n_[t], tri_n_[t]) == 0.0f;
-      if (!was_degenerate) {
-        if (!(len > kDegenerateRatio * scale)) {
-          ok = false;
-          ++stats_.rejected_fold;
-          return;
-        }
-        const glm::vec3 nt = x / len;
-        // against the triangle's current normal (a flip) and against the merged vertex's carried
-        // normal, interpolated from the original's (drift from the original orientation)
-        if (glm::dot(nt, tri_n_[t]) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
-          ok = false;
-          ++stats_.rejected_fold;
-          return;
-        }
-        new_ca = std::max(new_ca, angleBetweenUnit(n, nt) * 0.5f * len);
-      }
-      pairs_.push_back({u, w});
-      if (star_.count[u] == 0 && star_.next[u] == kNone) star_.touched.push_back(u);
-      if (star_.count[w] == 0 && star_.next[w] == kNone) star_.touched.push_back(w);
-      star_.count[u] += 1u;
-      star_.count[w] += 1u << 16;
-      star_.next[u] = w;
-    });
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t t = entries[e].t;
+    const glm::vec3 &pu = pos_[entries[e].u], &pw = pos_[entries[e].w];
+    if (glm::dot(tri_n_[t], tri_n_[t]) == 0.0f) continue;  // already degenerate: nothing to turn
+    const glm::vec3 x = glm::cross(pu - p, pw - p);
+    const float len = glm::length(x);
+    const float scale = glm::dot(pu - p, pu - p) + glm::dot(pw - p, pw - p) + glm::dot(pw - pu, pw - pu);
+    if (!(len > kDegenerateRatio * scale)) {
+      ++stats_.rejected_fold;
+      return false;
+    }
+    const glm::vec3 nt = x / len;
+    // against the triangle's current normal (a flip) and against the merged vertex's carried
+    // normal, interpolated from the original's (drift from the original orientation)
+    if (glm::dot(nt, tri_n_[t]) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
+      ++stats_.rejected_fold;
+      return false;
+    }
+    new_ca = std::max(new_ca, fastAngle(n, nt) * 0.5f * len);
+    if (new_ca >= bound) return false;  // cannot beat the best candidate so far
   }
-  if (!ok) return false;
+  star_.reset();
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t u = entries[e].u, w = entries[e].w;
+    if (star_.count[u] == 0 && star_.next[u] == kNone) star_.touched.push_back(u);
+    if (star_.count[w] == 0 && star_.next[w] == kNone) star_.touched.push_back(w);
+    star_.count[u] += 1u;
+    star_.count[w] += 1u << 16;
+    star_.next[u] = w;
+  }
   // link condition: the surviving fan around the merged vertex is one cycle or one chain
-  const size_t pc = pairs_.size();
+  const size_t pc = count;
   if (pc == 0 || !any_removed) {
     ++stats_.rejected_topology;
     return false;
   }
   size_t chain_starts = 0;
-  uint32_t start = pairs_[0].u;
+  uint32_t start = entries[0].u;
   for (uint32_t v : star_.touched) {
     const uint32_t c = star_.count[v], first = c & 0xffffu, second = c >> 16;
     if (first > 1 || second > 1) {
@@ -526,17 +541,15 @@ bool ZhangEngine::stepEdge() {
   if (heap_.empty()) return false;
   const uint32_t i = heap_.pop();
   // candidate partners: NV(V_i), in a fixed order
+  gatherStar(i, star_i_);
   tris_.clear();
   ++mark_gen_;
-  forStar(i, [&](uint32_t t, uint32_t corner) {
-    for (uint32_t c = 1; c < 3; ++c) {
-      const uint32_t u = tri_[3 * t + (corner + c) % 3];
+  for (const StarEntry& e : star_i_)
+    for (uint32_t u : {e.u, e.w})
       if (mark_[u] != mark_gen_) {
         mark_[u] = mark_gen_;
         tris_.push_back(u);
       }
-    }
-  });
   float best_ca = INFINITY;
   uint32_t best_j = kNone;
   glm::vec3 best_p(0.0f), best_n(0.0f);
@@ -546,8 +559,19 @@ bool ZhangEngine::stepEdge() {
     glm::vec3 p, n;
     bool ok;
     interpolate(s, 2, k, p, n, ok);
+    if (!ok) continue;
+    // surviving triangles: those of V_i without V_j and those of V_j without V_i
+    union_.clear();
+    bool any_removed = false;
+    for (const StarEntry& e : star_i_) {
+      if (e.u == j || e.w == j) any_removed = true;
+      else union_.push_back(e);
+    }
+    gatherStar(j, star_j_);
+    for (const StarEntry& e : star_j_)
+      if (e.u != i && e.w != i) union_.push_back(e);
     float ca;
-    if (!ok || !evaluate(s, 2, p, n, ca)) continue;
+    if (!evaluate(union_.data(), union_.size(), any_removed, p, n, best_ca, ca)) continue;
     if (ca < best_ca) {
       best_ca = ca;
       best_j = j;
@@ -568,7 +592,7 @@ float ZhangEngine::triangleVision(uint32_t t) {
   const glm::vec3 nt = tri_n_[t];
   for (int c = 0; c < 3; ++c)
     forStar(tri_[3 * t + c], [&](uint32_t o, uint32_t) {
-      if (o != t) max_angle = std::max(max_angle, angleBetweenUnit(nt, tri_n_[o]));
+      if (o != t) max_angle = std::max(max_angle, fastAngle(nt, tri_n_[o]));
     });
   return max_angle * tri_a_[t];
 }
@@ -597,8 +621,19 @@ bool ZhangEngine::stepTriangle() {
     for (int i = 0; i < 3; ++i)
       if (ca_[s[i]] > ca_[k] || (ca_[s[i]] == ca_[k] && s[i] < k)) k = s[i];
   }
+  if (!ok) return true;  // re-queued when its neighbourhood changes
+  union_.clear();
+  bool any_removed = false;
+  for (int si = 0; si < 3; ++si) {
+    gatherStar(s[si], star_j_);
+    for (const StarEntry& e : star_j_) {
+      const bool u_in = e.u == s[0] || e.u == s[1] || e.u == s[2], w_in = e.w == s[0] || e.w == s[1] || e.w == s[2];
+      if (u_in || w_in) any_removed = true;
+      else union_.push_back(e);
+    }
+  }
   float ca;
-  if (!ok || !evaluate(s, 3, p, n, ca)) return true;  // re-queued when its neighbourhood changes
+  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) return true;
   apply(s, 3, k, p, n);
   refreshTrianglesAround(k);
   return true;

@@ -50,9 +50,11 @@ struct StarMeasure {
 };
 
 // Topology and super height of a star (C(V), disk test, SA, SV, SH) and the class of §2 given the
-// largest normal angle of the star. `positions` indexed by vertex id.
+// largest normal angle of the star. `positions` indexed by vertex id. With `always_height` false, SA,
+// SV and SH are only computed where the class needs them (a disk vertex above the feature angle).
 void measureStar(const glm::vec3& pv, const StarPair* pairs, size_t pair_count, const glm::vec3* positions,
-                 float max_angle_rad, const ZhangParams& params, StarScratch& scratch, StarMeasure& out);
+                 float max_angle_rad, const ZhangParams& params, StarScratch& scratch, StarMeasure& out,
+                 bool always_height = true);
 
 // Super height only (SH of a disk star; 0 when the ring is not one cycle).
 float superHeightOfStar(const glm::vec3& pv, const StarPair* pairs, size_t pair_count, const glm::vec3* positions,
