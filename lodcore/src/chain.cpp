@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "cluster_internal.h"
+#include "scenelod/lodcore/zhang.h"
 
 namespace scenelod {
 
@@ -181,6 +182,7 @@ Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out,
       return e;
     }
     case LodMethod::kZhang:
+      return buildZhangChain(original, params, out);
     case LodMethod::kScrooge:
       return {Status::kUnsupported, std::string("the '") + lodMethodName(params.cluster.method) +
                                         "' generator is not part of this build"};
