@@ -556,10 +556,10 @@ class GltfReader {
           for (uint32_t i : idx) m.triangles.push_back(base + i);
           break;
         case TINYGLTF_MODE_TRIANGLE_STRIP:
-          // every other triangle swaps its first two corners to keep the winding
+          // triangle i is (i, i+1, i+2) for even i and (i, i+2, i+1) for odd i (glTF 2.0 §3.7.2.1)
           for (size_t i = 0; i + 2 < n; ++i) {
             const bool odd = i % 2 == 1;
-            m.triangles.insert(m.triangles.end(), {base + idx[odd ? i + 1 : i], base + idx[odd ? i : i + 1], base + idx[i + 2]});
+            m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[odd ? i + 2 : i + 1], base + idx[odd ? i + 1 : i + 2]});
           }
           break;
         case TINYGLTF_MODE_TRIANGLE_FAN:
@@ -729,8 +729,10 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
     for (char& c : err)
       if (c == '\n') c = ';';
     const bool size_problem = err.find("size mismatch") != std::string::npos || err.find("byteLength") != std::string::npos;
-    return {size_problem ? Status::kCorrupt : Status::kParseError,
-            path + ": " + (size_problem ? "truncated or wrong-size buffer: " : "cannot parse glTF: ") + err};
+    const bool bad_reference = err.find("out of bounds") != std::string::npos;
+    if (size_problem) return {Status::kCorrupt, path + ": truncated or wrong-size buffer: " + err};
+    if (bad_reference) return {Status::kInvalidMesh, path + ": invalid reference: " + err};
+    return {Status::kParseError, path + ": cannot parse glTF: " + err};
   }
   for (const std::string& req : model.extensionsRequired)
     for (const char* g : kGeometryExtensions)
