@@ -266,6 +266,9 @@ double readComponent(const unsigned char* p, int type, bool normalized) {
   }
 }
 
+// an accessor without a buffer view (zeros, maybe sparse) holds no data to bound its count
+constexpr size_t kMaxUnbackedCount = size_t(1) << 26;
+
 class GltfReader {
  public:
   GltfReader(const std::string& path, const tinygltf::Model& model, const LoadContext& ctx)
@@ -321,11 +324,16 @@ class GltfReader {
     component_count = ccount;
     component_type = a.componentType;
     const size_t elem = static_cast<size_t>(csize) * static_cast<size_t>(ccount);
-    out.assign(a.count * static_cast<size_t>(ccount), 0.0);
+    // the range check comes before any allocation, so a corrupt count cannot ask for gigabytes
+    const unsigned char* p = nullptr;
+    size_t stride = 0;
     if (a.bufferView >= 0) {
-      const unsigned char* p = nullptr;
-      size_t stride = 0;
       if (Error e = viewBytes(a.bufferView, a.byteOffset, 0, a.count, elem, what, p, stride)) return e;
+    } else if (a.count > kMaxUnbackedCount) {
+      return fail(Status::kInvalidMesh, what + " has no buffer view and an implausible count " + std::to_string(a.count));
+    }
+    out.assign(a.count * static_cast<size_t>(ccount), 0.0);
+    if (p) {
       for (size_t i = 0; i < a.count; ++i)
         for (int k = 0; k < ccount; ++k)
           out[i * static_cast<size_t>(ccount) + static_cast<size_t>(k)] =

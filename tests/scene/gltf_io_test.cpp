@@ -611,3 +611,35 @@ TEST(SceneLoad, ObjBecomesOneNodeAndFlattenAppliesWorldTransforms) {
   }
   EXPECT_EQ(loadScene(dir + "/tri.ply", s).status, Status::kUnsupported);
 }
+
+TEST(GltfImport, CorruptedGlbNeverCrashes) {
+  // every truncation and a byte overwrite at every offset of a small GLB: each import either
+  // succeeds with a valid scene or returns an error naming the file
+  const std::string dir = makeDir("corrupt");
+  ASSERT_TRUE(exportGlb(dir + "/good.glb", sampleScene()).ok());
+  const std::vector<unsigned char> good = readBytes(dir + "/good.glb");
+  ASSERT_GT(good.size(), 100u);
+  const std::string path = dir + "/bad.glb";
+  size_t failures = 0;
+  auto check = [&](const std::vector<unsigned char>& bytes) {
+    writeBytes(path, bytes);
+    SceneData s;
+    const Error e = importGltf(path, s);
+    if (e) {
+      ++failures;
+      EXPECT_EQ(e.message.rfind(path + ": ", 0), 0u) << e.message;
+    } else {
+      EXPECT_TRUE(validateSceneData(s, path).ok());
+    }
+  };
+  size_t truncations = 0;
+  for (size_t n = 0; n < good.size(); n += 3, ++truncations)
+    check(std::vector<unsigned char>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(n)));
+  EXPECT_EQ(failures, truncations);  // every truncation is refused
+  for (unsigned char value : {0x00, 0x39, 0xFF})
+    for (size_t i = value == 0xFF ? 0 : value % 4; i < good.size(); i += value == 0xFF ? 1 : 4) {
+      std::vector<unsigned char> bytes = good;
+      bytes[i] = value;
+      check(bytes);
+    }
+}
