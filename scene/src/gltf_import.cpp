@@ -24,6 +24,7 @@
 #include <stb_image.h>
 #include <tiny_gltf.h>
 
+#include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::scene {
@@ -764,20 +765,6 @@ Error readScene(const std::string& path, const tinygltf::Model& model, const Loa
   return {};
 }
 
-Sphere boundingSphere(const Mesh& mesh) {
-  Sphere s;
-  if (mesh.positions.empty()) return s;
-  const Aabb box = computeBounds(mesh);
-  s.center = box.center();
-  float r2 = 0.0f;
-  for (const glm::vec3& p : mesh.positions) {
-    const glm::vec3 d = p - s.center;
-    r2 = std::max(r2, d.x * d.x + d.y * d.y + d.z * d.z);
-  }
-  s.radius = std::sqrt(r2);
-  return s;
-}
-
 bool numberField(const tinygltf::Value& obj, const char* key, float& out) {
   if (!obj.IsObject() || !obj.Has(key)) return false;
   const tinygltf::Value& v = obj.Get(key);
@@ -884,7 +871,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
       LodLevel l0;
       l0.mesh = s.meshes[m].mesh;
       readLevelExtras(model.nodes[i], l0);
-      l0.bounds = boundingSphere(l0.mesh);
+      l0.bounds = minimalSphere(Span<const glm::vec3>(l0.mesh.positions.data(), l0.mesh.positions.size()));
       c[m].levels.push_back(std::move(l0));
       // without our extras, a level's cell width follows from MSFT_screencoverage (docs/IO.md)
       std::vector<float> coverage;
@@ -901,16 +888,16 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
         if (k < coverage.size() && coverage[k] > 0.0f)
           level.cell_width = 2.0f * c[m].levels[0].bounds.radius * kCoverageCellPixels / (coverage[k] * kCoverageViewportPx);
         readLevelExtras(ln, level);
-        level.bounds = boundingSphere(level.mesh);
         c[m].levels.push_back(std::move(level));
       }
+      computeChainBounds(c[m]);
     }
     for (size_t m = 0; m < c.size(); ++m)
       if (!defined[m]) {
         LodLevel l0;
         l0.mesh = s.meshes[m].mesh;
-        l0.bounds = boundingSphere(l0.mesh);
         c[m].levels.push_back(std::move(l0));
+        computeChainBounds(c[m]);
       }
     if (Error e = validateSceneData(s, path)) return e;
     out = std::move(s);
