@@ -13,6 +13,7 @@
 // max_normal_turn_deg or lose (almost) all its area (fold-over), or when it would move a kept vertex.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -373,6 +374,12 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
     n = nrm_[k];
     return;
   }
+  if (params_.placement == ZhangPlacement::kNeighbour) {  // s[s_count - 1] is the neighbour V_j
+    k = s[s_count - 1];
+    p = pos_[k];
+    n = nrm_[k];
+    return;
+  }
   float sum = 0.0f;
   for (int i = 0; i < s_count; ++i) sum += ca_[s[i]];
   p = glm::vec3(0.0f);
@@ -612,15 +619,15 @@ void ZhangEngine::refreshTrianglesAround(uint32_t k) {
 bool ZhangEngine::stepTriangle() {
   if (heap_.empty()) return false;
   const uint32_t t = heap_.pop();
-  const uint32_t s[3] = {tri_[3 * t], tri_[3 * t + 1], tri_[3 * t + 2]};
+  uint32_t s[3] = {tri_[3 * t], tri_[3 * t + 1], tri_[3 * t + 2]};
+  // the vertex with the largest CA last: with ZhangPlacement::kNeighbour the triangle goes onto it
+  for (int a = 0; a < 2; ++a)
+    if (ca_[s[a]] > ca_[s[2]] || (ca_[s[a]] == ca_[s[2]] && s[a] < s[2])) std::swap(s[a], s[2]);
   uint32_t k;
   glm::vec3 p, n;
   bool ok;
   interpolate(s, 3, k, p, n, ok);
-  if (ok && !kept_[k]) {  // survivor: the vertex with the largest CA
-    for (int i = 0; i < 3; ++i)
-      if (ca_[s[i]] > ca_[k] || (ca_[s[i]] == ca_[k] && s[i] < k)) k = s[i];
-  }
+  if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
   if (!ok) return true;  // re-queued when its neighbourhood changes
   union_.clear();
   bool any_removed = false;

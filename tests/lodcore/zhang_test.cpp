@@ -470,3 +470,20 @@ TEST(ZhangChain, LevelsHalveAndWidthsIncrease) {
   }
   EXPECT_NEAR(zhangEquivalentCellWidth(std::sqrt(3.0f)), 2.0f, 1e-6f);
 }
+
+TEST(ZhangEdgeCollapse, NeighbourPlacementKeepsInputPositions) {
+  const Mesh in = icosphere(3);
+  for (ZhangMode mode : {ZhangMode::kEdgeCollapse, ZhangMode::kTriangleDecimation}) {
+    ZhangParams p;
+    p.placement = ZhangPlacement::kNeighbour;
+    p.mode = mode;
+    Mesh out;
+    ASSERT_TRUE(simplifyZhang(in, 300, p, out).ok());
+    EXPECT_LE(out.triangleCount(), 300u);
+    expectValid(out);
+    expectClosedManifold(out);
+    std::set<std::tuple<float, float, float>> original;
+    for (const glm::vec3& q : in.positions) original.insert({q.x, q.y, q.z});
+    for (const glm::vec3& q : out.positions) EXPECT_TRUE(original.count({q.x, q.y, q.z})) << "moved vertex";
+  }
+}
