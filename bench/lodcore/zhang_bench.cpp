@@ -4,44 +4,25 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 #include <meshoptimizer.h>
 
+#include "scenelod/lodcore/obj_io.h"
 #include "scenelod/lodcore/zhang.h"
 
 using namespace scenelod;
 
 namespace {
 
-// the bunny's "v x y z" and "f a b c" lines only (obj_io's reader is not used here so the benchmark
-// does not depend on it); an absent file gives an empty mesh and the bunny benchmarks skip
-Mesh loadBunny() {
-  Mesh m;
-  std::ifstream f(SCENELOD_BUNNY_PATH);
-  std::string line;
-  while (std::getline(f, line)) {
-    std::istringstream s(line);
-    std::string tag;
-    s >> tag;
-    if (tag == "v") {
-      glm::vec3 p;
-      s >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "f") {
-      std::string c;
-      while (s >> c) m.triangles.push_back(static_cast<uint32_t>(std::stoul(c.substr(0, c.find('/'))) - 1));
-    }
-  }
-  return m;
-}
-
 const Mesh& bunny() {
-  static const Mesh m = loadBunny();
+  static const Mesh m = [] {
+    Mesh b;
+    if (readObj(SCENELOD_BUNNY_PATH, b)) b = Mesh{};  // absent: the bunny benchmarks skip
+    return b;
+  }();
   return m;
 }
 
