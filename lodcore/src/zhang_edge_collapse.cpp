@@ -586,7 +586,10 @@ bool ZhangEngine::stepEdge() {
       best_n = n;
     }
   }
-  if (best_j == kNone) return true;  // blocked until a neighbour's collapse changes its fan
+  if (best_j == kNone) {  // blocked until a neighbour's collapse changes its fan
+    ++stats_.blocked;
+    return true;
+  }
   const uint32_t s[2] = {i, best_j};
   apply(s, 2, best_j, best_p, best_n);
   return true;
@@ -628,7 +631,10 @@ bool ZhangEngine::stepTriangle() {
   bool ok;
   interpolate(s, 3, k, p, n, ok);
   if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
-  if (!ok) return true;  // re-queued when its neighbourhood changes
+  if (!ok) {  // re-queued when its neighbourhood changes
+    ++stats_.blocked;
+    return true;
+  }
   union_.clear();
   bool any_removed = false;
   for (int si = 0; si < 3; ++si) {
@@ -640,7 +646,10 @@ bool ZhangEngine::stepTriangle() {
     }
   }
   float ca;
-  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) return true;
+  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) {
+    ++stats_.blocked;
+    return true;
+  }
   apply(s, 3, k, p, n);
   refreshTrianglesAround(k);
   return true;

@@ -94,6 +94,7 @@ struct ZhangStats {
   size_t collapses = 0;         // edge collapses or triangle contractions done
   size_t rejected_topology = 0; // candidates refused by the link / manifold checks
   size_t rejected_fold = 0;     // candidates refused by the fold-over check
+  size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
   float max_displacement = 0.0f;  // largest distance an input vertex moved to its representative
