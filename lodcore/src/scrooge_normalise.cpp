@@ -16,13 +16,20 @@ namespace scenelod::scrooge {
 
 namespace {
 
+// splitmix64 finaliser: grid keys are small correlated integers
+uint64_t mix(uint64_t x) {
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
 struct CellKey {
   int64_t x, y, z;
   bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
 };
 struct CellHash {
   size_t operator()(const CellKey& k) const {
-    return size_t(k.x * 73856093LL) ^ size_t(k.y * 19349663LL) ^ size_t(k.z * 83492791LL);
+    return size_t(mix(uint64_t(k.x) ^ mix(uint64_t(k.y) ^ mix(uint64_t(k.z)))));
   }
 };
 
@@ -43,7 +50,7 @@ struct AttrHash {
 };
 
 // welds positions: exact equality when eps is 0, else within eps (the first vertex of a cluster
-// stays; later ones join the first point found within eps in the 27 neighbouring hash cells)
+// stays; later ones join the first point found within eps in the hash cells around them)
 void weldPoints(const Mesh& in, float eps, Model& m) {
   const size_t n = in.vertexCount();
   m.vertex_point.assign(n, kNoPoint);
@@ -51,10 +58,20 @@ void weldPoints(const Mesh& in, float eps, Model& m) {
   grid.reserve(n);
   for (size_t v = 0; v < n; ++v) {
     const glm::vec3 p = in.positions[v] + glm::vec3(0.0f);  // -0 becomes +0
+    // cells of 4 eps: a point within eps of a neighbour cell also looks there, else only at home
+    const double cell = 4.0 * double(eps);
     CellKey k;
+    int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     if (eps > 0.0f) {
-      k = {int64_t(std::floor(double(p.x) / eps)), int64_t(std::floor(double(p.y) / eps)),
-           int64_t(std::floor(double(p.z) / eps))};
+      const double c[3] = {double(p.x) / cell, double(p.y) / cell, double(p.z) / cell};
+      int64_t ki[3];
+      for (int a = 0; a < 3; ++a) {
+        ki[a] = int64_t(std::floor(c[a]));
+        const double frac = (c[a] - double(ki[a])) * cell;
+        lo[a] = frac <= double(eps) ? -1 : 0;
+        hi[a] = frac >= cell - double(eps) ? 1 : 0;
+      }
+      k = {ki[0], ki[1], ki[2]};
     } else {
       uint32_t b[3];
       std::memcpy(b, &p, sizeof(b));
@@ -62,9 +79,9 @@ void weldPoints(const Mesh& in, float eps, Model& m) {
     }
     uint32_t found = kNoPoint;
     if (eps > 0.0f) {
-      for (int dz = -1; dz <= 1 && found == kNoPoint; ++dz)
-        for (int dy = -1; dy <= 1 && found == kNoPoint; ++dy)
-          for (int dx = -1; dx <= 1 && found == kNoPoint; ++dx) {
+      for (int dz = lo[2]; dz <= hi[2] && found == kNoPoint; ++dz)
+        for (int dy = lo[1]; dy <= hi[1] && found == kNoPoint; ++dy)
+          for (int dx = lo[0]; dx <= hi[0] && found == kNoPoint; ++dx) {
             auto it = grid.find({k.x + dx, k.y + dy, k.z + dz});
             if (it == grid.end()) continue;
             for (uint32_t q : it->second)

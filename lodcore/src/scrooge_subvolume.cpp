@@ -19,6 +19,13 @@ namespace scenelod::scrooge {
 
 namespace {
 
+// splitmix64 finaliser: grid keys are small correlated integers
+uint64_t mix(uint64_t x) {
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
 constexpr uint32_t kMixed = 0xffffffffu;  // point used by polygons of several cells or none
 constexpr uint32_t kUnset = 0xfffffffeu;
 
@@ -28,7 +35,7 @@ struct Key {
   bool operator<(const Key& o) const { return x != o.x ? x < o.x : (y != o.y ? y < o.y : z < o.z); }
 };
 struct KeyHash {
-  size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL) ^ size_t(k.y * 19349663LL) ^ size_t(k.z * 83492791LL); }
+  size_t operator()(const Key& k) const { return size_t(mix(uint64_t(k.x) ^ mix(uint64_t(k.y) ^ mix(uint64_t(k.z))))); }
 };
 
 // closed cell [k s, (k+1) s] along one axis holding the interval [a, b], if there is one
