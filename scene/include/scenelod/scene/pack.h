@@ -1,0 +1,130 @@
+#pragma once
+// LOD packs: a compact binary file holding a scene (nodes, objects, transforms, importance) and the
+// LOD chain of every mesh, loaded with one read and no per-vertex parsing: every array is stored as
+// the runtime uses it, 16-byte aligned, little-endian. The byte layout and the versioning policy are
+// in docs/SCENE.md.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "scenelod/lodcore/lod_chain.h"
+#include "scenelod/lodcore/span.h"
+#include "scenelod/lodcore/status.h"
+#include "scenelod/scene/scene_data.h"
+
+namespace scenelod::scene {
+
+class Scene;
+
+constexpr char kPackMagic[8] = {'S', 'L', 'O', 'D', 'P', 'A', 'C', 'K'};
+constexpr uint32_t kPackVersion = 1;
+
+// CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320) of `size` bytes, continuing from `crc`
+// (0 to start). Cost: O(size), slicing-by-8, no allocation.
+uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);
+
+struct PackWriteOptions {
+  size_t max_levels = 0;           // keep at most this many levels per chain (0 = all; level 0 always)
+  bool optimize_order = true;      // reorder every level with optimizeMeshOrder (vertex cache + fetch)
+  // per-object data in objectNodes() order; empty = importance 1, not must-draw, user data = node index
+  std::vector<float> importance;
+  std::vector<uint8_t> must_draw;
+  std::vector<uint64_t> user_data;
+};
+
+struct PackWriteStats {
+  size_t bytes = 0;
+  double acmr_before = 0.0;  // triangle-weighted mean ACMR (FIFO 16) of all levels as given
+  double acmr_after = 0.0;   // the same after reordering (equal to before when not optimising)
+};
+
+// Writes `scene` (nodes, roots, names; meshes are the chains' level 0) and `chains` (one per mesh,
+// as buildLods makes them; LodLevel::bounds and `chain_spheres` as stored) to `path`.
+// Errors: chain count or per-object arrays not matching, an invalid mesh, cannot write. Allocates.
+Error writePack(const std::string& path, const SceneData& scene, const std::vector<LodChain>& chains,
+                const std::vector<Sphere>& chain_spheres, const PackWriteOptions& options = {},
+                PackWriteStats* stats = nullptr);
+// The same into memory.
+Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const std::vector<LodChain>& chains,
+                     const std::vector<Sphere>& chain_spheres, const PackWriteOptions& options = {},
+                     PackWriteStats* stats = nullptr, const std::string& what = "pack");
+
+// Views of one level inside a loaded pack (valid while the Pack lives).
+struct PackLevelView {
+  float cell_width = 0.0f;
+  float max_error = 0.0f;
+  LodMethod method = LodMethod::kOriginal;
+  Sphere bounds;
+  Span<const glm::vec3> positions;
+  Span<const glm::vec3> normals;  // empty when absent
+  Span<const glm::vec3> colors;   // empty when absent
+  Span<const glm::vec2> uvs;      // empty when absent
+  Span<const uint32_t> triangles;
+  Span<const uint32_t> edges;
+  Span<const float> edge_thickness;  // empty when absent
+  Span<const uint32_t> points;
+};
+
+struct PackNodeView {
+  int32_t parent = -1;
+  int32_t mesh = -1;
+  const float* local = nullptr;  // 16 floats, column-major
+  Span<const uint32_t> children;
+  const char* name = "";
+};
+
+struct PackObjectView {
+  uint32_t node = 0;
+  uint32_t chain = 0;
+  float importance = 1.0f;
+  bool must_draw = false;
+  uint64_t user_data = 0;
+};
+
+// A loaded pack: one buffer holding the file, with views into it.
+class Pack {
+ public:
+  // Reads `path` with one read into one buffer and checks magic, version, size, checksum and that
+  // every section and array lies inside the file; with `check_indices` also that every index is in
+  // range (one pass over the index arrays). Errors name the file: kIoError (missing, unreadable),
+  // kCorrupt (truncated, bad checksum, bad offsets), kUnsupported (other version). Allocates once.
+  static Error load(const std::string& path, Pack& out, bool check_indices = true);
+  // The same from bytes already in memory (copied into the pack's buffer); `what` names the source.
+  static Error fromBytes(const uint8_t* data, size_t size, Pack& out, const std::string& what, bool check_indices = true);
+
+  size_t nodeCount() const;
+  size_t rootCount() const;
+  size_t objectCount() const;
+  size_t chainCount() const;
+  size_t levelCount(size_t chain) const;
+  uint32_t root(size_t i) const;
+  PackNodeView node(size_t i) const;
+  PackObjectView object(size_t i) const;
+  Sphere chainSphere(size_t chain) const;
+  const char* meshName(size_t chain) const;
+  PackLevelView level(size_t chain, size_t level) const;
+  size_t byteSize() const { return bytes_.size(); }
+  const uint8_t* bytes() const { return bytes_.data(); }  // the whole file
+
+  // Copies out owned data: the scene (meshes = level 0 of each chain; materials are not stored)
+  // and the chains. Allocates.
+  void toSceneData(SceneData& out) const;
+  void toChains(std::vector<LodChain>& chains, std::vector<Sphere>& chain_spheres) const;
+  // Builds a runtime scene: nodes as in toSceneData, the pack's objects with their importance,
+  // must-draw flags and user data, and the chains' spheres. Allocates.
+  Error toScene(Scene& out) const;
+
+ private:
+  Error parse(const std::string& what, bool check_indices);
+  std::vector<uint8_t> bytes_;
+  // byte offsets of the sections, filled by parse()
+  size_t nodes_ = 0, node_count_ = 0, children_ = 0, children_count_ = 0, roots_ = 0, root_count_ = 0;
+  size_t objects_ = 0, object_count_ = 0, chains_ = 0, chain_count_ = 0, levels_ = 0, level_count_ = 0;
+  size_t names_ = 0, names_size_ = 0;
+};
+
+}  // namespace scenelod::scene

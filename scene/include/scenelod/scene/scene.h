@@ -1,0 +1,185 @@
+#pragma once
+// The runtime scene graph an engine mirrors its objects into: nodes with parent links and local
+// transforms, world transforms kept current with dirty flags in one parent-before-child pass, and
+// objects (a node + a shared LOD chain + importance + user data) whose world bounding spheres are
+// stored as flat arrays that selection reads as spans.
+//
+// Handles are (slot, generation) pairs: removing a node or object bumps its slot's generation, so an
+// old handle is refused with Status::kNotFound instead of touching a reused slot.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "scenelod/lodcore/lod_chain.h"
+#include "scenelod/lodcore/span.h"
+#include "scenelod/lodcore/status.h"
+#include "scenelod/scene/scene_data.h"
+
+namespace scenelod::scene {
+
+constexpr uint32_t kInvalidSlot = 0xffffffffu;
+
+struct NodeHandle {
+  uint32_t slot = kInvalidSlot;
+  uint32_t generation = 0;
+  bool operator==(const NodeHandle& o) const { return slot == o.slot && generation == o.generation; }
+  bool operator!=(const NodeHandle& o) const { return !(*this == o); }
+};
+
+struct ObjectHandle {
+  uint32_t slot = kInvalidSlot;
+  uint32_t generation = 0;
+  bool operator==(const ObjectHandle& o) const { return slot == o.slot && generation == o.generation; }
+  bool operator!=(const ObjectHandle& o) const { return !(*this == o); }
+};
+
+// Translation, rotation, scale; composes to T * R * S as in glTF.
+struct Trs {
+  glm::vec3 translation{0.0f};
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // w, x, y, z
+  glm::vec3 scale{1.0f};
+};
+
+glm::mat4 composeTrs(const Trs& trs);
+
+// Largest factor by which the linear part (upper 3x3) of `m` can stretch a vector, bounded from
+// above: sqrt of the largest Gershgorin row sum of the Gram matrix G = A^T A (G_ij = column_i .
+// column_j). For matrices without shear (any T * R * S) G is diagonal and the bound is exact, the
+// largest column norm; under shear it stays an upper bound of the spectral norm (the largest column
+// norm alone would not be). Cost: 6 dot products and a square root.
+float maxScaleBound(const glm::mat4& m);
+
+// A sphere moved by an affine matrix: centre transformed, radius times maxScaleBound(m). The result
+// contains the image of every point of the input sphere (conservative under non-uniform scale and
+// shear).
+Sphere transformSphere(const Sphere& s, const glm::mat4& m);
+
+struct ObjectDesc {
+  NodeHandle node;
+  uint32_t chain = 0;       // chain id, shared by every instance of one mesh; < chainCount()
+  float importance = 1.0f;  // selection's benefit weight, >= 0
+  bool must_draw = false;   // never culled by selection
+  uint64_t user_data = 0;   // the engine's own id, returned untouched
+};
+
+class Scene {
+ public:
+  Scene() = default;
+
+  // Builds the runtime scene from raw data: every node (same parents and local transforms; node i of
+  // `data` is nodeHandle(i)) and one object per node with a mesh, numbered as objectNodes() does
+  // (object k has dense index k until objects are removed). Chain ids are mesh indices; each
+  // chain's object-space sphere starts as the minimal sphere of its mesh. World transforms and
+  // spheres are current on return. Errors: validateSceneData's. Allocates.
+  static Error fromSceneData(const SceneData& data, Scene& out, const std::string& what = "scene");
+
+  // ---- chains: their object-space bounding spheres, indexed by chain id ----
+  // Sets the number of chains (new ones get an empty sphere). Allocates.
+  void setChainCount(size_t chain_count);
+  size_t chainCount() const { return chain_spheres_.size(); }
+  // Sets chain `chain`'s object-space sphere (it must contain every level of the chain); every
+  // object using it gets a new world sphere at the next update(). Errors: chain out of range.
+  Error setChainSphere(uint32_t chain, const Sphere& sphere);
+  Span<const Sphere> chainSpheres() const { return {chain_spheres_.data(), chain_spheres_.size()}; }
+
+  // ---- nodes ----
+  // Adds a node under `parent` (a null NodeHandle{} for a root) with a local matrix. The node goes
+  // after its parent in the update order. Errors: stale parent. Amortised O(1).
+  Error addNode(NodeHandle parent, const glm::mat4& local, NodeHandle& out);
+  // Removes a node, all its descendants and every object on them (their handles become stale).
+  // Errors: stale handle. O(nodes + objects).
+  Error removeNode(NodeHandle node);
+  // Moves `node` (with its subtree) under `new_parent` (null for a root), keeping its local
+  // transform. Errors: stale handle, or new_parent is the node itself or one of its descendants.
+  // Reorders the update order so parents stay first: O(nodes) worst case.
+  Error reparent(NodeHandle node, NodeHandle new_parent);
+  // Set a node's local transform and mark it dirty. Errors: stale handle. O(1), no allocation.
+  Error setLocal(NodeHandle node, const glm::mat4& local);
+  Error setLocal(NodeHandle node, const Trs& trs);
+  Error getLocal(NodeHandle node, glm::mat4& out) const;
+  // World transform as of the last update(). Errors: stale handle.
+  Error getWorld(NodeHandle node, glm::mat4& out) const;
+  Error getParent(NodeHandle node, NodeHandle& out) const;  // null handle for a root
+  bool isValid(NodeHandle node) const;
+  size_t nodeCount() const { return order_.size(); }
+  // Handle of the node at position `i` of the update order (parents before children), i < nodeCount().
+  NodeHandle nodeAt(size_t i) const;
+
+  // ---- objects ----
+  // Adds an object. Errors: stale node, chain out of range, importance negative or not finite.
+  // Its world sphere is current after the next update(). Amortised O(1).
+  Error addObject(const ObjectDesc& desc, ObjectHandle& out);
+  // Removes an object; the last object takes its dense index (swap-remove). Errors: stale handle. O(1).
+  Error removeObject(ObjectHandle object);
+  // Moves an object to another node. Errors: stale handles. O(1).
+  Error setObjectNode(ObjectHandle object, NodeHandle node);
+  Error setObjectChain(ObjectHandle object, uint32_t chain);
+  Error setImportance(ObjectHandle object, float importance);
+  Error setMustDraw(ObjectHandle object, bool must_draw);
+  Error setUserData(ObjectHandle object, uint64_t user_data);
+  Error getObject(ObjectHandle object, ObjectDesc& out) const;
+  // Dense index of a live object (its position in the span accessors below). Errors: stale handle.
+  Error objectIndex(ObjectHandle object, size_t& out) const;
+  ObjectHandle objectAt(size_t dense_index) const;  // dense_index < objectCount()
+  bool isValid(ObjectHandle object) const;
+  size_t objectCount() const { return object_chain_.size(); }
+
+  // Recomputes world transforms of dirty nodes and their descendants in one linear pass in
+  // parent-before-child order, then the world spheres of objects whose node moved (or whose chain
+  // or node changed). Returns the number of objects whose sphere was recomputed.
+  // Cost: O(nodes + objects); no allocation, no locks; single-threaded.
+  size_t update();
+
+  // ---- hot per-object data, dense arrays indexed by object dense index (valid after update()) ----
+  Span<const glm::vec3> worldCenters() const { return {world_center_.data(), world_center_.size()}; }
+  Span<const float> worldRadii() const { return {world_radius_.data(), world_radius_.size()}; }
+  Span<const float> maxScales() const { return {max_scale_.data(), max_scale_.size()}; }
+  Span<const uint32_t> chainIds() const { return {object_chain_.data(), object_chain_.size()}; }
+  Span<const float> importances() const { return {importance_.data(), importance_.size()}; }
+  Span<const uint8_t> mustDraw() const { return {must_draw_.data(), must_draw_.size()}; }
+  Span<const uint64_t> userData() const { return {user_data_.data(), user_data_.size()}; }
+
+ private:
+  bool nodeLive(NodeHandle h) const;
+  bool objectLive(ObjectHandle h) const;
+  void rebuildParentIndices();
+
+  // node slots (stable, indexed by handle slot)
+  std::vector<uint32_t> node_generation_;  // 4 B: bumped on removal
+  std::vector<uint32_t> node_dense_;       // 4 B: position in the order, kInvalidSlot when free
+  std::vector<uint32_t> node_free_;        // free slots
+  // nodes in update order (parents before children), indexed by dense position
+  std::vector<uint32_t> order_;            // 4 B: slot of the node at this position
+  std::vector<int32_t> parent_dense_;      // 4 B: parent's position, -1 for a root (hot: update pass)
+  std::vector<uint8_t> node_dirty_;        // 1 B: local changed since the last update (hot)
+  std::vector<glm::mat4> local_;           // 64 B (hot: update pass)
+  std::vector<glm::mat4> world_;           // 64 B (hot: update pass, sphere pass)
+
+  // object slots
+  std::vector<uint32_t> object_generation_;
+  std::vector<uint32_t> object_dense_;     // kInvalidSlot when free
+  std::vector<uint32_t> object_free_;
+  // objects, dense. hot, read by the sphere pass and by selection:
+  std::vector<glm::vec3> world_center_;    // 12 B: world sphere centre
+  std::vector<float> world_radius_;        // 4 B: world sphere radius
+  std::vector<float> max_scale_;           // 4 B: maxScaleBound of the node's world matrix
+  std::vector<uint32_t> object_chain_;     // 4 B: chain id
+  std::vector<uint32_t> object_node_slot_; // 4 B: node slot (sphere pass)
+  std::vector<uint8_t> object_dirty_;      // 1 B: sphere must be recomputed
+  // read by selection:
+  std::vector<float> importance_;          // 4 B
+  std::vector<uint8_t> must_draw_;         // 1 B
+  // cold:
+  std::vector<uint64_t> user_data_;        // 8 B: engine id
+  std::vector<uint32_t> object_slot_;      // 4 B: slot of the object at this dense index
+
+  std::vector<Sphere> chain_spheres_;      // object space, per chain id
+  bool all_objects_dirty_ = false;
+};
+
+}  // namespace scenelod::scene

@@ -1,0 +1,244 @@
+// Bounding spheres: Ritter 1990 ("An efficient bounding sphere", Graphics Gems I) and the minimal
+// enclosing sphere of Welzl 1991 ("Smallest enclosing disks (balls and ellipsoids)") in the
+// move-to-front form of Gärtner 1999 ("Fast and robust smallest enclosing balls"), in double
+// precision with an explicit support set of at most 4 points.
+#include "scenelod/scene/bounding_sphere.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+namespace scenelod::scene {
+
+float coveringRadius(Span<const glm::vec3> points, const glm::vec3& c) {
+  double max_d2 = 0.0;
+  for (const glm::vec3& p : points) {
+    const double dx = double(p.x) - c.x, dy = double(p.y) - c.y, dz = double(p.z) - c.z;
+    max_d2 = std::max(max_d2, dx * dx + dy * dy + dz * dz);
+  }
+  float r = std::nextafter(static_cast<float>(std::sqrt(max_d2)), INFINITY);
+  // the float distance a caller computes may round above the double one: check in float too
+  for (const glm::vec3& p : points) {
+    const float d = glm::length(p - c);
+    if (d > r) r = std::nextafter(d, INFINITY);
+  }
+  return points.empty() ? 0.0f : r;
+}
+
+Sphere ritterSphere(Span<const glm::vec3> points) {
+  Sphere s;
+  if (points.empty()) return s;
+  auto farthest = [&](const glm::vec3& from) {
+    size_t best = 0;
+    float best_d2 = -1.0f;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const glm::vec3 d = points[i] - from;
+      const float d2 = glm::dot(d, d);
+      if (d2 > best_d2) { best_d2 = d2; best = i; }
+    }
+    return points[best];
+  };
+  const glm::vec3 y = farthest(points[0]);
+  const glm::vec3 z = farthest(y);
+  glm::dvec3 c = (glm::dvec3(y) + glm::dvec3(z)) * 0.5;
+  double r = glm::length(glm::dvec3(z) - glm::dvec3(y)) * 0.5;
+  for (const glm::vec3& p : points) {
+    const glm::dvec3 d = glm::dvec3(p) - c;
+    const double dist = glm::length(d);
+    if (dist > r) {
+      // grow to the sphere touching the old one's far side and p
+      const double new_r = (r + dist) * 0.5;
+      c += d * ((new_r - r) / dist);
+      r = new_r;
+    }
+  }
+  s.center = glm::vec3(c);
+  s.radius = coveringRadius(points, s.center);
+  return s;
+}
+
+namespace {
+
+struct Ball {
+  glm::dvec3 c{0.0};
+  double r2 = -1.0;  // negative: the empty ball
+};
+
+// the smallest ball with all `k` points on its boundary (centre in their affine hull); false when
+// the points are affinely dependent (numerically)
+bool circumBall(const glm::dvec3* q, int k, Ball& out) {
+  if (k == 0) { out = Ball{}; return true; }
+  if (k == 1) { out.c = q[0]; out.r2 = 0.0; return true; }
+  const int m = k - 1;
+  glm::dvec3 v[3];
+  double a[3][4];
+  double scale = 0.0;
+  for (int i = 0; i < m; ++i) { v[i] = q[i + 1] - q[0]; scale = std::max(scale, glm::dot(v[i], v[i])); }
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < m; ++j) a[i][j] = 2.0 * glm::dot(v[i], v[j]);
+    a[i][m] = glm::dot(v[i], v[i]);
+  }
+  // gaussian elimination with partial pivoting on the m x m system
+  for (int col = 0; col < m; ++col) {
+    int piv = col;
+    for (int r = col + 1; r < m; ++r)
+      if (std::fabs(a[r][col]) > std::fabs(a[piv][col])) piv = r;
+    if (!(std::fabs(a[piv][col]) > 1e-12 * scale)) return false;
+    if (piv != col)
+      for (int j = 0; j <= m; ++j) std::swap(a[piv][j], a[col][j]);
+    for (int r = 0; r < m; ++r) {
+      if (r == col) continue;
+      const double f = a[r][col] / a[col][col];
+      for (int j = col; j <= m; ++j) a[r][j] -= f * a[col][j];
+    }
+  }
+  glm::dvec3 c = q[0];
+  for (int i = 0; i < m; ++i) c += v[i] * (a[i][m] / a[i][i]);
+  out.c = c;
+  const glm::dvec3 d = q[0] - c;
+  out.r2 = glm::dot(d, d);
+  return true;
+}
+
+class MoveToFront {
+ public:
+  explicit MoveToFront(std::vector<glm::dvec3> pts) : pts_(std::move(pts)) {
+    const size_t n = pts_.size();
+    next_.resize(n + 1);
+    prev_.resize(n + 1);
+    // a circular doubly linked list with a sentinel at index n
+    for (size_t i = 0; i <= n; ++i) {
+      next_[i] = static_cast<uint32_t>((i + 1) % (n + 1));
+      prev_[i] = static_cast<uint32_t>((i + n) % (n + 1));
+    }
+  }
+
+  Ball run() {
+    // pivoting (Gärtner §2): repeatedly restart with the farthest violator in the support set,
+    // which keeps the recursion shallow on large inputs
+    mtf(sentinel());
+    for (int round = 0; round < 64; ++round) {
+      uint32_t worst = sentinel();
+      double worst_excess = 0.0;
+      for (uint32_t i = next_[sentinel()]; i != sentinel(); i = next_[i]) {
+        const double e = excess(pts_[i]);
+        if (e > worst_excess) { worst_excess = e; worst = i; }
+      }
+      if (worst == sentinel()) break;
+      support_count_ = 0;
+      push(pts_[worst]);
+      mtf(worst);
+      support_count_ = 0;
+      moveToFront(worst);
+    }
+    return ball_;
+  }
+
+ private:
+  uint32_t sentinel() const { return static_cast<uint32_t>(pts_.size()); }
+
+  double excess(const glm::dvec3& p) const {
+    if (ball_.r2 < 0.0) return 1.0;
+    const glm::dvec3 d = p - ball_.c;
+    const double e = glm::dot(d, d) - ball_.r2;
+    return e > 1e-12 * std::max(ball_.r2, 1e-300) ? e : 0.0;
+  }
+
+  bool push(const glm::dvec3& p) {
+    support_[support_count_] = p;
+    Ball b;
+    if (!circumBall(support_, support_count_ + 1, b)) return false;
+    ball_ = b;
+    ++support_count_;
+    return true;
+  }
+
+  void moveToFront(uint32_t i) {
+    next_[prev_[i]] = next_[i];
+    prev_[next_[i]] = prev_[i];
+    const uint32_t first = next_[sentinel()];
+    next_[i] = first;
+    prev_[i] = sentinel();
+    prev_[first] = i;
+    next_[sentinel()] = i;
+  }
+
+  // the smallest ball containing the list before `end` with the current support set on its boundary
+  void mtf(uint32_t end) {
+    Ball b;
+    circumBall(support_, support_count_, b);
+    ball_ = b;
+    if (support_count_ == 4) return;
+    for (uint32_t i = next_[sentinel()]; i != end;) {
+      const uint32_t nxt = next_[i];
+      if (excess(pts_[i]) > 0.0) {
+        if (push(pts_[i])) {
+          mtf(i);
+          --support_count_;
+          moveToFront(i);
+        }
+      }
+      i = nxt;
+    }
+  }
+
+  std::vector<glm::dvec3> pts_;
+  std::vector<uint32_t> next_, prev_;
+  glm::dvec3 support_[4];
+  int support_count_ = 0;
+  Ball ball_;
+};
+
+}  // namespace
+
+Sphere minimalSphere(Span<const glm::vec3> points) {
+  Sphere s;
+  if (points.empty()) return s;
+  std::vector<glm::dvec3> pts(points.size());
+  for (size_t i = 0; i < points.size(); ++i) pts[i] = glm::dvec3(points[i]);
+  // deterministic shuffle (xorshift) so sorted or scanline inputs keep the expected linear time
+  uint64_t state = 0x9E3779B97F4A7C15ull;
+  for (size_t i = pts.size(); i > 1; --i) {
+    state ^= state << 13; state ^= state >> 7; state ^= state << 17;
+    std::swap(pts[i - 1], pts[state % i]);
+  }
+  MoveToFront mtf(std::move(pts));
+  const Ball b = mtf.run();
+  s.center = glm::vec3(b.c);
+  s.radius = coveringRadius(points, s.center);
+  return s;
+}
+
+Sphere mergeSpheres(const Sphere& a, const Sphere& b) {
+  const glm::dvec3 ca(a.center), cb(b.center);
+  const double d = glm::length(cb - ca);
+  if (d + b.radius <= a.radius) return a;
+  if (d + a.radius <= b.radius) return b;
+  const double r = (d + a.radius + b.radius) * 0.5;
+  const glm::dvec3 c = ca + (cb - ca) * ((r - a.radius) / d);
+  Sphere s;
+  s.center = glm::vec3(c);
+  // round up so both input spheres stay inside after the float conversion of the centre
+  const double ra = glm::length(ca - glm::dvec3(s.center)) + a.radius;
+  const double rb = glm::length(cb - glm::dvec3(s.center)) + b.radius;
+  s.radius = std::nextafter(static_cast<float>(std::max(ra, rb)), INFINITY);
+  return s;
+}
+
+Sphere computeChainBounds(LodChain& chain) {
+  std::vector<glm::vec3> all;
+  size_t total = 0;
+  for (const LodLevel& l : chain.levels) total += l.mesh.positions.size();
+  all.reserve(total);
+  for (LodLevel& l : chain.levels) {
+    l.bounds = minimalSphere(Span<const glm::vec3>(l.mesh.positions.data(), l.mesh.positions.size()));
+    all.insert(all.end(), l.mesh.positions.begin(), l.mesh.positions.end());
+  }
+  return minimalSphere(Span<const glm::vec3>(all.data(), all.size()));
+}
+
+}  // namespace scenelod::scene

@@ -1,0 +1,595 @@
+// LOD pack writer and loader. The checksum is CRC-32 (IEEE), computed with the slicing-by-8 table
+// method (Kounavis & Berry 2005, "A systematic approach to building high performance software-based
+// CRC generators").
+#include "scenelod/scene/pack.h"
+
+#include <cstdio>
+#include <cstring>
+#include <type_traits>
+
+#include "scenelod/scene/mesh_order.h"
+#include "scenelod/scene/scene.h"
+
+namespace scenelod::scene {
+
+namespace {
+
+struct Crc32Tables {
+  uint32_t t[8][256];
+  Crc32Tables() {
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? (c >> 1) ^ 0xEDB88320u : c >> 1;
+      t[0][i] = c;
+    }
+    for (uint32_t i = 0; i < 256; ++i)
+      for (int s = 1; s < 8; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xff];
+  }
+};
+
+const Crc32Tables& crcTables() {
+  static const Crc32Tables tables;
+  return tables;
+}
+
+// ---- on-disk records (little-endian, fixed sizes checked below) ----
+struct FileHeader {
+  char magic[8];
+  uint32_t version;
+  uint32_t header_bytes;
+  uint64_t file_bytes;
+  uint32_t checksum;  // crc32 of the whole file with this field set to 0
+  uint32_t section_count;
+  uint64_t section_table_offset;
+  uint32_t flags;
+  uint32_t reserved[5];
+};
+static_assert(sizeof(FileHeader) == 64, "pack header is 64 bytes");
+constexpr size_t kChecksumOffset = 24;
+
+enum SectionKind : uint32_t {
+  kNodes = 1, kChildren = 2, kRoots = 3, kObjects = 4, kChains = 5, kLevels = 6, kNames = 7, kData = 8,
+};
+constexpr uint32_t kSectionKindCount = 8;
+
+struct SectionEntry {
+  uint32_t kind;
+  uint32_t element_bytes;
+  uint64_t offset;
+  uint64_t count;
+  uint64_t reserved;
+};
+static_assert(sizeof(SectionEntry) == 32, "section entry is 32 bytes");
+
+struct NodeRecord {
+  int32_t parent;
+  int32_t mesh;
+  uint32_t first_child;
+  uint32_t child_count;
+  uint32_t name;  // offset in the names section
+  uint32_t reserved[3];
+  float local[16];
+};
+static_assert(sizeof(NodeRecord) == 96, "node record is 96 bytes");
+
+struct ObjectRecord {
+  uint32_t node;
+  uint32_t chain;
+  float importance;
+  uint32_t flags;  // bit 0: must draw
+  uint64_t user_data;
+};
+static_assert(sizeof(ObjectRecord) == 24, "object record is 24 bytes");
+
+struct ChainRecord {
+  uint32_t first_level;
+  uint32_t level_count;
+  uint32_t name;
+  uint32_t reserved;
+  float sphere[4];
+};
+static_assert(sizeof(ChainRecord) == 32, "chain record is 32 bytes");
+
+struct LevelRecord {
+  float cell_width;
+  float max_error;
+  uint32_t method;
+  uint32_t reserved;
+  float bounds[4];
+  uint32_t vertex_count, triangle_count, edge_count, point_count;
+  // absolute byte offsets of the arrays; 0 = absent
+  uint64_t positions, normals, colors, uvs, triangles, edges, thickness, points;
+};
+static_assert(sizeof(LevelRecord) == 112, "level record is 112 bytes");
+
+constexpr uint32_t kElementBytes[kSectionKindCount + 1] = {0, sizeof(NodeRecord), 4, 4, sizeof(ObjectRecord),
+                                                           sizeof(ChainRecord), sizeof(LevelRecord), 1, 1};
+
+size_t align16(size_t x) { return (x + 15) & ~size_t(15); }
+
+bool littleEndianHost() {
+  const uint32_t one = 1;
+  uint8_t b;
+  std::memcpy(&b, &one, 1);
+  return b == 1;
+}
+
+class Writer {
+ public:
+  std::vector<uint8_t> data;  // the data section's contents
+
+  template <class T>
+  uint64_t array(const std::vector<T>& v, uint64_t data_base) {
+    if (v.empty()) return 0;
+    const size_t at = align16(data.size());
+    data.resize(at + v.size() * sizeof(T), 0);
+    std::memcpy(data.data() + at, v.data(), v.size() * sizeof(T));
+    return data_base + at;
+  }
+};
+
+uint32_t addName(std::vector<char>& names, const std::string& s) {
+  const uint32_t at = static_cast<uint32_t>(names.size());
+  names.insert(names.end(), s.begin(), s.end());
+  names.push_back('\0');
+  return at;
+}
+
+}  // namespace
+
+uint32_t crc32(const void* data, size_t size, uint32_t crc) {
+  const Crc32Tables& t = crcTables();
+  const uint8_t* p = static_cast<const uint8_t*>(data);
+  crc = ~crc;
+  while (size >= 8) {
+    uint32_t a, b;
+    std::memcpy(&a, p, 4);
+    std::memcpy(&b, p + 4, 4);
+    a ^= crc;
+    crc = t.t[7][a & 0xff] ^ t.t[6][(a >> 8) & 0xff] ^ t.t[5][(a >> 16) & 0xff] ^ t.t[4][a >> 24] ^
+          t.t[3][b & 0xff] ^ t.t[2][(b >> 8) & 0xff] ^ t.t[1][(b >> 16) & 0xff] ^ t.t[0][b >> 24];
+    p += 8;
+    size -= 8;
+  }
+  while (size--) crc = (crc >> 8) ^ t.t[0][(crc ^ *p++) & 0xff];
+  return ~crc;
+}
+
+Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const std::vector<LodChain>& chains,
+                     const std::vector<Sphere>& chain_spheres, const PackWriteOptions& opt, PackWriteStats* stats,
+                     const std::string& what) {
+  if (!littleEndianHost()) return {Status::kUnsupported, what + ": packs are little-endian; this host is not"};
+  if (chains.size() != scene.meshes.size() || chain_spheres.size() != chains.size())
+    return {Status::kInvalidArgument, what + ": " + std::to_string(chains.size()) + " chains and " +
+                                          std::to_string(chain_spheres.size()) + " chain spheres for " +
+                                          std::to_string(scene.meshes.size()) + " meshes"};
+  if (Error e = validateSceneData(scene, what)) return e;
+  const std::vector<int32_t> object_nodes = objectNodes(scene);
+  const size_t object_count = object_nodes.size();
+  if ((!opt.importance.empty() && opt.importance.size() != object_count) ||
+      (!opt.must_draw.empty() && opt.must_draw.size() != object_count) ||
+      (!opt.user_data.empty() && opt.user_data.size() != object_count))
+    return {Status::kInvalidArgument, what + ": per-object arrays must have " + std::to_string(object_count) + " entries"};
+
+  std::vector<NodeRecord> nodes(scene.nodes.size());
+  std::vector<uint32_t> children, roots(scene.roots.begin(), scene.roots.end());
+  std::vector<char> names;
+  for (size_t i = 0; i < scene.nodes.size(); ++i) {
+    const NodeData& n = scene.nodes[i];
+    NodeRecord& r = nodes[i];
+    std::memset(&r, 0, sizeof r);
+    r.parent = n.parent;
+    r.mesh = n.mesh;
+    r.first_child = static_cast<uint32_t>(children.size());
+    r.child_count = static_cast<uint32_t>(n.children.size());
+    for (int32_t c : n.children) children.push_back(static_cast<uint32_t>(c));
+    r.name = addName(names, n.name);
+    std::memcpy(r.local, &n.local[0][0], sizeof r.local);
+  }
+  std::vector<ObjectRecord> objects(object_count);
+  for (size_t k = 0; k < object_count; ++k) {
+    ObjectRecord& o = objects[k];
+    std::memset(&o, 0, sizeof o);
+    o.node = static_cast<uint32_t>(object_nodes[k]);
+    o.chain = static_cast<uint32_t>(scene.nodes[object_nodes[k]].mesh);
+    o.importance = opt.importance.empty() ? 1.0f : opt.importance[k];
+    o.flags = !opt.must_draw.empty() && opt.must_draw[k] ? 1u : 0u;
+    o.user_data = opt.user_data.empty() ? uint64_t(object_nodes[k]) : opt.user_data[k];
+  }
+
+  // fixed layout up to the data section
+  const uint32_t section_count = kSectionKindCount;
+  std::vector<ChainRecord> chain_records(chains.size());
+  std::vector<LevelRecord> levels;
+  for (size_t c = 0; c < chains.size(); ++c) {
+    const size_t kept = opt.max_levels == 0 ? chains[c].levels.size() : std::min(chains[c].levels.size(), opt.max_levels);
+    ChainRecord& cr = chain_records[c];
+    std::memset(&cr, 0, sizeof cr);
+    cr.first_level = static_cast<uint32_t>(levels.size());
+    cr.level_count = static_cast<uint32_t>(kept);
+    cr.name = addName(names, scene.meshes[c].name);
+    cr.sphere[0] = chain_spheres[c].center.x;
+    cr.sphere[1] = chain_spheres[c].center.y;
+    cr.sphere[2] = chain_spheres[c].center.z;
+    cr.sphere[3] = chain_spheres[c].radius;
+    levels.resize(levels.size() + kept);
+  }
+  size_t at = align16(sizeof(FileHeader));
+  const size_t table_at = at;
+  at = align16(at + section_count * sizeof(SectionEntry));
+  struct Placed { uint32_t kind; size_t offset, count; };
+  std::vector<Placed> placed;
+  auto place = [&](uint32_t kind, size_t count) {
+    placed.push_back({kind, at, count});
+    at = align16(at + count * kElementBytes[kind]);
+  };
+  place(kNodes, nodes.size());
+  place(kChildren, children.size());
+  place(kRoots, roots.size());
+  place(kObjects, objects.size());
+  place(kChains, chain_records.size());
+  place(kLevels, levels.size());
+  place(kNames, names.size());
+  const size_t data_base = at;
+
+  Writer w;
+  double acmr_before = 0.0, acmr_after = 0.0, weight = 0.0;
+  for (size_t c = 0; c < chains.size(); ++c) {
+    for (uint32_t l = 0; l < chain_records[c].level_count; ++l) {
+      const LodLevel& src = chains[c].levels[l];
+      const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
+      if (Error e = validateMesh(src.mesh, level_name)) return e;
+      Mesh m = src.mesh;
+      const double tris = double(m.triangleCount());
+      if (tris > 0) acmr_before += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
+      if (opt.optimize_order) optimizeMeshOrder(m);
+      if (tris > 0) {
+        acmr_after += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
+        weight += tris;
+      }
+      LevelRecord& r = levels[chain_records[c].first_level + l];
+      std::memset(&r, 0, sizeof r);
+      r.cell_width = src.cell_width;
+      r.max_error = src.max_error;
+      r.method = static_cast<uint32_t>(src.method);
+      r.bounds[0] = src.bounds.center.x;
+      r.bounds[1] = src.bounds.center.y;
+      r.bounds[2] = src.bounds.center.z;
+      r.bounds[3] = src.bounds.radius;
+      r.vertex_count = static_cast<uint32_t>(m.vertexCount());
+      r.triangle_count = static_cast<uint32_t>(m.triangleCount());
+      r.edge_count = static_cast<uint32_t>(m.edgeCount());
+      r.point_count = static_cast<uint32_t>(m.pointCount());
+      r.positions = w.array(m.positions, data_base);
+      r.normals = w.array(m.normals, data_base);
+      r.colors = w.array(m.colors, data_base);
+      r.uvs = w.array(m.uvs, data_base);
+      r.triangles = w.array(m.triangles, data_base);
+      r.edges = w.array(m.edges, data_base);
+      r.thickness = w.array(m.edge_thickness, data_base);
+      r.points = w.array(m.points, data_base);
+    }
+  }
+  place(kData, w.data.size());
+  const size_t file_bytes = at;
+
+  out.assign(file_bytes, 0);
+  FileHeader h;
+  std::memset(&h, 0, sizeof h);
+  std::memcpy(h.magic, kPackMagic, 8);
+  h.version = kPackVersion;
+  h.header_bytes = sizeof(FileHeader);
+  h.file_bytes = file_bytes;
+  h.section_count = section_count;
+  h.section_table_offset = table_at;
+  std::memcpy(out.data(), &h, sizeof h);
+  for (size_t s = 0; s < placed.size(); ++s) {
+    SectionEntry e{placed[s].kind, kElementBytes[placed[s].kind], placed[s].offset, placed[s].count, 0};
+    std::memcpy(out.data() + table_at + s * sizeof(SectionEntry), &e, sizeof e);
+  }
+  auto put = [&](size_t offset, const void* src, size_t bytes) { if (bytes) std::memcpy(out.data() + offset, src, bytes); };
+  put(placed[0].offset, nodes.data(), nodes.size() * sizeof(NodeRecord));
+  put(placed[1].offset, children.data(), children.size() * 4);
+  put(placed[2].offset, roots.data(), roots.size() * 4);
+  put(placed[3].offset, objects.data(), objects.size() * sizeof(ObjectRecord));
+  put(placed[4].offset, chain_records.data(), chain_records.size() * sizeof(ChainRecord));
+  put(placed[5].offset, levels.data(), levels.size() * sizeof(LevelRecord));
+  put(placed[6].offset, names.data(), names.size());
+  put(placed[7].offset, w.data.data(), w.data.size());
+  const uint32_t crc = crc32(out.data(), out.size());
+  std::memcpy(out.data() + kChecksumOffset, &crc, 4);
+  if (stats) {
+    stats->bytes = file_bytes;
+    stats->acmr_before = weight > 0 ? acmr_before / weight : 0.0;
+    stats->acmr_after = weight > 0 ? acmr_after / weight : 0.0;
+  }
+  return {};
+}
+
+Error writePack(const std::string& path, const SceneData& scene, const std::vector<LodChain>& chains,
+                const std::vector<Sphere>& chain_spheres, const PackWriteOptions& options, PackWriteStats* stats) {
+  std::vector<uint8_t> bytes;
+  if (Error e = writePackBytes(bytes, scene, chains, chain_spheres, options, stats, path)) return e;
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return {Status::kIoError, path + ": cannot open for writing: " + std::strerror(errno)};
+  const size_t written = std::fwrite(bytes.data(), 1, bytes.size(), f);
+  const bool closed = std::fclose(f) == 0;
+  if (written != bytes.size() || !closed) return {Status::kIoError, path + ": write failed (disk full?)"};
+  return {};
+}
+
+// ---- loading ----
+
+Error Pack::load(const std::string& path, Pack& out, bool check_indices) {
+  out = Pack{};
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return {Status::kIoError, path + ": cannot open: " + std::strerror(errno)};
+  if (std::fseek(f, 0, SEEK_END) != 0) { std::fclose(f); return {Status::kIoError, path + ": cannot seek"}; }
+  const long size = std::ftell(f);
+  std::rewind(f);
+  if (size < 0) { std::fclose(f); return {Status::kIoError, path + ": cannot tell the file size"}; }
+  out.bytes_.resize(static_cast<size_t>(size));
+  const size_t got = size > 0 ? std::fread(out.bytes_.data(), 1, out.bytes_.size(), f) : 0;
+  std::fclose(f);
+  if (got != out.bytes_.size()) return {Status::kIoError, path + ": read " + std::to_string(got) + " of " + std::to_string(size) + " bytes"};
+  return out.parse(path, check_indices);
+}
+
+Error Pack::fromBytes(const uint8_t* data, size_t size, Pack& out, const std::string& what, bool check_indices) {
+  out = Pack{};
+  out.bytes_.assign(data, data + size);
+  return out.parse(what, check_indices);
+}
+
+namespace {
+template <class T>
+T read(const std::vector<uint8_t>& b, size_t offset) {
+  static_assert(std::is_trivially_copyable<T>::value, "records are plain data");
+  T t;
+  std::memcpy(&t, b.data() + offset, sizeof t);
+  return t;
+}
+}  // namespace
+
+Error Pack::parse(const std::string& what, bool check_indices) {
+  auto corrupt = [&](const std::string& m) { return Error(Status::kCorrupt, what + ": " + m); };
+  const size_t size = bytes_.size();
+  if (size < 8 || std::memcmp(bytes_.data(), kPackMagic, 8) != 0)
+    return {Status::kParseError, what + ": not a scenelod pack (no SLODPACK magic at the start)"};
+  if (size < sizeof(FileHeader))
+    return corrupt("truncated: " + std::to_string(size) + " bytes, a pack header alone has 64");
+  const FileHeader h = read<FileHeader>(bytes_, 0);
+  if (h.version != kPackVersion)
+    return {Status::kUnsupported, what + ": pack version " + std::to_string(h.version) + ", this build reads version " +
+                                      std::to_string(kPackVersion) + " only (rebuild the pack with 'scenelod pack')"};
+  if (!littleEndianHost()) return {Status::kUnsupported, what + ": packs are little-endian; this host is not"};
+  if (h.file_bytes != size)
+    return corrupt(h.file_bytes > size ? "truncated: the header says " + std::to_string(h.file_bytes) + " bytes, the file has " + std::to_string(size)
+                                       : "the header says " + std::to_string(h.file_bytes) + " bytes but the file has " + std::to_string(size) + " (trailing data)");
+  uint32_t crc = crc32(bytes_.data(), kChecksumOffset);
+  const uint32_t zero = 0;
+  crc = crc32(&zero, 4, crc);
+  crc = crc32(bytes_.data() + kChecksumOffset + 4, size - kChecksumOffset - 4, crc);
+  if (crc != h.checksum) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "checksum mismatch (stored %08x, computed %08x): the file is corrupt", h.checksum, crc);
+    return corrupt(buf);
+  }
+  // from here on the bytes are what the writer wrote, unless made by hand: keep checking bounds
+  if (h.header_bytes != sizeof(FileHeader) || h.section_table_offset % 16 != 0 || h.section_count > 64 ||
+      h.section_table_offset + uint64_t(h.section_count) * sizeof(SectionEntry) > size)
+    return corrupt("section table out of bounds");
+  size_t offset[kSectionKindCount + 1] = {}, count[kSectionKindCount + 1] = {};
+  bool seen[kSectionKindCount + 1] = {};
+  for (uint32_t s = 0; s < h.section_count; ++s) {
+    const SectionEntry e = read<SectionEntry>(bytes_, h.section_table_offset + s * sizeof(SectionEntry));
+    if (e.kind == 0 || e.kind > kSectionKindCount) continue;  // unknown sections are skipped (minor additions)
+    if (e.element_bytes != kElementBytes[e.kind])
+      return corrupt("section " + std::to_string(e.kind) + " has " + std::to_string(e.element_bytes) + "-byte elements, expected " +
+                     std::to_string(kElementBytes[e.kind]));
+    if (e.offset % 4 != 0 || e.offset > size || e.count > (size - e.offset) / e.element_bytes)
+      return corrupt("section " + std::to_string(e.kind) + " lies outside the file");
+    offset[e.kind] = e.offset;
+    count[e.kind] = e.count;
+    seen[e.kind] = true;
+  }
+  for (uint32_t k = 1; k <= kSectionKindCount; ++k)
+    if (!seen[k]) return corrupt("section " + std::to_string(k) + " is missing");
+  nodes_ = offset[kNodes]; node_count_ = count[kNodes];
+  children_ = offset[kChildren]; children_count_ = count[kChildren];
+  roots_ = offset[kRoots]; root_count_ = count[kRoots];
+  objects_ = offset[kObjects]; object_count_ = count[kObjects];
+  chains_ = offset[kChains]; chain_count_ = count[kChains];
+  levels_ = offset[kLevels]; level_count_ = count[kLevels];
+  names_ = offset[kNames]; names_size_ = count[kNames];
+  if (names_size_ > 0 && bytes_[names_ + names_size_ - 1] != 0) return corrupt("names section is not terminated");
+  auto nameOk = [&](uint32_t n) { return names_size_ > 0 && n < names_size_; };
+  for (size_t i = 0; i < node_count_; ++i) {
+    const NodeRecord r = read<NodeRecord>(bytes_, nodes_ + i * sizeof(NodeRecord));
+    if (r.parent < -1 || r.parent >= int64_t(node_count_) || r.mesh < -1 || r.mesh >= int64_t(chain_count_) ||
+        uint64_t(r.first_child) + r.child_count > children_count_ || !nameOk(r.name))
+      return corrupt("node " + std::to_string(i) + " has an index out of range");
+  }
+  for (size_t i = 0; i < children_count_; ++i)
+    if (read<uint32_t>(bytes_, children_ + 4 * i) >= node_count_) return corrupt("child list entry out of range");
+  for (size_t i = 0; i < root_count_; ++i)
+    if (read<uint32_t>(bytes_, roots_ + 4 * i) >= node_count_) return corrupt("root out of range");
+  for (size_t i = 0; i < object_count_; ++i) {
+    const ObjectRecord o = read<ObjectRecord>(bytes_, objects_ + i * sizeof(ObjectRecord));
+    if (o.node >= node_count_ || o.chain >= chain_count_) return corrupt("object " + std::to_string(i) + " has an index out of range");
+  }
+  for (size_t c = 0; c < chain_count_; ++c) {
+    const ChainRecord r = read<ChainRecord>(bytes_, chains_ + c * sizeof(ChainRecord));
+    if (uint64_t(r.first_level) + r.level_count > level_count_ || !nameOk(r.name))
+      return corrupt("chain " + std::to_string(c) + " has a level range out of bounds");
+  }
+  const size_t data_begin = offset[kData], data_end = offset[kData] + count[kData];
+  for (size_t l = 0; l < level_count_; ++l) {
+    const LevelRecord r = read<LevelRecord>(bytes_, levels_ + l * sizeof(LevelRecord));
+    const std::string where = "level record " + std::to_string(l);
+    auto arrayOk = [&](uint64_t at, uint64_t n, size_t elem, bool optional) {
+      if (at == 0) return optional || n == 0;
+      return at % 4 == 0 && at >= data_begin && at <= data_end && n <= (data_end - at) / elem;
+    };
+    const uint64_t v = r.vertex_count;
+    if (!arrayOk(r.positions, v, 12, false) || !arrayOk(r.normals, v, 12, true) || !arrayOk(r.colors, v, 12, true) ||
+        !arrayOk(r.uvs, v, 8, true) || !arrayOk(r.triangles, 3ull * r.triangle_count, 4, false) ||
+        !arrayOk(r.edges, 2ull * r.edge_count, 4, false) || !arrayOk(r.thickness, r.edge_count, 4, true) ||
+        !arrayOk(r.points, r.point_count, 4, false) || r.method > uint32_t(LodMethod::kScrooge))
+      return corrupt(where + " has an array outside the data section");
+    if (check_indices) {
+      auto indicesOk = [&](uint64_t at, uint64_t n) {
+        if (n == 0) return true;
+        const uint32_t* p = reinterpret_cast<const uint32_t*>(bytes_.data() + at);
+        uint32_t worst = 0;
+        for (uint64_t i = 0; i < n; ++i) worst = p[i] > worst ? p[i] : worst;
+        return worst < v;
+      };
+      if (!indicesOk(r.triangles, 3ull * r.triangle_count) || !indicesOk(r.edges, 2ull * r.edge_count) ||
+          !indicesOk(r.points, r.point_count))
+        return corrupt(where + " has a vertex index out of range");
+    }
+  }
+  return {};
+}
+
+size_t Pack::nodeCount() const { return node_count_; }
+size_t Pack::rootCount() const { return root_count_; }
+size_t Pack::objectCount() const { return object_count_; }
+size_t Pack::chainCount() const { return chain_count_; }
+uint32_t Pack::root(size_t i) const { return read<uint32_t>(bytes_, roots_ + 4 * i); }
+
+size_t Pack::levelCount(size_t chain) const {
+  return read<ChainRecord>(bytes_, chains_ + chain * sizeof(ChainRecord)).level_count;
+}
+
+PackNodeView Pack::node(size_t i) const {
+  const size_t at = nodes_ + i * sizeof(NodeRecord);
+  const NodeRecord r = read<NodeRecord>(bytes_, at);
+  PackNodeView v;
+  v.parent = r.parent;
+  v.mesh = r.mesh;
+  v.local = reinterpret_cast<const float*>(bytes_.data() + at + offsetof(NodeRecord, local));
+  v.children = Span<const uint32_t>(reinterpret_cast<const uint32_t*>(bytes_.data() + children_) + r.first_child, r.child_count);
+  v.name = reinterpret_cast<const char*>(bytes_.data() + names_ + r.name);
+  return v;
+}
+
+PackObjectView Pack::object(size_t i) const {
+  const ObjectRecord r = read<ObjectRecord>(bytes_, objects_ + i * sizeof(ObjectRecord));
+  return PackObjectView{r.node, r.chain, r.importance, (r.flags & 1u) != 0, r.user_data};
+}
+
+Sphere Pack::chainSphere(size_t c) const {
+  const ChainRecord r = read<ChainRecord>(bytes_, chains_ + c * sizeof(ChainRecord));
+  return Sphere{glm::vec3(r.sphere[0], r.sphere[1], r.sphere[2]), r.sphere[3]};
+}
+
+const char* Pack::meshName(size_t c) const {
+  const ChainRecord r = read<ChainRecord>(bytes_, chains_ + c * sizeof(ChainRecord));
+  return reinterpret_cast<const char*>(bytes_.data() + names_ + r.name);
+}
+
+PackLevelView Pack::level(size_t chain, size_t level) const {
+  const ChainRecord c = read<ChainRecord>(bytes_, chains_ + chain * sizeof(ChainRecord));
+  const LevelRecord r = read<LevelRecord>(bytes_, levels_ + (c.first_level + level) * sizeof(LevelRecord));
+  PackLevelView v;
+  v.cell_width = r.cell_width;
+  v.max_error = r.max_error;
+  v.method = static_cast<LodMethod>(r.method);
+  v.bounds = Sphere{glm::vec3(r.bounds[0], r.bounds[1], r.bounds[2]), r.bounds[3]};
+  auto span = [&](auto* type_tag, uint64_t at, size_t n) {
+    using T = std::remove_pointer_t<decltype(type_tag)>;
+    return at == 0 ? Span<const T>() : Span<const T>(reinterpret_cast<const T*>(bytes_.data() + at), n);
+  };
+  v.positions = span((glm::vec3*)nullptr, r.positions, r.vertex_count);
+  v.normals = span((glm::vec3*)nullptr, r.normals, r.vertex_count);
+  v.colors = span((glm::vec3*)nullptr, r.colors, r.vertex_count);
+  v.uvs = span((glm::vec2*)nullptr, r.uvs, r.vertex_count);
+  v.triangles = span((uint32_t*)nullptr, r.triangles, 3 * size_t(r.triangle_count));
+  v.edges = span((uint32_t*)nullptr, r.edges, 2 * size_t(r.edge_count));
+  v.edge_thickness = span((float*)nullptr, r.thickness, r.edge_count);
+  v.points = span((uint32_t*)nullptr, r.points, r.point_count);
+  return v;
+}
+
+namespace {
+Mesh meshFromLevel(const PackLevelView& v) {
+  Mesh m;
+  m.positions.assign(v.positions.begin(), v.positions.end());
+  m.normals.assign(v.normals.begin(), v.normals.end());
+  m.colors.assign(v.colors.begin(), v.colors.end());
+  m.uvs.assign(v.uvs.begin(), v.uvs.end());
+  m.triangles.assign(v.triangles.begin(), v.triangles.end());
+  m.edges.assign(v.edges.begin(), v.edges.end());
+  m.edge_thickness.assign(v.edge_thickness.begin(), v.edge_thickness.end());
+  m.points.assign(v.points.begin(), v.points.end());
+  return m;
+}
+}  // namespace
+
+void Pack::toSceneData(SceneData& out) const {
+  out = SceneData{};
+  out.nodes.resize(node_count_);
+  for (size_t i = 0; i < node_count_; ++i) {
+    const PackNodeView v = node(i);
+    NodeData& n = out.nodes[i];
+    n.name = v.name;
+    n.parent = v.parent;
+    n.mesh = v.mesh;
+    n.children.assign(v.children.begin(), v.children.end());
+    std::memcpy(&n.local[0][0], v.local, 16 * sizeof(float));
+  }
+  for (size_t i = 0; i < root_count_; ++i) out.roots.push_back(static_cast<int32_t>(root(i)));
+  out.meshes.resize(chain_count_);
+  for (size_t c = 0; c < chain_count_; ++c) {
+    out.meshes[c].name = meshName(c);
+    if (levelCount(c) > 0) out.meshes[c].mesh = meshFromLevel(level(c, 0));
+  }
+}
+
+void Pack::toChains(std::vector<LodChain>& chains, std::vector<Sphere>& spheres) const {
+  chains.assign(chain_count_, LodChain{});
+  spheres.resize(chain_count_);
+  for (size_t c = 0; c < chain_count_; ++c) {
+    spheres[c] = chainSphere(c);
+    const size_t n = levelCount(c);
+    chains[c].levels.resize(n);
+    for (size_t l = 0; l < n; ++l) {
+      const PackLevelView v = level(c, l);
+      LodLevel& dst = chains[c].levels[l];
+      dst.mesh = meshFromLevel(v);
+      dst.cell_width = v.cell_width;
+      dst.max_error = v.max_error;
+      dst.method = v.method;
+      dst.bounds = v.bounds;
+    }
+  }
+}
+
+Error Pack::toScene(Scene& out) const {
+  // nodes through SceneData (no meshes needed: objects come from the pack's object table)
+  SceneData d;
+  d.nodes.resize(node_count_);
+  for (size_t i = 0; i < node_count_; ++i) {
+    const PackNodeView v = node(i);
+    d.nodes[i].parent = v.parent;
+    d.nodes[i].children.assign(v.children.begin(), v.children.end());
+    std::memcpy(&d.nodes[i].local[0][0], v.local, 16 * sizeof(float));
+  }
+  for (size_t i = 0; i < root_count_; ++i) d.roots.push_back(static_cast<int32_t>(root(i)));
+  if (Error e = Scene::fromSceneData(d, out, "pack")) return e;
+  out.setChainCount(chain_count_);
+  for (size_t c = 0; c < chain_count_; ++c)
+    if (Error e = out.setChainSphere(static_cast<uint32_t>(c), chainSphere(c))) return e;
+  for (size_t k = 0; k < object_count_; ++k) {
+    const PackObjectView o = object(k);
+    ObjectHandle h;
+    if (Error e = out.addObject(ObjectDesc{NodeHandle{o.node, 0}, o.chain, o.importance, o.must_draw, o.user_data}, h))
+      return e;
+  }
+  out.update();
+  return {};
+}
+
+}  // namespace scenelod::scene

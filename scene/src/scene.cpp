@@ -1,0 +1,468 @@
+// The runtime scene graph: slot/generation handles, nodes kept in parent-before-child order so one
+// linear pass updates world transforms (Filament / ozz-animation style flat hierarchies), and the
+// objects' world bounding spheres as flat arrays.
+#include "scenelod/scene/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "scenelod/scene/bounding_sphere.h"
+
+namespace scenelod::scene {
+
+glm::mat4 composeTrs(const Trs& trs) {
+  glm::mat4 m = glm::mat4_cast(trs.rotation);
+  m[0] *= trs.scale.x;
+  m[1] *= trs.scale.y;
+  m[2] *= trs.scale.z;
+  m[3] = glm::vec4(trs.translation, 1.0f);
+  return m;
+}
+
+namespace {
+
+// inlined into the update pass; see maxScaleBound
+inline float scaleBound(const float* m) {
+  const float a0 = m[0], a1 = m[1], a2 = m[2], b0 = m[4], b1 = m[5], b2 = m[6], c0 = m[8], c1 = m[9], c2 = m[10];
+  const float aa = a0 * a0 + a1 * a1 + a2 * a2, bb = b0 * b0 + b1 * b1 + b2 * b2, cc = c0 * c0 + c1 * c1 + c2 * c2;
+  const float ab = std::fabs(a0 * b0 + a1 * b1 + a2 * b2), ac = std::fabs(a0 * c0 + a1 * c1 + a2 * c2),
+              bc = std::fabs(b0 * c0 + b1 * c1 + b2 * c2);
+  // gershgorin: every eigenvalue of the gram matrix is at most its largest absolute row sum
+  const float ra = aa + ab + ac, rb = bb + ab + bc, rc = cc + ac + bc;
+  const float row = ra > rb ? (ra > rc ? ra : rc) : (rb > rc ? rb : rc);
+  // a few ulps up so float rounding of the products never makes the bound too small
+  return std::sqrt(row) * (1.0f + 4.0f * 1.1920929e-7f);
+}
+
+}  // namespace
+
+float maxScaleBound(const glm::mat4& m) { return scaleBound(&m[0][0]); }
+
+Sphere transformSphere(const Sphere& s, const glm::mat4& m) {
+  Sphere out;
+  out.center = glm::vec3(m * glm::vec4(s.center, 1.0f));
+  out.radius = s.radius * maxScaleBound(m);
+  return out;
+}
+
+namespace {
+Error stale(const char* what) { return {Status::kNotFound, std::string("stale or invalid ") + what + " handle"}; }
+}  // namespace
+
+bool Scene::nodeLive(NodeHandle h) const {
+  return h.slot < node_generation_.size() && node_generation_[h.slot] == h.generation &&
+         node_dense_[h.slot] != kInvalidSlot;
+}
+
+bool Scene::objectLive(ObjectHandle h) const {
+  return h.slot < object_generation_.size() && object_generation_[h.slot] == h.generation &&
+         object_dense_[h.slot] != kInvalidSlot;
+}
+
+bool Scene::isValid(NodeHandle node) const { return nodeLive(node); }
+bool Scene::isValid(ObjectHandle object) const { return objectLive(object); }
+
+NodeHandle Scene::nodeAt(size_t i) const {
+  const uint32_t slot = order_[i];
+  return NodeHandle{slot, node_generation_[slot]};
+}
+
+ObjectHandle Scene::objectAt(size_t i) const {
+  const uint32_t slot = object_slot_[i];
+  return ObjectHandle{slot, object_generation_[slot]};
+}
+
+void Scene::setChainCount(size_t n) {
+  chain_spheres_.resize(n);
+  all_objects_dirty_ = true;
+}
+
+Error Scene::setChainSphere(uint32_t chain, const Sphere& sphere) {
+  if (chain >= chain_spheres_.size())
+    return {Status::kInvalidArgument, "chain " + std::to_string(chain) + " out of range (" +
+                                          std::to_string(chain_spheres_.size()) + " chains)"};
+  if (!std::isfinite(sphere.radius) || sphere.radius < 0.0f)
+    return {Status::kInvalidArgument, "chain " + std::to_string(chain) + ": sphere radius is negative or not finite"};
+  chain_spheres_[chain] = sphere;
+  for (size_t i = 0; i < object_chain_.size(); ++i)
+    if (object_chain_[i] == chain) object_dirty_[i] = 1;
+  return {};
+}
+
+Error Scene::addNode(NodeHandle parent, const glm::mat4& local, NodeHandle& out) {
+  int32_t parent_dense = -1;
+  if (parent.slot != kInvalidSlot) {
+    if (!nodeLive(parent)) return stale("parent node");
+    parent_dense = static_cast<int32_t>(node_dense_[parent.slot]);
+  }
+  uint32_t slot;
+  if (!node_free_.empty()) {
+    slot = node_free_.back();
+    node_free_.pop_back();
+  } else {
+    slot = static_cast<uint32_t>(node_generation_.size());
+    node_generation_.push_back(0);
+    node_dense_.push_back(kInvalidSlot);
+  }
+  node_dense_[slot] = static_cast<uint32_t>(order_.size());
+  order_.push_back(slot);
+  parent_dense_.push_back(parent_dense);
+  node_dirty_.push_back(1);
+  local_.push_back(local);
+  world_.push_back(local);
+  out = NodeHandle{slot, node_generation_[slot]};
+  return {};
+}
+
+void Scene::rebuildParentIndices() {
+  // parent_dense_ is kept as parent slots during a reorder, then mapped back to positions here
+  for (size_t i = 0; i < order_.size(); ++i) node_dense_[order_[i]] = static_cast<uint32_t>(i);
+  for (size_t i = 0; i < order_.size(); ++i)
+    if (parent_dense_[i] >= 0) parent_dense_[i] = static_cast<int32_t>(node_dense_[parent_dense_[i]]);
+}
+
+Error Scene::removeNode(NodeHandle node) {
+  if (!nodeLive(node)) return stale("node");
+  const size_t first = node_dense_[node.slot], n = order_.size();
+  // descendants come after their ancestors: one forward pass marks the subtree
+  std::vector<uint8_t> doomed(n, 0);
+  doomed[first] = 1;
+  for (size_t i = first + 1; i < n; ++i)
+    if (parent_dense_[i] >= 0 && doomed[parent_dense_[i]]) doomed[i] = 1;
+  // objects on removed nodes go first (swap-remove, walking backwards keeps it simple)
+  for (size_t k = object_chain_.size(); k-- > 0;)
+    if (doomed[node_dense_[object_node_slot_[k]]]) removeObject(objectAt(k));
+  // stable compaction of the node arrays; parent links become slots during the move
+  for (size_t i = 0; i < n; ++i)
+    if (parent_dense_[i] >= 0) parent_dense_[i] = static_cast<int32_t>(order_[parent_dense_[i]]);
+  size_t w = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t slot = order_[i];
+    if (doomed[i]) {
+      node_dense_[slot] = kInvalidSlot;
+      ++node_generation_[slot];
+      node_free_.push_back(slot);
+      continue;
+    }
+    order_[w] = slot;
+    parent_dense_[w] = parent_dense_[i];
+    node_dirty_[w] = node_dirty_[i];
+    local_[w] = local_[i];
+    world_[w] = world_[i];
+    ++w;
+  }
+  order_.resize(w);
+  parent_dense_.resize(w);
+  node_dirty_.resize(w);
+  local_.resize(w);
+  world_.resize(w);
+  rebuildParentIndices();
+  return {};
+}
+
+Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
+  if (!nodeLive(node)) return stale("node");
+  const bool to_root = new_parent.slot == kInvalidSlot;
+  if (!to_root && !nodeLive(new_parent)) return stale("new parent node");
+  const size_t i = node_dense_[node.slot], n = order_.size();
+  const size_t p = to_root ? 0 : node_dense_[new_parent.slot];
+  if (!to_root && p == i) return {Status::kInvalidArgument, "a node cannot be its own parent"};
+  if (!to_root && p > i) {
+    // is the new parent inside the subtree? walk up from it
+    for (int32_t a = static_cast<int32_t>(p); a >= 0; a = parent_dense_[a])
+      if (static_cast<size_t>(a) == i)
+        return {Status::kInvalidArgument, "cannot move a node under one of its own descendants"};
+  }
+  node_dirty_[i] = 1;
+  if (to_root || p < i) {
+    parent_dense_[i] = to_root ? -1 : static_cast<int32_t>(p);
+    return {};
+  }
+  // the parent comes later: move the subtree (marked in one forward pass over [i, p]) to just after
+  // p, keeping relative order on both sides; nodes outside [i, p] keep their positions
+  for (size_t k = 0; k < n; ++k)
+    if (parent_dense_[k] >= 0) parent_dense_[k] = static_cast<int32_t>(order_[parent_dense_[k]]);
+  parent_dense_[i] = static_cast<int32_t>(new_parent.slot);
+  std::vector<uint8_t> in_subtree(p - i + 1, 0);
+  in_subtree[0] = 1;
+  for (size_t k = i + 1; k <= p; ++k) {
+    const uint32_t parent_slot = static_cast<uint32_t>(parent_dense_[k]);
+    if (parent_dense_[k] >= 0 && node_dense_[parent_slot] >= i && node_dense_[parent_slot] < k &&
+        in_subtree[node_dense_[parent_slot] - i])
+      in_subtree[k - i] = 1;
+  }
+  struct Row { uint32_t slot; int32_t parent; uint8_t dirty; glm::mat4 local, world; };
+  std::vector<Row> keep, moved;
+  for (size_t k = i; k <= p; ++k) {
+    Row r{order_[k], parent_dense_[k], node_dirty_[k], local_[k], world_[k]};
+    (in_subtree[k - i] ? moved : keep).push_back(r);
+  }
+  size_t w = i;
+  for (const auto* group : {&keep, &moved})
+    for (const Row& r : *group) {
+      order_[w] = r.slot;
+      parent_dense_[w] = r.parent;
+      node_dirty_[w] = r.dirty;
+      local_[w] = r.local;
+      world_[w] = r.world;
+      ++w;
+    }
+  rebuildParentIndices();
+  return {};
+}
+
+Error Scene::setLocal(NodeHandle node, const glm::mat4& local) {
+  if (!nodeLive(node)) return stale("node");
+  const uint32_t i = node_dense_[node.slot];
+  local_[i] = local;
+  node_dirty_[i] = 1;
+  return {};
+}
+
+Error Scene::setLocal(NodeHandle node, const Trs& trs) { return setLocal(node, composeTrs(trs)); }
+
+Error Scene::getLocal(NodeHandle node, glm::mat4& out) const {
+  if (!nodeLive(node)) return stale("node");
+  out = local_[node_dense_[node.slot]];
+  return {};
+}
+
+Error Scene::getWorld(NodeHandle node, glm::mat4& out) const {
+  if (!nodeLive(node)) return stale("node");
+  out = world_[node_dense_[node.slot]];
+  return {};
+}
+
+Error Scene::getParent(NodeHandle node, NodeHandle& out) const {
+  if (!nodeLive(node)) return stale("node");
+  const int32_t p = parent_dense_[node_dense_[node.slot]];
+  out = p < 0 ? NodeHandle{} : nodeAt(static_cast<size_t>(p));
+  return {};
+}
+
+Error Scene::addObject(const ObjectDesc& d, ObjectHandle& out) {
+  if (!nodeLive(d.node)) return stale("node");
+  if (d.chain >= chain_spheres_.size())
+    return {Status::kInvalidArgument, "chain " + std::to_string(d.chain) + " out of range (" +
+                                          std::to_string(chain_spheres_.size()) + " chains)"};
+  if (!std::isfinite(d.importance) || d.importance < 0.0f)
+    return {Status::kInvalidArgument, "object importance must be finite and >= 0"};
+  uint32_t slot;
+  if (!object_free_.empty()) {
+    slot = object_free_.back();
+    object_free_.pop_back();
+  } else {
+    slot = static_cast<uint32_t>(object_generation_.size());
+    object_generation_.push_back(0);
+    object_dense_.push_back(kInvalidSlot);
+  }
+  object_dense_[slot] = static_cast<uint32_t>(object_chain_.size());
+  world_center_.push_back(glm::vec3(0.0f));
+  world_radius_.push_back(0.0f);
+  max_scale_.push_back(1.0f);
+  object_chain_.push_back(d.chain);
+  object_node_slot_.push_back(d.node.slot);
+  object_dirty_.push_back(1);
+  importance_.push_back(d.importance);
+  must_draw_.push_back(d.must_draw ? 1 : 0);
+  user_data_.push_back(d.user_data);
+  object_slot_.push_back(slot);
+  out = ObjectHandle{slot, object_generation_[slot]};
+  return {};
+}
+
+Error Scene::removeObject(ObjectHandle h) {
+  if (!objectLive(h)) return stale("object");
+  const size_t k = object_dense_[h.slot], last = object_chain_.size() - 1;
+  if (k != last) {
+    world_center_[k] = world_center_[last];
+    world_radius_[k] = world_radius_[last];
+    max_scale_[k] = max_scale_[last];
+    object_chain_[k] = object_chain_[last];
+    object_node_slot_[k] = object_node_slot_[last];
+    object_dirty_[k] = object_dirty_[last];
+    importance_[k] = importance_[last];
+    must_draw_[k] = must_draw_[last];
+    user_data_[k] = user_data_[last];
+    object_slot_[k] = object_slot_[last];
+    object_dense_[object_slot_[k]] = static_cast<uint32_t>(k);
+  }
+  world_center_.pop_back();
+  world_radius_.pop_back();
+  max_scale_.pop_back();
+  object_chain_.pop_back();
+  object_node_slot_.pop_back();
+  object_dirty_.pop_back();
+  importance_.pop_back();
+  must_draw_.pop_back();
+  user_data_.pop_back();
+  object_slot_.pop_back();
+  object_dense_[h.slot] = kInvalidSlot;
+  ++object_generation_[h.slot];
+  object_free_.push_back(h.slot);
+  return {};
+}
+
+Error Scene::setObjectNode(ObjectHandle h, NodeHandle node) {
+  if (!objectLive(h)) return stale("object");
+  if (!nodeLive(node)) return stale("node");
+  const uint32_t k = object_dense_[h.slot];
+  object_node_slot_[k] = node.slot;
+  object_dirty_[k] = 1;
+  return {};
+}
+
+Error Scene::setObjectChain(ObjectHandle h, uint32_t chain) {
+  if (!objectLive(h)) return stale("object");
+  if (chain >= chain_spheres_.size())
+    return {Status::kInvalidArgument, "chain " + std::to_string(chain) + " out of range"};
+  const uint32_t k = object_dense_[h.slot];
+  object_chain_[k] = chain;
+  object_dirty_[k] = 1;
+  return {};
+}
+
+Error Scene::setImportance(ObjectHandle h, float importance) {
+  if (!objectLive(h)) return stale("object");
+  if (!std::isfinite(importance) || importance < 0.0f)
+    return {Status::kInvalidArgument, "object importance must be finite and >= 0"};
+  importance_[object_dense_[h.slot]] = importance;
+  return {};
+}
+
+Error Scene::setMustDraw(ObjectHandle h, bool must_draw) {
+  if (!objectLive(h)) return stale("object");
+  must_draw_[object_dense_[h.slot]] = must_draw ? 1 : 0;
+  return {};
+}
+
+Error Scene::setUserData(ObjectHandle h, uint64_t user_data) {
+  if (!objectLive(h)) return stale("object");
+  user_data_[object_dense_[h.slot]] = user_data;
+  return {};
+}
+
+Error Scene::getObject(ObjectHandle h, ObjectDesc& out) const {
+  if (!objectLive(h)) return stale("object");
+  const uint32_t k = object_dense_[h.slot];
+  out.node = NodeHandle{object_node_slot_[k], node_generation_[object_node_slot_[k]]};
+  out.chain = object_chain_[k];
+  out.importance = importance_[k];
+  out.must_draw = must_draw_[k] != 0;
+  out.user_data = user_data_[k];
+  return {};
+}
+
+Error Scene::objectIndex(ObjectHandle h, size_t& out) const {
+  if (!objectLive(h)) return stale("object");
+  out = object_dense_[h.slot];
+  return {};
+}
+
+size_t Scene::update() {
+  const size_t n = order_.size();
+  uint8_t* dirty = node_dirty_.data();
+  const int32_t* parent = parent_dense_.data();
+  // parents come first, so a parent's flag is final when its children are visited
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t p = parent[i];
+    if (p >= 0) {
+      if (dirty[p]) dirty[i] = 1;
+      if (dirty[i]) world_[i] = world_[p] * local_[i];
+    } else if (dirty[i]) {
+      world_[i] = local_[i];
+    }
+  }
+  const size_t m = object_chain_.size();
+  size_t recomputed = 0;
+  const bool all = all_objects_dirty_;
+  const uint32_t* node_of = object_node_slot_.data();
+  const uint32_t* dense_of = node_dense_.data();
+  const uint32_t* chain_of = object_chain_.data();
+  const Sphere* chains = chain_spheres_.data();
+  uint8_t* object_dirty = object_dirty_.data();
+  glm::vec3* centers = world_center_.data();
+  float* radii = world_radius_.data();
+  float* scales = max_scale_.data();
+  for (size_t k = 0; k < m; ++k) {
+    const uint32_t node = dense_of[node_of[k]];
+    if (!(all | object_dirty[k] | dirty[node])) continue;
+    const float* w = &world_[node][0][0];
+    const Sphere& s = chains[chain_of[k]];
+    const float scale = scaleBound(w);
+    const float x = s.center.x, y = s.center.y, z = s.center.z;
+    centers[k] = glm::vec3(w[0] * x + w[4] * y + w[8] * z + w[12], w[1] * x + w[5] * y + w[9] * z + w[13],
+                           w[2] * x + w[6] * y + w[10] * z + w[14]);
+    radii[k] = s.radius * scale;
+    scales[k] = scale;
+    object_dirty[k] = 0;
+    ++recomputed;
+  }
+  std::fill(node_dirty_.begin(), node_dirty_.end(), uint8_t(0));
+  all_objects_dirty_ = false;
+  return recomputed;
+}
+
+Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string& what) {
+  if (Error e = validateSceneData(data, what)) return e;
+  out = Scene{};
+  const size_t n = data.nodes.size();
+  // insert parents before children: a depth-first walk from every parentless node (roots of the
+  // default scene first, then any other parentless node), so node i gets slot i
+  std::vector<int32_t> order;
+  order.reserve(n);
+  std::vector<int32_t> stack;
+  std::vector<uint8_t> listed(n, 0);
+  auto walk = [&](int32_t r) {
+    stack.push_back(r);
+    while (!stack.empty()) {
+      const int32_t i = stack.back();
+      stack.pop_back();
+      if (listed[i]) continue;
+      listed[i] = 1;
+      order.push_back(i);
+      const auto& ch = data.nodes[i].children;
+      for (auto c = ch.rbegin(); c != ch.rend(); ++c) stack.push_back(*c);
+    }
+  };
+  for (int32_t r : data.roots) walk(r);
+  for (size_t i = 0; i < n; ++i)
+    if (data.nodes[i].parent < 0) walk(static_cast<int32_t>(i));
+  // nodes whose parent does not list them as a child: attach after their parent by repeated passes
+  for (bool progress = true; progress && order.size() < n;) {
+    progress = false;
+    for (size_t i = 0; i < n; ++i)
+      if (!listed[i] && listed[data.nodes[i].parent]) { walk(static_cast<int32_t>(i)); progress = true; }
+  }
+  // slots equal SceneData node indices: allocate all slots first, then fill the order
+  out.node_generation_.assign(n, 0);
+  out.node_dense_.assign(n, kInvalidSlot);
+  for (int32_t i : order) {
+    out.node_dense_[i] = static_cast<uint32_t>(out.order_.size());
+    out.order_.push_back(static_cast<uint32_t>(i));
+    const int32_t p = data.nodes[i].parent;
+    out.parent_dense_.push_back(p < 0 ? -1 : static_cast<int32_t>(out.node_dense_[p]));
+    out.node_dirty_.push_back(1);
+    out.local_.push_back(data.nodes[i].local);
+    out.world_.push_back(data.nodes[i].local);
+  }
+  out.setChainCount(data.meshes.size());
+  for (size_t m = 0; m < data.meshes.size(); ++m) {
+    const auto& pos = data.meshes[m].mesh.positions;
+    out.chain_spheres_[m] = minimalSphere(Span<const glm::vec3>(pos.data(), pos.size()));
+  }
+  for (int32_t node : objectNodes(data)) {
+    ObjectDesc d;
+    d.node = NodeHandle{static_cast<uint32_t>(node), 0};
+    d.chain = static_cast<uint32_t>(data.nodes[node].mesh);
+    ObjectHandle h;
+    if (Error e = out.addObject(d, h)) return e;
+  }
+  out.update();
+  return {};
+}
+
+}  // namespace scenelod::scene

@@ -1,0 +1,273 @@
+#include "scenelod/scene/scene.h"
+
+#include <cmath>
+#include <random>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include "scenelod/scene/bounding_sphere.h"
+
+using namespace scenelod;
+using namespace scenelod::scene;
+
+namespace {
+
+glm::mat4 randomAffine(std::mt19937& rng, bool shear) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), s(0.3f, 2.5f);
+  Trs t;
+  t.translation = {u(rng) * 5, u(rng) * 5, u(rng) * 5};
+  t.rotation = glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng) + 0.01f));
+  t.scale = {s(rng), s(rng), s(rng)};
+  glm::mat4 m = composeTrs(t);
+  if (shear) {
+    glm::mat4 sh(1.0f);
+    sh[1][0] = u(rng);
+    sh[2][1] = u(rng);
+    m = m * sh;
+  }
+  return m;
+}
+
+// world matrix by walking up the parents through the public API
+glm::mat4 bruteWorld(const Scene& s, NodeHandle h) {
+  glm::mat4 m(1.0f);
+  while (h.slot != kInvalidSlot) {
+    glm::mat4 local;
+    EXPECT_TRUE(s.getLocal(h, local).ok());
+    m = local * m;
+    NodeHandle p;
+    EXPECT_TRUE(s.getParent(h, p).ok());
+    h = p;
+  }
+  return m;
+}
+
+void expectMatNear(const glm::mat4& a, const glm::mat4& b, float tol) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], b[c][r], tol * (1.0f + std::fabs(b[c][r])));
+}
+
+std::vector<glm::vec3> cloud(std::mt19937& rng, size_t n) {
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<glm::vec3> p(n);
+  for (auto& v : p) v = {g(rng) * 2.0f + 1.0f, g(rng) * 0.5f, g(rng) - 3.0f};
+  return p;
+}
+
+}  // namespace
+
+TEST(Scene, WorldTransformsMatchBruteForceAfterMovesAndReparenting) {
+  std::mt19937 rng(7);
+  Scene s;
+  s.setChainCount(1);
+  std::vector<NodeHandle> nodes;
+  for (int i = 0; i < 200; ++i) {
+    NodeHandle parent;
+    if (!nodes.empty() && rng() % 5 != 0) parent = nodes[rng() % nodes.size()];
+    NodeHandle h;
+    ASSERT_TRUE(s.addNode(parent, randomAffine(rng, i % 7 == 0), h).ok());
+    nodes.push_back(h);
+  }
+  s.update();
+  for (int round = 0; round < 30; ++round) {
+    for (int k = 0; k < 20; ++k) ASSERT_TRUE(s.setLocal(nodes[rng() % nodes.size()], randomAffine(rng, false)).ok());
+    for (int k = 0; k < 5; ++k) {
+      const NodeHandle a = nodes[rng() % nodes.size()], b = nodes[rng() % nodes.size()];
+      const Error e = s.reparent(a, rng() % 4 == 0 ? NodeHandle{} : b);
+      // refused only when b is a or under a
+      if (e) {
+        EXPECT_EQ(e.status, Status::kInvalidArgument);
+        bool under = false;
+        for (NodeHandle h = b; h.slot != kInvalidSlot;) {
+          if (h == a) under = true;
+          NodeHandle p;
+          ASSERT_TRUE(s.getParent(h, p).ok());
+          h = p;
+        }
+        EXPECT_TRUE(under) << e.message;
+      }
+    }
+    s.update();
+    // parents before children in the update order
+    for (size_t i = 0; i < s.nodeCount(); ++i) {
+      NodeHandle p;
+      ASSERT_TRUE(s.getParent(s.nodeAt(i), p).ok());
+      if (p.slot == kInvalidSlot) continue;
+      bool before = false;
+      for (size_t j = 0; j < i; ++j) before |= s.nodeAt(j) == p;
+      ASSERT_TRUE(before) << "node at " << i << " comes before its parent";
+    }
+    for (NodeHandle h : nodes) {
+      glm::mat4 w;
+      ASSERT_TRUE(s.getWorld(h, w).ok());
+      expectMatNear(w, bruteWorld(s, h), 1e-3f);
+    }
+  }
+}
+
+TEST(Scene, WorldSpheresContainTransformedVerticesUnderNonUniformScaleAndShear) {
+  std::mt19937 rng(11);
+  const std::vector<glm::vec3> pts = cloud(rng, 500);
+  Scene s;
+  s.setChainCount(1);
+  ASSERT_TRUE(s.setChainSphere(0, minimalSphere(Span<const glm::vec3>(pts.data(), pts.size()))).ok());
+  std::vector<NodeHandle> nodes;
+  std::vector<ObjectHandle> objects;
+  for (int i = 0; i < 40; ++i) {
+    NodeHandle h;
+    ASSERT_TRUE(s.addNode(nodes.empty() || i % 3 == 0 ? NodeHandle{} : nodes[rng() % nodes.size()],
+                          randomAffine(rng, i % 2 == 0), h).ok());
+    nodes.push_back(h);
+    ObjectHandle o;
+    ASSERT_TRUE(s.addObject(ObjectDesc{h, 0, 1.0f, false, uint64_t(i)}, o).ok());
+    objects.push_back(o);
+  }
+  for (int round = 0; round < 5; ++round) {
+    for (int k = 0; k < 10; ++k) ASSERT_TRUE(s.setLocal(nodes[rng() % nodes.size()], randomAffine(rng, true)).ok());
+    s.reparent(nodes[rng() % 20 + 20], nodes[rng() % 20]);  // may be refused (would form a cycle)
+    s.update();
+    for (ObjectHandle o : objects) {
+      size_t k;
+      ASSERT_TRUE(s.objectIndex(o, k).ok());
+      ObjectDesc d;
+      ASSERT_TRUE(s.getObject(o, d).ok());
+      const glm::mat4 w = bruteWorld(s, d.node);
+      const glm::vec3 c = s.worldCenters()[k];
+      const float r = s.worldRadii()[k];
+      EXPECT_EQ(s.userData()[k], d.user_data);
+      float worst = 0.0f;
+      for (const glm::vec3& p : pts) worst = std::max(worst, glm::length(glm::vec3(w * glm::vec4(p, 1.0f)) - c));
+      EXPECT_LE(worst, r * (1.0f + 1e-4f)) << "object " << k;
+    }
+  }
+}
+
+TEST(Scene, MaxScaleBoundIsExactWithoutShearAndAnUpperBoundWithIt) {
+  Trs t;
+  t.rotation = glm::angleAxis(0.7f, glm::normalize(glm::vec3(1, 2, 3)));
+  t.scale = {0.5f, 3.0f, 1.5f};
+  EXPECT_NEAR(maxScaleBound(composeTrs(t)), 3.0f, 1e-5f);
+  // a shear whose spectral norm (golden ratio) exceeds its largest column norm (sqrt 2)
+  glm::mat4 sh(1.0f);
+  sh[1][0] = 1.0f;
+  const float golden = (1.0f + std::sqrt(5.0f)) * 0.5f;
+  EXPECT_GE(maxScaleBound(sh), golden);
+  // and the unit vector it stretches most really gets stretched by that much
+  // (the top right singular vector (1, golden) / |.|), so the bound must exceed the largest column norm
+  const glm::vec3 v = glm::normalize(glm::vec3(1.0f, golden, 0.0f));
+  const float stretch = glm::length(glm::vec3(sh * glm::vec4(v, 0.0f)));
+  EXPECT_NEAR(stretch, golden, 1e-5f);
+  EXPECT_GT(stretch, std::sqrt(2.0f));
+  EXPECT_GE(maxScaleBound(sh), stretch);
+}
+
+TEST(Scene, StaleHandlesAreRefused) {
+  Scene s;
+  s.setChainCount(2);
+  NodeHandle root, child;
+  ASSERT_TRUE(s.addNode({}, glm::mat4(1.0f), root).ok());
+  ASSERT_TRUE(s.addNode(root, glm::mat4(1.0f), child).ok());
+  ObjectHandle a, b;
+  ASSERT_TRUE(s.addObject(ObjectDesc{child, 1}, a).ok());
+  ASSERT_TRUE(s.addObject(ObjectDesc{root, 0}, b).ok());
+  EXPECT_EQ(s.addObject(ObjectDesc{root, 2}, b).status, Status::kInvalidArgument);  // chain out of range
+  ASSERT_TRUE(s.removeNode(root).ok());  // takes the child and both objects
+  EXPECT_EQ(s.nodeCount(), 0u);
+  EXPECT_EQ(s.objectCount(), 0u);
+  glm::mat4 m;
+  EXPECT_EQ(s.setLocal(child, glm::mat4(1.0f)).status, Status::kNotFound);
+  EXPECT_EQ(s.getWorld(root, m).status, Status::kNotFound);
+  EXPECT_EQ(s.removeObject(a).status, Status::kNotFound);
+  EXPECT_EQ(s.setImportance(b, 2.0f).status, Status::kNotFound);
+  EXPECT_EQ(s.reparent(child, {}).status, Status::kNotFound);
+  EXPECT_EQ(s.addNode(root, glm::mat4(1.0f), child).status, Status::kNotFound);
+  // the slots are reused with new generations: the old handles stay stale
+  NodeHandle again;
+  ASSERT_TRUE(s.addNode({}, glm::mat4(2.0f), again).ok());
+  EXPECT_EQ(again.slot == root.slot || again.slot == child.slot, true);
+  EXPECT_FALSE(s.isValid(root));
+  EXPECT_FALSE(s.isValid(child));
+  EXPECT_TRUE(s.isValid(again));
+  ObjectHandle c;
+  ASSERT_TRUE(s.addObject(ObjectDesc{again, 0}, c).ok());
+  EXPECT_FALSE(s.isValid(a));
+  EXPECT_FALSE(s.isValid(b));
+  ObjectDesc desc;
+  EXPECT_EQ(s.getObject(a, desc).status, Status::kNotFound);
+  EXPECT_EQ(NodeHandle{}.slot, kInvalidSlot);
+  EXPECT_EQ(s.setLocal(NodeHandle{}, glm::mat4(1.0f)).status, Status::kNotFound);
+}
+
+TEST(Scene, SwapRemoveKeepsOtherHandlesAndData) {
+  Scene s;
+  s.setChainCount(3);
+  NodeHandle n;
+  ASSERT_TRUE(s.addNode({}, glm::translate(glm::mat4(1.0f), glm::vec3(1, 2, 3)), n).ok());
+  std::vector<ObjectHandle> objs(3);
+  for (uint32_t i = 0; i < 3; ++i) ASSERT_TRUE(s.addObject(ObjectDesc{n, i, float(i), i == 2, 100u + i}, objs[i]).ok());
+  ASSERT_TRUE(s.removeObject(objs[0]).ok());
+  s.update();
+  for (uint32_t i = 1; i < 3; ++i) {
+    size_t k;
+    ASSERT_TRUE(s.objectIndex(objs[i], k).ok());
+    EXPECT_EQ(s.chainIds()[k], i);
+    EXPECT_EQ(s.userData()[k], 100u + i);
+    EXPECT_EQ(s.importances()[k], float(i));
+    EXPECT_EQ(s.mustDraw()[k], i == 2 ? 1 : 0);
+    EXPECT_EQ(s.objectAt(k), objs[i]);
+  }
+}
+
+TEST(Scene, FromSceneDataNumbersObjectsLikeObjectNodes) {
+  SceneData d;
+  d.meshes.resize(2);
+  d.meshes[0].mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  d.meshes[0].mesh.triangles = {0, 1, 2};
+  d.meshes[1].mesh.positions = {{0, 0, 0}, {0, 0, 4}, {0, 3, 0}};
+  d.meshes[1].mesh.triangles = {0, 1, 2};
+  d.nodes.resize(4);
+  d.nodes[0].children = {2, 1};
+  d.nodes[1].parent = 0; d.nodes[1].mesh = 0;
+  d.nodes[2].parent = 0; d.nodes[2].mesh = 1; d.nodes[2].children = {3};
+  d.nodes[2].local = glm::scale(glm::mat4(1.0f), glm::vec3(2.0f));
+  d.nodes[3].parent = 2; d.nodes[3].mesh = 0;
+  d.nodes[3].local = glm::translate(glm::mat4(1.0f), glm::vec3(10, 0, 0));
+  d.roots = {0};
+  Scene s;
+  ASSERT_TRUE(Scene::fromSceneData(d, s).ok());
+  const std::vector<int32_t> expect = objectNodes(d);
+  ASSERT_EQ(s.objectCount(), expect.size());
+  const std::vector<glm::mat4> world = worldTransforms(d);
+  for (size_t k = 0; k < expect.size(); ++k) {
+    ObjectDesc od;
+    ASSERT_TRUE(s.getObject(s.objectAt(k), od).ok());
+    EXPECT_EQ(od.node.slot, uint32_t(expect[k]));
+    EXPECT_EQ(s.chainIds()[k], uint32_t(d.nodes[expect[k]].mesh));
+    glm::mat4 w;
+    ASSERT_TRUE(s.getWorld(od.node, w).ok());
+    expectMatNear(w, world[expect[k]], 1e-6f);
+  }
+  // object 1 is node 3: mesh 0 scaled by 2 around (20, 0, 0); its minimal sphere has radius sqrt(2)/2
+  EXPECT_NEAR(s.worldRadii()[1], std::sqrt(2.0f), 1e-5f);
+  EXPECT_NEAR(s.worldCenters()[1].x, 21.0f, 1e-5f);
+}
+
+TEST(Scene, UpdateOnlyRecomputesMovedObjects) {
+  Scene s;
+  s.setChainCount(1);
+  NodeHandle a, b, c;
+  ASSERT_TRUE(s.addNode({}, glm::mat4(1.0f), a).ok());
+  ASSERT_TRUE(s.addNode(a, glm::mat4(1.0f), b).ok());
+  ASSERT_TRUE(s.addNode({}, glm::mat4(1.0f), c).ok());
+  ObjectHandle o;
+  ASSERT_TRUE(s.addObject(ObjectDesc{b}, o).ok());
+  ASSERT_TRUE(s.addObject(ObjectDesc{c}, o).ok());
+  EXPECT_EQ(s.update(), 2u);
+  EXPECT_EQ(s.update(), 0u);
+  ASSERT_TRUE(s.setLocal(a, glm::translate(glm::mat4(1.0f), glm::vec3(1, 0, 0))).ok());
+  EXPECT_EQ(s.update(), 1u);  // only the object under a's child
+  EXPECT_FLOAT_EQ(s.worldCenters()[0].x, 1.0f);
+  EXPECT_FLOAT_EQ(s.worldCenters()[1].x, 0.0f);
+}
