@@ -19,6 +19,7 @@ struct Face {
   glm::vec3 color{1.0f};        // area-weighted mean colour (of the corners, or of the merged parts)
   bool blended = false;         // formed by merging: corners take `color`, not their vertex colour
   bool rebuilt = false;         // changed by reconstruction (gets the §7.1 polygon constraints)
+  bool inside = false;          // was wholly inside a sub-volume in some pass (may lose co-linear corners)
   bool alive = true;
 };
 
@@ -48,12 +49,17 @@ void degradeInSubvolumes(Model& model, const ScroogeParams& params, ScroogeStats
 // §6.3 for one sub-volume: degrades the points of `faces` whose owner is `cell` (a point used by any
 // polygon outside the sub-volume has another owner and stays, §6.1). Returns the moves made.
 size_t degradeFaces(Model& model, const std::vector<uint32_t>& faces, const std::vector<uint32_t>& owner,
-                    uint32_t cell, double l_max, double theta_min_rad, double theta_max_rad);
+                    uint32_t cell, double l_max, double theta_min_rad, double theta_max_rad, bool prevent_foldover);
 
-// §7 for one sub-volume: drops flattened polygons, merges coplanar neighbours (new faces go to
-// `added`, merged ones die), removes co-linear vertices. Returns the number of groups merged.
+// §7 for one sub-volume: merges coplanar neighbours (new faces go to `added`, merged ones die).
+// Returns the number of groups merged.
 size_t reconstructFaces(Model& model, const std::vector<uint32_t>& faces, const ScroogeParams& params,
-                        double l_max, std::vector<Face>& added);
+                        std::vector<Face>& added);
+
+// after all passes: drops polygons flattened by degradation and (§7.1.1) removes co-linear corners
+// of polygons that were inside a sub-volume. Done last because nothing moves afterwards, so the
+// T-junctions both leave behind cannot open.
+void finishFaces(Model& model, const ScroogeParams& params, double l_max);
 
 // §7.1.2: splits a concave face into convex pieces (Hertel-Mehlhorn over an ear-clipping).
 void splitConcave(const Model& model, const Face& face, std::vector<Face>& pieces);

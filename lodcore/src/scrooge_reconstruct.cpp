@@ -66,25 +66,26 @@ double cross2(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
 
 }  // namespace
 
-size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const ScroogeParams& params, double l_max,
+size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const ScroogeParams& params,
                         std::vector<Face>& added) {
-  // polygons flattened by degradation have no area left
+  // polygons flattened by degradation stay until the end (dropping one now would leave its middle
+  // vertex as a T-junction that a later pass could move off the edge, opening a crack); they join any
+  // neighbouring group but never start one
   std::vector<uint32_t> live;
   for (uint32_t f : faces) {
     if (!m.faces[f].alive) continue;
-    if (isDegenerate(m, m.faces[f].pts)) {
-      m.faces[f].alive = false;
-      continue;
-    }
+    m.faces[f].inside = true;
     live.push_back(f);
   }
   const size_t n = live.size();
   std::vector<glm::dvec3> normal(n);
   std::vector<double> area(n);
+  std::vector<uint8_t> flat(n);
   for (size_t i = 0; i < n; ++i) {
     const glm::dvec3 nn = newellNormal(m, m.faces[live[i]].pts);
     area[i] = 0.5 * glm::length(nn);
-    normal[i] = glm::normalize(nn);
+    flat[i] = isDegenerate(m, m.faces[live[i]].pts) ? 1 : 0;
+    normal[i] = flat[i] ? glm::dvec3(0.0) : glm::normalize(nn);
   }
   // undirected edge -> (local face, forward?) for adjacency
   struct EdgeUse {
@@ -119,12 +120,12 @@ size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const Scro
   std::vector<uint32_t> group, queue;
   size_t merged = 0;
   for (size_t seed = 0; seed < n; ++seed) {
-    if (grouped[seed]) continue;
+    if (grouped[seed] || flat[seed]) continue;
     group.assign(1, uint32_t(seed));
     grouped[seed] = 1;
     for (size_t q = 0; q < group.size(); ++q)
       for (uint32_t g : neighbours[group[q]])
-        if (!grouped[g] && glm::dot(normal[g], normal[seed]) >= cos_tol) {
+        if (!grouped[g] && (flat[g] || glm::dot(normal[g], normal[seed]) >= cos_tol)) {
           grouped[g] = 1;
           group.push_back(g);
         }
@@ -184,16 +185,23 @@ size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const Scro
     merged_face.color = total > 0.0 ? glm::vec3(color / total) : m.faces[live[seed]].color;
     merged_face.blended = true;
     merged_face.rebuilt = true;
+    merged_face.inside = true;
     added.push_back(std::move(merged_face));
     ++merged;
   }
 
-  if (params.remove_colinear) {
-    for (uint32_t f : live)
-      if (m.faces[f].alive && removeColinear(m, m.faces[f], l_max)) m.faces[f].rebuilt = true;
-    for (Face& f : added) removeColinear(m, f, l_max);
-  }
   return merged;
+}
+
+void finishFaces(Model& m, const ScroogeParams& params, double l_max) {
+  for (Face& f : m.faces) {
+    if (!f.alive) continue;
+    if (isDegenerate(m, f.pts)) {  // flattened by degradation: no area, nothing moves any more
+      f.alive = false;
+      continue;
+    }
+    if (params.remove_colinear && f.inside && removeColinear(m, f, l_max)) f.rebuilt = true;
+  }
 }
 
 void splitConcave(const Model& m, const Face& face, std::vector<Face>& pieces) {

@@ -50,7 +50,7 @@ bool cellOfInterval(double a, double b, double s, int64_t& k) {
 }  // namespace
 
 size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vector<uint32_t>& owner, uint32_t cell,
-                    double l_max, double theta_min, double theta_max) {
+                    double l_max, double theta_min, double theta_max, bool prevent_foldover) {
   // directed edges of the sub-volume's polygons, sorted by start point (§6.3 step 2)
   std::vector<std::pair<uint32_t, uint32_t>> out_edges;
   for (uint32_t f : faces) {
@@ -59,6 +59,32 @@ size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vec
   }
   std::sort(out_edges.begin(), out_edges.end());
   out_edges.erase(std::unique(out_edges.begin(), out_edges.end()), out_edges.end());
+  // polygons around each point, to refuse moves that would turn one over
+  std::vector<std::pair<uint32_t, uint32_t>> point_faces;
+  for (uint32_t f : faces)
+    for (uint32_t p : m.faces[f].pts) point_faces.emplace_back(p, f);
+  std::sort(point_faces.begin(), point_faces.end());
+  point_faces.erase(std::unique(point_faces.begin(), point_faces.end()), point_faces.end());
+  auto foldsOver = [&](uint32_t v, const glm::vec3& to) {
+    auto range = std::equal_range(point_faces.begin(), point_faces.end(), std::make_pair(v, 0u),
+                                  [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto it = range.first; it != range.second; ++it) {
+      const std::vector<uint32_t>& pts = m.faces[it->second].pts;
+      glm::dvec3 before(0.0), after(0.0);
+      const glm::dvec3 o(m.points[pts[0]]);
+      const glm::dvec3 o_after = pts[0] == v ? glm::dvec3(to) : o;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const uint32_t a = pts[i], b = pts[(i + 1) % pts.size()];
+        const glm::dvec3 pa(m.points[a]), pb(m.points[b]);
+        before += glm::cross(pa - o, pb - o);
+        after += glm::cross((a == v ? glm::dvec3(to) : pa) - o_after, (b == v ? glm::dvec3(to) : pb) - o_after);
+      }
+      const double lb = glm::length(before);
+      // a polygon may flatten (the one being collapsed does) but not turn its back
+      if (lb > 0.0 && glm::dot(before, after) < -1e-6 * lb * lb) return true;
+    }
+    return false;
+  };
 
   size_t moves = 0;
   for (uint32_t f : faces) {
@@ -96,6 +122,7 @@ size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vec
       const glm::vec3 moved = glm::vec3(p1 + r * e2);
       if (moved == m.points[v2]) continue;
       if (glm::length(glm::dvec3(moved) - glm::dvec3(m.origin[v2])) > l_max) continue;
+      if (prevent_foldover && foldsOver(v2, moved)) continue;
       m.points[v2] = moved;
       ++moves;
     }
@@ -178,8 +205,8 @@ void degradeInSubvolumes(Model& m, const ScroogeParams& params, ScroogeStats& st
     std::vector<size_t> moves(keys.size(), 0), merges(keys.size(), 0);
     tbb::parallel_for(size_t(0), keys.size(), [&](size_t c) {
       // cells touch disjoint points and faces: each writes only what it owns
-      moves[c] = degradeFaces(m, cell_faces[c], owner, uint32_t(c), l_max, theta_min, theta_max);
-      merges[c] = reconstructFaces(m, cell_faces[c], params, l_max, added[c]);
+      moves[c] = degradeFaces(m, cell_faces[c], owner, uint32_t(c), l_max, theta_min, theta_max, params.prevent_foldover);
+      merges[c] = reconstructFaces(m, cell_faces[c], params, added[c]);
     });
     for (size_t c = 0; c < keys.size(); ++c) {
       stats.moved_vertices += moves[c];
@@ -189,6 +216,7 @@ void degradeInSubvolumes(Model& m, const ScroogeParams& params, ScroogeStats& st
     m.faces.erase(std::remove_if(m.faces.begin(), m.faces.end(), [](const Face& f) { return !f.alive; }),
                   m.faces.end());
   }
+  finishFaces(m, params, l_max);
 }
 
 }  // namespace scenelod::scrooge

@@ -192,6 +192,40 @@ TEST(Scrooge, PolygonsNeverInsideASubvolumeKeepTheirCorners) {
   }
 }
 
+TEST(Scrooge, ClosedSurfaceStaysClosed) {
+  // the bumpy sphere is star-shaped about the origin: a ray from there that hits no triangle has
+  // found a crack (co-linear corners and flattened polygons are only dropped once nothing moves)
+  const Mesh in = bumpySphere(24, 48);
+  auto hits = [](const Mesh& m, const glm::dvec3& d) {
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+      const glm::dvec3 a(m.positions[m.triangles[3 * t]]), b(m.positions[m.triangles[3 * t + 1]]),
+          c(m.positions[m.triangles[3 * t + 2]]);
+      const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
+      const double det = glm::dot(e1, p);
+      if (std::fabs(det) < 1e-14) continue;
+      const double u = glm::dot(-a, p) / det;
+      const glm::dvec3 q = glm::cross(-a, e1);
+      const double v = glm::dot(d, q) / det;
+      if (u >= -1e-9 && v >= -1e-9 && u + v <= 1.0 + 1e-9 && glm::dot(e2, q) / det > 0.0) return true;
+    }
+    return false;
+  };
+  for (int divisions : {2, 1}) {
+    ScroogeParams p;
+    p.subvolume_size = scroogeSubvolumeForDivisions(computeBounds(in), divisions);
+    Mesh out;
+    ASSERT_TRUE(scroogeMesh(in, p, out).ok());
+    ASSERT_LT(out.triangleCount(), in.triangleCount());
+    const int n = 1000;
+    int misses = 0;
+    for (int i = 0; i < n; ++i) {  // a Fibonacci spiral of directions
+      const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1.0 - z * z), ph = 2.399963 * i;
+      if (!hits(out, glm::dvec3(r * std::cos(ph), r * std::sin(ph), z))) ++misses;
+    }
+    EXPECT_EQ(misses, 0) << "divisions " << divisions;
+  }
+}
+
 TEST(Scrooge, CoplanarNeighboursMergeWithAreaWeightedColour) {
   // a red unit square beside a blue 2 x 1 rectangle, with a colour seam at x = 1
   Mesh in;

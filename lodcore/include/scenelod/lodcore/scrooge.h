@@ -27,6 +27,8 @@ struct ScroogeParams {
   float theta_max_deg = 45.0f;     // edge pairs bending more than this never degrade; in (theta_min, 180)
   float coplanar_deg = 5.0f;       // a polygon joins a merge group within this angle of the group's first polygon
   float weld_epsilon_rel = 1e-6f;  // vertices closer than this x bbox diagonal are one vertex; 0 = exact equality
+  bool prevent_foldover = true;    // refuse a move that turns a polygon around the moved vertex over
+                                   // (not in the paper: without it large sub-volumes fold the surface)
   bool overlap_passes = true;      // the 8 passes offset by half a sub-volume per axis (§5); false = one grid
   bool remove_colinear = true;     // §7.1.1: drop vertices lying on the segment between their neighbours
   bool fill_holes = true;          // §7.2: a merged group with holes keeps only its outer outline (the paper);
