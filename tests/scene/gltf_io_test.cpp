@@ -113,6 +113,31 @@ TEST(GltfImport, ReadsAnExternalBufferSquare) {
   EXPECT_EQ(s.meshes[0].primitive_materials, (std::vector<int32_t>{-1}));
 }
 
+TEST(GltfImport, ReadsAnEmbeddedDataUriBuffer) {
+  const std::string dir = makeDir("datauri");
+  SquareGltf g;
+  g.write(dir);
+  const std::vector<unsigned char> bin = readBytes(dir + "/square.bin");
+  static const char kB64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string b64;
+  for (size_t i = 0; i < bin.size(); i += 3) {
+    const uint32_t v = (uint32_t(bin[i]) << 16) | (i + 1 < bin.size() ? uint32_t(bin[i + 1]) << 8 : 0u) |
+                       (i + 2 < bin.size() ? uint32_t(bin[i + 2]) : 0u);
+    b64 += kB64[(v >> 18) & 63];
+    b64 += kB64[(v >> 12) & 63];
+    b64 += i + 1 < bin.size() ? kB64[(v >> 6) & 63] : '=';
+    b64 += i + 2 < bin.size() ? kB64[v & 63] : '=';
+  }
+  g.uri = "data:application/octet-stream;base64," + b64;
+  const std::string path = g.write(dir, "embedded.gltf");
+  ::remove((dir + "/square.bin").c_str());  // only the data URI can provide the bytes now
+  SceneData s;
+  const Error e = importGltf(path, s);
+  ASSERT_TRUE(e.ok()) << e.message;
+  EXPECT_EQ(s.meshes[0].mesh.triangles, (std::vector<uint32_t>{0, 1, 2, 1, 3, 2}));
+  EXPECT_EQ(s.meshes[0].mesh.positions[3], glm::vec3(1, 1, 0));
+}
+
 TEST(GltfImport, ConvertsStripsFansLineStripsLoopsAndPoints) {
   const std::string dir = makeDir("modes");
   struct Case {
