@@ -47,6 +47,12 @@ bool readFileBytes(const std::string& path, std::vector<unsigned char>& out, std
     err = std::strerror(errno);
     return false;
   }
+  struct stat st;
+  if (::fstat(::fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+    std::fclose(f);
+    err = "not a regular file";
+    return false;
+  }
   std::fseek(f, 0, SEEK_END);
   const long size = std::ftell(f);
   std::rewind(f);
