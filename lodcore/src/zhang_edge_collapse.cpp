@@ -1,0 +1,792 @@
+// Vision-characteristic edge collapse and its triangle-decimation extension, §3 of Zhang, Shu & Luo
+// 2003, "Mesh Simplification Based on Shading Characteristic" (WSCG 2003 short papers).
+//
+// Data layout: flat arrays only. Triangles keep their three vertex ids; each vertex heads a singly
+// linked list of the triangle corners that reference it (merged in O(degree) on a collapse, dead
+// corners unlinked lazily while walking). Vertices (edge collapse) or triangles (extension) sit in an
+// indexed binary min-heap with decrease/increase-key. Every per-collapse buffer is a member reused
+// across collapses, so the common case allocates nothing.
+//
+// Checks (docs/ZHANG.md): a contraction is refused when the fan around the merged vertex would not
+// be one disk or one half-disk (link condition, which also keeps a closed mesh closed and refuses
+// fins and tetrahedron collapses), when a remaining triangle would turn by more than
+// max_normal_turn_deg or lose (almost) all its area (fold-over), or when it would move a kept vertex.
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <glm/geometric.hpp>
+
+#include "scenelod/lodcore/zhang.h"
+#include "zhang_internal.h"
+
+namespace scenelod {
+namespace {
+
+using zhang_detail::kNone;
+using zhang_detail::StarPair;
+using zhang_detail::StarScratch;
+
+// indexed binary min-heap over ids 0..n-1, ordered by (key, id) so ties are deterministic
+class IndexedHeap {
+ public:
+  void reset(size_t n) {
+    heap_.clear();
+    heap_.reserve(n);
+    pos_.assign(n, kNone);
+    key_.assign(n, 0.0f);
+  }
+  bool contains(uint32_t id) const { return pos_[id] != kNone; }
+  bool empty() const { return heap_.empty(); }
+  uint32_t top() const { return heap_[0]; }
+  void set(uint32_t id, float key) {  // insert or update
+    if (pos_[id] == kNone) {
+      key_[id] = key;
+      pos_[id] = static_cast<uint32_t>(heap_.size());
+      heap_.push_back(id);
+      up(pos_[id]);
+      return;
+    }
+    const float old = key_[id];
+    key_[id] = key;
+    if (key < old) up(pos_[id]); else down(pos_[id]);
+  }
+  void remove(uint32_t id) {
+    const uint32_t p = pos_[id];
+    if (p == kNone) return;
+    const uint32_t last = heap_.back();
+    heap_.pop_back();
+    pos_[id] = kNone;
+    if (p < heap_.size()) {
+      heap_[p] = last;
+      pos_[last] = p;
+      up(p);
+      down(pos_[last]);
+    }
+  }
+  uint32_t pop() {
+    const uint32_t id = heap_[0];
+    remove(id);
+    return id;
+  }
+
+ private:
+  bool less(uint32_t a, uint32_t b) const { return key_[a] < key_[b] || (key_[a] == key_[b] && a < b); }
+  void up(uint32_t p) {
+    const uint32_t id = heap_[p];
+    while (p > 0) {
+      const uint32_t parent = (p - 1) / 2;
+      if (!less(id, heap_[parent])) break;
+      heap_[p] = heap_[parent];
+      pos_[heap_[p]] = p;
+      p = parent;
+    }
+    heap_[p] = id;
+    pos_[id] = p;
+  }
+  void down(uint32_t p) {
+    const uint32_t id = heap_[p], n = static_cast<uint32_t>(heap_.size());
+    for (;;) {
+      uint32_t c = 2 * p + 1;
+      if (c >= n) break;
+      if (c + 1 < n && less(heap_[c + 1], heap_[c])) ++c;
+      if (!less(heap_[c], id)) break;
+      heap_[p] = heap_[c];
+      pos_[heap_[p]] = p;
+      p = c;
+    }
+    heap_[p] = id;
+    pos_[id] = p;
+  }
+  std::vector<uint32_t> heap_;
+  std::vector<uint32_t> pos_;
+  std::vector<float> key_;
+};
+
+// acos to within 7e-5 rad (Abramowitz & Stegun 4.4.45); CA only ranks collapses, and libm's acosf
+// was a tenth of the run time
+inline float fastAcos(float x) {
+  const float ax = std::min(std::fabs(x), 1.0f);
+  const float r = std::sqrt(1.0f - ax) * (1.5707288f + ax * (-0.2121144f + ax * (0.0742610f - 0.0187293f * ax)));
+  return x >= 0.0f ? r : 3.14159265f - r;
+}
+
+// angle between unit vectors, 0 when either is zero (a degenerate triangle's normal)
+inline float fastAngle(const glm::vec3& a, const glm::vec3& b) {
+  if (glm::dot(a, a) == 0.0f || glm::dot(b, b) == 0.0f) return 0.0f;
+  return fastAcos(glm::dot(a, b));
+}
+
+glm::vec3 safeNormalize(const glm::vec3& v) {
+  const float len = glm::length(v);
+  return len > 0.0f ? v / len : glm::vec3(0.0f);
+}
+
+// relative area below which a triangle counts as degenerate: |cross| <= eps * sum of squared edges
+constexpr float kDegenerateRatio = 1e-6f;
+
+class ZhangEngine {
+ public:
+  Error init(const Mesh& in, const ZhangParams& params);
+  // runs until at most `target` triangles remain or nothing can be collapsed
+  void run(size_t target);
+  void extract(Mesh& out, ZhangStats& stats);
+  size_t aliveTriangles() const { return alive_tris_; }
+  size_t initialTriangles() const { return initial_tris_; }
+  bool stopped() const { return stopped_; }
+  void setProgress(const ProgressCallback* p, size_t final_target) {
+    progress_ = p;
+    final_target_ = final_target;
+  }
+
+ private:
+  template <class F>
+  void forStar(uint32_t v, F&& f);  // f(triangle, corner 0..2) for each live triangle of v
+  uint32_t find(uint32_t v);
+  void updateTriangle(uint32_t t);
+  float visionOf(uint32_t v);
+  float superHeightOf(uint32_t v);
+  void refreshVertex(uint32_t v);
+
+  // contraction of the set S (2 or 3 vertices) into survivor k at (p, n): checks, new CA(k)
+  // a triangle that survives a contraction: its id and the two vertices after the merged one
+  struct StarEntry {
+    uint32_t t, u, w;
+  };
+  void gatherStar(uint32_t v, std::vector<StarEntry>& out);
+  // checks the contraction whose surviving triangles are `entries` (the merged vertex moved to p with
+  // carried normal n) and gives the new CA of the merged vertex; candidates whose CA reaches `bound`
+  // stop early (they cannot win) and return false
+  bool evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p, const glm::vec3& n,
+                float bound, float& new_ca);
+  // the fold-over part of evaluate, raising new_ca (which the caller initialises)
+  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound,
+                     float& new_ca);
+  // the link-condition part of evaluate
+  bool checkTopology(const StarEntry* entries, size_t count, bool any_removed);
+  void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
+  void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
+
+  bool stepEdge();
+  bool stepTriangle();
+  float triangleVision(uint32_t t);
+  void refreshTrianglesAround(uint32_t k);
+
+  const Mesh* in_ = nullptr;
+  ZhangParams params_;
+  float cos_max_turn_ = 0.5f;
+  // per vertex, hot: position (12 B), carried geometric normal (12 B), CA (4 B), corner list head (4 B)
+  std::vector<glm::vec3> pos_, nrm_;
+  std::vector<float> ca_;
+  std::vector<uint32_t> vhead_;
+  // per vertex, cold: attributes blended on collapse with the area weight, union-find parent
+  std::vector<glm::vec3> attr_nrm_, col_;
+  std::vector<glm::vec2> uv_;
+  std::vector<float> weight_;
+  std::vector<uint32_t> parent_;
+  std::vector<uint8_t> kept_, alive_v_;
+  // per triangle, one record so that walking a fan touches one cache line per triangle (52 B):
+  // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
+  // alive flag (4 B); corner c is vertex c % 3 of triangle c / 3
+  struct Face {
+    uint32_t v[3] = {kNone, kNone, kNone};
+    uint32_t next[3] = {kNone, kNone, kNone};
+    glm::vec3 n{0.0f};
+    float area = 0.0f;
+    uint32_t alive = 1;
+  };
+  std::vector<Face> faces_;
+  uint32_t& cornerNext(uint32_t c) { return faces_[c / 3].next[c % 3]; }
+  size_t alive_tris_ = 0, initial_tris_ = 0;
+  IndexedHeap heap_;
+  bool stopped_ = false;
+  ZhangStats stats_;
+  const ProgressCallback* progress_ = nullptr;
+  size_t final_target_ = 0, current_target_ = 0;
+  // scratch reused by every evaluation
+  StarScratch star_;
+  std::vector<StarPair> pairs_;
+  std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
+  std::vector<StarEntry> star_i_, star_j_, union_;
+  uint32_t mark_gen_ = 0;
+};
+
+template <class F>
+void ZhangEngine::forStar(uint32_t v, F&& f) {
+  uint32_t prev = kNone;
+  for (uint32_t c = vhead_[v]; c != kNone;) {
+    const uint32_t t = c / 3, next = cornerNext(c);
+    if (!faces_[t].alive) {  // unlink the dead corner
+      if (prev == kNone) vhead_[v] = next; else cornerNext(prev) = next;
+      c = next;
+      continue;
+    }
+    f(t, c % 3);
+    prev = c;
+    c = next;
+  }
+}
+
+uint32_t ZhangEngine::find(uint32_t v) {
+  uint32_t r = v;
+  while (parent_[r] != r) r = parent_[r];
+  while (parent_[v] != r) {
+    const uint32_t n = parent_[v];
+    parent_[v] = r;
+    v = n;
+  }
+  return r;
+}
+
+void ZhangEngine::updateTriangle(uint32_t t) {
+  const glm::vec3 &a = pos_[faces_[t].v[0]], &b = pos_[faces_[t].v[1]], &c = pos_[faces_[t].v[2]];
+  const glm::vec3 x = glm::cross(b - a, c - a);
+  const float len = glm::length(x);
+  faces_[t].n = len > 0.0f ? x / len : glm::vec3(0.0f);
+  faces_[t].area = 0.5f * len;
+}
+
+float ZhangEngine::visionOf(uint32_t v) {
+  float ca = 0.0f;
+  const glm::vec3 nv = nrm_[v];
+  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, faces_[t].n) * faces_[t].area); });
+  return ca;
+}
+
+float ZhangEngine::superHeightOf(uint32_t v) {
+  pairs_.clear();
+  forStar(v, [&](uint32_t t, uint32_t k) { pairs_.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]}); });
+  return zhang_detail::superHeightOfStar(pos_[v], pairs_.data(), pairs_.size(), pos_.data(), star_);
+}
+
+void ZhangEngine::refreshVertex(uint32_t v) {
+  ca_[v] = visionOf(v);
+  if (params_.mode != ZhangMode::kEdgeCollapse || kept_[v] || !alive_v_[v]) return;
+  const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : ca_[v];
+  heap_.set(v, key);
+}
+
+Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
+  in_ = &in;
+  params_ = params;
+  if (!(params.max_normal_turn_deg > 0.0f) || !(params.max_normal_turn_deg <= 180.0f))
+    return {Status::kInvalidArgument, "zhang: max_normal_turn_deg must be in (0, 180]"};
+  if (!(params.feature_angle_deg >= 0.0f) || !(params.angle_height_ratio >= 0.0f))
+    return {Status::kInvalidArgument, "zhang: feature_angle_deg and angle_height_ratio must be >= 0"};
+  cos_max_turn_ = std::cos(params.max_normal_turn_deg * 3.14159265f / 180.0f);
+  const size_t vn = in.vertexCount(), tn = in.triangleCount();
+  if (vn >= kNone || 3 * tn >= kNone) return {Status::kUnsupported, "zhang: mesh too large for 32-bit indices"};
+  stats_ = ZhangStats{};
+  pos_ = in.positions;
+  nrm_.assign(vn, glm::vec3(0.0f));
+  ca_.assign(vn, 0.0f);
+  vhead_.assign(vn, kNone);
+  attr_nrm_ = in.normals;
+  col_ = in.colors;
+  uv_ = in.uvs;
+  weight_.assign(vn, 0.0f);
+  parent_.resize(vn);
+  for (size_t v = 0; v < vn; ++v) parent_[v] = static_cast<uint32_t>(v);
+  kept_.assign(vn, 0);
+  alive_v_.assign(vn, 0);
+  faces_.clear();
+  faces_.reserve(tn);
+  star_.resize(vn);
+  mark_.assign(std::max(vn, tn), 0);
+  mark_gen_ = 0;
+
+  // triangles: drop repeated indices and repeated vertex sets (the first occurrence stays)
+  for (size_t t = 0; t < tn; ++t) {
+    const uint32_t a = in.triangles[3 * t], b = in.triangles[3 * t + 1], c = in.triangles[3 * t + 2];
+    if (a == b || b == c || a == c) {
+      ++stats_.dropped_degenerate;
+      continue;
+    }
+    const uint32_t lo = std::min({a, b, c}), hi = std::max({a, b, c}), mid = a ^ b ^ c ^ lo ^ hi;
+    bool duplicate = false;
+    for (uint32_t corner = vhead_[lo]; corner != kNone && !duplicate; corner = cornerNext(corner)) {
+      const uint32_t* o = faces_[corner / 3].v;
+      const uint32_t olo = std::min({o[0], o[1], o[2]}), ohi = std::max({o[0], o[1], o[2]});
+      duplicate = olo == lo && ohi == hi && (o[0] ^ o[1] ^ o[2] ^ olo ^ ohi) == mid;
+    }
+    if (duplicate) {
+      ++stats_.dropped_duplicate;
+      continue;
+    }
+    const uint32_t id = static_cast<uint32_t>(faces_.size());
+    Face f;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = in.triangles[3 * t + k];
+      f.v[k] = v;
+      f.next[k] = vhead_[v];
+      vhead_[v] = 3 * id + k;
+    }
+    faces_.push_back(f);
+  }
+  const size_t live = faces_.size();
+  alive_tris_ = initial_tris_ = live;
+  stats_.input_triangles = live;
+  for (uint32_t t = 0; t < live; ++t) {
+    updateTriangle(t);
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = faces_[t].v[k];
+      nrm_[v] += faces_[t].n * faces_[t].area;
+      weight_[v] += faces_[t].area / 3.0f;
+      alive_v_[v] = 1;
+    }
+  }
+  for (glm::vec3& n : nrm_) n = safeNormalize(n);
+
+  // classification (§2): complex and edge vertices are kept, angle vertices on request
+  heap_.reset(params_.mode == ZhangMode::kEdgeCollapse ? vn : live);
+  std::vector<StarPair> pairs;
+  for (uint32_t v = 0; v < vn; ++v) {
+    if (!alive_v_[v]) continue;
+    pairs.clear();
+    float max_angle = 0.0f, ca = 0.0f;
+    forStar(v, [&](uint32_t t, uint32_t k) {
+      pairs.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]});
+      const float angle = fastAngle(nrm_[v], faces_[t].n);
+      max_angle = std::max(max_angle, angle);
+      ca = std::max(ca, angle * faces_[t].area);
+    });
+    zhang_detail::StarMeasure m;
+    zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
+                              params_.influence == ZhangInfluence::kSuperHeight);
+    ca_[v] = ca;
+    kept_[v] = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
+               (params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle);
+    if (params_.mode == ZhangMode::kEdgeCollapse && !kept_[v])
+      heap_.set(v, params_.influence == ZhangInfluence::kSuperHeight ? m.super_height : ca);
+  }
+  if (params_.mode == ZhangMode::kTriangleDecimation)
+    for (uint32_t t = 0; t < live; ++t) heap_.set(t, triangleVision(t));
+  stopped_ = false;
+  return {};
+}
+
+// position and normal of the merged vertex, interpolated by the CA of the merged vertices (§3);
+// a kept vertex never moves, and two kept vertices never merge
+void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok) {
+  int kept_count = 0;
+  k = s[0];
+  for (int i = 0; i < s_count; ++i)
+    if (kept_[s[i]]) {
+      ++kept_count;
+      k = s[i];
+    }
+  ok = kept_count <= 1;
+  if (!ok) return;
+  if (kept_count == 1) {
+    p = pos_[k];
+    n = nrm_[k];
+    return;
+  }
+  if (params_.placement == ZhangPlacement::kNeighbour) {  // s[s_count - 1] is the neighbour V_j
+    k = s[s_count - 1];
+    p = pos_[k];
+    n = nrm_[k];
+    return;
+  }
+  float sum = 0.0f;
+  for (int i = 0; i < s_count; ++i) sum += ca_[s[i]];
+  p = glm::vec3(0.0f);
+  glm::vec3 nn(0.0f);
+  for (int i = 0; i < s_count; ++i) {
+    const float w = sum > 0.0f ? ca_[s[i]] / sum : 1.0f / static_cast<float>(s_count);
+    p += w * pos_[s[i]];
+    nn += w * nrm_[s[i]];
+  }
+  n = safeNormalize(nn);
+  if (glm::dot(n, n) == 0.0f) n = nrm_[k];
+}
+
+void ZhangEngine::gatherStar(uint32_t v, std::vector<StarEntry>& out) {
+  out.clear();
+  forStar(v, [&](uint32_t t, uint32_t corner) {
+    out.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
+  });
+}
+
+bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p,
+                           const glm::vec3& n, float bound, float& new_ca) {
+  new_ca = 0.0f;
+  return checkGeometry(entries, count, p, n, bound, new_ca) && checkTopology(entries, count, any_removed);
+}
+
+bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n,
+                                float bound, float& new_ca) {
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t t = entries[e].t;
+    const glm::vec3 &pu = pos_[entries[e].u], &pw = pos_[entries[e].w];
+    if (glm::dot(faces_[t].n, faces_[t].n) == 0.0f) continue;  // already degenerate: nothing to turn
+    const glm::vec3 x = glm::cross(pu - p, pw - p);
+    const float len = glm::length(x);
+    const float scale = glm::dot(pu - p, pu - p) + glm::dot(pw - p, pw - p) + glm::dot(pw - pu, pw - pu);
+    if (!(len > kDegenerateRatio * scale)) {
+      ++stats_.rejected_fold;
+      return false;
+    }
+    const glm::vec3 nt = x / len;
+    // against the triangle's current normal (a flip) and against the merged vertex's carried
+    // normal, interpolated from the original's (drift from the original orientation)
+    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
+      ++stats_.rejected_fold;
+      return false;
+    }
+    new_ca = std::max(new_ca, fastAngle(n, nt) * 0.5f * len);
+    if (new_ca >= bound) return false;  // cannot beat the best candidate so far
+  }
+  return true;
+}
+
+bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any_removed) {
+  star_.reset();
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t u = entries[e].u, w = entries[e].w;
+    if (star_.count[u] == 0 && star_.next[u] == kNone) star_.touched.push_back(u);
+    if (star_.count[w] == 0 && star_.next[w] == kNone) star_.touched.push_back(w);
+    star_.count[u] += 1u;
+    star_.count[w] += 1u << 16;
+    star_.next[u] = w;
+  }
+  // link condition: the surviving fan around the merged vertex is one cycle or one chain
+  const size_t pc = count;
+  if (pc == 0 || !any_removed) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  size_t chain_starts = 0;
+  uint32_t start = entries[0].u;
+  for (uint32_t v : star_.touched) {
+    const uint32_t c = star_.count[v], first = c & 0xffffu, second = c >> 16;
+    if (first > 1 || second > 1) {
+      ++stats_.rejected_topology;
+      return false;
+    }
+    if (second == 0) {
+      ++chain_starts;
+      start = v;
+    }
+  }
+  if (chain_starts > 1 || star_.touched.size() != pc + chain_starts) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  size_t steps = 0;
+  uint32_t v = start;
+  do {
+    if ((star_.count[v] & 0xffffu) == 0) break;  // end of the chain
+    v = star_.next[v];
+    ++steps;
+  } while (v != start && steps <= pc);
+  if (steps != pc || (chain_starts == 0 && (v != start || pc < 3))) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  return true;
+}
+
+void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n) {
+  // triangles with two or more merged vertices die
+  removed_.clear();
+  for (int si = 0; si < s_count; ++si) {
+    forStar(s[si], [&](uint32_t t, uint32_t) {
+      int inside = 0;
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < s_count; ++i) inside += faces_[t].v[c] == s[i];
+      if (inside >= 2) removed_.push_back(t);
+    });
+  }
+  for (uint32_t t : removed_) {
+    if (!faces_[t].alive) continue;
+    faces_[t].alive = 0;
+    --alive_tris_;
+    if (params_.mode == ZhangMode::kTriangleDecimation) heap_.remove(t);
+  }
+  // attributes blended with the area weights; the merged vertex keeps id k
+  float wsum = 0.0f;
+  for (int i = 0; i < s_count; ++i) wsum += weight_[s[i]];
+  auto blend3 = [&](std::vector<glm::vec3>& a) {
+    if (a.empty()) return;
+    glm::vec3 acc(0.0f);
+    for (int i = 0; i < s_count; ++i) acc += (wsum > 0.0f ? weight_[s[i]] / wsum : 1.0f / s_count) * a[s[i]];
+    a[k] = acc;
+  };
+  if (!kept_[k]) {
+    blend3(attr_nrm_);
+    blend3(col_);
+    if (!uv_.empty()) {
+      glm::vec2 acc(0.0f);
+      for (int i = 0; i < s_count; ++i) acc += (wsum > 0.0f ? weight_[s[i]] / wsum : 1.0f / s_count) * uv_[s[i]];
+      uv_[k] = acc;
+    }
+  }
+  weight_[k] = wsum;
+  pos_[k] = p;
+  nrm_[k] = n;
+  for (int i = 0; i < s_count; ++i) {
+    const uint32_t v = s[i];
+    if (v == k) continue;
+    // relabel v's corners to k and splice v's list in front of k's
+    uint32_t last = kNone;
+    forStar(v, [&](uint32_t t, uint32_t corner) {
+      faces_[t].v[corner] = k;
+      last = 3 * t + corner;
+    });
+    if (last != kNone) {
+      cornerNext(last) = vhead_[k];
+      vhead_[k] = vhead_[v];
+    }
+    vhead_[v] = kNone;
+    parent_[v] = k;
+    alive_v_[v] = 0;
+    if (params_.mode == ZhangMode::kEdgeCollapse) heap_.remove(v);
+  }
+  // new normals and areas around k, then the CA (and queue key) of k and of its ring
+  neighbours_.clear();
+  ++mark_gen_;
+  forStar(k, [&](uint32_t t, uint32_t corner) {
+    updateTriangle(t);
+    for (uint32_t c = 1; c < 3; ++c) {
+      const uint32_t u = faces_[t].v[(corner + c) % 3];
+      if (mark_[u] != mark_gen_) {
+        mark_[u] = mark_gen_;
+        neighbours_.push_back(u);
+      }
+    }
+  });
+  refreshVertex(k);
+  for (uint32_t u : neighbours_) refreshVertex(u);
+  ++stats_.collapses;
+}
+
+bool ZhangEngine::stepEdge() {
+  if (heap_.empty()) return false;
+  const uint32_t i = heap_.pop();
+  // candidate partners: NV(V_i), in a fixed order
+  gatherStar(i, star_i_);
+  tris_.clear();
+  ++mark_gen_;
+  for (const StarEntry& e : star_i_)
+    for (uint32_t u : {e.u, e.w})
+      if (mark_[u] != mark_gen_) {
+        mark_[u] = mark_gen_;
+        tris_.push_back(u);
+      }
+  float best_ca = INFINITY;
+  uint32_t best_j = kNone;
+  glm::vec3 best_p(0.0f), best_n(0.0f);
+  for (uint32_t j : tris_) {
+    const uint32_t s[2] = {i, j};
+    uint32_t k;
+    glm::vec3 p, n;
+    bool ok;
+    interpolate(s, 2, k, p, n, ok);
+    if (!ok) continue;
+    // surviving triangles: those of V_i without V_j and those of V_j without V_i
+    union_.clear();
+    bool any_removed = false;
+    for (const StarEntry& e : star_i_) {
+      if (e.u == j || e.w == j) any_removed = true;
+      else union_.push_back(e);
+    }
+    // V_i's side first: most candidates lose there, before V_j's fan is walked
+    float ca = 0.0f;
+    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, ca)) continue;
+    const size_t i_part = union_.size();
+    gatherStar(j, star_j_);
+    for (const StarEntry& e : star_j_)
+      if (e.u != i && e.w != i) union_.push_back(e);
+    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, ca)) continue;
+    if (!checkTopology(union_.data(), union_.size(), any_removed)) continue;
+    if (ca < best_ca) {
+      best_ca = ca;
+      best_j = j;
+      best_p = p;
+      best_n = n;
+    }
+  }
+  if (best_j == kNone) {  // blocked until a neighbour's collapse changes its fan
+    ++stats_.blocked;
+    return true;
+  }
+  const uint32_t s[2] = {i, best_j};
+  apply(s, 2, best_j, best_p, best_n);
+  return true;
+}
+
+// CA(T): the triangle's area times the largest angle between its normal and the normals of NT(T),
+// the triangles sharing a vertex with it (definition 4)
+float ZhangEngine::triangleVision(uint32_t t) {
+  float max_angle = 0.0f;
+  const glm::vec3 nt = faces_[t].n;
+  for (int c = 0; c < 3; ++c)
+    forStar(faces_[t].v[c], [&](uint32_t o, uint32_t) {
+      if (o != t) max_angle = std::max(max_angle, fastAngle(nt, faces_[o].n));
+    });
+  return max_angle * faces_[t].area;
+}
+
+void ZhangEngine::refreshTrianglesAround(uint32_t k) {
+  // triangles whose NT(T) holds a triangle of k's fan: those touching k or its ring
+  ++mark_gen_;
+  auto touch = [&](uint32_t t, uint32_t) {
+    if (mark_[t] == mark_gen_) return;
+    mark_[t] = mark_gen_;
+    heap_.set(t, triangleVision(t));
+  };
+  forStar(k, touch);
+  for (uint32_t u : neighbours_) forStar(u, touch);
+}
+
+bool ZhangEngine::stepTriangle() {
+  if (heap_.empty()) return false;
+  const uint32_t t = heap_.pop();
+  uint32_t s[3] = {faces_[t].v[0], faces_[t].v[1], faces_[t].v[2]};
+  // the vertex with the largest CA last: with ZhangPlacement::kNeighbour the triangle goes onto it
+  for (int a = 0; a < 2; ++a)
+    if (ca_[s[a]] > ca_[s[2]] || (ca_[s[a]] == ca_[s[2]] && s[a] < s[2])) std::swap(s[a], s[2]);
+  uint32_t k;
+  glm::vec3 p, n;
+  bool ok;
+  interpolate(s, 3, k, p, n, ok);
+  if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
+  if (!ok) {  // re-queued when its neighbourhood changes
+    ++stats_.blocked;
+    return true;
+  }
+  union_.clear();
+  bool any_removed = false;
+  for (int si = 0; si < 3; ++si) {
+    gatherStar(s[si], star_j_);
+    for (const StarEntry& e : star_j_) {
+      const bool u_in = e.u == s[0] || e.u == s[1] || e.u == s[2], w_in = e.w == s[0] || e.w == s[1] || e.w == s[2];
+      if (u_in || w_in) any_removed = true;
+      else union_.push_back(e);
+    }
+  }
+  float ca;
+  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) {
+    ++stats_.blocked;
+    return true;
+  }
+  apply(s, 3, k, p, n);
+  refreshTrianglesAround(k);
+  return true;
+}
+
+void ZhangEngine::run(size_t target) {
+  current_target_ = target;
+  size_t since_report = 0;
+  while (alive_tris_ > target && !stopped_) {
+    const bool progressed = params_.mode == ZhangMode::kEdgeCollapse ? stepEdge() : stepTriangle();
+    if (!progressed) stopped_ = true;
+    if (progress_ && ++since_report >= 8192) {
+      since_report = 0;
+      const double span = static_cast<double>(initial_tris_ - std::min(initial_tris_, final_target_));
+      (*progress_)(span > 0 ? static_cast<double>(initial_tris_ - alive_tris_) / span : 1.0, "zhang collapse");
+    }
+  }
+}
+
+void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
+  const Mesh& in = *in_;
+  const size_t vn = in.vertexCount();
+  out = Mesh{};
+  std::vector<uint32_t> remap(vn, kNone);
+  uint32_t next_id = 0;
+  auto use = [&](uint32_t v) {
+    if (remap[v] == kNone) remap[v] = 0;  // mark; ids assigned in vertex order below
+  };
+  for (size_t t = 0; t < faces_.size(); ++t)
+    if (faces_[t].alive)
+      for (int c = 0; c < 3; ++c) use(faces_[t].v[c]);
+  for (size_t e = 0; e < in.edgeCount(); ++e) {
+    const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
+    if (a != b) {
+      use(a);
+      use(b);
+    }
+  }
+  for (uint32_t p : in.points) use(find(p));
+  for (size_t v = 0; v < vn; ++v)
+    if (remap[v] != kNone) remap[v] = next_id++;
+  out.positions.resize(next_id);
+  out.normals.resize(next_id);
+  if (!col_.empty()) out.colors.resize(next_id);
+  if (!uv_.empty()) out.uvs.resize(next_id);
+  for (size_t v = 0; v < vn; ++v) {
+    if (remap[v] == kNone) continue;
+    const uint32_t o = remap[v];
+    out.positions[o] = pos_[v];
+    glm::vec3 nrm = attr_nrm_.empty() ? nrm_[v] : safeNormalize(attr_nrm_[v]);
+    out.normals[o] = glm::dot(nrm, nrm) > 0.0f ? nrm : glm::vec3(0.0f, 0.0f, 1.0f);
+    if (!col_.empty()) out.colors[o] = col_[v];
+    if (!uv_.empty()) out.uvs[o] = uv_[v];
+  }
+  out.triangles.reserve(3 * alive_tris_);
+  for (size_t t = 0; t < faces_.size(); ++t)
+    if (faces_[t].alive)
+      for (int c = 0; c < 3; ++c) out.triangles.push_back(remap[faces_[t].v[c]]);
+  for (size_t e = 0; e < in.edgeCount(); ++e) {
+    const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
+    if (a == b) continue;
+    out.edges.push_back(remap[a]);
+    out.edges.push_back(remap[b]);
+    if (!in.edge_thickness.empty()) out.edge_thickness.push_back(in.edge_thickness[e]);
+  }
+  for (uint32_t p : in.points) out.points.push_back(remap[find(p)]);
+  // measured error: the largest distance an input vertex moved to its representative
+  float max_d2 = 0.0f;
+  for (size_t v = 0; v < vn; ++v) {
+    const uint32_t r = find(static_cast<uint32_t>(v));
+    if (remap[r] == kNone) continue;
+    const glm::vec3 d = in.positions[v] - pos_[r];
+    max_d2 = std::max(max_d2, glm::dot(d, d));
+  }
+  stats_.max_displacement = std::sqrt(max_d2);
+  stats_.output_triangles = alive_tris_;
+  stats_.stop_reason = alive_tris_ > current_target_ && stopped_ ? ZhangStopReason::kNoValidCollapse
+                                                                 : ZhangStopReason::kTargetReached;
+  stats = stats_;
+}
+
+}  // namespace
+
+Error simplifyZhangMulti(const Mesh& in, const std::vector<size_t>& targets, const ZhangParams& params,
+                         std::vector<Mesh>& out, std::vector<ZhangStats>* stats, const ProgressCallback& progress) {
+  out.clear();
+  if (stats) stats->clear();
+  if (Error e = validateMesh(in, "zhang simplification input")) return e;
+  for (size_t i = 1; i < targets.size(); ++i)
+    if (targets[i] >= targets[i - 1])
+      return {Status::kInvalidArgument, "zhang: targets must be strictly decreasing"};
+  ZhangEngine engine;
+  if (Error e = engine.init(in, params)) return e;
+  out.resize(targets.size());
+  for (size_t i = 0; i < targets.size(); ++i) {
+    engine.setProgress(progress.fn ? &progress : nullptr, targets.back());
+    engine.run(targets[i]);
+    ZhangStats s;
+    engine.extract(out[i], s);
+    if (stats) stats->push_back(s);
+  }
+  progress(1.0, "zhang collapse");
+  return {};
+}
+
+Error simplifyZhang(const Mesh& in, size_t target_triangles, const ZhangParams& params, Mesh& out,
+                    ZhangStats* stats) {
+  std::vector<Mesh> meshes;
+  std::vector<ZhangStats> all;
+  if (Error e = simplifyZhangMulti(in, {target_triangles}, params, meshes, &all)) {
+    out = Mesh{};
+    return e;
+  }
+  out = std::move(meshes[0]);
+  if (stats) *stats = all[0];
+  return {};
+}
+
+}  // namespace scenelod

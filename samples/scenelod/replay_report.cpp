@@ -1,0 +1,177 @@
+#include "replay_report.h"
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "scenelod/eval/plot.h"
+
+namespace scenelod::tool {
+
+using namespace scenelod::selection;
+
+namespace {
+
+std::string num(double v, int digits = 3) {
+  char b[64];
+  std::snprintf(b, sizeof(b), "%.*f", digits, v);
+  return b;
+}
+
+}  // namespace
+
+Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in, std::vector<std::string>& summary) {
+  summary.clear();
+  std::ostringstream o;
+  o << "# Replay report\n\n";
+  o << "- replay: `" << in.replay_path << "`\n- scene: `" << in.scene_path << "`\n";
+  if (in.replay) {
+    const ReplayHeader& h = in.replay->header;
+    o << "- viewport " << h.viewport_width_px << " x " << h.viewport_height_px << ", fov " << num(h.fov_y_deg, 1)
+      << " deg, " << num(h.pixels_per_cell, 2) << " pixels per cell, " << in.replay->frames.size() << " frames\n";
+  }
+  if (!in.command.empty()) o << "- command: `" << in.command << "`\n";
+  o << "\n## Summary\n\n| run | mode | frames | objects | mean predicted ms | mean measured ms | |pred - meas| / meas | "
+       "frames within +10 % of budget (after 30) | over-budget flags | switches / object / s | mean triangles |\n"
+       "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (size_t r = 0; r < in.runs.size(); ++r) {
+    const auto& log = *in.runs[r];
+    const ReplaySummary s = summarizeReplay(log);
+    const bool budget = !log.empty() && log[0].has_budget;
+    std::string within = "-";
+    if (s.budget_frames) within = num(100.0 * s.within_10_percent / s.budget_frames, 1) + " % (" + std::to_string(s.within_10_percent) + "/" + std::to_string(s.budget_frames) + ")";
+    o << "| " << in.run_names[r] << " | " << (budget ? "budget " + num(log[0].budget_ms, 2) + " ms" : std::string("distance")) << " | " << s.frames
+      << " | " << s.objects << " | " << num(s.mean_predicted_ms) << " | " << num(s.mean_measured_ms) << " | "
+      << num(100.0 * s.mean_abs_prediction_error, 1) << " % | " << within << " | " << s.over_budget_flagged << " | "
+      << num(s.switches_per_object_per_second, 4) << " | " << num(s.mean_triangles, 0) << " |\n";
+    char line[256];
+    if (budget)
+      std::snprintf(line, sizeof(line), "%s: budget %.2f ms, measured within +10%% on %s of frames after warm-up, %.4f switches/object/s",
+                    in.run_names[r].c_str(), log[0].budget_ms, within.c_str(), s.switches_per_object_per_second);
+    else
+      std::snprintf(line, sizeof(line), "%s: distance mode, mean measured %.2f ms, %.0f triangles/frame, %.4f switches/object/s",
+                    in.run_names[r].c_str(), s.mean_measured_ms, s.mean_triangles, s.switches_per_object_per_second);
+    summary.push_back(line);
+  }
+  o << "\nMeasured times come from the replay file where it has them, otherwise from the synthetic renderer "
+       "(true costs known, 5 % Gaussian noise, seeded); the selector learns its cost model online from them.\n";
+
+  o << "\n## Level histogram (share of object-frames)\n\n| run | not drawn |";
+  size_t max_levels = 0;
+  for (const auto* log : in.runs) max_levels = std::max(max_levels, summarizeReplay(*log).level_histogram.size());
+  for (size_t k = 1; k < max_levels; ++k) o << " L" << (k - 1) << " |";
+  o << "\n|---|";
+  for (size_t k = 0; k < max_levels; ++k) o << "---|";
+  o << "\n";
+  for (size_t r = 0; r < in.runs.size(); ++r) {
+    const ReplaySummary s = summarizeReplay(*in.runs[r]);
+    size_t total = 0;
+    for (size_t c : s.level_histogram) total += c;
+    o << "| " << in.run_names[r] << " |";
+    for (size_t k = 0; k < max_levels; ++k)
+      o << " " << num(total ? 100.0 * (k < s.level_histogram.size() ? s.level_histogram[k] : 0) / total : 0.0, 1) << " % |";
+    o << "\n";
+  }
+
+  o << "\n## Frame cost over time (every 10th frame)\n\n| frame | time s |";
+  for (const auto& n : in.run_names) o << " " << n << " predicted | " << n << " measured | " << n << " switches |";
+  o << "\n|---|---|";
+  for (size_t r = 0; r < in.runs.size(); ++r) o << "---|---|---|";
+  o << "\n";
+  const size_t frames = in.runs.empty() ? 0 : in.runs[0]->size();
+  for (size_t i = 0; i < frames; i += 10) {
+    o << "| " << (*in.runs[0])[i].frame << " | " << num((*in.runs[0])[i].time_s, 2) << " |";
+    for (const auto* log : in.runs) {
+      const ReplayLogFrame& f = (*log)[i];
+      o << " " << num(f.predicted_ms) << " | " << (f.has_measured ? num(f.measured_ms) : std::string("-")) << " | " << f.switches << " |";
+    }
+    o << "\n";
+  }
+  // plots beside the report
+  const size_t slash = md_path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? std::string() : md_path.substr(0, slash + 1);
+  std::string stem = md_path.substr(dir.size());
+  if (stem.size() > 3 && stem.substr(stem.size() - 3) == ".md") stem.resize(stem.size() - 3);
+  std::vector<eval::PlotSeries> cost, levels, switches;
+  int color = 0;
+  for (size_t r = 0; r < in.runs.size(); ++r) {
+    const auto& log = *in.runs[r];
+    eval::PlotSeries pred, meas, budget;
+    pred.name = in.run_names[r] + " predicted";
+    meas.name = in.run_names[r] + " measured";
+    budget.name = in.run_names[r] + " budget";
+    pred.markers = meas.markers = budget.markers = false;
+    for (const auto& f : log) {
+      pred.x.push_back(f.time_s);
+      pred.y.push_back(f.predicted_ms);
+      if (f.has_measured) {
+        meas.x.push_back(f.time_s);
+        meas.y.push_back(f.measured_ms);
+      }
+      if (f.has_budget) {
+        budget.x.push_back(f.time_s);
+        budget.y.push_back(f.budget_ms);
+      }
+    }
+    pred.color = eval::seriesColor(color++);
+    meas.color = eval::seriesColor(color++);
+    budget.color = eval::seriesColor(color++);
+    cost.push_back(pred);
+    if (!meas.x.empty()) cost.push_back(meas);
+    if (!budget.x.empty()) cost.push_back(budget);
+    const ReplaySummary s = summarizeReplay(log);
+    size_t total = 0;
+    for (size_t c : s.level_histogram) total += c;
+    eval::PlotSeries h;
+    h.name = in.run_names[r];
+    h.color = eval::seriesColor(static_cast<int>(r));
+    for (size_t k = 0; k < s.level_histogram.size(); ++k) {
+      h.x.push_back(static_cast<double>(k) - 1.0);
+      h.y.push_back(total ? 100.0 * s.level_histogram[k] / total : 0.0);
+    }
+    levels.push_back(h);
+    // switches per second, in whole-second bins (the first frame's initial choice left out)
+    std::map<long, double> bins;
+    for (size_t i = 1; i < log.size(); ++i) bins[static_cast<long>(log[i].time_s)] += log[i].switches;
+    eval::PlotSeries sw;
+    sw.name = in.run_names[r];
+    sw.color = eval::seriesColor(static_cast<int>(r));
+    for (const auto& b : bins) {
+      sw.x.push_back(static_cast<double>(b.first) + 0.5);
+      sw.y.push_back(b.second);
+    }
+    switches.push_back(sw);
+  }
+  std::vector<std::pair<std::string, std::string>> images;
+  auto plot = [&](const std::vector<eval::PlotSeries>& series, const char* suffix, const char* title, const char* xl,
+                  const char* yl) -> Error {
+    bool any = false;
+    for (const auto& s : series) any = any || !s.x.empty();
+    if (!any) return Error();
+    eval::PlotParams p;
+    p.title = title;
+    p.x_label = xl;
+    p.y_label = yl;
+    const std::string file = stem + suffix;
+    if (Error e = eval::writePlotPng(dir + file, series, p)) return e;
+    images.push_back({title, file});
+    return Error();
+  };
+  if (Error e = plot(cost, "_cost.png", "frame cost vs budget", "time (s)", "ms")) return e;
+  if (Error e = plot(levels, "_levels.png", "level histogram (-1 = not drawn)", "level", "% of object-frames")) return e;
+  if (Error e = plot(switches, "_switches.png", "level switches per second", "time (s)", "switches")) return e;
+  if (!images.empty()) {
+    o << "\n## Plots\n\n";
+    for (const auto& im : images) o << "![" << im.first << "](" << im.second << ")\n\n";
+  }
+
+  std::ofstream out(md_path);
+  if (!out) return Error(Status::kIoError, md_path + ": cannot write the report");
+  out << o.str();
+  out.flush();
+  if (!out) return Error(Status::kIoError, md_path + ": write failed");
+  return Error();
+}
+
+}  // namespace scenelod::tool

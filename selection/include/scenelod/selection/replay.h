@@ -1,0 +1,63 @@
+#pragma once
+// Replay files (JSON lines, docs/REPLAY.md): a header line, then one line per frame with the camera,
+// optionally the measured frame time, a pick point and object moves. Offline code: allocates,
+// returns Error naming the file and line.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
+#include "scenelod/lodcore/status.h"
+
+namespace scenelod::selection {
+
+struct ReplayHeader {
+  int version = 1;               // "scenelod_replay"
+  std::string scene;             // glTF/GLB, pack, level-scene JSON or "builtin:NAME"; relative to the replay file
+  uint32_t viewport_width_px = 1280;
+  uint32_t viewport_height_px = 720;
+  double fov_y_deg = 60.0;
+  bool has_budget = false;       // false: distance mode (budget_ms null or absent)
+  double budget_ms = 16.7;
+  double pixels_per_cell = 1.0;
+};
+
+// A new local transform of an object (its node): translation, rotation (x, y, z, w), uniform scale.
+struct ReplayMove {
+  uint32_t object = 0;
+  glm::vec3 translation{0.0f};
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // glm order w, x, y, z
+  float scale = 1.0f;
+};
+
+struct ReplayFrame {
+  uint64_t frame = 0;
+  double time_s = 0.0;
+  glm::vec3 eye{0.0f, 0.0f, 5.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  bool has_measured = false;
+  double measured_ms = 0.0;
+  bool has_pick = false;
+  float pick_px[2] = {0.0f, 0.0f};
+  std::vector<ReplayMove> moves;
+};
+
+struct Replay {
+  ReplayHeader header;
+  std::vector<ReplayFrame> frames;
+};
+
+// Reads a replay. Errors: missing file, a line that is not JSON, a missing or mistyped key, a
+// version other than 1, frames out of order, a non-finite number; each names the file and line.
+Error readReplay(const std::string& path, Replay& out);
+// Writes a replay (numbers with enough digits to read back the same floats).
+Error writeReplay(const std::string& path, const Replay& replay);
+
+// The scene path of a replay resolved against the replay file's folder (absolute paths and
+// "builtin:" names are returned unchanged).
+std::string resolveReplayScene(const std::string& replay_path, const std::string& scene);
+
+}  // namespace scenelod::selection

@@ -1,0 +1,81 @@
+#pragma once
+// Running a replay through the selector: per frame apply moves, update world spheres, select, then
+// take the frame's measured time from the file or from a synthetic renderer (known true cost
+// coefficients with seeded Gaussian noise) and report it to the selector before the next frame, as
+// an engine would. Produces the JSON-lines log of docs/REPLAY.md. Offline code: allocates.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "scenelod/lodcore/status.h"
+#include "scenelod/selection/cost_model.h"
+#include "scenelod/selection/replay.h"
+#include "scenelod/selection/replay_scene.h"
+#include "scenelod/selection/selector.h"
+
+namespace scenelod::selection {
+
+// The true costs of the synthetic renderer: deliberately not the selector's prior, so calibration
+// has something to learn.
+CostCoefficients syntheticTrueCost();
+
+struct ReplayRunOptions {
+  SelectionParams params;              // mode, budget and pixels_per_cell are taken from the header
+  bool force_distance = false;         // distance mode whatever the header says
+  bool override_budget = false;        // budget mode with budget_ms below whatever the header says
+  double budget_ms = 16.7;
+  bool synthetic_renderer = true;      // measure frames without measured_ms synthetically
+  CostCoefficients true_cost = syntheticTrueCost();
+  double noise = 0.05;                 // relative standard deviation of the synthetic measurement
+  uint64_t seed = 1;
+  CostCoefficients initial_cost;       // the selector's prior
+};
+
+struct ReplayLogFrame {
+  uint64_t frame = 0;
+  double time_s = 0.0;
+  bool has_budget = false;
+  double budget_ms = 0.0;
+  double predicted_ms = 0.0;
+  bool has_measured = false;
+  double measured_ms = 0.0;
+  bool measured_from_file = false;
+  std::vector<int8_t> levels;
+  uint32_t switches = 0;
+  uint32_t drawn = 0;
+  uint32_t culled = 0;
+  uint32_t dropped = 0;
+  uint32_t flags = 0;
+  double benefit = 0.0;
+  double triangles = 0.0;
+};
+
+// Runs every frame of `replay` on `scene` (moves change the scene). Errors: an invalid scene, a move
+// naming a missing object, a frame whose camera is degenerate (eye == target), each naming the frame.
+Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options,
+                std::vector<ReplayLogFrame>& log);
+
+// One log line (no newline): {"frame", "time_s", "budget_ms", "predicted_ms", "measured_ms",
+// "levels", "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
+// fixed precision so logs compare exactly.
+std::string replayLogLine(const ReplayLogFrame& frame);
+Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log);
+
+struct ReplaySummary {
+  size_t frames = 0;
+  size_t objects = 0;
+  size_t warmup = 30;
+  double duration_s = 0.0;
+  size_t budget_frames = 0;            // frames after warm-up with a budget and a measurement
+  size_t within_10_percent = 0;        // of those, measured <= 1.1 x budget
+  size_t over_budget_flagged = 0;
+  double mean_predicted_ms = 0.0, mean_measured_ms = 0.0;
+  double mean_abs_prediction_error = 0.0;  // |predicted - measured| / measured, after warm-up
+  double switches_per_object_per_second = 0.0;
+  double mean_triangles = 0.0;
+  std::vector<size_t> level_histogram; // index 0 = not drawn, k + 1 = level k; over all frames and objects
+};
+
+ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup = 30);
+
+}  // namespace scenelod::selection

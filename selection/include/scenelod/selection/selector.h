@@ -1,0 +1,166 @@
+#pragma once
+// Per-frame level-of-detail selection: one level per object (or "not drawn") from the camera, in
+// distance mode (the coarsest accurate-enough level, Low & Tan 1997 §4) or under a frame-time budget
+// (Funkhouser & Sequin 1993, with Mason & Blake 1997's convex-hull greedy and its Lagrangian twin).
+//
+// Shape (STYLE.md §3): a SelectionJob holds const spans over caller-owned per-object arrays (SoA), a
+// flat per-chain level table, spans for the outputs, and a pointer to a SelectorContext created once
+// for the largest object count. run() allocates nothing, locks nothing, throws nothing, and the same
+// inputs on a context in the same state give bit-identical outputs.
+//
+// Threads: one thread calls run() on a context at a time. reportFrameTime() may be called from any
+// one other thread at the same time (the engine's render thread reporting the frame it just
+// finished); it hands the time over through a lock-free single-slot mailbox that the next run()
+// reads. See docs/SELECTION.md.
+#include <cstddef>
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "scenelod/lodcore/span.h"
+#include "scenelod/selection/camera.h"
+#include "scenelod/selection/cost_model.h"
+
+namespace scenelod::selection {
+
+// Memory for a context: allocate(user, bytes, alignment) returns memory or null; free(user, p).
+// Per context, so two engines in one process stay independent.
+struct Allocator {
+  void* (*allocate)(void* user, size_t bytes, size_t alignment) = nullptr;
+  void (*free)(void* user, void* pointer) = nullptr;
+  void* user = nullptr;
+};
+
+// The C library's aligned allocation.
+Allocator defaultAllocator();
+
+// Levels of every chain, flattened: chain c owns rows [chain_level_offset[c], chain_level_offset[c+1]).
+// Row order within a chain is level order: level 0 (the original, cell width 0) first, cell widths
+// non-decreasing. All spans but chain_level_offset have one entry per row.
+struct LevelTable {
+  Span<const uint32_t> chain_level_offset;  // chain_count + 1 entries, starting at 0, non-decreasing
+  Span<const float> cell_width;             // object space, >= 0, finite
+  Span<const uint32_t> triangle_count;
+  Span<const uint32_t> vertex_count;
+  Span<const uint32_t> line_point_count;    // edges + points
+
+  size_t chainCount() const { return chain_level_offset.count ? chain_level_offset.count - 1 : 0; }
+  size_t rowCount() const { return cell_width.count; }
+};
+
+enum class SelectionMode : uint8_t {
+  kDistance,  // the coarsest accurate-enough level (w_k * scale <= X * R), no budget
+  kBudget,    // maximise total benefit with predicted cost <= budget_ms
+};
+
+enum class BudgetAlgorithm : uint8_t {
+  kLagrangian,  // price search warm-started from last frame, exact greedy on the bracket (default)
+  kGreedy,      // upgrades by decreasing marginal ratio from a heap (Mason & Blake)
+};
+
+enum SelectionFlag : uint32_t {
+  kFlagOverBudget = 1u << 0,       // even the mandatory levels (must-draw at coarsest) exceed the budget
+  kFlagObjectsDropped = 1u << 1,   // some objects in view were not drawn to fit the budget
+  kFlagSplitFallback = 1u << 2,    // the half-approximation fallback beat the greedy this frame
+};
+
+struct SelectionParams {
+  SelectionMode mode = SelectionMode::kBudget;
+  float budget_ms = 16.0f;          // budget mode: total predicted frame time allowed, > 0
+  float pixels_per_cell = 1.0f;     // X: a level is accurate enough when one cell projects to <= X pixels
+  float hysteresis = 0.1f;          // >= 0: the current level's benefit counts (1 + h) times, so a
+                                    // switch to a finer level happens at X*R/(1+h) of the cell width
+                                    // where a switch to coarser happens; also in distance mode
+  bool stop_at_first_non_fitting = true;  // false: skip an upgrade that does not fit and keep trying
+                                          // cheaper ones (always uses the greedy algorithm)
+  bool half_approximation = true;   // compare with the first non-fitting upgrade alone (1/2 bound)
+  BudgetAlgorithm algorithm = BudgetAlgorithm::kLagrangian;
+  bool calibrate = true;            // fit the cost model from reported frame times
+};
+
+struct SelectionStats {
+  uint64_t frame = 0;              // index of this selection on the context, from 0; pass it to
+                                   // reportFrameTime when the frame has been rendered
+  double predicted_ms = 0.0;       // predicted cost of the chosen levels, per-frame constant included
+  double mandatory_ms = 0.0;       // per-frame constant + must-draw objects at their cheapest level
+  double total_benefit = 0.0;      // sum of benefits of the chosen levels (hysteresis included)
+  double lambda = 0.0;             // benefit per ms at the budget's edge (budget mode)
+  CostFeatures features;           // what the chosen levels draw (the calibration's regressors)
+  uint32_t drawn_count = 0;
+  uint32_t culled_count = 0;       // outside the view frustum (never drawn)
+  uint32_t dropped_count = 0;      // in view but not drawn to fit the budget
+  uint32_t switch_count = 0;       // objects whose level changed since last frame (to/from -1 included)
+  uint32_t search_passes = 0;      // linear passes of the price search
+  uint32_t flags = 0;              // SelectionFlag bits
+};
+
+class SelectorContext;
+
+struct SelectorConfig {
+  size_t max_object_count = 0;       // > 0
+  size_t max_levels_per_chain = 16;  // 1..64
+  size_t max_level_rows = 65536;     // rows of the level table (all chains' levels together)
+  size_t bracket_capacity = 2048;    // upgrades sorted at the budget's edge by the Lagrangian form
+  CostCoefficients initial_cost;
+  CalibrationParams calibration;
+  Allocator allocator;               // null functions = defaultAllocator()
+};
+
+// Creates a context: all memory for max_object_count objects in one allocation. Returns null on a bad
+// config or when the allocator fails. Cost: one allocation, O(max_object_count).
+SelectorContext* createSelectorContext(const SelectorConfig& config);
+// Frees the context through its allocator. Null is ignored.
+void destroySelectorContext(SelectorContext* context);
+// Forgets last frame's levels and price (a cold start); the cost model is kept.
+void resetSelectorHistory(SelectorContext* context);
+// Bytes the context holds, and the part of it that scales per object, divided by max_object_count.
+size_t selectorMemoryBytes(const SelectorContext* context);
+double selectorBytesPerObject(const SelectorContext* context);
+
+// The current cost model (the prior, or the calibrated one).
+CostCoefficients selectorCostModel(const SelectorContext* context);
+// Replaces the cost model and restarts its calibration from it.
+void setSelectorCostModel(SelectorContext* context, const CostCoefficients& coefficients);
+
+// Hands the measured time of frame `frame` (SelectionStats::frame) to the context. Lock-free,
+// wait-free; may run concurrently with run() from one other thread. The next run() feeds it to the
+// calibration if it refers to one of the last 16 frames; a newer report overwrites an unread one.
+void reportFrameTime(SelectorContext* context, uint64_t frame, float measured_ms);
+
+// Predicted cost and benefit (hysteresis included) the last run() gave `object` at `level` (-1 = not
+// drawn) in budget mode. Returns false when the object was culled, the level is out of range, or
+// the last run was not in budget mode. Needs nothing of the last run's inputs. For tests and tools.
+bool selectorLastPoint(const SelectorContext* context, size_t object, int level, double* cost_ms,
+                       double* benefit);
+
+struct SelectionJob {
+  // inputs
+  const Camera* camera = nullptr;
+  SelectionParams params;
+  LevelTable levels;
+  Span<const glm::vec3> centers;        // world bounding-sphere centres, one per object
+  Span<const float> radii;              // world bounding-sphere radii, >= 0
+  Span<const float> max_scales;         // largest scale of the instance (cell widths are object space)
+  Span<const uint32_t> chains;          // chain of each object, < levels.chainCount()
+  Span<const float> importance;         // empty = 1 for all, else one per object, >= 0
+  Span<const uint8_t> must_draw;        // empty = none, else one per object (nonzero = must draw)
+  Span<const float> visible_fraction;   // empty = 1 (visibility helper), else in [0, 1]
+  Span<const float> focus;              // empty = 1, else >= 0
+  Span<const float> motion;             // empty = 1, else in [0, 1] (lower for fast-moving objects)
+  // outputs
+  Span<int8_t> levels_out;              // one per object: chosen level, -1 = not drawn
+  Span<float> cost_ms_out;              // empty or one per object: predicted cost of its level
+  SelectionStats* stats = nullptr;      // may be null
+  SelectorContext* context = nullptr;
+
+  // False on a null context or camera, an invalid camera, spans of the wrong size, more objects or
+  // level rows than the context holds, a malformed level table (offsets, more levels than max_levels_per_chain,
+  // decreasing or non-finite widths), a chain id out of range, non-positive budget in budget mode or
+  // non-positive pixels_per_cell. Cost: O(objects + rows).
+  bool validate() const;
+  // validate(), then selects. Returns false (outputs untouched) when validation fails.
+  // Cost: O(objects * levels) per frame plus a few linear passes; no allocation.
+  bool run();
+};
+
+}  // namespace scenelod::selection

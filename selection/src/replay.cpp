@@ -1,0 +1,225 @@
+// Replay files: JSON lines (docs/REPLAY.md), read with nlohmann-json.
+#include "scenelod/selection/replay.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace scenelod::selection {
+
+namespace {
+
+using json = nlohmann::json;
+
+struct LineError {
+  std::string message;
+};
+
+double number(const json& j, const char* key, bool required, double fallback, std::string& err) {
+  auto it = j.find(key);
+  if (it == j.end() || it->is_null()) {
+    if (required) err = std::string("missing key \"") + key + "\"";
+    return fallback;
+  }
+  if (!it->is_number()) {
+    err = std::string("key \"") + key + "\" must be a number";
+    return fallback;
+  }
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) err = std::string("key \"") + key + "\" is not finite";
+  return v;
+}
+
+bool vec3(const json& j, const char* key, bool required, glm::vec3& out, std::string& err) {
+  auto it = j.find(key);
+  if (it == j.end()) {
+    if (required) err = std::string("missing key \"") + key + "\"";
+    return false;
+  }
+  if (!it->is_array() || it->size() != 3) {
+    err = std::string("key \"") + key + "\" must be an array of 3 numbers";
+    return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(*it)[i].is_number() || !std::isfinite((*it)[i].get<double>())) {
+      err = std::string("key \"") + key + "\" must be an array of 3 finite numbers";
+      return false;
+    }
+    out[i] = (*it)[i].get<float>();
+  }
+  return true;
+}
+
+std::string fmt(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.9g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::string resolveReplayScene(const std::string& replay_path, const std::string& scene) {
+  if (scene.empty() || scene[0] == '/' || scene.rfind("builtin:", 0) == 0) return scene;
+  const size_t slash = replay_path.find_last_of('/');
+  if (slash == std::string::npos) return scene;
+  return replay_path.substr(0, slash + 1) + scene;
+}
+
+static Error readReplayImpl(const std::string& path, Replay& out) {
+  out = Replay();
+  std::ifstream in(path);
+  if (!in) return Error(Status::kIoError, path + ": cannot open replay file");
+  std::string line;
+  size_t line_no = 0;
+  bool have_header = false;
+  auto fail = [&](const std::string& what) {
+    return Error(Status::kParseError, path + ":" + std::to_string(line_no) + ": " + what);
+  };
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    json j = json::parse(line, nullptr, false);
+    if (j.is_discarded()) return fail("not valid JSON");
+    if (!j.is_object()) return fail("expected a JSON object");
+    std::string err;
+    if (!have_header) {
+      auto v = j.find("scenelod_replay");
+      if (v == j.end()) return fail("the first line must be the header with \"scenelod_replay\"");
+      if (!v->is_number_integer() || v->get<int>() != 1)
+        return fail("unsupported replay version (this reader knows version 1)");
+      ReplayHeader& h = out.header;
+      auto s = j.find("scene");
+      if (s == j.end() || !s->is_string() || s->get<std::string>().empty()) return fail("missing key \"scene\" (a path)");
+      h.scene = s->get<std::string>();
+      auto vp = j.find("viewport");
+      if (vp != j.end()) {
+        if (!vp->is_array() || vp->size() != 2 || !(*vp)[0].is_number_integer() || !(*vp)[1].is_number_integer() ||
+            (*vp)[0].get<long>() < 1 || (*vp)[1].get<long>() < 1 || (*vp)[0].get<long>() > 65536 || (*vp)[1].get<long>() > 65536)
+          return fail("\"viewport\" must be [width, height] in whole pixels, 1..65536");
+        h.viewport_width_px = (*vp)[0].get<uint32_t>();
+        h.viewport_height_px = (*vp)[1].get<uint32_t>();
+      }
+      h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
+      if (!err.empty()) return fail(err);
+      if (!(h.fov_y_deg > 0.0 && h.fov_y_deg < 180.0)) return fail("\"fov_y_deg\" must be in (0, 180)");
+      auto b = j.find("budget_ms");
+      if (b != j.end() && !b->is_null()) {
+        h.budget_ms = number(j, "budget_ms", true, 0.0, err);
+        if (!err.empty()) return fail(err);
+        if (!(h.budget_ms > 0.0)) return fail("\"budget_ms\" must be > 0 (or null for distance mode)");
+        h.has_budget = true;
+      }
+      h.pixels_per_cell = number(j, "pixels_per_cell", false, 1.0, err);
+      if (!err.empty()) return fail(err);
+      if (!(h.pixels_per_cell > 0.0)) return fail("\"pixels_per_cell\" must be > 0");
+      have_header = true;
+      continue;
+    }
+    ReplayFrame f;
+    const double fi = number(j, "frame", true, 0.0, err);
+    if (!err.empty()) return fail(err);
+    if (fi < 0 || fi != std::floor(fi)) return fail("\"frame\" must be a whole number >= 0");
+    f.frame = static_cast<uint64_t>(fi);
+    if (!out.frames.empty() && f.frame <= out.frames.back().frame) return fail("frames must be in increasing order");
+    f.time_s = number(j, "time_s", false, 0.0, err);
+    if (!err.empty()) return fail(err);
+    vec3(j, "eye", true, f.eye, err);
+    if (!err.empty()) return fail(err);
+    vec3(j, "target", true, f.target, err);
+    if (!err.empty()) return fail(err);
+    vec3(j, "up", false, f.up, err);
+    if (!err.empty()) return fail(err);
+    auto m = j.find("measured_ms");
+    if (m != j.end() && !m->is_null()) {
+      f.measured_ms = number(j, "measured_ms", true, 0.0, err);
+      if (!err.empty()) return fail(err);
+      if (f.measured_ms < 0.0) return fail("\"measured_ms\" must be >= 0");
+      f.has_measured = true;
+    }
+    auto p = j.find("pick");
+    if (p != j.end() && !p->is_null()) {
+      if (!p->is_array() || p->size() != 2 || !(*p)[0].is_number() || !(*p)[1].is_number())
+        return fail("\"pick\" must be [x, y] in pixels");
+      f.has_pick = true;
+      f.pick_px[0] = (*p)[0].get<float>();
+      f.pick_px[1] = (*p)[1].get<float>();
+    }
+    auto mv = j.find("moves");
+    if (mv != j.end() && !mv->is_null()) {
+      if (!mv->is_array()) return fail("\"moves\" must be an array of [object, tx, ty, tz, qx, qy, qz, qw, s]");
+      for (const json& e : *mv) {
+        if (!e.is_array() || e.size() != 9) return fail("each move must be [object, tx, ty, tz, qx, qy, qz, qw, s]");
+        for (const json& x : e)
+          if (!x.is_number() || !std::isfinite(x.get<double>())) return fail("a move holds a value that is not a finite number");
+        if (!e[0].is_number_integer() || e[0].get<long>() < 0) return fail("a move's object must be a whole number >= 0");
+        ReplayMove rm;
+        rm.object = e[0].get<uint32_t>();
+        rm.translation = glm::vec3(e[1].get<float>(), e[2].get<float>(), e[3].get<float>());
+        rm.rotation = glm::quat(e[7].get<float>(), e[4].get<float>(), e[5].get<float>(), e[6].get<float>());
+        rm.scale = e[8].get<float>();
+        if (!(rm.scale > 0.0f)) return fail("a move's scale must be > 0");
+        f.moves.push_back(rm);
+      }
+    }
+    out.frames.push_back(std::move(f));
+  }
+  if (!have_header) return Error(Status::kParseError, path + ": empty replay (no header line)");
+  return Error();
+}
+
+static Error writeReplayImpl(const std::string& path, const Replay& r) {
+  std::ofstream out(path);
+  if (!out) return Error(Status::kIoError, path + ": cannot write replay file");
+  const ReplayHeader& h = r.header;
+  json hj;
+  std::ostringstream s;
+  s << "{\"scenelod_replay\": 1, \"scene\": " << json(h.scene).dump() << ", \"viewport\": [" << h.viewport_width_px
+    << ", " << h.viewport_height_px << "], \"fov_y_deg\": " << fmt(h.fov_y_deg)
+    << ", \"budget_ms\": " << (h.has_budget ? fmt(h.budget_ms) : std::string("null"))
+    << ", \"pixels_per_cell\": " << fmt(h.pixels_per_cell) << "}\n";
+  out << s.str();
+  for (const ReplayFrame& f : r.frames) {
+    std::ostringstream l;
+    auto v3 = [](const glm::vec3& v) { return "[" + fmt(v.x) + ", " + fmt(v.y) + ", " + fmt(v.z) + "]"; };
+    l << "{\"frame\": " << f.frame << ", \"time_s\": " << fmt(f.time_s) << ", \"eye\": " << v3(f.eye)
+      << ", \"target\": " << v3(f.target) << ", \"up\": " << v3(f.up);
+    if (f.has_measured) l << ", \"measured_ms\": " << fmt(f.measured_ms);
+    if (f.has_pick) l << ", \"pick\": [" << fmt(f.pick_px[0]) << ", " << fmt(f.pick_px[1]) << "]";
+    if (!f.moves.empty()) {
+      l << ", \"moves\": [";
+      for (size_t i = 0; i < f.moves.size(); ++i) {
+        const ReplayMove& m = f.moves[i];
+        l << (i ? ", " : "") << "[" << m.object << ", " << fmt(m.translation.x) << ", " << fmt(m.translation.y) << ", "
+          << fmt(m.translation.z) << ", " << fmt(m.rotation.x) << ", " << fmt(m.rotation.y) << ", " << fmt(m.rotation.z)
+          << ", " << fmt(m.rotation.w) << ", " << fmt(m.scale) << "]";
+      }
+      l << "]";
+    }
+    l << "}\n";
+    out << l.str();
+  }
+  out.flush();
+  if (!out) return Error(Status::kIoError, path + ": write failed");
+  return Error();
+}
+
+Error readReplay(const std::string& path, Replay& out) {
+  try {
+    return readReplayImpl(path, out);
+  } catch (const std::exception& e) {
+    return Error(Status::kParseError, path + ": " + e.what());
+  }
+}
+
+Error writeReplay(const std::string& path, const Replay& replay) {
+  try {
+    return writeReplayImpl(path, replay);
+  } catch (const std::exception& e) {
+    return Error(Status::kIoError, path + ": " + e.what());
+  }
+}
+
+}  // namespace scenelod::selection

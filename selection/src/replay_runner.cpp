@@ -1,0 +1,218 @@
+// Replay driver: the selector in a simulated frame loop, with a synthetic renderer whose true costs
+// follow the same linear model (Funkhouser & Sequin 1993 §4.1) plus seeded Gaussian noise.
+#include "scenelod/selection/replay_runner.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace scenelod::selection {
+
+namespace {
+
+// Box-Muller on mt19937_64 (fully specified), so the noise is the same with every standard library
+class Gaussian {
+ public:
+  explicit Gaussian(uint64_t seed) : rng_(seed) {}
+  double next() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    const double u1 = (static_cast<double>(rng_() >> 11) + 1.0) * (1.0 / 9007199254740993.0);
+    const double u2 = static_cast<double>(rng_() >> 11) * (1.0 / 9007199254740992.0);
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    spare_ = r * std::sin(6.283185307179586 * u2);
+    has_spare_ = true;
+    return r * std::cos(6.283185307179586 * u2);
+  }
+
+ private:
+  std::mt19937_64 rng_;
+  bool has_spare_ = false;
+  double spare_ = 0.0;
+};
+
+struct ContextDeleter {
+  SelectorContext* c;
+  ~ContextDeleter() { destroySelectorContext(c); }
+};
+
+}  // namespace
+
+CostCoefficients syntheticTrueCost() {
+  CostCoefficients t;
+  t.per_frame_ms = 0.8;
+  t.per_object_ms = 3.0e-3;
+  t.per_triangle_ms = 1.5e-6;
+  t.per_vertex_ms = 0.4e-6;
+  t.per_line_point_ms = 2.0e-6;
+  t.per_pixel_ms = 0.6e-7;
+  return t;
+}
+
+Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options, std::vector<ReplayLogFrame>& log) {
+  log.clear();
+  if (Error e = validateReplayScene(scene, scene.name)) return e;
+  const size_t n = scene.objectCount();
+  SelectorConfig cfg;
+  cfg.max_object_count = std::max<size_t>(n, 1);
+  cfg.max_levels_per_chain = std::max<size_t>(scene.table.maxLevelsPerChain(), 1);
+  cfg.initial_cost = options.initial_cost;
+  ContextDeleter ctx{createSelectorContext(cfg)};
+  if (!ctx.c) return Error(Status::kOutOfMemory, scene.name + ": cannot create the selector context");
+
+  const ReplayHeader& h = replay.header;
+  Camera cam;
+  cam.viewport_width_px = h.viewport_width_px;
+  cam.viewport_height_px = h.viewport_height_px;
+  cam.fov_y_rad = static_cast<float>(h.fov_y_deg * 3.14159265358979 / 180.0);
+  cam.near_plane = 0.05f;
+  cam.far_plane = 1.0e6f;
+
+  SelectionParams params = options.params;
+  params.pixels_per_cell = static_cast<float>(h.pixels_per_cell);
+  bool budget = h.has_budget;
+  double budget_ms = h.budget_ms;
+  if (options.override_budget) {
+    budget = true;
+    budget_ms = options.budget_ms;
+  }
+  if (options.force_distance) budget = false;
+  params.mode = budget ? SelectionMode::kBudget : SelectionMode::kDistance;
+  params.budget_ms = static_cast<float>(budget ? budget_ms : 1.0);
+
+  std::vector<glm::vec3> centers;
+  std::vector<float> radii, scales;
+  computeWorldSpheres(scene, centers, radii, scales);
+  const LevelTable table = scene.table.view();
+  Gaussian noise(options.seed);
+
+  for (const ReplayFrame& f : replay.frames) {
+    const std::string where = scene.name + ": replay frame " + std::to_string(f.frame);
+    if (!f.moves.empty()) {
+      if (Error e = applyMoves(scene, f.moves, where)) return e;
+      computeWorldSpheres(scene, centers, radii, scales);
+    }
+    cam.eye = f.eye;
+    cam.target = f.target;
+    cam.up = f.up;
+    if (!cameraValid(cam)) return Error(Status::kInvalidArgument, where + ": degenerate camera (eye equals target, or up along the view)");
+    ReplayLogFrame out;
+    out.levels.assign(n, -1);
+    SelectionStats st;
+    SelectionJob job;
+    job.camera = &cam;
+    job.params = params;
+    job.levels = table;
+    job.centers = Span<const glm::vec3>(centers.data(), n);
+    job.radii = Span<const float>(radii.data(), n);
+    job.max_scales = Span<const float>(scales.data(), n);
+    job.chains = Span<const uint32_t>(scene.object_chain.data(), n);
+    job.importance = Span<const float>(scene.importance.data(), n);
+    job.must_draw = Span<const uint8_t>(scene.must_draw.data(), n);
+    job.levels_out = Span<int8_t>(out.levels.data(), n);
+    job.stats = &st;
+    job.context = ctx.c;
+    if (!job.run()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame's input");
+    out.frame = f.frame;
+    out.time_s = f.time_s;
+    out.has_budget = budget;
+    out.budget_ms = budget ? budget_ms : 0.0;
+    out.predicted_ms = st.predicted_ms;
+    out.switches = st.switch_count;
+    out.drawn = st.drawn_count;
+    out.culled = st.culled_count;
+    out.dropped = st.dropped_count;
+    out.flags = st.flags;
+    out.benefit = st.total_benefit;
+    out.triangles = st.features.triangles;
+    if (f.has_measured) {
+      out.has_measured = true;
+      out.measured_from_file = true;
+      out.measured_ms = f.measured_ms;
+    } else if (options.synthetic_renderer) {
+      const double truth = predictFrameMs(options.true_cost, st.features);
+      out.has_measured = true;
+      out.measured_ms = std::max(0.0, truth * (1.0 + options.noise * noise.next()));
+    }
+    if (out.has_measured) reportFrameTime(ctx.c, st.frame, static_cast<float>(out.measured_ms));
+    log.push_back(std::move(out));
+  }
+  return Error();
+}
+
+std::string replayLogLine(const ReplayLogFrame& f) {
+  std::ostringstream o;
+  char buf[96];
+  o << "{\"frame\": " << f.frame;
+  std::snprintf(buf, sizeof(buf), ", \"time_s\": %.4f", f.time_s);
+  o << buf;
+  if (f.has_budget) std::snprintf(buf, sizeof(buf), ", \"budget_ms\": %.4f", f.budget_ms);
+  else std::snprintf(buf, sizeof(buf), ", \"budget_ms\": null");
+  o << buf;
+  std::snprintf(buf, sizeof(buf), ", \"predicted_ms\": %.4f", f.predicted_ms);
+  o << buf;
+  if (f.has_measured) std::snprintf(buf, sizeof(buf), ", \"measured_ms\": %.4f", f.measured_ms);
+  else std::snprintf(buf, sizeof(buf), ", \"measured_ms\": null");
+  o << buf << ", \"levels\": [";
+  for (size_t i = 0; i < f.levels.size(); ++i) o << (i ? "," : "") << static_cast<int>(f.levels[i]);
+  o << "], \"switches\": " << f.switches << ", \"drawn\": " << f.drawn << ", \"culled\": " << f.culled
+    << ", \"dropped\": " << f.dropped << ", \"flags\": " << f.flags;
+  std::snprintf(buf, sizeof(buf), ", \"triangles\": %.0f}", f.triangles);
+  o << buf;
+  return o.str();
+}
+
+Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log) {
+  std::ofstream out(path);
+  if (!out) return Error(Status::kIoError, path + ": cannot write the replay log");
+  for (const ReplayLogFrame& f : log) out << replayLogLine(f) << "\n";
+  out.flush();
+  if (!out) return Error(Status::kIoError, path + ": write failed");
+  return Error();
+}
+
+ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup) {
+  ReplaySummary s;
+  s.frames = log.size();
+  s.warmup = warmup;
+  if (log.empty()) return s;
+  s.objects = log[0].levels.size();
+  s.duration_s = log.back().time_s - log.front().time_s;
+  size_t measured = 0, switches = 0;
+  for (size_t i = 0; i < log.size(); ++i) {
+    const ReplayLogFrame& f = log[i];
+    if (f.flags & kFlagOverBudget) ++s.over_budget_flagged;
+    s.mean_predicted_ms += f.predicted_ms;
+    s.mean_triangles += f.triangles;
+    if (i > 0) switches += f.switches;
+    for (int8_t l : f.levels) {
+      const size_t b = static_cast<size_t>(l + 1);
+      if (s.level_histogram.size() <= b) s.level_histogram.resize(b + 1, 0);
+      ++s.level_histogram[b];
+    }
+    if (i < warmup || !f.has_measured) continue;
+    ++measured;
+    s.mean_measured_ms += f.measured_ms;
+    if (f.measured_ms > 0.0) s.mean_abs_prediction_error += std::fabs(f.predicted_ms - f.measured_ms) / f.measured_ms;
+    if (f.has_budget) {
+      ++s.budget_frames;
+      if (f.measured_ms <= 1.1 * f.budget_ms) ++s.within_10_percent;
+    }
+  }
+  s.mean_predicted_ms /= static_cast<double>(log.size());
+  s.mean_triangles /= static_cast<double>(log.size());
+  if (measured) {
+    s.mean_measured_ms /= static_cast<double>(measured);
+    s.mean_abs_prediction_error /= static_cast<double>(measured);
+  }
+  // the first frame's switches are the initial choice, not switches
+  if (s.duration_s > 0.0 && s.objects > 0)
+    s.switches_per_object_per_second = static_cast<double>(switches) / static_cast<double>(s.objects) / s.duration_s;
+  return s;
+}
+
+}  // namespace scenelod::selection

@@ -1,0 +1,719 @@
+// Per-frame LOD selection.
+//   Distance mode: the coarsest level whose cell width is accurate enough, w_k * scale <= X * R with
+//   R = 2 D tan(fov/2) / H (Low & Tan 1997 §4).
+//   Budget mode: Funkhouser & Sequin 1993 ("Adaptive display algorithm for interactive frame rates
+//   during visualization of complex virtual environments"), cost/benefit choice as a multiple-choice
+//   knapsack, solved on each object's upper convex hull of (cost, benefit) by upgrades in decreasing
+//   marginal ratio (Mason & Blake 1997, "Adaptive visualization of multiresolution models"), with the
+//   classical 1/2 guarantee of max(greedy, first non-fitting upgrade alone) (Sinha & Zoltners 1979 for
+//   the multiple-choice knapsack's LP relaxation). The Lagrangian form (docs/SELECTION.md) brackets the
+//   price lambda at the budget's edge with a few linear passes, then runs the same greedy on the
+//   upgrades inside the bracket only.
+#include "scenelod/selection/selector.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <new>
+
+namespace scenelod::selection {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr size_t kRingSize = 16;   // frames whose features are kept for late time reports
+constexpr uint8_t kNotDrawn = 0xFF;
+
+void* mallocAllocate(void*, size_t bytes, size_t alignment) {
+  const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
+  const size_t rounded = (bytes + a - 1) / a * a;
+  return std::aligned_alloc(a, rounded);
+}
+void mallocFree(void*, void* p) { std::free(p); }
+
+struct HeapEntry {
+  float ratio;
+  uint32_t slot;
+};
+// max-heap on ratio, then the lower slot first (a total order: deterministic)
+struct HeapLess {
+  bool operator()(const HeapEntry& x, const HeapEntry& y) const {
+    if (x.ratio != y.ratio) return x.ratio < y.ratio;
+    return x.slot > y.slot;
+  }
+};
+
+struct BracketEntry {
+  float ratio;
+  uint32_t slot;
+  uint32_t step;  // upgrade from hull point `step` to `step + 1`
+};
+struct BracketOrder {
+  bool operator()(const BracketEntry& x, const BracketEntry& y) const {
+    if (x.ratio != y.ratio) return x.ratio > y.ratio;
+    if (x.slot != y.slot) return x.slot < y.slot;
+    return x.step < y.step;
+  }
+};
+
+struct PassResult {
+  double cost = 0.0;        // total object cost with every upgrade of ratio > lambda taken
+  size_t below = 0;         // upgrades with ratio in (lo, lambda]
+  size_t above = 0;         // upgrades with ratio in (lambda, hi]
+};
+
+}  // namespace
+
+class SelectorContext {
+ public:
+  // configuration
+  Allocator allocator;
+  size_t max_objects = 0;
+  size_t hull_stride = 0;  // max levels per chain + 1 (the not-drawn point)
+  size_t bracket_capacity = 0;
+  size_t total_bytes = 0;
+  size_t per_object_bytes = 0;
+
+  // persistent per-object state
+  int8_t* prev_level = nullptr;  // level chosen last frame, -1 = not drawn
+
+  // per-frame scratch, indexed by slot (objects in the frustum, in object order)
+  uint32_t* slot_object = nullptr;
+  float* slot_a = nullptr;       // level-independent cost: per_object + per_pixel * pixels
+  float* slot_b = nullptr;       // level-independent benefit: pixels * importance * focus * motion * visibility
+  float* slot_q = nullptr;       // X * R / scale: the coarsest accurate-enough cell width
+  float* slot_px = nullptr;      // projected pixels
+  uint8_t* slot_finest = nullptr;  // finest candidate level (the coarsest accurate-enough one)
+  uint8_t* slot_must = nullptr;
+  uint32_t* slot_row0 = nullptr;   // first level-table row of the slot's chain
+  int8_t* slot_prev = nullptr;     // last frame's level of the slot's object
+  uint8_t* slot_levels = nullptr;  // level count of the slot's chain
+  // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
+  float* row_cost = nullptr;
+  float* row_inv_w = nullptr;
+  size_t max_rows = 0;
+  uint8_t* hull = nullptr;       // hull_stride bytes per slot: levels along the hull, kNotDrawn = -1
+  uint8_t* hull_count = nullptr;
+  uint8_t* chosen = nullptr;     // index into the slot's hull
+  HeapEntry* heap = nullptr;
+  BracketEntry* bracket = nullptr;
+
+  // cost model and calibration
+  CostCalibrator calibrator;
+  CostFeatures ring_features[kRingSize];
+  uint64_t ring_frame[kRingSize];
+  std::atomic<uint64_t> mailbox{0};  // (frame + 1) << 32 | float bits of the time; 0 = empty
+
+  // history
+  uint64_t frame = 0;
+  double last_lambda = 0.0;
+  bool has_history = false;
+  bool last_was_budget = false;
+  size_t last_slot_count = 0;
+
+  // per-frame constants, valid during run() and until the next one
+  float h1 = 1.0f;
+
+  uint32_t firstRow(size_t slot) const { return slot_row0[slot]; }
+
+  // cost of drawing slot `s` at level `l` (-1: not drawn)
+  float pointCost(size_t s, int l) const {
+    if (l < 0) return 0.0f;
+    return slot_a[s] + row_cost[slot_row0[s] + static_cast<uint32_t>(l)];
+  }
+  // min(1, X R / (w scale)): 1 for every accurate-enough level (and for w = 0, where 1/w = inf)
+  float accuracy(size_t s, int l) const {
+    return std::min(1.0f, slot_q[s] * row_inv_w[slot_row0[s] + static_cast<uint32_t>(l)]);
+  }
+  float pointBenefit(size_t s, int l) const {
+    if (l < 0) return 0.0f;
+    float acc = accuracy(s, l);
+    if (l == slot_prev[s]) acc *= h1;
+    return slot_b[s] * acc;
+  }
+  int hullLevel(size_t s, size_t k) const {
+    const uint8_t v = hull[s * hull_stride + k];
+    return v == kNotDrawn ? -1 : static_cast<int>(v);
+  }
+  static float ratio(float c0, float b0, float c1, float b1) { return (b1 - b0) / (c1 - c0); }
+
+  PassResult pass(size_t slot_count, double lambda, double lo, double hi) const;
+  void greedy(size_t slot_count, double total, double cap, bool stop, int64_t* split_slot, uint32_t* split_step) const;
+};
+
+namespace {
+
+size_t alignUp(size_t v, size_t a) { return (v + a - 1) / a * a; }
+
+}  // namespace
+
+Allocator defaultAllocator() {
+  Allocator a;
+  a.allocate = mallocAllocate;
+  a.free = mallocFree;
+  return a;
+}
+
+SelectorContext* createSelectorContext(const SelectorConfig& config) {
+  if (config.max_object_count == 0 || config.max_object_count > 0x7fffffffu) return nullptr;
+  if (config.max_levels_per_chain < 1 || config.max_levels_per_chain > 64) return nullptr;
+  if (config.bracket_capacity < 1 || config.max_level_rows < 1 || config.max_level_rows > (size_t(1) << 31)) return nullptr;
+  if (!(config.calibration.forgetting > 0.0 && config.calibration.forgetting <= 1.0) ||
+      !(config.calibration.prior_weight > 0.0))
+    return nullptr;
+  Allocator alloc = config.allocator;
+  if (!alloc.allocate || !alloc.free) alloc = defaultAllocator();
+
+  const size_t n = config.max_object_count, stride = config.max_levels_per_chain + 1;
+  // one block: the context, then each array aligned to 16 bytes
+  size_t offset = alignUp(sizeof(SelectorContext), 16);
+  struct Part { size_t bytes; size_t at; };
+  const size_t rows = config.max_level_rows;
+  // per-object parts first (they define the bytes per object), then the fixed ones
+  constexpr size_t kPerObjectParts = 15;
+  Part parts[18] = {
+      {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
+      {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
+      {n, 0},                      {n, 0},                    {n * stride, 0},
+      {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
+      {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0}};
+  size_t per_object = 0;
+  for (size_t i = 0; i < 18; ++i) {
+    parts[i].at = offset;
+    offset = alignUp(offset + parts[i].bytes, 16);
+    if (i < kPerObjectParts) per_object += parts[i].bytes;
+  }
+  void* block = alloc.allocate(alloc.user, offset, 64);
+  if (!block) return nullptr;
+  auto* c = new (block) SelectorContext();
+  auto* base = static_cast<unsigned char*>(block);
+  c->allocator = alloc;
+  c->max_objects = n;
+  c->hull_stride = stride;
+  c->bracket_capacity = config.bracket_capacity;
+  c->total_bytes = offset;
+  c->per_object_bytes = per_object;
+  c->prev_level = reinterpret_cast<int8_t*>(base + parts[0].at);
+  c->slot_object = reinterpret_cast<uint32_t*>(base + parts[1].at);
+  c->slot_a = reinterpret_cast<float*>(base + parts[2].at);
+  c->slot_b = reinterpret_cast<float*>(base + parts[3].at);
+  c->slot_q = reinterpret_cast<float*>(base + parts[4].at);
+  c->slot_px = reinterpret_cast<float*>(base + parts[5].at);
+  c->slot_finest = base + parts[6].at;
+  c->slot_must = base + parts[7].at;
+  c->hull = base + parts[8].at;
+  c->hull_count = base + parts[9].at;
+  c->chosen = base + parts[10].at;
+  c->heap = reinterpret_cast<HeapEntry*>(base + parts[11].at);
+  c->slot_row0 = reinterpret_cast<uint32_t*>(base + parts[12].at);
+  c->slot_prev = reinterpret_cast<int8_t*>(base + parts[13].at);
+  c->slot_levels = base + parts[14].at;
+  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
+  c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
+  c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
+  c->max_rows = rows;
+  c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
+  for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
+  resetSelectorHistory(c);
+  return c;
+}
+
+void destroySelectorContext(SelectorContext* c) {
+  if (!c) return;
+  const Allocator alloc = c->allocator;
+  c->~SelectorContext();
+  alloc.free(alloc.user, c);
+}
+
+void resetSelectorHistory(SelectorContext* c) {
+  if (!c) return;
+  std::memset(c->prev_level, 0xFF, c->max_objects);  // all -1
+  c->last_lambda = 0.0;
+  c->has_history = false;
+  c->last_was_budget = false;
+  c->last_slot_count = 0;
+}
+
+size_t selectorMemoryBytes(const SelectorContext* c) { return c ? c->total_bytes : 0; }
+double selectorBytesPerObject(const SelectorContext* c) {
+  return c ? static_cast<double>(c->per_object_bytes) / static_cast<double>(c->max_objects) : 0.0;
+}
+
+CostCoefficients selectorCostModel(const SelectorContext* c) { return c ? c->calibrator.coefficients() : CostCoefficients(); }
+void setSelectorCostModel(SelectorContext* c, const CostCoefficients& k) {
+  if (c) c->calibrator.reset(k);
+}
+
+void reportFrameTime(SelectorContext* c, uint64_t frame, float measured_ms) {
+  if (!c) return;
+  uint32_t bits;
+  std::memcpy(&bits, &measured_ms, sizeof(bits));
+  const uint64_t word = (((frame + 1) & 0xffffffffu) << 32) | bits;
+  c->mailbox.store(word, std::memory_order_release);
+}
+
+bool selectorLastPoint(const SelectorContext* c, size_t object, int level, double* cost_ms, double* benefit) {
+  if (!c || !c->last_was_budget || object >= c->max_objects) return false;
+  // slots are in object order: binary search
+  const uint32_t* first = c->slot_object;
+  const uint32_t* last = c->slot_object + c->last_slot_count;
+  const uint32_t* it = std::lower_bound(first, last, static_cast<uint32_t>(object));
+  if (it == last || *it != object) return false;
+  const size_t s = static_cast<size_t>(it - first);
+  if (level < -1 || level >= static_cast<int>(c->slot_levels[s])) return false;
+  *cost_ms = c->pointCost(s, level);
+  *benefit = c->pointBenefit(s, level);
+  return true;
+}
+
+bool SelectionJob::validate() const {
+  if (!context || !camera || !cameraValid(*camera)) return false;
+  const size_t n = centers.count;
+  if (n > context->max_objects) return false;
+  if (levels.cell_width.count > context->max_rows) return false;
+  if (radii.count != n || max_scales.count != n || chains.count != n || levels_out.count != n) return false;
+  if ((n > 0 && (!centers.data || !radii.data || !max_scales.data || !chains.data || !levels_out.data))) return false;
+  auto optional = [n](size_t count, const void* data) { return count == 0 || (count == n && data); };
+  if (!optional(importance.count, importance.data) || !optional(must_draw.count, must_draw.data) ||
+      !optional(visible_fraction.count, visible_fraction.data) || !optional(focus.count, focus.data) ||
+      !optional(motion.count, motion.data) || !optional(cost_ms_out.count, cost_ms_out.data))
+    return false;
+  if (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.pixels_per_cell)) return false;
+  if (!(params.hysteresis >= 0.0f) || !std::isfinite(params.hysteresis)) return false;
+  if (params.mode == SelectionMode::kBudget && !(params.budget_ms > 0.0f)) return false;
+  // level table
+  const size_t rows = levels.cell_width.count;
+  if (levels.chain_level_offset.count < 1 || !levels.chain_level_offset.data) return false;
+  if (levels.triangle_count.count != rows || levels.vertex_count.count != rows || levels.line_point_count.count != rows)
+    return false;
+  if (rows > 0 && (!levels.cell_width.data || !levels.triangle_count.data || !levels.vertex_count.data ||
+                   !levels.line_point_count.data))
+    return false;
+  const size_t chain_count = levels.chainCount();
+  if (levels.chain_level_offset[0] != 0 || levels.chain_level_offset[chain_count] != rows) return false;
+  for (size_t c = 0; c < chain_count; ++c) {
+    const uint32_t b = levels.chain_level_offset[c], e = levels.chain_level_offset[c + 1];
+    if (e < b || e - b > context->hull_stride - 1) return false;
+    for (uint32_t r = b; r < e; ++r) {
+      const float w = levels.cell_width[r];
+      if (!(w >= 0.0f) || !std::isfinite(w)) return false;
+      if (r > b && w < levels.cell_width[r - 1]) return false;
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    if (chains[i] >= chain_count) return false;
+  return true;
+}
+
+PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
+  PassResult r;
+  for (size_t s = 0; s < slot_count; ++s) {
+    const size_t n = hull_count[s];
+    size_t k = 0;
+    int l0 = hullLevel(s, 0);
+    float c0 = pointCost(s, l0), b0 = pointBenefit(s, l0);
+    double chosen_cost = c0;
+    bool taking = true;
+    while (k + 1 < n) {
+      const int l1 = hullLevel(s, k + 1);
+      const float c1 = pointCost(s, l1), b1 = pointBenefit(s, l1);
+      const double q = ratio(c0, b0, c1, b1);
+      if (q <= lo) break;
+      if (taking && q > lambda) {
+        chosen_cost = c1;
+        if (q <= hi) ++r.above;
+      } else {
+        taking = false;
+        ++r.below;
+      }
+      ++k;
+      c0 = c1;
+      b0 = b1;
+    }
+    r.cost += chosen_cost;
+  }
+  return r;
+}
+
+void SelectorContext::greedy(size_t slot_count, double total, double cap, bool stop, int64_t* split_slot,
+                             uint32_t* split_step) const {
+  size_t heap_size = 0;
+  for (size_t s = 0; s < slot_count; ++s) {
+    chosen[s] = 0;
+    if (hull_count[s] < 2) continue;
+    const int l0 = hullLevel(s, 0), l1 = hullLevel(s, 1);
+    heap[heap_size++] = {ratio(pointCost(s, l0), pointBenefit(s, l0), pointCost(s, l1), pointBenefit(s, l1)),
+                         static_cast<uint32_t>(s)};
+  }
+  std::make_heap(heap, heap + heap_size, HeapLess());
+  while (heap_size > 0) {
+    std::pop_heap(heap, heap + heap_size, HeapLess());
+    const HeapEntry e = heap[--heap_size];
+    const size_t s = e.slot, k = chosen[s];
+    const int l0 = hullLevel(s, k), l1 = hullLevel(s, k + 1);
+    const float c0 = pointCost(s, l0), c1 = pointCost(s, l1);
+    const double delta = static_cast<double>(c1) - static_cast<double>(c0);
+    if (total + delta <= cap) {
+      total += delta;
+      chosen[s] = static_cast<uint8_t>(k + 1);
+      if (k + 2 < hull_count[s]) {
+        const int l2 = hullLevel(s, k + 2);
+        heap[heap_size++] = {ratio(c1, pointBenefit(s, l1), pointCost(s, l2), pointBenefit(s, l2)), e.slot};
+        std::push_heap(heap, heap + heap_size, HeapLess());
+      }
+    } else {
+      if (*split_slot < 0) {
+        *split_slot = static_cast<int64_t>(s);
+        *split_step = static_cast<uint32_t>(k);
+      }
+      if (stop) return;
+    }
+  }
+}
+
+bool SelectionJob::run() {
+  if (!validate()) return false;
+  SelectorContext& ctx = *context;
+  const Camera& cam = *camera;
+  const size_t n = centers.count;
+  const bool budget = params.mode == SelectionMode::kBudget;
+
+  // calibration: the last reported frame time, if it belongs to a frame we still know
+  const uint64_t word = ctx.mailbox.exchange(0, std::memory_order_acquire);
+  if (word != 0 && params.calibrate) {
+    const uint64_t tag = word >> 32;
+    const uint32_t bits = static_cast<uint32_t>(word & 0xffffffffu);
+    float ms;
+    std::memcpy(&ms, &bits, sizeof(ms));
+    const uint64_t f = tag - 1;
+    const size_t slot = static_cast<size_t>(f % kRingSize);
+    if ((ctx.ring_frame[slot] & 0xffffffffu) == f) ctx.calibrator.update(ctx.ring_features[slot], ms);
+  }
+  const CostCoefficients coef = ctx.calibrator.coefficients();
+  {
+    const float c_tri = static_cast<float>(coef.per_triangle_ms), c_vert = static_cast<float>(coef.per_vertex_ms),
+                c_lp = static_cast<float>(coef.per_line_point_ms);
+    for (size_t r = 0; r < levels.cell_width.count; ++r) {
+      ctx.row_cost[r] = c_tri * static_cast<float>(levels.triangle_count[r]) +
+                        c_vert * static_cast<float>(levels.vertex_count[r]) +
+                        c_lp * static_cast<float>(levels.line_point_count[r]);
+      const float w = levels.cell_width[r];
+      ctx.row_inv_w[r] = w > 0.0f ? 1.0f / w : std::numeric_limits<float>::infinity();
+    }
+  }
+  const float c_obj = static_cast<float>(coef.per_object_ms), c_px = static_cast<float>(coef.per_pixel_ms);
+  ctx.h1 = 1.0f + params.hysteresis;
+  const float pixel_factor = pixelSizeFactor(cam);
+  const float ortho_pixel = pixelSize(cam, 0.0f);
+  const bool ortho = cam.projection == Projection::kOrthographic;
+
+  const Frustum frustum = computeFrustum(cam);
+  const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
+  const float x_cells = params.pixels_per_cell;
+
+  // pass 1: cull; per slot the level-independent terms and the finest candidate level
+  size_t slots = 0;
+  double mandatory = coef.per_frame_ms;
+  uint32_t culled = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 c = centers[i];
+    const float r = radii[i];
+    const uint32_t row0 = levels.chain_level_offset[chains[i]];
+    const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
+    if (level_count == 0 || !sphereInFrustum(frustum, c, r)) {
+      levels_out[i] = -1;
+      ++culled;
+      continue;
+    }
+    float pixel = ortho_pixel;
+    if (!ortho) {
+      const glm::vec3 d = c - cam.eye;
+      const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+      pixel = std::max(dist - r, cam.near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+    }
+    const float r_px = r / pixel;
+    const float px = std::min(kPi * r_px * r_px, viewport_px);
+    const float q = x_cells * pixel / max_scales[i];
+    // the coarsest level of accuracy 1 (level 0, w = 0, always is)
+    int finest = static_cast<int>(level_count) - 1;
+    while (finest > 0 && !(q * ctx.row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
+    float b = px;
+    if (importance.count) b *= importance[i];
+    if (focus.count) b *= focus[i];
+    if (motion.count) b *= motion[i];
+    if (visible_fraction.count) b *= visible_fraction[i];
+    const size_t s = slots++;
+    ctx.slot_object[s] = static_cast<uint32_t>(i);
+    ctx.slot_a[s] = c_obj + c_px * px;
+    ctx.slot_b[s] = b;
+    ctx.slot_q[s] = q;
+    ctx.slot_px[s] = px;
+    ctx.slot_finest[s] = static_cast<uint8_t>(finest);
+    ctx.slot_row0[s] = row0;
+    ctx.slot_prev[s] = ctx.prev_level[i];
+    ctx.slot_levels[s] = static_cast<uint8_t>(level_count);
+    const bool must = must_draw.count && must_draw[i];
+    ctx.slot_must[s] = must ? 1 : 0;
+    if (must && budget) {
+      float cheapest = std::numeric_limits<float>::infinity();
+      for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
+      mandatory += cheapest;
+    }
+  }
+
+  SelectionStats st;
+  st.frame = ctx.frame;
+  st.culled_count = culled;
+  st.mandatory_ms = budget ? mandatory : 0.0;
+  const double cap = static_cast<double>(params.budget_ms);
+
+  if (!budget) {
+    for (size_t s = 0; s < slots; ++s) {
+      const size_t i = ctx.slot_object[s];
+      const uint32_t row0 = levels.chain_level_offset[chains[i]];
+      const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
+      int level = ctx.slot_finest[s];
+      const int p = ctx.slot_prev[s];
+      // hysteresis: a coarser current level stays while it is within the margin
+      if (p > level && p < static_cast<int>(level_count) && ctx.accuracy(s, p) * ctx.h1 >= 1.0f) level = p;
+      ctx.chosen[s] = static_cast<uint8_t>(level);
+    }
+  } else {
+    // pass 2: each slot's upper convex hull over the points that fit alone
+    const double avail = cap - mandatory;
+    struct Pt { float c, b; int l; };
+    Pt pts[65];
+    for (size_t s = 0; s < slots; ++s) {
+      const size_t i = ctx.slot_object[s];
+      const uint32_t row0 = levels.chain_level_offset[chains[i]];
+      const int level_count = static_cast<int>(levels.chain_level_offset[chains[i] + 1] - row0);
+      size_t m = 0;
+      if (!ctx.slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
+      for (int l = ctx.slot_finest[s]; l < level_count; ++l) pts[m++] = {ctx.pointCost(s, l), ctx.pointBenefit(s, l), l};
+      // insertion sort: cost ascending, benefit descending, coarser level first (costs usually
+      // already descend with the level, so this is nearly linear)
+      for (size_t a = 1; a < m; ++a) {
+        const Pt p = pts[a];
+        size_t j = a;
+        auto before = [](const Pt& x, const Pt& y) {
+          if (x.c != y.c) return x.c < y.c;
+          if (x.b != y.b) return x.b > y.b;
+          return x.l > y.l;
+        };
+        while (j > 0 && before(p, pts[j - 1])) {
+          pts[j] = pts[j - 1];
+          --j;
+        }
+        pts[j] = p;
+      }
+      const float base_cost = pts[0].c;
+      uint8_t* h = ctx.hull + s * ctx.hull_stride;
+      Pt hp[65];
+      size_t hn = 0;
+      for (size_t a = 0; a < m; ++a) {
+        const Pt& p = pts[a];
+        if (hn > 0 && static_cast<double>(p.c) - base_cost > avail) break;  // cannot fit even alone
+        if (hn > 0 && !(p.b > hp[hn - 1].b)) continue;
+        while (hn >= 2 && !(SelectorContext::ratio(hp[hn - 2].c, hp[hn - 2].b, hp[hn - 1].c, hp[hn - 1].b) >
+                            SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b)))
+          --hn;
+        hp[hn++] = p;
+      }
+      for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
+      ctx.hull_count[s] = static_cast<uint8_t>(hn);
+    }
+
+    int64_t split_slot = -1;
+    uint32_t split_step = 0;
+    const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
+    const bool use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
+    uint32_t passes = 0;
+    double lambda = 0.0;
+    if (use_greedy) {
+      double base_total = 0.0;
+      for (size_t s = 0; s < slots; ++s) base_total += ctx.pointCost(s, ctx.hullLevel(s, 0));
+      ctx.greedy(slots, base_total, obj_cap, params.stop_at_first_non_fitting, &split_slot, &split_step);
+    } else {
+      const double inf = std::numeric_limits<double>::infinity();
+      PassResult all = ctx.pass(slots, 0.0, 0.0, inf);
+      ++passes;
+      size_t in_bracket = all.above;
+      double lo = 0.0, hi = inf;
+      if (all.cost <= obj_cap) {
+        hi = 0.0;  // everything fits
+        in_bracket = 0;
+      } else {
+        double guess = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
+        if (!(guess > 0.0)) {
+          // a first guess: the mean benefit per ms of the finest fitting points
+          double b = 0.0, c = 0.0;
+          for (size_t s = 0; s < slots; ++s) {
+            const int l = ctx.hullLevel(s, ctx.hull_count[s] - 1u);
+            b += ctx.pointBenefit(s, l);
+            c += ctx.pointCost(s, l);
+          }
+          guess = c > 0.0 && b > 0.0 ? b / c : 1.0;
+        }
+        // C(lambda) falls from C(0) = all.cost; find hi with C(hi) <= cap by growing steps from the
+        // guess (last frame's price when the camera moves smoothly), then interpolate C linearly
+        // between lo and hi, kept off the ends, until few upgrades remain in (lo, hi]
+        double lam = guess, cost_lo = all.cost, cost_hi = 0.0, step = 1.1;
+        while (in_bracket > ctx.bracket_capacity && passes < 64) {
+          const PassResult pr = ctx.pass(slots, lam, lo, hi);
+          ++passes;
+          if (pr.cost <= obj_cap) {
+            hi = lam;
+            cost_hi = pr.cost;
+            in_bracket = pr.below;
+          } else {
+            lo = lam;
+            cost_lo = pr.cost;
+            in_bracket = pr.above;
+          }
+          if (in_bracket <= ctx.bracket_capacity) break;
+          double next;
+          if (hi == inf) {
+            next = lo * step;
+            step *= step;
+          } else {
+            double t = cost_lo > cost_hi ? (cost_lo - obj_cap) / (cost_lo - cost_hi) : 0.5;
+            t = std::min(0.9, std::max(0.1, t));
+            next = lo + t * (hi - lo);
+          }
+          if (!(next > lo && next < hi)) break;  // no double strictly inside: all ties
+          lam = next;
+        }
+      }
+      lambda = hi;
+      if (in_bracket > ctx.bracket_capacity) {
+        // ties the bracket cannot separate: the heap greedy gives the same order
+        double base_total = 0.0;
+        for (size_t s = 0; s < slots; ++s) base_total += ctx.pointCost(s, ctx.hullLevel(s, 0));
+        ctx.greedy(slots, base_total, obj_cap, true, &split_slot, &split_step);
+      } else {
+        // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
+        double total = 0.0;
+        size_t count = 0;
+        for (size_t s = 0; s < slots; ++s) {
+          const size_t hn = ctx.hull_count[s];
+          size_t k = 0;
+          int l0 = ctx.hullLevel(s, 0);
+          float c0 = ctx.pointCost(s, l0), b0 = ctx.pointBenefit(s, l0);
+          float chosen_cost = c0;
+          bool taking = true;
+          while (k + 1 < hn) {
+            const int l1 = ctx.hullLevel(s, k + 1);
+            const float c1 = ctx.pointCost(s, l1), b1 = ctx.pointBenefit(s, l1);
+            const float q = SelectorContext::ratio(c0, b0, c1, b1);
+            if (static_cast<double>(q) <= lo) break;
+            if (taking && static_cast<double>(q) > hi) {
+              chosen_cost = c1;
+              ctx.chosen[s] = static_cast<uint8_t>(k + 1);
+            } else {
+              if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+              taking = false;
+              ctx.bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
+            }
+            ++k;
+            c0 = c1;
+            b0 = b1;
+          }
+          if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+          total += chosen_cost;
+        }
+        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
+        for (size_t e = 0; e < count; ++e) {
+          const BracketEntry& be = ctx.bracket[e];
+          if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
+          const int l0 = ctx.hullLevel(be.slot, be.step), l1 = ctx.hullLevel(be.slot, be.step + 1);
+          const double delta = static_cast<double>(ctx.pointCost(be.slot, l1)) - ctx.pointCost(be.slot, l0);
+          if (total + delta <= obj_cap) {
+            total += delta;
+            ctx.chosen[be.slot] = static_cast<uint8_t>(be.step + 1);
+            lambda = be.ratio;
+          } else {
+            split_slot = be.slot;
+            split_step = be.step;
+            lambda = be.ratio;
+            break;
+          }
+        }
+      }
+    }
+    // the 1/2 guarantee: the first upgrade that did not fit, alone with every other object at its base
+    if (params.half_approximation && split_slot >= 0) {
+      double greedy_benefit = 0.0, base_benefit = 0.0;
+      for (size_t s = 0; s < slots; ++s) {
+        greedy_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, ctx.chosen[s]));
+        base_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, 0));
+      }
+      const size_t js = static_cast<size_t>(split_slot);
+      const double alt = base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, split_step + 1)) -
+                         ctx.pointBenefit(js, ctx.hullLevel(js, 0));
+      if (alt > greedy_benefit) {
+        for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = 0;
+        ctx.chosen[js] = static_cast<uint8_t>(split_step + 1);
+        st.flags |= kFlagSplitFallback;
+      }
+    }
+    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = static_cast<uint8_t>(ctx.hullLevel(s, ctx.chosen[s]) < 0 ? kNotDrawn : ctx.hullLevel(s, ctx.chosen[s]));
+    ctx.last_lambda = lambda;
+    st.lambda = lambda;
+    st.search_passes = passes;
+    if (mandatory > cap) st.flags |= kFlagOverBudget;
+  }
+
+  // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
+  CostFeatures f;
+  double predicted = coef.per_frame_ms, benefit = 0.0;
+  for (size_t s = 0; s < slots; ++s) {
+    const size_t i = ctx.slot_object[s];
+    const int level = ctx.chosen[s] == kNotDrawn ? -1 : static_cast<int>(ctx.chosen[s]);
+    levels_out[i] = static_cast<int8_t>(level);
+    if (level < 0) {
+      if (ctx.slot_b[s] > 0.0f) ++st.dropped_count;
+      continue;
+    }
+    const uint32_t row = ctx.slot_row0[s] + static_cast<uint32_t>(level);
+    const float cost = ctx.pointCost(s, level);
+    predicted += cost;
+    benefit += ctx.pointBenefit(s, level);
+    f.objects += 1.0;
+    f.triangles += levels.triangle_count[row];
+    f.vertices += levels.vertex_count[row];
+    f.line_points += levels.line_point_count[row];
+    f.pixels += ctx.slot_px[s];
+    ++st.drawn_count;
+  }
+  if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
+  if (cost_ms_out.count) {
+    for (size_t i = 0; i < n; ++i) cost_ms_out[i] = 0.0f;
+    for (size_t s = 0; s < slots; ++s) {
+      const size_t i = ctx.slot_object[s];
+      if (levels_out[i] >= 0) cost_ms_out[i] = ctx.pointCost(s, levels_out[i]);
+    }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (levels_out[i] != ctx.prev_level[i]) ++st.switch_count;
+    ctx.prev_level[i] = levels_out[i];
+  }
+  st.predicted_ms = predicted;
+  st.total_benefit = benefit;
+  st.features = f;
+
+  const size_t ring = static_cast<size_t>(ctx.frame % kRingSize);
+  ctx.ring_features[ring] = f;
+  ctx.ring_frame[ring] = ctx.frame;
+  ctx.has_history = true;
+  ctx.last_was_budget = budget;
+  ctx.last_slot_count = slots;
+  ++ctx.frame;
+  if (stats) *stats = st;
+  return true;
+}
+
+}  // namespace scenelod::selection
