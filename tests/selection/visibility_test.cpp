@@ -1,6 +1,8 @@
 #include "scenelod/selection/visibility.h"
 
 #include "scenelod/scene/scene.h"
+#include "scenelod/selection/level_table.h"
+#include "scenelod/selection/selector.h"
 
 #include <algorithm>
 #include <cmath>
@@ -611,4 +613,86 @@ TEST(Visibility, SyncFromSceneMirrorsMovesAndSwapRemovals) {
   EXPECT_NE(e.message.find("scene object 1: drawn level 3 outside [-1, 1)"), std::string::npos) << e.message;
   const std::vector<int32_t> short_levels{0};
   EXPECT_NE(rs.syncFromScene(sc, short_levels).message.find("1 drawn levels for 2 scene objects"), std::string::npos);
+}
+
+TEST(Visibility, SelectorGivesAnOccludedObjectItsCoarsestLevelOrNone) {
+  // a cube behind a wall and a second cube in plain view, same 4-level chain (the level table's
+  // counts make detail expensive); budget mode with room for both cubes at full detail
+  WallScene s;
+  LodChain cube4;
+  for (int k = 0; k < 4; ++k) cube4.levels.push_back(level(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
+  s.chains[0] = &cube4;
+  s.add(0, at({0.0f, 0.0f, 0.0f}));   // hidden
+  s.add(1, at({0.0f, 0.0f, 4.0f}));   // wall
+  s.add(0, at({2.0f, 0.0f, 6.0f}));   // seen, in front of the wall
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  const Camera cam = frontCamera();
+
+  LevelTableData table;
+  const float widths[4] = {0.0f, 0.01f, 0.04f, 0.16f};
+  const uint32_t tris[4] = {200000, 50000, 12000, 3000}, verts[4] = {100000, 25000, 6000, 1500}, lp[4] = {0, 0, 0, 0};
+  table.addChain(Span<const float>(widths, 4), Span<const uint32_t>(tris, 4), Span<const uint32_t>(verts, 4),
+                 Span<const uint32_t>(lp, 4));
+  const float wall_w[1] = {0.0f};
+  const uint32_t wall_t[1] = {12}, wall_v[1] = {8}, wall_lp[1] = {0};
+  table.addChain(Span<const float>(wall_w, 1), Span<const uint32_t>(wall_t, 1), Span<const uint32_t>(wall_v, 1),
+                 Span<const uint32_t>(wall_lp, 1));
+  const std::vector<uint32_t> chains{0, 1, 0};
+  std::vector<glm::vec3> centers;
+  std::vector<float> radii, scales;
+  for (uint32_t id = 0; id < 3; ++id) {
+    centers.push_back(glm::vec3(rs.worldSpheres()[id]));
+    radii.push_back(rs.worldSpheres()[id].w);
+    scales.push_back(1.0f);
+  }
+
+  SelectorConfig config;
+  config.max_object_count = 3;
+  SelectorContext* ctx = createSelectorContext(config);
+  ASSERT_NE(ctx, nullptr);
+  auto select = [&](Span<const float> visible) {
+    std::vector<int8_t> out(3, 0);
+    SelectionJob job;
+    job.camera = &cam;
+    job.params.mode = SelectionMode::kBudget;
+    job.params.budget_ms = 1.0f;  // 0.5 per frame; a cube costs ~0.25 ms at level 0, 0.06 at level 1
+    job.params.calibrate = false;
+    job.levels = table.view();
+    job.centers = Span<const glm::vec3>(centers.data(), centers.size());
+    job.radii = Span<const float>(radii.data(), radii.size());
+    job.max_scales = Span<const float>(scales.data(), scales.size());
+    job.chains = Span<const uint32_t>(chains.data(), chains.size());
+    job.visible_fraction = visible;
+    job.context = ctx;
+    job.levels_out = Span<int8_t>(out.data(), out.size());
+    EXPECT_TRUE(job.run());
+    return out;
+  };
+  // without visibility the hidden cube is drawn finer than its coarsest level
+  resetSelectorHistory(ctx);
+  const std::vector<int8_t> blind = select({});
+  EXPECT_GE(blind[0], 0);
+  EXPECT_LT(blind[0], 3);
+
+  OcclusionEstimator est;
+  OcclusionParams p;
+  p.ray_budget = p.rays_per_test;  // one object per frame
+  ASSERT_TRUE(est.init(3, p).ok());
+  std::vector<float> vis(3);
+  resetSelectorHistory(ctx);
+  bool coarse = false;
+  std::vector<int8_t> seen;
+  for (int f = 0; f < 10 && !coarse; ++f) {
+    ASSERT_TRUE(est.update(rs, cam, Span<float>(vis)));
+    seen = select(Span<const float>(vis.data(), vis.size()));
+    coarse = seen[0] == -1 || seen[0] == 3;
+  }
+  EXPECT_TRUE(coarse) << "hidden cube still at level " << int(seen[0]) << " after 10 frames";
+  // the cube in view is drawn, at least as finely as without visibility (budget freed)
+  EXPECT_GE(seen[2], 0);
+  EXPECT_GE(blind[2], 0);
+  EXPECT_LE(seen[2], blind[2]);
+  EXPECT_EQ(vis[2], 1.0f);
+  destroySelectorContext(ctx);
 }
