@@ -76,8 +76,9 @@ int run(const std::vector<std::string>& argv) {
   if (args.has("--out"))
     if (Error e = writeReplayLog(args.get("--out"), log)) return runError("replay", e.message);
   const ReplaySummary s = summarizeReplay(log);
-  std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s\n", s.frames,
-              s.objects, s.mean_predicted_ms, s.mean_measured_ms, s.switches_per_object_per_second);
+  std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s, "
+              "mean benefit %.6g\n", s.frames, s.objects, s.mean_predicted_ms, s.mean_measured_ms,
+              s.switches_per_object_per_second, s.mean_benefit);
   if (s.budget_frames)
     std::printf("budget frames after warm-up within +10 %%: %zu / %zu (%.1f %%)\n", s.within_10_percent, s.budget_frames,
                 100.0 * s.within_10_percent / s.budget_frames);

@@ -188,6 +188,7 @@ ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t war
     if (f.flags & kFlagOverBudget) ++s.over_budget_flagged;
     s.mean_predicted_ms += f.predicted_ms;
     s.mean_triangles += f.triangles;
+    s.mean_benefit += f.benefit;
     if (i > 0) switches += f.switches;
     for (int8_t l : f.levels) {
       const size_t b = static_cast<size_t>(l + 1);
@@ -205,6 +206,7 @@ ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t war
   }
   s.mean_predicted_ms /= static_cast<double>(log.size());
   s.mean_triangles /= static_cast<double>(log.size());
+  s.mean_benefit /= static_cast<double>(log.size());
   if (measured) {
     s.mean_measured_ms /= static_cast<double>(measured);
     s.mean_abs_prediction_error /= static_cast<double>(measured);

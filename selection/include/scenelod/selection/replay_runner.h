@@ -73,6 +73,7 @@ struct ReplaySummary {
   double mean_abs_prediction_error = 0.0;  // |predicted - measured| / measured, after warm-up
   double switches_per_object_per_second = 0.0;
   double mean_triangles = 0.0;
+  double mean_benefit = 0.0;          // total benefit of the chosen levels, per frame
   std::vector<size_t> level_histogram; // index 0 = not drawn, k + 1 = level k; over all frames and objects
 };
 
