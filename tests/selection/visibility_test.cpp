@@ -1,7 +1,11 @@
 #include "scenelod/selection/visibility.h"
 
 #include "scenelod/scene/scene.h"
+#include "scenelod/selection/camera_path.h"
 #include "scenelod/selection/level_table.h"
+#include "scenelod/selection/replay_runner.h"
+#include "scenelod/selection/replay_scene.h"
+#include "scenelod/selection/replay_visibility.h"
 #include "scenelod/selection/selector.h"
 
 #include <algorithm>
@@ -695,4 +699,53 @@ TEST(Visibility, SelectorGivesAnOccludedObjectItsCoarsestLevelOrNone) {
   EXPECT_LE(seen[2], blind[2]);
   EXPECT_EQ(vis[2], 1.0f);
   destroySelectorContext(ctx);
+}
+
+TEST(Visibility, ReplayWithVisibilityDropsHiddenObjectsAndLogsEstimates) {
+  ReplayScene scene;
+  ASSERT_TRUE(makeBuiltinScene("builtin:city", scene).ok());
+  Replay replay;
+  replay.header.scene = "builtin:city";
+  replay.header.has_budget = true;
+  replay.header.budget_ms = 8.0;
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kFlythrough, 40, 60.0, replay);
+  for (size_t i = 0; i < replay.frames.size(); i += 10) {
+    replay.frames[i].has_pick = true;
+    replay.frames[i].pick_px[0] = 640.0f;
+    replay.frames[i].pick_px[1] = 360.0f;
+  }
+  ReplayVisibility vis;
+  ASSERT_TRUE(vis.init(scene).ok());
+  ReplayRunOptions opt;
+  opt.visibility = &vis;
+  std::vector<ReplayLogFrame> log;
+  ReplayScene run_scene = scene;
+  ASSERT_TRUE(runReplay(replay, run_scene, opt, log).ok());
+  ASSERT_EQ(log.size(), replay.frames.size());
+  const LevelTable table = scene.table.view();
+  size_t hidden_total = 0, picks = 0;
+  for (const ReplayLogFrame& f : log) {
+    ASSERT_TRUE(f.has_visibility);
+    ASSERT_EQ(f.visible.size(), scene.objectCount());
+    EXPECT_NE(replayLogLine(f).find("\"visible\": ["), std::string::npos);
+    hidden_total += f.hidden_count;
+    picks += f.pick_object >= 0 ? 1 : 0;
+    for (size_t i = 0; i < f.visible.size(); ++i) {
+      EXPECT_GE(f.visible[i], 0.0f);
+      EXPECT_LE(f.visible[i], 1.0f);
+      if (f.visible[i] != 0.0f) continue;
+      // nothing to gain from detail: not drawn, or the coarsest level
+      const uint32_t c = scene.object_chain[i];
+      const int coarsest = static_cast<int>(table.chain_level_offset[c + 1] - table.chain_level_offset[c]) - 1;
+      EXPECT_TRUE(f.levels[i] == -1 || f.levels[i] == coarsest)
+          << "frame " << f.frame << " object " << i << " hidden but at level " << int(f.levels[i]);
+    }
+  }
+  EXPECT_GT(hidden_total, 0u) << "the city fly-through should hide some buildings";
+  EXPECT_GT(picks, 0u);
+  // without visibility the log keeps its documented keys only
+  std::vector<ReplayLogFrame> plain;
+  ReplayScene plain_scene = scene;
+  ASSERT_TRUE(runReplay(replay, plain_scene, ReplayRunOptions(), plain).ok());
+  EXPECT_EQ(replayLogLine(plain[0]).find("visible"), std::string::npos);
 }
