@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -748,4 +749,61 @@ TEST(Visibility, ReplayWithVisibilityDropsHiddenObjectsAndLogsEstimates) {
   ReplayScene plain_scene = scene;
   ASSERT_TRUE(runReplay(replay, plain_scene, ReplayRunOptions(), plain).ok());
   EXPECT_EQ(replayLogLine(plain[0]).find("visible"), std::string::npos);
+}
+
+TEST(Visibility, OrthographicCameraPicksAndFindsTheHiddenCube) {
+  WallScene s = occludedScene();
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  Camera cam = frontCamera();
+  cam.projection = Projection::kOrthographic;
+  cam.ortho_height = 10.0f;
+  // the centre pixel's ray is parallel to -z through x = y = 0: the wall is first
+  const PickHit h = rs.pick(cam, {80.0f, 60.0f});
+  EXPECT_EQ(h.object, 1);
+  EXPECT_NEAR(h.point.z, 4.05f, 1e-4f);
+  EXPECT_NEAR(h.distance, 10.0f - 4.05f, 1e-4f);
+  OcclusionEstimator est;
+  ASSERT_TRUE(est.init(64).ok());
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  EXPECT_EQ(est.visibleFraction(rs, 0), 0.0f);
+  // parallel rays: a cube beside the wall (x = 5, beyond its half width 4) is seen in full
+  rs.setTransform(0, at({5.0f, 0.0f, 0.0f}));
+  rs.commit();
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  EXPECT_EQ(est.visibleFraction(rs, 0), 1.0f);
+}
+
+TEST(Visibility, ConcurrentQueriesAfterCommitMatchSerialOnes) {
+  WallScene s = occludedScene();
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  const Camera cam = frontCamera();
+  std::vector<int32_t> serial;
+  for (uint32_t y = 0; y < 120; y += 3)
+    for (uint32_t x = 0; x < 160; x += 3) serial.push_back(rs.pick(cam, {x + 0.5f, y + 0.5f}).object);
+  OcclusionEstimator serial_est;
+  ASSERT_TRUE(serial_est.init(64).ok());
+  std::vector<float> serial_vis(rs.objectCapacity());
+  ASSERT_TRUE(serial_est.update(rs, cam, Span<float>(serial_vis)));
+
+  std::vector<std::vector<int32_t>> picks(2);
+  std::vector<std::vector<float>> vis(2, std::vector<float>(rs.objectCapacity()));
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&, t] {
+      OcclusionEstimator est;  // one estimator per thread
+      if (!est.init(64).ok()) return;
+      for (int round = 0; round < 20; ++round) {
+        picks[t].clear();
+        for (uint32_t y = 0; y < 120; y += 3)
+          for (uint32_t x = 0; x < 160; x += 3) picks[t].push_back(rs.pick(cam, {x + 0.5f, y + 0.5f}).object);
+      }
+      est.update(rs, cam, Span<float>(vis[t]));
+    });
+  for (std::thread& th : threads) th.join();
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_EQ(picks[t], serial);
+    EXPECT_EQ(vis[t], serial_vis);
+  }
 }
