@@ -8,7 +8,9 @@ const char kZhangOptionsHelp[] =
     "                       neighbour; lower error on the bunny, docs/bench/zhang.md)\n"
     "  --zhang-mode M       edge (edge collapse, default) or triangle (the triangle-decimation extension)\n"
     "  --zhang-influence I  ca (vision characteristic, default) or sh (super height) orders the queue\n"
-    "  --keep-corners B     yes keeps angle vertices (corners) fixed; no (default) processes them\n";
+    "  --keep-corners B     yes keeps angle vertices (corners) fixed; no (default) processes them\n"
+    "  --weld B             yes joins vertices at the same position first, so that glTF attribute seams\n"
+    "                       are simplified too (texture seams are not kept); no (default) keeps seams\n";
 
 bool parseZhangOptions(const Args& args, ZhangParams& p, std::string& error) {
   p = ZhangParams();
@@ -38,6 +40,13 @@ bool parseZhangOptions(const Args& args, ZhangParams& p, std::string& error) {
   else if (corners == "no") p.keep_angle_vertices = false;
   else {
     error = "--keep-corners takes yes or no, not '" + corners + "'";
+    return false;
+  }
+  const std::string weld = args.get("--weld", "no");
+  if (weld == "yes") p.weld_positions = true;
+  else if (weld == "no") p.weld_positions = false;
+  else {
+    error = "--weld takes yes or no, not '" + weld + "'";
     return false;
   }
   return true;
