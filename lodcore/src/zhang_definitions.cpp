@@ -29,6 +29,10 @@ const char* zhangInfluenceName(ZhangInfluence i) {
   return i == ZhangInfluence::kVisionCharacteristic ? "ca" : "sh";
 }
 
+const char* zhangPlacementName(ZhangPlacement p) {
+  return p == ZhangPlacement::kInterpolated ? "interpolated" : "neighbour";
+}
+
 const char* zhangModeName(ZhangMode m) { return m == ZhangMode::kEdgeCollapse ? "edge-collapse" : "triangle"; }
 
 const char* zhangStopReasonName(ZhangStopReason r) {

@@ -13,6 +13,7 @@
 // max_normal_turn_deg or lose (almost) all its area (fold-over), or when it would move a kept vertex.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -158,6 +159,11 @@ class ZhangEngine {
   // stop early (they cannot win) and return false
   bool evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p, const glm::vec3& n,
                 float bound, float& new_ca);
+  // the fold-over part of evaluate, raising new_ca (which the caller initialises)
+  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound,
+                     float& new_ca);
+  // the link-condition part of evaluate
+  bool checkTopology(const StarEntry* entries, size_t count, bool any_removed);
   void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
   void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
 
@@ -179,12 +185,18 @@ class ZhangEngine {
   std::vector<float> weight_;
   std::vector<uint32_t> parent_;
   std::vector<uint8_t> kept_, alive_v_;
-  // per triangle: 3 vertex ids, unit normal, area, alive flag; per corner: next corner of the vertex
-  std::vector<uint32_t> tri_;
-  std::vector<glm::vec3> tri_n_;
-  std::vector<float> tri_a_;
-  std::vector<uint8_t> tri_alive_;
-  std::vector<uint32_t> cnext_;
+  // per triangle, one record so that walking a fan touches one cache line per triangle (52 B):
+  // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
+  // alive flag (4 B); corner c is vertex c % 3 of triangle c / 3
+  struct Face {
+    uint32_t v[3] = {kNone, kNone, kNone};
+    uint32_t next[3] = {kNone, kNone, kNone};
+    glm::vec3 n{0.0f};
+    float area = 0.0f;
+    uint32_t alive = 1;
+  };
+  std::vector<Face> faces_;
+  uint32_t& cornerNext(uint32_t c) { return faces_[c / 3].next[c % 3]; }
   size_t alive_tris_ = 0, initial_tris_ = 0;
   IndexedHeap heap_;
   bool stopped_ = false;
@@ -203,9 +215,9 @@ template <class F>
 void ZhangEngine::forStar(uint32_t v, F&& f) {
   uint32_t prev = kNone;
   for (uint32_t c = vhead_[v]; c != kNone;) {
-    const uint32_t t = c / 3, next = cnext_[c];
-    if (!tri_alive_[t]) {  // unlink the dead corner
-      if (prev == kNone) vhead_[v] = next; else cnext_[prev] = next;
+    const uint32_t t = c / 3, next = cornerNext(c);
+    if (!faces_[t].alive) {  // unlink the dead corner
+      if (prev == kNone) vhead_[v] = next; else cornerNext(prev) = next;
       c = next;
       continue;
     }
@@ -227,23 +239,23 @@ uint32_t ZhangEngine::find(uint32_t v) {
 }
 
 void ZhangEngine::updateTriangle(uint32_t t) {
-  const glm::vec3 &a = pos_[tri_[3 * t]], &b = pos_[tri_[3 * t + 1]], &c = pos_[tri_[3 * t + 2]];
+  const glm::vec3 &a = pos_[faces_[t].v[0]], &b = pos_[faces_[t].v[1]], &c = pos_[faces_[t].v[2]];
   const glm::vec3 x = glm::cross(b - a, c - a);
   const float len = glm::length(x);
-  tri_n_[t] = len > 0.0f ? x / len : glm::vec3(0.0f);
-  tri_a_[t] = 0.5f * len;
+  faces_[t].n = len > 0.0f ? x / len : glm::vec3(0.0f);
+  faces_[t].area = 0.5f * len;
 }
 
 float ZhangEngine::visionOf(uint32_t v) {
   float ca = 0.0f;
   const glm::vec3 nv = nrm_[v];
-  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, tri_n_[t]) * tri_a_[t]); });
+  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, faces_[t].n) * faces_[t].area); });
   return ca;
 }
 
 float ZhangEngine::superHeightOf(uint32_t v) {
   pairs_.clear();
-  forStar(v, [&](uint32_t t, uint32_t k) { pairs_.push_back({tri_[3 * t + (k + 1) % 3], tri_[3 * t + (k + 2) % 3]}); });
+  forStar(v, [&](uint32_t t, uint32_t k) { pairs_.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]}); });
   return zhang_detail::superHeightOfStar(pos_[v], pairs_.data(), pairs_.size(), pos_.data(), star_);
 }
 
@@ -277,10 +289,8 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   for (size_t v = 0; v < vn; ++v) parent_[v] = static_cast<uint32_t>(v);
   kept_.assign(vn, 0);
   alive_v_.assign(vn, 0);
-  tri_.clear();
-  tri_.reserve(3 * tn);
-  cnext_.clear();
-  cnext_.reserve(3 * tn);
+  faces_.clear();
+  faces_.reserve(tn);
   star_.resize(vn);
   mark_.assign(std::max(vn, tn), 0);
   mark_gen_ = 0;
@@ -294,8 +304,8 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     }
     const uint32_t lo = std::min({a, b, c}), hi = std::max({a, b, c}), mid = a ^ b ^ c ^ lo ^ hi;
     bool duplicate = false;
-    for (uint32_t corner = vhead_[lo]; corner != kNone && !duplicate; corner = cnext_[corner]) {
-      const uint32_t* o = &tri_[corner / 3 * 3];
+    for (uint32_t corner = vhead_[lo]; corner != kNone && !duplicate; corner = cornerNext(corner)) {
+      const uint32_t* o = faces_[corner / 3].v;
       const uint32_t olo = std::min({o[0], o[1], o[2]}), ohi = std::max({o[0], o[1], o[2]});
       duplicate = olo == lo && ohi == hi && (o[0] ^ o[1] ^ o[2] ^ olo ^ ohi) == mid;
     }
@@ -303,26 +313,25 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
       ++stats_.dropped_duplicate;
       continue;
     }
-    const uint32_t id = static_cast<uint32_t>(tri_.size());
+    const uint32_t id = static_cast<uint32_t>(faces_.size());
+    Face f;
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t v = in.triangles[3 * t + k];
-      tri_.push_back(v);
-      cnext_.push_back(vhead_[v]);
-      vhead_[v] = id + k;
+      f.v[k] = v;
+      f.next[k] = vhead_[v];
+      vhead_[v] = 3 * id + k;
     }
+    faces_.push_back(f);
   }
-  const size_t live = tri_.size() / 3;
-  tri_n_.assign(live, glm::vec3(0.0f));
-  tri_a_.assign(live, 0.0f);
-  tri_alive_.assign(live, 1);
+  const size_t live = faces_.size();
   alive_tris_ = initial_tris_ = live;
   stats_.input_triangles = live;
   for (uint32_t t = 0; t < live; ++t) {
     updateTriangle(t);
     for (int k = 0; k < 3; ++k) {
-      const uint32_t v = tri_[3 * t + k];
-      nrm_[v] += tri_n_[t] * tri_a_[t];
-      weight_[v] += tri_a_[t] / 3.0f;
+      const uint32_t v = faces_[t].v[k];
+      nrm_[v] += faces_[t].n * faces_[t].area;
+      weight_[v] += faces_[t].area / 3.0f;
       alive_v_[v] = 1;
     }
   }
@@ -336,10 +345,10 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     pairs.clear();
     float max_angle = 0.0f, ca = 0.0f;
     forStar(v, [&](uint32_t t, uint32_t k) {
-      pairs.push_back({tri_[3 * t + (k + 1) % 3], tri_[3 * t + (k + 2) % 3]});
-      const float angle = fastAngle(nrm_[v], tri_n_[t]);
+      pairs.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]});
+      const float angle = fastAngle(nrm_[v], faces_[t].n);
       max_angle = std::max(max_angle, angle);
-      ca = std::max(ca, angle * tri_a_[t]);
+      ca = std::max(ca, angle * faces_[t].area);
     });
     zhang_detail::StarMeasure m;
     zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
@@ -373,6 +382,12 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
     n = nrm_[k];
     return;
   }
+  if (params_.placement == ZhangPlacement::kNeighbour) {  // s[s_count - 1] is the neighbour V_j
+    k = s[s_count - 1];
+    p = pos_[k];
+    n = nrm_[k];
+    return;
+  }
   float sum = 0.0f;
   for (int i = 0; i < s_count; ++i) sum += ca_[s[i]];
   p = glm::vec3(0.0f);
@@ -389,17 +404,22 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
 void ZhangEngine::gatherStar(uint32_t v, std::vector<StarEntry>& out) {
   out.clear();
   forStar(v, [&](uint32_t t, uint32_t corner) {
-    out.push_back({t, tri_[3 * t + (corner + 1) % 3], tri_[3 * t + (corner + 2) % 3]});
+    out.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
   });
 }
 
 bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p,
                            const glm::vec3& n, float bound, float& new_ca) {
   new_ca = 0.0f;
+  return checkGeometry(entries, count, p, n, bound, new_ca) && checkTopology(entries, count, any_removed);
+}
+
+bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n,
+                                float bound, float& new_ca) {
   for (size_t e = 0; e < count; ++e) {
     const uint32_t t = entries[e].t;
     const glm::vec3 &pu = pos_[entries[e].u], &pw = pos_[entries[e].w];
-    if (glm::dot(tri_n_[t], tri_n_[t]) == 0.0f) continue;  // already degenerate: nothing to turn
+    if (glm::dot(faces_[t].n, faces_[t].n) == 0.0f) continue;  // already degenerate: nothing to turn
     const glm::vec3 x = glm::cross(pu - p, pw - p);
     const float len = glm::length(x);
     const float scale = glm::dot(pu - p, pu - p) + glm::dot(pw - p, pw - p) + glm::dot(pw - pu, pw - pu);
@@ -410,13 +430,17 @@ bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_remo
     const glm::vec3 nt = x / len;
     // against the triangle's current normal (a flip) and against the merged vertex's carried
     // normal, interpolated from the original's (drift from the original orientation)
-    if (glm::dot(nt, tri_n_[t]) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
+    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
       ++stats_.rejected_fold;
       return false;
     }
     new_ca = std::max(new_ca, fastAngle(n, nt) * 0.5f * len);
     if (new_ca >= bound) return false;  // cannot beat the best candidate so far
   }
+  return true;
+}
+
+bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any_removed) {
   star_.reset();
   for (size_t e = 0; e < count; ++e) {
     const uint32_t u = entries[e].u, w = entries[e].w;
@@ -470,13 +494,13 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     forStar(s[si], [&](uint32_t t, uint32_t) {
       int inside = 0;
       for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < s_count; ++i) inside += tri_[3 * t + c] == s[i];
+        for (int i = 0; i < s_count; ++i) inside += faces_[t].v[c] == s[i];
       if (inside >= 2) removed_.push_back(t);
     });
   }
   for (uint32_t t : removed_) {
-    if (!tri_alive_[t]) continue;
-    tri_alive_[t] = 0;
+    if (!faces_[t].alive) continue;
+    faces_[t].alive = 0;
     --alive_tris_;
     if (params_.mode == ZhangMode::kTriangleDecimation) heap_.remove(t);
   }
@@ -507,11 +531,11 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     // relabel v's corners to k and splice v's list in front of k's
     uint32_t last = kNone;
     forStar(v, [&](uint32_t t, uint32_t corner) {
-      tri_[3 * t + corner] = k;
+      faces_[t].v[corner] = k;
       last = 3 * t + corner;
     });
     if (last != kNone) {
-      cnext_[last] = vhead_[k];
+      cornerNext(last) = vhead_[k];
       vhead_[k] = vhead_[v];
     }
     vhead_[v] = kNone;
@@ -525,7 +549,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
   forStar(k, [&](uint32_t t, uint32_t corner) {
     updateTriangle(t);
     for (uint32_t c = 1; c < 3; ++c) {
-      const uint32_t u = tri_[3 * t + (corner + c) % 3];
+      const uint32_t u = faces_[t].v[(corner + c) % 3];
       if (mark_[u] != mark_gen_) {
         mark_[u] = mark_gen_;
         neighbours_.push_back(u);
@@ -567,11 +591,15 @@ bool ZhangEngine::stepEdge() {
       if (e.u == j || e.w == j) any_removed = true;
       else union_.push_back(e);
     }
+    // V_i's side first: most candidates lose there, before V_j's fan is walked
+    float ca = 0.0f;
+    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, ca)) continue;
+    const size_t i_part = union_.size();
     gatherStar(j, star_j_);
     for (const StarEntry& e : star_j_)
       if (e.u != i && e.w != i) union_.push_back(e);
-    float ca;
-    if (!evaluate(union_.data(), union_.size(), any_removed, p, n, best_ca, ca)) continue;
+    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, ca)) continue;
+    if (!checkTopology(union_.data(), union_.size(), any_removed)) continue;
     if (ca < best_ca) {
       best_ca = ca;
       best_j = j;
@@ -579,7 +607,10 @@ bool ZhangEngine::stepEdge() {
       best_n = n;
     }
   }
-  if (best_j == kNone) return true;  // blocked until a neighbour's collapse changes its fan
+  if (best_j == kNone) {  // blocked until a neighbour's collapse changes its fan
+    ++stats_.blocked;
+    return true;
+  }
   const uint32_t s[2] = {i, best_j};
   apply(s, 2, best_j, best_p, best_n);
   return true;
@@ -589,12 +620,12 @@ bool ZhangEngine::stepEdge() {
 // the triangles sharing a vertex with it (definition 4)
 float ZhangEngine::triangleVision(uint32_t t) {
   float max_angle = 0.0f;
-  const glm::vec3 nt = tri_n_[t];
+  const glm::vec3 nt = faces_[t].n;
   for (int c = 0; c < 3; ++c)
-    forStar(tri_[3 * t + c], [&](uint32_t o, uint32_t) {
-      if (o != t) max_angle = std::max(max_angle, fastAngle(nt, tri_n_[o]));
+    forStar(faces_[t].v[c], [&](uint32_t o, uint32_t) {
+      if (o != t) max_angle = std::max(max_angle, fastAngle(nt, faces_[o].n));
     });
-  return max_angle * tri_a_[t];
+  return max_angle * faces_[t].area;
 }
 
 void ZhangEngine::refreshTrianglesAround(uint32_t k) {
@@ -612,16 +643,19 @@ void ZhangEngine::refreshTrianglesAround(uint32_t k) {
 bool ZhangEngine::stepTriangle() {
   if (heap_.empty()) return false;
   const uint32_t t = heap_.pop();
-  const uint32_t s[3] = {tri_[3 * t], tri_[3 * t + 1], tri_[3 * t + 2]};
+  uint32_t s[3] = {faces_[t].v[0], faces_[t].v[1], faces_[t].v[2]};
+  // the vertex with the largest CA last: with ZhangPlacement::kNeighbour the triangle goes onto it
+  for (int a = 0; a < 2; ++a)
+    if (ca_[s[a]] > ca_[s[2]] || (ca_[s[a]] == ca_[s[2]] && s[a] < s[2])) std::swap(s[a], s[2]);
   uint32_t k;
   glm::vec3 p, n;
   bool ok;
   interpolate(s, 3, k, p, n, ok);
-  if (ok && !kept_[k]) {  // survivor: the vertex with the largest CA
-    for (int i = 0; i < 3; ++i)
-      if (ca_[s[i]] > ca_[k] || (ca_[s[i]] == ca_[k] && s[i] < k)) k = s[i];
+  if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
+  if (!ok) {  // re-queued when its neighbourhood changes
+    ++stats_.blocked;
+    return true;
   }
-  if (!ok) return true;  // re-queued when its neighbourhood changes
   union_.clear();
   bool any_removed = false;
   for (int si = 0; si < 3; ++si) {
@@ -633,7 +667,10 @@ bool ZhangEngine::stepTriangle() {
     }
   }
   float ca;
-  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) return true;
+  if (!evaluate(union_.data(), union_.size(), any_removed, p, n, INFINITY, ca)) {
+    ++stats_.blocked;
+    return true;
+  }
   apply(s, 3, k, p, n);
   refreshTrianglesAround(k);
   return true;
@@ -662,9 +699,9 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   auto use = [&](uint32_t v) {
     if (remap[v] == kNone) remap[v] = 0;  // mark; ids assigned in vertex order below
   };
-  for (size_t t = 0; t < tri_alive_.size(); ++t)
-    if (tri_alive_[t])
-      for (int c = 0; c < 3; ++c) use(tri_[3 * t + c]);
+  for (size_t t = 0; t < faces_.size(); ++t)
+    if (faces_[t].alive)
+      for (int c = 0; c < 3; ++c) use(faces_[t].v[c]);
   for (size_t e = 0; e < in.edgeCount(); ++e) {
     const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
     if (a != b) {
@@ -689,9 +726,9 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
     if (!uv_.empty()) out.uvs[o] = uv_[v];
   }
   out.triangles.reserve(3 * alive_tris_);
-  for (size_t t = 0; t < tri_alive_.size(); ++t)
-    if (tri_alive_[t])
-      for (int c = 0; c < 3; ++c) out.triangles.push_back(remap[tri_[3 * t + c]]);
+  for (size_t t = 0; t < faces_.size(); ++t)
+    if (faces_[t].alive)
+      for (int c = 0; c < 3; ++c) out.triangles.push_back(remap[faces_[t].v[c]]);
   for (size_t e = 0; e < in.edgeCount(); ++e) {
     const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
     if (a == b) continue;

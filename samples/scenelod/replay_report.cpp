@@ -2,7 +2,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
+
+#include "scenelod/eval/plot.h"
 
 namespace scenelod::tool {
 
@@ -104,6 +107,85 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
         << num(s.mean_hidden_cost_without_ms) << " | " << num(s.mean_occlusion_saved_ms) << " | " << s.pick_frames << " |\n";
     }
   }
+
+  // plots beside the report
+  const size_t slash = md_path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? std::string() : md_path.substr(0, slash + 1);
+  std::string stem = md_path.substr(dir.size());
+  if (stem.size() > 3 && stem.substr(stem.size() - 3) == ".md") stem.resize(stem.size() - 3);
+  std::vector<eval::PlotSeries> cost, levels, switches;
+  int color = 0;
+  for (size_t r = 0; r < in.runs.size(); ++r) {
+    const auto& log = *in.runs[r];
+    eval::PlotSeries pred, meas, budget;
+    pred.name = in.run_names[r] + " predicted";
+    meas.name = in.run_names[r] + " measured";
+    budget.name = in.run_names[r] + " budget";
+    pred.markers = meas.markers = budget.markers = false;
+    for (const auto& f : log) {
+      pred.x.push_back(f.time_s);
+      pred.y.push_back(f.predicted_ms);
+      if (f.has_measured) {
+        meas.x.push_back(f.time_s);
+        meas.y.push_back(f.measured_ms);
+      }
+      if (f.has_budget) {
+        budget.x.push_back(f.time_s);
+        budget.y.push_back(f.budget_ms);
+      }
+    }
+    pred.color = eval::seriesColor(color++);
+    meas.color = eval::seriesColor(color++);
+    budget.color = eval::seriesColor(color++);
+    cost.push_back(pred);
+    if (!meas.x.empty()) cost.push_back(meas);
+    if (!budget.x.empty()) cost.push_back(budget);
+    const ReplaySummary s = summarizeReplay(log);
+    size_t total = 0;
+    for (size_t c : s.level_histogram) total += c;
+    eval::PlotSeries h;
+    h.name = in.run_names[r];
+    h.color = eval::seriesColor(static_cast<int>(r));
+    for (size_t k = 0; k < s.level_histogram.size(); ++k) {
+      h.x.push_back(static_cast<double>(k) - 1.0);
+      h.y.push_back(total ? 100.0 * s.level_histogram[k] / total : 0.0);
+    }
+    levels.push_back(h);
+    // switches per second, in whole-second bins (the first frame's initial choice left out)
+    std::map<long, double> bins;
+    for (size_t i = 1; i < log.size(); ++i) bins[static_cast<long>(log[i].time_s)] += log[i].switches;
+    eval::PlotSeries sw;
+    sw.name = in.run_names[r];
+    sw.color = eval::seriesColor(static_cast<int>(r));
+    for (const auto& b : bins) {
+      sw.x.push_back(static_cast<double>(b.first) + 0.5);
+      sw.y.push_back(b.second);
+    }
+    switches.push_back(sw);
+  }
+  std::vector<std::pair<std::string, std::string>> images;
+  auto plot = [&](const std::vector<eval::PlotSeries>& series, const char* suffix, const char* title, const char* xl,
+                  const char* yl) -> Error {
+    bool any = false;
+    for (const auto& s : series) any = any || !s.x.empty();
+    if (!any) return Error();
+    eval::PlotParams p;
+    p.title = title;
+    p.x_label = xl;
+    p.y_label = yl;
+    const std::string file = stem + suffix;
+    if (Error e = eval::writePlotPng(dir + file, series, p)) return e;
+    images.push_back({title, file});
+    return Error();
+  };
+  if (Error e = plot(cost, "_cost.png", "frame cost vs budget", "time (s)", "ms")) return e;
+  if (Error e = plot(levels, "_levels.png", "level histogram (-1 = not drawn)", "level", "% of object-frames")) return e;
+  if (Error e = plot(switches, "_switches.png", "level switches per second", "time (s)", "switches")) return e;
+  if (!images.empty()) {
+    o << "\n## Plots\n\n";
+    for (const auto& im : images) o << "![" << im.first << "](" << im.second << ")\n\n";
+  }
+
   std::ofstream out(md_path);
   if (!out) return Error(Status::kIoError, md_path + ": cannot write the report");
   out << o.str();

@@ -10,6 +10,8 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "scenelod/lodcore/obj_io.h"
+
 namespace scenelod::scene {
 
 namespace {
@@ -86,12 +88,12 @@ struct Builder {
   }
 };
 
-// profiles in xz, counter-clockwise seen from +y (x right, z towards the viewer: angle -> (cos, -sin))
+// profiles as (x, z), turning from +x towards +z: extrudeSides then winds the walls outwards
 std::vector<glm::vec2> circle(float r, size_t n) {
   std::vector<glm::vec2> p(n);
   for (size_t i = 0; i < n; ++i) {
     const float a = 2.0f * kPi * float(i) / float(n);
-    p[i] = {r * std::cos(a), -r * std::sin(a)};
+    p[i] = {r * std::cos(a), r * std::sin(a)};
   }
   return p;
 }
@@ -103,7 +105,7 @@ std::vector<glm::vec2> gearProfile(size_t teeth, float r_root, float r_tip) {
     const float a0 = 2.0f * kPi * float(t) / float(teeth), step = 2.0f * kPi / float(teeth);
     const float angles[4] = {a0, a0 + step * 0.25f, a0 + step * 0.45f, a0 + step * 0.7f};
     const float radii[4] = {r_root, r_tip, r_tip, r_root};
-    for (int k = 0; k < 4; ++k) p.push_back({radii[k] * std::cos(angles[k]), -radii[k] * std::sin(angles[k])});
+    for (int k = 0; k < 4; ++k) p.push_back({radii[k] * std::cos(angles[k]), radii[k] * std::sin(angles[k])});
   }
   return p;
 }
@@ -112,7 +114,7 @@ Mesh box(glm::vec3 size, glm::vec3 color) {
   Builder b;
   b.color = color;
   const glm::vec3 h = size * 0.5f;
-  const std::vector<glm::vec2> square = {{h.x, h.z}, {h.x, -h.z}, {-h.x, -h.z}, {-h.x, h.z}};
+  const std::vector<glm::vec2> square = {{h.x, -h.z}, {h.x, h.z}, {-h.x, h.z}, {-h.x, -h.z}};
   b.extrudeSides(square, -h.y, h.y, false);
   b.polygon({{h.x, h.y, h.z}, {h.x, h.y, -h.z}, {-h.x, h.y, -h.z}, {-h.x, h.y, h.z}});
   b.polygon({{-h.x, -h.y, h.z}, {-h.x, -h.y, -h.z}, {h.x, -h.y, -h.z}, {h.x, -h.y, h.z}});
@@ -144,13 +146,10 @@ Mesh gear(size_t teeth, float r_root, float r_tip, float thickness, float bore, 
   const auto p = gearProfile(teeth, r_root, r_tip);
   b.extrudeSides(p, -thickness * 0.5f, thickness * 0.5f, false);
   b.caps(p, -thickness * 0.5f, thickness * 0.5f);
-  // a hub boss on both faces
-  const size_t first = b.m.positions.size();
+  // a hub: a closed cylinder through the gear, standing out of both faces
   const auto hub = circle(bore, segments);
-  b.extrudeSides(hub, thickness * 0.5f, thickness * 0.9f, true);
-  b.extrudeSides(hub, -thickness * 0.9f, -thickness * 0.5f, true);
+  b.extrudeSides(hub, -thickness * 0.9f, thickness * 0.9f, true);
   b.caps(hub, -thickness * 0.9f, thickness * 0.9f);
-  (void)first;
   return b.m;
 }
 
@@ -168,14 +167,13 @@ Mesh pipe(float r_out, float r_in, float length, size_t segments, glm::vec3 colo
   // end rings
   for (int end = 0; end < 2; ++end) {
     const float y = end ? y1 : y0;
-    const glm::vec3 n(0, end ? 1.0f : -1.0f, 0);
     for (size_t i = 0; i < segments; ++i) {
       const size_t j = (i + 1) % segments;
+      // this corner order faces -y; the top ring is turned round
       std::vector<glm::vec3> quad = {{outer[i].x, y, outer[i].y}, {outer[j].x, y, outer[j].y},
                                      {inner[j].x, y, inner[j].y}, {inner[i].x, y, inner[i].y}};
-      if (!end) std::swap(quad[1], quad[3]);
+      if (end) std::swap(quad[1], quad[3]);
       b.polygon(quad);
-      (void)n;
     }
   }
   return b.m;
@@ -192,6 +190,10 @@ Mesh bolt(size_t segments, glm::vec3 color) {
   std::vector<glm::vec3> tip;
   for (auto it = shank.rbegin(); it != shank.rend(); ++it) tip.push_back({it->x, -0.3f, it->y});
   b.starPolygon({0, -0.3f, 0}, tip, {0, -1, 0});
+  // the shank's top (hidden under the head) closes it, so every part is a closed shell
+  std::vector<glm::vec3> top;
+  for (const glm::vec2& q : shank) top.push_back({q.x, 0.0f, q.y});
+  b.starPolygon({0, 0.0f, 0}, top, {0, 1, 0});
   return b.m;
 }
 
@@ -262,34 +264,12 @@ Mesh makeBlobMesh(int subdivisions) {
 
 namespace {
 
-// minimal OBJ reader for the bunny (positions and triangular faces only)
 bool readBunnyObj(const std::string& path, Mesh& out) {
-  FILE* f = std::fopen(path.c_str(), "r");
-  if (!f) return false;
-  char line[1024];
   Mesh m;
-  bool ok = true;
-  while (ok && std::fgets(line, sizeof line, f)) {
-    if (line[0] == 'v' && line[1] == ' ') {
-      glm::vec3 p;
-      ok = std::sscanf(line + 2, "%f %f %f", &p.x, &p.y, &p.z) == 3;
-      m.positions.push_back(p);
-    } else if (line[0] == 'f' && line[1] == ' ') {
-      long a, b, c;
-      // "f a b c" or "f a/x/y b/x/y c/x/y"
-      char* s = line + 2;
-      char* end;
-      a = std::strtol(s, &end, 10); while (*end && *end != ' ') ++end; s = end;
-      b = std::strtol(s, &end, 10); while (*end && *end != ' ') ++end; s = end;
-      c = std::strtol(s, &end, 10);
-      ok = a > 0 && b > 0 && c > 0;
-      m.triangles.insert(m.triangles.end(), {uint32_t(a - 1), uint32_t(b - 1), uint32_t(c - 1)});
-    }
-  }
-  std::fclose(f);
-  if (!ok || m.positions.empty() || !validateMesh(m, path).ok()) return false;
-  computeVertexNormals(m);
+  if (readObj(path, m) || m.triangles.empty()) return false;
+  if (m.normals.empty()) computeVertexNormals(m);
   m.colors.assign(m.positions.size(), glm::vec3(0.75f, 0.7f, 0.65f));
+  m.uvs.clear();
   out = std::move(m);
   return true;
 }

@@ -10,6 +10,7 @@
 
 #include <tiny_gltf.h>
 
+#include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::scene {
@@ -194,15 +195,9 @@ tinygltf::Value levelExtras(const LodLevel& level) {
   return tinygltf::Value(o);
 }
 
+// the minimal bounding sphere of level 0's vertices, whatever bounds the caller stored
 float sphereRadius(const LodLevel& level) {
-  if (level.bounds.radius > 0.0f) return level.bounds.radius;
-  const Aabb box = computeBounds(level.mesh);
-  float r2 = 0.0f;
-  for (const glm::vec3& p : level.mesh.positions) {
-    const glm::vec3 d = p - box.center();
-    r2 = std::max(r2, d.x * d.x + d.y * d.y + d.z * d.z);
-  }
-  return std::sqrt(r2);
+  return minimalSphere(Span<const glm::vec3>(level.mesh.positions.data(), level.mesh.positions.size())).radius;
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include <stb_image.h>
 #include <tiny_gltf.h>
 
+#include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::scene {
@@ -266,6 +267,9 @@ double readComponent(const unsigned char* p, int type, bool normalized) {
   }
 }
 
+// an accessor without a buffer view (zeros, maybe sparse) holds no data to bound its count
+constexpr size_t kMaxUnbackedCount = size_t(1) << 26;
+
 class GltfReader {
  public:
   GltfReader(const std::string& path, const tinygltf::Model& model, const LoadContext& ctx)
@@ -321,11 +325,16 @@ class GltfReader {
     component_count = ccount;
     component_type = a.componentType;
     const size_t elem = static_cast<size_t>(csize) * static_cast<size_t>(ccount);
-    out.assign(a.count * static_cast<size_t>(ccount), 0.0);
+    // the range check comes before any allocation, so a corrupt count cannot ask for gigabytes
+    const unsigned char* p = nullptr;
+    size_t stride = 0;
     if (a.bufferView >= 0) {
-      const unsigned char* p = nullptr;
-      size_t stride = 0;
       if (Error e = viewBytes(a.bufferView, a.byteOffset, 0, a.count, elem, what, p, stride)) return e;
+    } else if (a.count > kMaxUnbackedCount) {
+      return fail(Status::kInvalidMesh, what + " has no buffer view and an implausible count " + std::to_string(a.count));
+    }
+    out.assign(a.count * static_cast<size_t>(ccount), 0.0);
+    if (p) {
       for (size_t i = 0; i < a.count; ++i)
         for (int k = 0; k < ccount; ++k)
           out[i * static_cast<size_t>(ccount) + static_cast<size_t>(k)] =
@@ -556,10 +565,10 @@ class GltfReader {
           for (uint32_t i : idx) m.triangles.push_back(base + i);
           break;
         case TINYGLTF_MODE_TRIANGLE_STRIP:
-          // every other triangle swaps its first two corners to keep the winding
+          // triangle i is (i, i+1, i+2) for even i and (i, i+2, i+1) for odd i (glTF 2.0 §3.7.2.1)
           for (size_t i = 0; i + 2 < n; ++i) {
             const bool odd = i % 2 == 1;
-            m.triangles.insert(m.triangles.end(), {base + idx[odd ? i + 1 : i], base + idx[odd ? i : i + 1], base + idx[i + 2]});
+            m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[odd ? i + 2 : i + 1], base + idx[odd ? i + 1 : i + 2]});
           }
           break;
         case TINYGLTF_MODE_TRIANGLE_FAN:
@@ -729,8 +738,10 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
     for (char& c : err)
       if (c == '\n') c = ';';
     const bool size_problem = err.find("size mismatch") != std::string::npos || err.find("byteLength") != std::string::npos;
-    return {size_problem ? Status::kCorrupt : Status::kParseError,
-            path + ": " + (size_problem ? "truncated or wrong-size buffer: " : "cannot parse glTF: ") + err};
+    const bool bad_reference = err.find("out of bounds") != std::string::npos;
+    if (size_problem) return {Status::kCorrupt, path + ": truncated or wrong-size buffer: " + err};
+    if (bad_reference) return {Status::kInvalidMesh, path + ": invalid reference: " + err};
+    return {Status::kParseError, path + ": cannot parse glTF: " + err};
   }
   for (const std::string& req : model.extensionsRequired)
     for (const char* g : kGeometryExtensions)
@@ -752,20 +763,6 @@ Error readScene(const std::string& path, const tinygltf::Model& model, const Loa
   if (Error e = validateSceneData(s, path)) return e;
   out = std::move(s);
   return {};
-}
-
-Sphere boundingSphere(const Mesh& mesh) {
-  Sphere s;
-  if (mesh.positions.empty()) return s;
-  const Aabb box = computeBounds(mesh);
-  s.center = box.center();
-  float r2 = 0.0f;
-  for (const glm::vec3& p : mesh.positions) {
-    const glm::vec3 d = p - s.center;
-    r2 = std::max(r2, d.x * d.x + d.y * d.y + d.z * d.z);
-  }
-  s.radius = std::sqrt(r2);
-  return s;
 }
 
 bool numberField(const tinygltf::Value& obj, const char* key, float& out) {
@@ -874,7 +871,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
       LodLevel l0;
       l0.mesh = s.meshes[m].mesh;
       readLevelExtras(model.nodes[i], l0);
-      l0.bounds = boundingSphere(l0.mesh);
+      l0.bounds = minimalSphere(Span<const glm::vec3>(l0.mesh.positions.data(), l0.mesh.positions.size()));
       c[m].levels.push_back(std::move(l0));
       // without our extras, a level's cell width follows from MSFT_screencoverage (docs/IO.md)
       std::vector<float> coverage;
@@ -891,16 +888,16 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
         if (k < coverage.size() && coverage[k] > 0.0f)
           level.cell_width = 2.0f * c[m].levels[0].bounds.radius * kCoverageCellPixels / (coverage[k] * kCoverageViewportPx);
         readLevelExtras(ln, level);
-        level.bounds = boundingSphere(level.mesh);
         c[m].levels.push_back(std::move(level));
       }
+      computeChainBounds(c[m]);
     }
     for (size_t m = 0; m < c.size(); ++m)
       if (!defined[m]) {
         LodLevel l0;
         l0.mesh = s.meshes[m].mesh;
-        l0.bounds = boundingSphere(l0.mesh);
         c[m].levels.push_back(std::move(l0));
+        computeChainBounds(c[m]);
       }
     if (Error e = validateSceneData(s, path)) return e;
     out = std::move(s);

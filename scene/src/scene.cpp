@@ -122,6 +122,7 @@ void Scene::rebuildParentIndices() {
   for (size_t i = 0; i < order_.size(); ++i) node_dense_[order_[i]] = static_cast<uint32_t>(i);
   for (size_t i = 0; i < order_.size(); ++i)
     if (parent_dense_[i] >= 0) parent_dense_[i] = static_cast<int32_t>(node_dense_[parent_dense_[i]]);
+  for (size_t k = 0; k < object_node_slot_.size(); ++k) object_node_dense_[k] = node_dense_[object_node_slot_[k]];
 }
 
 Error Scene::removeNode(NodeHandle node) {
@@ -134,7 +135,7 @@ Error Scene::removeNode(NodeHandle node) {
     if (parent_dense_[i] >= 0 && doomed[parent_dense_[i]]) doomed[i] = 1;
   // objects on removed nodes go first (swap-remove, walking backwards keeps it simple)
   for (size_t k = object_chain_.size(); k-- > 0;)
-    if (doomed[node_dense_[object_node_slot_[k]]]) removeObject(objectAt(k));
+    if (doomed[object_node_dense_[k]]) removeObject(objectAt(k));
   // stable compaction of the node arrays; parent links become slots during the move
   for (size_t i = 0; i < n; ++i)
     if (parent_dense_[i] >= 0) parent_dense_[i] = static_cast<int32_t>(order_[parent_dense_[i]]);
@@ -265,6 +266,7 @@ Error Scene::addObject(const ObjectDesc& d, ObjectHandle& out) {
   max_scale_.push_back(1.0f);
   object_chain_.push_back(d.chain);
   object_node_slot_.push_back(d.node.slot);
+  object_node_dense_.push_back(node_dense_[d.node.slot]);
   object_dirty_.push_back(1);
   importance_.push_back(d.importance);
   must_draw_.push_back(d.must_draw ? 1 : 0);
@@ -283,6 +285,7 @@ Error Scene::removeObject(ObjectHandle h) {
     max_scale_[k] = max_scale_[last];
     object_chain_[k] = object_chain_[last];
     object_node_slot_[k] = object_node_slot_[last];
+    object_node_dense_[k] = object_node_dense_[last];
     object_dirty_[k] = object_dirty_[last];
     importance_[k] = importance_[last];
     must_draw_[k] = must_draw_[last];
@@ -295,6 +298,7 @@ Error Scene::removeObject(ObjectHandle h) {
   max_scale_.pop_back();
   object_chain_.pop_back();
   object_node_slot_.pop_back();
+  object_node_dense_.pop_back();
   object_dirty_.pop_back();
   importance_.pop_back();
   must_draw_.pop_back();
@@ -311,6 +315,7 @@ Error Scene::setObjectNode(ObjectHandle h, NodeHandle node) {
   if (!nodeLive(node)) return stale("node");
   const uint32_t k = object_dense_[h.slot];
   object_node_slot_[k] = node.slot;
+  object_node_dense_[k] = node_dense_[node.slot];
   object_dirty_[k] = 1;
   return {};
 }
@@ -379,8 +384,7 @@ size_t Scene::update() {
   const size_t m = object_chain_.size();
   size_t recomputed = 0;
   const bool all = all_objects_dirty_;
-  const uint32_t* node_of = object_node_slot_.data();
-  const uint32_t* dense_of = node_dense_.data();
+  const uint32_t* node_of = object_node_dense_.data();
   const uint32_t* chain_of = object_chain_.data();
   const Sphere* chains = chain_spheres_.data();
   uint8_t* object_dirty = object_dirty_.data();
@@ -388,7 +392,7 @@ size_t Scene::update() {
   float* radii = world_radius_.data();
   float* scales = max_scale_.data();
   for (size_t k = 0; k < m; ++k) {
-    const uint32_t node = dense_of[node_of[k]];
+    const uint32_t node = node_of[k];
     if (!(all | object_dirty[k] | dirty[node])) continue;
     const float* w = &world_[node][0][0];
     const Sphere& s = chains[chain_of[k]];

@@ -21,8 +21,13 @@ glm::vec4 plane(const glm::vec3& normal, const glm::vec3& point) {
 float pixelSize(const Camera& c, float distance) {
   const float h = static_cast<float>(std::max<uint32_t>(c.viewport_height_px, 1));
   if (c.projection == Projection::kOrthographic) return c.ortho_height / h;
-  const float d = std::max(distance, c.near_plane);
-  return 2.0f * d * std::tan(c.fov_y_rad * 0.5f) / h;
+  return std::max(distance, c.near_plane) * pixelSizeFactor(c);
+}
+
+float pixelSizeFactor(const Camera& c) {
+  if (c.projection == Projection::kOrthographic) return 0.0f;
+  const float h = static_cast<float>(std::max<uint32_t>(c.viewport_height_px, 1));
+  return 2.0f * std::tan(c.fov_y_rad * 0.5f) / h;
 }
 
 bool cameraValid(const Camera& c) {

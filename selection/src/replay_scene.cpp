@@ -12,6 +12,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
+#include "scenelod/scene/pack.h"
 #include "scenelod/scene/scene_data.h"
 
 namespace scenelod::selection {
@@ -380,14 +381,53 @@ Error writeLevelScene(const std::string& path, const ReplayScene& s) {
   return Error();
 }
 
+Error loadPackScene(const std::string& path, ReplayScene& s) {
+  s = ReplayScene();
+  s.name = path;
+  scene::Pack pack;
+  if (Error e = scene::Pack::load(path, pack)) return e;
+  for (size_t c = 0; c < pack.chainCount(); ++c) {
+    std::vector<float> w;
+    std::vector<uint32_t> t, v, lp;
+    for (size_t l = 0; l < pack.levelCount(c); ++l) {
+      const scene::PackLevelView lv = pack.level(c, l);
+      w.push_back(lv.cell_width);
+      t.push_back(static_cast<uint32_t>(lv.triangles.size() / 3));
+      v.push_back(static_cast<uint32_t>(lv.positions.size()));
+      lp.push_back(static_cast<uint32_t>(lv.edges.size() / 2 + lv.points.size()));
+    }
+    s.table.addChain(Span<const float>(w.data(), w.size()), Span<const uint32_t>(t.data(), t.size()),
+                     Span<const uint32_t>(v.data(), v.size()), Span<const uint32_t>(lp.data(), lp.size()));
+    s.chain_bounds.push_back(pack.chainSphere(c));
+    s.chain_names.push_back(pack.meshName(c));
+  }
+  for (size_t n = 0; n < pack.nodeCount(); ++n) {
+    const scene::PackNodeView nv = pack.node(n);
+    glm::mat4 m;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m[c][r] = nv.local[c * 4 + r];
+    s.node_parent.push_back(nv.parent);
+    s.node_local.push_back(m);
+  }
+  for (size_t o = 0; o < pack.objectCount(); ++o) {
+    const scene::PackObjectView ov = pack.object(o);
+    s.object_node.push_back(static_cast<int32_t>(ov.node));
+    s.object_chain.push_back(ov.chain);
+    s.importance.push_back(ov.importance);
+    s.must_draw.push_back(ov.must_draw ? 1 : 0);
+  }
+  return validateReplayScene(s, path);
+}
+
 Error loadReplayScene(const std::string& path, ReplayScene& out) {
   if (path.rfind("builtin:", 0) == 0) return makeBuiltinScene(path, out);
   const size_t dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? std::string() : path.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == "json") return loadLevelScene(path, out);
-  return Error(Status::kUnsupported, path + ": replay scenes are builtin:NAME or level-scene .json files in this build "
-                                            "(glTF/GLB and packs arrive with the scene import)");
+  if (ext == "pack" || ext == "slod") return loadPackScene(path, out);
+  return Error(Status::kUnsupported, path + ": replay scenes are builtin:NAME, level-scene .json files or LOD packs "
+                                            "(.pack; glTF/GLB once chains can be built in this build)");
 }
 
 }  // namespace scenelod::selection

@@ -88,6 +88,13 @@ class SelectorContext {
   float* slot_px = nullptr;      // projected pixels
   uint8_t* slot_finest = nullptr;  // finest candidate level (the coarsest accurate-enough one)
   uint8_t* slot_must = nullptr;
+  uint32_t* slot_row0 = nullptr;   // first level-table row of the slot's chain
+  int8_t* slot_prev = nullptr;     // last frame's level of the slot's object
+  uint8_t* slot_levels = nullptr;  // level count of the slot's chain
+  // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
+  float* row_cost = nullptr;
+  float* row_inv_w = nullptr;
+  size_t max_rows = 0;
   uint8_t* hull = nullptr;       // hull_stride bytes per slot: levels along the hull, kNotDrawn = -1
   uint8_t* hull_count = nullptr;
   uint8_t* chosen = nullptr;     // index into the slot's hull
@@ -106,39 +113,25 @@ class SelectorContext {
   bool has_history = false;
   bool last_was_budget = false;
   size_t last_slot_count = 0;
-  const float* last_cell_width = nullptr;  // for selectorLastPoint
-  const uint32_t* last_offsets = nullptr;
-  const uint32_t* last_chains = nullptr;
-  const uint32_t* last_tri = nullptr;
-  const uint32_t* last_vert = nullptr;
-  const uint32_t* last_lp = nullptr;
-  float last_h1 = 1.0f;
-  float last_coef[4] = {};
 
-  // per-frame constants, valid during run()
-  float c_tri = 0, c_vert = 0, c_lp = 0;
+  // per-frame constants, valid during run() and until the next one
   float h1 = 1.0f;
-  const LevelTable* table = nullptr;
-  const uint32_t* chains = nullptr;
 
-  uint32_t firstRow(size_t slot) const { return table->chain_level_offset[chains[slot_object[slot]]]; }
+  uint32_t firstRow(size_t slot) const { return slot_row0[slot]; }
 
   // cost of drawing slot `s` at level `l` (-1: not drawn)
   float pointCost(size_t s, int l) const {
     if (l < 0) return 0.0f;
-    const uint32_t row = firstRow(s) + static_cast<uint32_t>(l);
-    return slot_a[s] + (c_tri * static_cast<float>(table->triangle_count[row]) +
-                        c_vert * static_cast<float>(table->vertex_count[row]) +
-                        c_lp * static_cast<float>(table->line_point_count[row]));
+    return slot_a[s] + row_cost[slot_row0[s] + static_cast<uint32_t>(l)];
   }
+  // min(1, X R / (w scale)): 1 for every accurate-enough level (and for w = 0, where 1/w = inf)
   float accuracy(size_t s, int l) const {
-    const float w = table->cell_width[firstRow(s) + static_cast<uint32_t>(l)];
-    return w > 0.0f ? std::min(1.0f, slot_q[s] / w) : 1.0f;
+    return std::min(1.0f, slot_q[s] * row_inv_w[slot_row0[s] + static_cast<uint32_t>(l)]);
   }
   float pointBenefit(size_t s, int l) const {
     if (l < 0) return 0.0f;
     float acc = accuracy(s, l);
-    if (l == prev_level[slot_object[s]]) acc *= h1;
+    if (l == slot_prev[s]) acc *= h1;
     return slot_b[s] * acc;
   }
   int hullLevel(size_t s, size_t k) const {
@@ -167,7 +160,7 @@ Allocator defaultAllocator() {
 SelectorContext* createSelectorContext(const SelectorConfig& config) {
   if (config.max_object_count == 0 || config.max_object_count > 0x7fffffffu) return nullptr;
   if (config.max_levels_per_chain < 1 || config.max_levels_per_chain > 64) return nullptr;
-  if (config.bracket_capacity < 1) return nullptr;
+  if (config.bracket_capacity < 1 || config.max_level_rows < 1 || config.max_level_rows > (size_t(1) << 31)) return nullptr;
   if (!(config.calibration.forgetting > 0.0 && config.calibration.forgetting <= 1.0) ||
       !(config.calibration.prior_weight > 0.0))
     return nullptr;
@@ -178,17 +171,21 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   // one block: the context, then each array aligned to 16 bytes
   size_t offset = alignUp(sizeof(SelectorContext), 16);
   struct Part { size_t bytes; size_t at; };
-  Part parts[14] = {
+  const size_t rows = config.max_level_rows;
+  // per-object parts first (they define the bytes per object), then the fixed ones
+  constexpr size_t kPerObjectParts = 15;
+  Part parts[18] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {0, 0}};
+      {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 13; ++i) {
+  for (size_t i = 0; i < 18; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
-    if (i < 12) per_object += parts[i].bytes;
+    if (i < kPerObjectParts) per_object += parts[i].bytes;
   }
   void* block = alloc.allocate(alloc.user, offset, 64);
   if (!block) return nullptr;
@@ -212,7 +209,13 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->hull_count = base + parts[9].at;
   c->chosen = base + parts[10].at;
   c->heap = reinterpret_cast<HeapEntry*>(base + parts[11].at);
-  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[12].at);
+  c->slot_row0 = reinterpret_cast<uint32_t*>(base + parts[12].at);
+  c->slot_prev = reinterpret_cast<int8_t*>(base + parts[13].at);
+  c->slot_levels = base + parts[14].at;
+  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
+  c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
+  c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
+  c->max_rows = rows;
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
   resetSelectorHistory(c);
@@ -261,30 +264,9 @@ bool selectorLastPoint(const SelectorContext* c, size_t object, int level, doubl
   const uint32_t* it = std::lower_bound(first, last, static_cast<uint32_t>(object));
   if (it == last || *it != object) return false;
   const size_t s = static_cast<size_t>(it - first);
-  const uint32_t row0 = c->last_offsets[c->last_chains[object]];
-  const uint32_t rows = c->last_offsets[c->last_chains[object] + 1] - row0;
-  if (level < -1 || level >= static_cast<int>(rows)) return false;
-  // recompute with last frame's constants (same expressions as run())
-  SelectorContext& m = const_cast<SelectorContext&>(*c);
-  LevelTable t;
-  t.chain_level_offset = Span<const uint32_t>(c->last_offsets, 0);
-  t.cell_width = Span<const float>(c->last_cell_width, 0);
-  t.triangle_count = Span<const uint32_t>(c->last_tri, 0);
-  t.vertex_count = Span<const uint32_t>(c->last_vert, 0);
-  t.line_point_count = Span<const uint32_t>(c->last_lp, 0);
-  const LevelTable* saved_table = m.table;
-  const uint32_t* saved_chains = m.chains;
-  m.table = &t;
-  m.chains = c->last_chains;
-  m.c_tri = c->last_coef[0]; m.c_vert = c->last_coef[1]; m.c_lp = c->last_coef[2];
-  m.h1 = c->last_h1;
-  // prev_level now holds this frame's choice; benefits were computed against the one before, which
-  // is not kept: report the benefit without the hysteresis bonus
-  float acc = level < 0 ? 0.0f : m.accuracy(s, level);
-  *cost_ms = m.pointCost(s, level);
-  *benefit = level < 0 ? 0.0 : static_cast<double>(m.slot_b[s] * acc);
-  m.table = saved_table;
-  m.chains = saved_chains;
+  if (level < -1 || level >= static_cast<int>(c->slot_levels[s])) return false;
+  *cost_ms = c->pointCost(s, level);
+  *benefit = c->pointBenefit(s, level);
   return true;
 }
 
@@ -292,6 +274,7 @@ bool SelectionJob::validate() const {
   if (!context || !camera || !cameraValid(*camera)) return false;
   const size_t n = centers.count;
   if (n > context->max_objects) return false;
+  if (levels.cell_width.count > context->max_rows) return false;
   if (radii.count != n || max_scales.count != n || chains.count != n || levels_out.count != n) return false;
   if ((n > 0 && (!centers.data || !radii.data || !max_scales.data || !chains.data || !levels_out.data))) return false;
   auto optional = [n](size_t count, const void* data) { return count == 0 || (count == n && data); };
@@ -411,13 +394,22 @@ bool SelectionJob::run() {
     if ((ctx.ring_frame[slot] & 0xffffffffu) == f) ctx.calibrator.update(ctx.ring_features[slot], ms);
   }
   const CostCoefficients coef = ctx.calibrator.coefficients();
-  ctx.c_tri = static_cast<float>(coef.per_triangle_ms);
-  ctx.c_vert = static_cast<float>(coef.per_vertex_ms);
-  ctx.c_lp = static_cast<float>(coef.per_line_point_ms);
+  {
+    const float c_tri = static_cast<float>(coef.per_triangle_ms), c_vert = static_cast<float>(coef.per_vertex_ms),
+                c_lp = static_cast<float>(coef.per_line_point_ms);
+    for (size_t r = 0; r < levels.cell_width.count; ++r) {
+      ctx.row_cost[r] = c_tri * static_cast<float>(levels.triangle_count[r]) +
+                        c_vert * static_cast<float>(levels.vertex_count[r]) +
+                        c_lp * static_cast<float>(levels.line_point_count[r]);
+      const float w = levels.cell_width[r];
+      ctx.row_inv_w[r] = w > 0.0f ? 1.0f / w : std::numeric_limits<float>::infinity();
+    }
+  }
   const float c_obj = static_cast<float>(coef.per_object_ms), c_px = static_cast<float>(coef.per_pixel_ms);
   ctx.h1 = 1.0f + params.hysteresis;
-  ctx.table = &levels;
-  ctx.chains = chains.data;
+  const float pixel_factor = pixelSizeFactor(cam);
+  const float ortho_pixel = pixelSize(cam, 0.0f);
+  const bool ortho = cam.projection == Projection::kOrthographic;
 
   const Frustum frustum = computeFrustum(cam);
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
@@ -437,14 +429,18 @@ bool SelectionJob::run() {
       ++culled;
       continue;
     }
-    const glm::vec3 d = c - cam.eye;
-    const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    const float pixel = pixelSize(cam, dist - r);
+    float pixel = ortho_pixel;
+    if (!ortho) {
+      const glm::vec3 d = c - cam.eye;
+      const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+      pixel = std::max(dist - r, cam.near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+    }
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, viewport_px);
     const float q = x_cells * pixel / max_scales[i];
+    // the coarsest level of accuracy 1 (level 0, w = 0, always is)
     int finest = static_cast<int>(level_count) - 1;
-    while (finest > 0 && !(levels.cell_width[row0 + static_cast<uint32_t>(finest)] <= q)) --finest;
+    while (finest > 0 && !(q * ctx.row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
     float b = px;
     if (importance.count) b *= importance[i];
     if (focus.count) b *= focus[i];
@@ -457,6 +453,9 @@ bool SelectionJob::run() {
     ctx.slot_q[s] = q;
     ctx.slot_px[s] = px;
     ctx.slot_finest[s] = static_cast<uint8_t>(finest);
+    ctx.slot_row0[s] = row0;
+    ctx.slot_prev[s] = ctx.prev_level[i];
+    ctx.slot_levels[s] = static_cast<uint8_t>(level_count);
     const bool must = must_draw.count && must_draw[i];
     ctx.slot_must[s] = must ? 1 : 0;
     if (must && budget) {
@@ -478,7 +477,7 @@ bool SelectionJob::run() {
       const uint32_t row0 = levels.chain_level_offset[chains[i]];
       const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
       int level = ctx.slot_finest[s];
-      const int p = ctx.prev_level[i];
+      const int p = ctx.slot_prev[s];
       // hysteresis: a coarser current level stays while it is within the margin
       if (p > level && p < static_cast<int>(level_count) && ctx.accuracy(s, p) * ctx.h1 >= 1.0f) level = p;
       ctx.chosen[s] = static_cast<uint8_t>(level);
@@ -559,21 +558,32 @@ bool SelectionJob::run() {
           }
           guess = c > 0.0 && b > 0.0 ? b / c : 1.0;
         }
-        double lam = guess;
+        // C(lambda) falls from C(0) = all.cost; find hi with C(hi) <= cap by growing steps from the
+        // guess (last frame's price when the camera moves smoothly), then interpolate C linearly
+        // between lo and hi, kept off the ends, until few upgrades remain in (lo, hi]
+        double lam = guess, cost_lo = all.cost, cost_hi = 0.0, step = 1.1;
         while (in_bracket > ctx.bracket_capacity && passes < 64) {
           const PassResult pr = ctx.pass(slots, lam, lo, hi);
           ++passes;
           if (pr.cost <= obj_cap) {
             hi = lam;
+            cost_hi = pr.cost;
             in_bracket = pr.below;
           } else {
             lo = lam;
+            cost_lo = pr.cost;
             in_bracket = pr.above;
           }
+          if (in_bracket <= ctx.bracket_capacity) break;
           double next;
-          if (hi == inf) next = lo * 4.0;
-          else if (lo == 0.0) next = hi * 0.25;
-          else next = std::sqrt(lo * hi);
+          if (hi == inf) {
+            next = lo * step;
+            step *= step;
+          } else {
+            double t = cost_lo > cost_hi ? (cost_lo - obj_cap) / (cost_lo - cost_hi) : 0.5;
+            t = std::min(0.9, std::max(0.1, t));
+            next = lo + t * (hi - lo);
+          }
           if (!(next > lo && next < hi)) break;  // no double strictly inside: all ties
           lam = next;
         }
@@ -668,7 +678,7 @@ bool SelectionJob::run() {
       if (ctx.slot_b[s] > 0.0f) ++st.dropped_count;
       continue;
     }
-    const uint32_t row = ctx.firstRow(s) + static_cast<uint32_t>(level);
+    const uint32_t row = ctx.slot_row0[s] + static_cast<uint32_t>(level);
     const float cost = ctx.pointCost(s, level);
     predicted += cost;
     benefit += ctx.pointBenefit(s, level);
@@ -701,14 +711,6 @@ bool SelectionJob::run() {
   ctx.has_history = true;
   ctx.last_was_budget = budget;
   ctx.last_slot_count = slots;
-  ctx.last_offsets = levels.chain_level_offset.data;
-  ctx.last_cell_width = levels.cell_width.data;
-  ctx.last_tri = levels.triangle_count.data;
-  ctx.last_vert = levels.vertex_count.data;
-  ctx.last_lp = levels.line_point_count.data;
-  ctx.last_chains = chains.data;
-  ctx.last_h1 = ctx.h1;
-  ctx.last_coef[0] = ctx.c_tri; ctx.last_coef[1] = ctx.c_vert; ctx.last_coef[2] = ctx.c_lp;
   ++ctx.frame;
   if (stats) *stats = st;
   return true;

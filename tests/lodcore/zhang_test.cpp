@@ -1,5 +1,6 @@
 #include "scenelod/lodcore/zhang.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -9,6 +10,9 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+
+#include "scenelod/lodcore/obj_io.h"
+#include "test_support.h"
 
 using namespace scenelod;
 
@@ -137,15 +141,18 @@ void expectClosedManifold(const Mesh& m) {
 }
 
 long eulerCharacteristic(const Mesh& m) {
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  std::set<uint32_t> verts;
+  std::vector<uint64_t> edges;
+  std::vector<uint32_t> verts(m.triangles);
   for (size_t t = 0; t < m.triangleCount(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const uint32_t a = m.triangles[3 * t + k], b = m.triangles[3 * t + (k + 1) % 3];
-      edges.insert(std::minmax(a, b));
-      verts.insert(a);
+      const auto e = std::minmax(m.triangles[3 * t + k], m.triangles[3 * t + (k + 1) % 3]);
+      edges.push_back(uint64_t(e.first) << 32 | e.second);
     }
-  return static_cast<long>(verts.size()) - static_cast<long>(edges.size()) + static_cast<long>(m.triangleCount());
+  std::sort(edges.begin(), edges.end());
+  std::sort(verts.begin(), verts.end());
+  const long e = std::unique(edges.begin(), edges.end()) - edges.begin();
+  const long v = std::unique(verts.begin(), verts.end()) - verts.begin();
+  return v - e + static_cast<long>(m.triangleCount());
 }
 
 const ZhangVertexMeasures& measureOf(const std::vector<ZhangVertexMeasures>& all, size_t v) { return all.at(v); }
@@ -387,29 +394,83 @@ TEST(ZhangTriangleDecimation, SphereReachesTargetClosed) {
   }
 }
 
-TEST(ZhangBadInput, NonManifoldBoundariesIsolatedAndDuplicates) {
+TEST(ZhangBadInput, NonManifoldEdgeIsKeptAndResultValid) {
   Mesh in = flatGrid(6);
-  const uint32_t base = static_cast<uint32_t>(in.positions.size());
-  // a fin on an interior edge (non-manifold), an isolated vertex, a duplicate and a degenerate triangle
+  const uint32_t apex = static_cast<uint32_t>(in.positions.size());
   in.positions.push_back({3.5f, 3.5f, 1.0f});
-  in.positions.push_back({100.0f, 100.0f, 100.0f});
-  const uint32_t a = 3 * 7 + 3, c = a + 8;  // the diagonal of an interior quad
-  in.triangles.insert(in.triangles.end(), {a, c, base});
-  in.triangles.insert(in.triangles.end(), {in.triangles[30], in.triangles[31], in.triangles[32]});
-  in.triangles.insert(in.triangles.end(), {in.triangles[33], in.triangles[35], in.triangles[34]});  // reversed
-  in.triangles.insert(in.triangles.end(), {1, 1, 2});
+  const uint32_t a = 3 * 7 + 3, c = a + 8;  // the diagonal of an interior quad: now on 3 triangles
+  in.triangles.insert(in.triangles.end(), {a, c, apex});
+  std::vector<ZhangVertexMeasures> ms;
+  ASSERT_TRUE(computeZhangMeasures(in, ZhangParams{}, ms).ok());
+  EXPECT_EQ(ms[a].vertex_class, ZhangVertexClass::kComplex);
+  EXPECT_EQ(ms[c].vertex_class, ZhangVertexClass::kComplex);
   Mesh out;
   ZhangStats st;
   ASSERT_TRUE(simplifyZhang(in, 10, ZhangParams{}, out, &st).ok());
-  EXPECT_EQ(st.dropped_degenerate, 1u);
-  EXPECT_EQ(st.dropped_duplicate, 2u);
   expectValid(out);
-  for (const glm::vec3& q : out.positions) EXPECT_NE(q.x, 100.0f) << "isolated vertex dropped";
-  // the fin's apex and the edge it stands on are complex/kept, so the fin survives
-  bool apex = false;
-  for (const glm::vec3& q : out.positions) apex |= q == glm::vec3(3.5f, 3.5f, 1.0f);
-  EXPECT_TRUE(apex);
   EXPECT_LT(out.triangleCount(), in.triangleCount());
+  // the fin's apex (an edge vertex) and the two complex vertices it stands on stay where they were
+  size_t found = 0;
+  for (const glm::vec3& q : out.positions)
+    found += q == in.positions[apex] || q == in.positions[a] || q == in.positions[c];
+  EXPECT_EQ(found, 3u);
+}
+
+TEST(ZhangBadInput, IsolatedVerticesAreDropped) {
+  Mesh in = icosphere(2);
+  const size_t original_vertices = in.positions.size();
+  in.positions.push_back({100.0f, 100.0f, 100.0f});
+  in.positions.insert(in.positions.begin() + 0, glm::vec3(-50.0f));  // shift every index by one
+  for (uint32_t& i : in.triangles) ++i;
+  Mesh out;
+  ASSERT_TRUE(simplifyZhang(in, 100, ZhangParams{}, out).ok());
+  expectValid(out);
+  expectClosedManifold(out);
+  EXPECT_LT(out.vertexCount(), original_vertices);
+  for (const glm::vec3& q : out.positions) EXPECT_LT(glm::length(q), 1.5f) << "an isolated vertex survived";
+}
+
+TEST(ZhangBadInput, DuplicateAndDegenerateTrianglesAreDropped) {
+  Mesh in = icosphere(2);  // 320 triangles
+  const std::vector<uint32_t> first(in.triangles.begin(), in.triangles.begin() + 6);
+  in.triangles.insert(in.triangles.end(), first.begin(), first.begin() + 3);           // same orientation
+  in.triangles.insert(in.triangles.end(), {first[3], first[5], first[4]});            // reversed
+  in.triangles.insert(in.triangles.end(), {first[0], first[0], first[1]});            // repeated index
+  Mesh out;
+  ZhangStats st;
+  ASSERT_TRUE(simplifyZhang(in, 100, ZhangParams{}, out, &st).ok());
+  EXPECT_EQ(st.dropped_duplicate, 2u);
+  EXPECT_EQ(st.dropped_degenerate, 1u);
+  EXPECT_EQ(st.input_triangles, 320u);
+  EXPECT_LE(out.triangleCount(), 100u);
+  expectValid(out);
+  expectClosedManifold(out);  // with the duplicates removed the sphere is closed again
+}
+
+TEST(ZhangBadInput, OpenMeshWithHoleKeepsItsBorders) {
+  // a sphere with a hole: the hole's rim is an edge-vertex loop and must come out unmoved
+  Mesh in = icosphere(3);
+  std::vector<uint32_t> kept;
+  for (size_t t = 0; t < in.triangleCount(); ++t) {
+    const glm::vec3 c = in.positions[in.triangles[3 * t]];
+    if (c.z > 0.9f) continue;  // cut a cap off
+    kept.insert(kept.end(), in.triangles.begin() + 3 * t, in.triangles.begin() + 3 * t + 3);
+  }
+  in.triangles = kept;
+  std::vector<ZhangVertexMeasures> ms;
+  ASSERT_TRUE(computeZhangMeasures(in, ZhangParams{}, ms).ok());
+  std::vector<glm::vec3> rim;
+  for (size_t v = 0; v < ms.size(); ++v)
+    if (ms[v].vertex_class == ZhangVertexClass::kEdge) rim.push_back(in.positions[v]);
+  ASSERT_GT(rim.size(), 4u);
+  Mesh out;
+  ASSERT_TRUE(simplifyZhang(in, in.triangleCount() / 5, ZhangParams{}, out).ok());
+  expectValid(out);
+  for (const glm::vec3& r : rim) {
+    bool present = false;
+    for (const glm::vec3& q : out.positions) present |= q == r;
+    EXPECT_TRUE(present) << "rim vertex moved or lost";
+  }
 }
 
 TEST(ZhangBadInput, ClearErrors) {
@@ -469,4 +530,36 @@ TEST(ZhangChain, LevelsHalveAndWidthsIncrease) {
     expectClosedManifold(l.mesh);
   }
   EXPECT_NEAR(zhangEquivalentCellWidth(std::sqrt(3.0f)), 2.0f, 1e-6f);
+}
+
+TEST(ZhangEdgeCollapse, NeighbourPlacementKeepsInputPositions) {
+  const Mesh in = icosphere(3);
+  for (ZhangMode mode : {ZhangMode::kEdgeCollapse, ZhangMode::kTriangleDecimation}) {
+    ZhangParams p;
+    p.placement = ZhangPlacement::kNeighbour;
+    p.mode = mode;
+    Mesh out;
+    ASSERT_TRUE(simplifyZhang(in, 300, p, out).ok());
+    EXPECT_LE(out.triangleCount(), 300u);
+    expectValid(out);
+    expectClosedManifold(out);
+    std::set<std::tuple<float, float, float>> original;
+    for (const glm::vec3& q : in.positions) original.insert({q.x, q.y, q.z});
+    for (const glm::vec3& q : out.positions) EXPECT_TRUE(original.count({q.x, q.y, q.z})) << "moved vertex";
+  }
+}
+
+TEST(ZhangEdgeCollapse, BunnyToTenPercentStaysClosed) {
+  SCENELOD_REQUIRE_BUNNY();
+  Mesh in;
+  ASSERT_TRUE(readObj(test::bunnyPath(), in).ok());
+  const long chi = eulerCharacteristic(in);
+  Mesh out;
+  ZhangStats st;
+  ASSERT_TRUE(simplifyZhang(in, in.triangleCount() / 10, ZhangParams{}, out, &st).ok());
+  EXPECT_EQ(st.stop_reason, ZhangStopReason::kTargetReached);
+  EXPECT_LE(out.triangleCount(), in.triangleCount() / 10);
+  expectValid(out);
+  expectClosedManifold(out);
+  EXPECT_EQ(eulerCharacteristic(out), chi);
 }

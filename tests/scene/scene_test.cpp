@@ -271,3 +271,62 @@ TEST(Scene, UpdateOnlyRecomputesMovedObjects) {
   EXPECT_FLOAT_EQ(s.worldCenters()[0].x, 1.0f);
   EXPECT_FLOAT_EQ(s.worldCenters()[1].x, 0.0f);
 }
+
+TEST(Scene, RandomEditsKeepWorldSpheresAndHandlesConsistent) {
+  std::mt19937 rng(23);
+  Scene s;
+  s.setChainCount(3);
+  for (uint32_t c = 0; c < 3; ++c) ASSERT_TRUE(s.setChainSphere(c, Sphere{{0.5f * c, 0.0f, -0.25f}, 1.0f + c}).ok());
+  std::vector<NodeHandle> live_nodes, dead_nodes;
+  std::vector<ObjectHandle> live_objects, dead_objects;
+  auto pick = [&](auto& v) { return v[rng() % v.size()]; };
+  for (int step = 0; step < 600; ++step) {
+    const int op = int(rng() % 10);
+    if (op < 3 || live_nodes.size() < 3) {
+      NodeHandle h;
+      ASSERT_TRUE(s.addNode(live_nodes.empty() || rng() % 4 == 0 ? NodeHandle{} : pick(live_nodes), randomAffine(rng, rng() % 3 == 0), h).ok());
+      live_nodes.push_back(h);
+      ObjectHandle o;
+      ASSERT_TRUE(s.addObject(ObjectDesc{h, uint32_t(rng() % 3), 1.0f, false, uint64_t(step)}, o).ok());
+      live_objects.push_back(o);
+    } else if (op == 3) {
+      ASSERT_TRUE(s.setLocal(pick(live_nodes), randomAffine(rng, true)).ok());
+    } else if (op == 4) {
+      s.reparent(pick(live_nodes), rng() % 3 == 0 ? NodeHandle{} : pick(live_nodes));  // cycles are refused
+    } else if (op == 5 && !live_objects.empty()) {
+      const size_t i = rng() % live_objects.size();
+      ASSERT_TRUE(s.removeObject(live_objects[i]).ok());
+      dead_objects.push_back(live_objects[i]);
+      live_objects.erase(live_objects.begin() + i);
+    } else if (op == 6) {
+      ASSERT_TRUE(s.removeNode(pick(live_nodes)).ok());
+      // the subtree and its objects went with it
+      std::vector<NodeHandle> keep;
+      for (NodeHandle h : live_nodes) (s.isValid(h) ? keep : dead_nodes).push_back(h);
+      live_nodes.swap(keep);
+      std::vector<ObjectHandle> keep_objects;
+      for (ObjectHandle h : live_objects) (s.isValid(h) ? keep_objects : dead_objects).push_back(h);
+      live_objects.swap(keep_objects);
+    } else if (op == 7 && !live_objects.empty()) {
+      ASSERT_TRUE(s.setObjectNode(pick(live_objects), pick(live_nodes)).ok());
+    } else {
+      s.update();
+    }
+    if (step % 50 != 49) continue;
+    s.update();
+    ASSERT_EQ(s.nodeCount(), live_nodes.size());
+    ASSERT_EQ(s.objectCount(), live_objects.size());
+    for (ObjectHandle o : live_objects) {
+      ObjectDesc d;
+      ASSERT_TRUE(s.getObject(o, d).ok());
+      size_t k;
+      ASSERT_TRUE(s.objectIndex(o, k).ok());
+      const glm::mat4 w = bruteWorld(s, d.node);
+      const Sphere expect = transformSphere(s.chainSpheres()[d.chain], w);
+      EXPECT_NEAR(glm::length(s.worldCenters()[k] - expect.center), 0.0f, 1e-3f * (1.0f + glm::length(expect.center)));
+      EXPECT_NEAR(s.worldRadii()[k], expect.radius, 1e-4f * expect.radius);
+    }
+    for (NodeHandle h : dead_nodes) EXPECT_EQ(s.setLocal(h, glm::mat4(1.0f)).status, Status::kNotFound);
+    for (ObjectHandle h : dead_objects) EXPECT_EQ(s.setImportance(h, 1.0f).status, Status::kNotFound);
+  }
+}

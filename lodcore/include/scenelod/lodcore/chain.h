@@ -3,6 +3,7 @@
 // the original (Low & Tan §3.2.2), levels are built in parallel with TBB and the result does not
 // depend on the thread count.
 #include <cstddef>
+#include <vector>
 
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/lod_chain.h"
@@ -20,14 +21,37 @@ struct ChainParams {
 };
 
 // Builds level 0 (a copy of `original`) and `level_count` simplified levels with cell widths
-// w_k = w_1 * growth^(k-1). Levels that come out identical in counts to the previous one are kept,
-// so level indices always match cell widths. Errors: as clusterMesh, plus level_count of 0 with an
-// explicit width <= 0. An empty mesh gives a chain with only level 0. Allocates; uses TBB.
-Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out);
+// w_k = w_1 * growth^(k-1), dispatching on params.cluster.method (kUniform, kFloatingHeaviest,
+// kFloatingNearest; kZhang goes to buildZhangChain; generators not built yet return kUnsupported;
+// ChainStats are only filled for the clustering methods). Each level records
+// its cell width, its measured maximum vertex displacement and a bounding sphere (centre of the
+// level's vertex box, radius to the farthest vertex). Levels that come out identical in counts to
+// the previous one are kept, so level indices always match cell widths.
+// Errors: invalid mesh (as validateMesh), first_cell_width negative or not finite, growth not finite
+// or <= 1, a method that is not a generator. An empty mesh, or level_count 0, gives a chain with only
+// level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB.
+Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, struct ChainStats* stats = nullptr);
 
-// Finds by bisection a cell width whose clustering gives a triangle count within `tolerance`
-// (relative) of `target_triangles`, or the closest found. Errors: target 0, empty mesh.
+// Where a chain's build time went (filled by buildChain when asked).
+struct ChainStats {
+  double prepare_seconds = 0.0;       // validation, grading and the sort by weight
+  double first_width_seconds = 0.0;   // the search for w_1 (0 when given)
+  std::vector<double> level_seconds;  // per simplified level (levels run in parallel: these overlap)
+  double total_seconds = 0.0;         // wall time of the whole call
+};
+
+// Finds by bisection (on log width) a cell width whose clustering gives a triangle count within
+// `tolerance` (relative) of `target_triangles`, or the closest found. Errors: target 0, empty mesh
+// (no triangles), invalid mesh, a method that is not a clustering method. Cost: O(V log V) once,
+// then about 20-40 O(V + T) counting passes.
 Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, size_t target_triangles,
                              float& cell_width, double tolerance = 0.02);
+
+// The same search on an already prepared mesh (no re-grading).
+Error findCellWidthForTarget(const PreparedMesh& prepared, const ClusterParams& params, size_t target_triangles,
+                             float& cell_width, double tolerance = 0.02);
+
+// Bounding sphere of a mesh's vertices: centre of their box, radius to the farthest one. Cost O(V).
+Sphere computeBoundingSphere(const Mesh& mesh);
 
 }  // namespace scenelod

@@ -2,8 +2,16 @@
 // Vertex-clustering simplification of one mesh at one cell width: Rossignac & Borrel 1993 uniform
 // subdivision (the baseline) and Low & Tan 1997 floating cells (§3.2, §4), with the nearest-centre
 // variant (§3.2.3), cube or sphere cells, thick edges (§3.3.1).
+//
+// Pipeline (docs/CLUSTERING.md): grade every vertex, sort by weight (once per mesh: PreparedMesh),
+// assign vertices to cells, synthesise one representative per cluster, eliminate degenerate and
+// duplicate primitives into triangles / thick edges / points, recompute normals and colours.
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/mesh.h"
@@ -36,7 +44,73 @@ struct ClusterParams {
   float cell_width = 0.0f;         // object space, finite and > 0
   bool keep_edges = true;          // triangles collapsed to two clusters become thick edges
   bool keep_points = true;         // triangles collapsed to one cluster become points
+  bool boost_features = true;      // grading: boundary and crease vertices get a higher angular factor
+  float crease_angle_deg = 60.0f;  // output normals: faces meeting at a larger angle do not share normals
 };
+
+// A mesh graded and sorted by weight once, so that every level of a chain reuses the sort (§4).
+// Holds a pointer to the mesh it was made from: that mesh must outlive it and stay unchanged.
+struct PreparedMesh {
+  const Mesh* mesh = nullptr;
+  Grading grading = Grading::kLowTan;
+  bool boost_features = true;
+  std::vector<float> weights;    // one per vertex: angular factor x (longest incident edge / longest edge)
+  std::vector<uint32_t> order;   // referenced vertices only, heaviest first, ties by vertex index
+  std::vector<glm::vec3> sorted_positions;  // positions[order[i]], so that levels stream through them
+  Aabb bounds;                   // of the referenced vertices
+  float longest_edge = 0.0f;     // longest edge of the mesh (the length normaliser)
+  float mean_edge_length = 0.0f;
+  double surface_area = 0.0;     // of all triangles (sizes the per-level grid hash)
+
+  size_t referencedVertexCount() const { return order.size(); }
+};
+
+// Per-vertex grading only. `angular` (optional, may be null) receives the angular factor alone:
+// cos(theta/2) for kLowTan (0 for a flat interior vertex, where theta = pi), pi/theta for kRossignac;
+// with boost_features, max(that, 0.5 on a boundary, (1 - cos(dihedral))/2 at a crease) for kLowTan.
+// `weights` gets angular x (longest incident edge / longest edge of the mesh); `raw` (optional) the
+// unnormalised angular x longest incident edge, which orders vertices the same way. A vertex with no
+// incident edge of non-zero length weighs 0. Precondition: `mesh` is valid (validateMesh).
+// Cost: O(sum of vertex degrees^2) time (degrees above 64 use an O(degree) estimate of theta),
+// O(V + T) temporary memory; parallel over vertices with TBB.
+void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::vector<float>& weights,
+                   std::vector<float>* angular = nullptr, float* longest_edge = nullptr,
+                   std::vector<float>* raw = nullptr);
+
+// Validates `in`, grades its vertices and sorts the referenced ones by weight. `what` names the mesh
+// in error messages. Errors: invalid mesh (NaN, index out of range, size mismatch).
+// Cost: O(V log V) for the sort; allocates weights, order and sorted positions (20 bytes per vertex).
+Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out,
+                  const std::string& what = "mesh");
+
+// Which cluster every vertex joined at one cell width (for tests, diagnostics and other generators).
+struct ClusterAssignment {
+  std::vector<uint32_t> cluster_of;  // per vertex; UINT32_MAX for vertices no primitive references
+  std::vector<uint32_t> heaviest;    // per cluster: its heaviest vertex (a floating cell's centre)
+};
+
+// Runs only the clustering step of clusterPrepared. Same errors. Cost: O(V) time and memory.
+Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, ClusterAssignment& out);
+
+// Numbers measured while clustering one level.
+struct ClusterStats {
+  size_t cluster_count = 0;       // clusters (cells holding at least one referenced vertex)
+  float max_error = 0.0f;         // largest distance an input vertex moved to its representative
+  size_t collapsed_triangles = 0; // input triangles that became edges or points
+};
+
+// Simplifies a prepared mesh at params.cell_width (params.grading and boost_features are those of
+// the preparation). Writes positions, normals (crease-aware: a vertex is split where faces meet at
+// more than crease_angle_deg), colours (area-weighted, when the input has colours), triangles, thick
+// edges and points into `out`; uvs are dropped. Errors: cell width not finite or <= 0, or too small
+// for the mesh extent (more than 2^30 cells along an axis), method not a clustering method.
+// Thread-safe for distinct `out`. Cost: O(V + T) time and memory per call.
+Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out,
+                      ClusterStats* stats = nullptr);
+
+// Counts the triangles clusterPrepared would output at `cell_width`, without synthesis or normals
+// (used by width searches). Same errors. Cost: O(V + T).
+Error countClusteredTriangles(const PreparedMesh& prepared, const ClusterParams& params, size_t& triangle_count);
 
 // Simplifies `in` (triangles, and its edges and points) at one cell width into `out`.
 // `out` gets positions, normals (crease-aware), colours (area-weighted) of the representatives and

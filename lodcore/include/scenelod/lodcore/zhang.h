@@ -39,12 +39,20 @@ enum class ZhangMode : uint8_t {
   kTriangleDecimation,  // "Extension of algorithm": triangle queue, triangle contracted to a point
 };
 
+// Where the merged vertex goes.
+enum class ZhangPlacement : uint8_t {
+  kInterpolated,  // the paper: position and normal interpolated by the CA of the merged vertices
+  kNeighbour,     // onto the chosen neighbour V_j (a half-edge collapse; measured lower error)
+};
+
 const char* zhangInfluenceName(ZhangInfluence i);
+const char* zhangPlacementName(ZhangPlacement p);
 const char* zhangModeName(ZhangMode m);
 
 struct ZhangParams {
   ZhangMode mode = ZhangMode::kEdgeCollapse;
   ZhangInfluence influence = ZhangInfluence::kVisionCharacteristic;
+  ZhangPlacement placement = ZhangPlacement::kInterpolated;
   // largest angle between a vertex normal and an adjacent face normal for a simple vertex
   float feature_angle_deg = 30.0f;
   // super height over the mean distance to the neighbours above which a feature vertex is an angle
@@ -86,6 +94,7 @@ struct ZhangStats {
   size_t collapses = 0;         // edge collapses or triangle contractions done
   size_t rejected_topology = 0; // candidates refused by the link / manifold checks
   size_t rejected_fold = 0;     // candidates refused by the fold-over check
+  size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
   float max_displacement = 0.0f;  // largest distance an input vertex moved to its representative

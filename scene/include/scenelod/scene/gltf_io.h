@@ -30,13 +30,14 @@ Error importGltf(const std::string& path, SceneData& out);
 // written by exportGlb with chains comes back as the scene and chains that were written. A level's
 // cell width, error and method come from its node's extras.scenelod; without them the cell width
 // follows from MSFT_screencoverage (see kCoverageCellPixels). A mesh without MSFT_lod gets a
-// one-level chain (its own mesh). Level bounds are recomputed.
+// one-level chain (its own mesh). Level bounds are recomputed (computeChainBounds).
 Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodChain>& chains);
 
 // MSFT_screencoverage as written and read here (docs/IO.md): coverage = projected bounding-sphere
 // diameter / viewport height. Level k (cell width w_k) is accurate enough while one cell projects to
 // at most kCoverageCellPixels pixels on a kCoverageViewportPx-pixel-high viewport, that is while
-// coverage <= 2 r X / (w_k H) with r the level-0 bounding-sphere radius (the field of view cancels).
+// coverage <= 2 r X / (w_k H) with r the radius of the minimal sphere of level 0's vertices (the
+// field of view cancels).
 // The value stored for level i is that bound for level i + 1 (where level i stops being needed);
 // the last level's value is 0 (it is drawn down to any size).
 constexpr float kCoverageCellPixels = 1.0f;

@@ -147,7 +147,7 @@ class Scene {
  private:
   bool nodeLive(NodeHandle h) const;
   bool objectLive(ObjectHandle h) const;
-  void rebuildParentIndices();
+  void rebuildParentIndices();  // also refreshes object_node_dense_
 
   // node slots (stable, indexed by handle slot)
   std::vector<uint32_t> node_generation_;  // 4 B: bumped on removal
@@ -169,7 +169,7 @@ class Scene {
   std::vector<float> world_radius_;        // 4 B: world sphere radius
   std::vector<float> max_scale_;           // 4 B: maxScaleBound of the node's world matrix
   std::vector<uint32_t> object_chain_;     // 4 B: chain id
-  std::vector<uint32_t> object_node_slot_; // 4 B: node slot (sphere pass)
+  std::vector<uint32_t> object_node_dense_; // 4 B: the node's position in the update order (sphere pass)
   std::vector<uint8_t> object_dirty_;      // 1 B: sphere must be recomputed
   // read by selection:
   std::vector<float> importance_;          // 4 B
@@ -177,6 +177,7 @@ class Scene {
   // cold:
   std::vector<uint64_t> user_data_;        // 8 B: engine id
   std::vector<uint32_t> object_slot_;      // 4 B: slot of the object at this dense index
+  std::vector<uint32_t> object_node_slot_; // 4 B: node slot (handles; refreshes object_node_dense_)
 
   std::vector<Sphere> chain_spheres_;      // object space, per chain id
   bool all_objects_dirty_ = false;

@@ -29,6 +29,10 @@ struct Camera {
 // clamped to it. Cost: a few flops, no allocation, thread-safe.
 float pixelSize(const Camera& camera, float distance);
 
+// The factor 2 * tan(FOV/2) / viewport height of a perspective camera (pixelSize is
+// max(distance, near) times it), or 0 for an orthographic one. Selection hoists it out of its loop.
+float pixelSizeFactor(const Camera& camera);
+
 // True when the camera can be used: finite eye/target/up, eye != target, up not parallel to the view
 // direction, 0 < fov < pi, 0 < near < far, viewport at least 1x1, ortho_height > 0.
 bool cameraValid(const Camera& camera);

@@ -71,8 +71,11 @@ Error replaySceneFromSceneData(const scene::SceneData& scene_data, const std::ve
 Error loadLevelScene(const std::string& path, ReplayScene& out);
 Error writeLevelScene(const std::string& path, const ReplayScene& scene);
 
-// Loads any scene a replay may name: "builtin:NAME", a level-scene .json, or a glTF/GLB/OBJ file
-// (imported, then its chains built with default parameters). Errors name the file.
+// A LOD pack (scene/pack.h): its nodes, objects (importance, must-draw) and chains' level rows.
+Error loadPackScene(const std::string& path, ReplayScene& out);
+
+// Loads any scene a replay may name: "builtin:NAME", a level-scene .json or a LOD pack (.pack).
+// Errors name the file.
 Error loadReplayScene(const std::string& path, ReplayScene& out);
 
 }  // namespace scenelod::selection

@@ -99,7 +99,8 @@ class SelectorContext;
 struct SelectorConfig {
   size_t max_object_count = 0;       // > 0
   size_t max_levels_per_chain = 16;  // 1..64
-  size_t bracket_capacity = 4096;    // upgrades sorted at the budget's edge by the Lagrangian form
+  size_t max_level_rows = 65536;     // rows of the level table (all chains' levels together)
+  size_t bracket_capacity = 2048;    // upgrades sorted at the budget's edge by the Lagrangian form
   CostCoefficients initial_cost;
   CalibrationParams calibration;
   Allocator allocator;               // null functions = defaultAllocator()
@@ -128,7 +129,7 @@ void reportFrameTime(SelectorContext* context, uint64_t frame, float measured_ms
 
 // Predicted cost and benefit (hysteresis included) the last run() gave `object` at `level` (-1 = not
 // drawn) in budget mode. Returns false when the object was culled, the level is out of range, or
-// the last run was not in budget mode. For tests and tools.
+// the last run was not in budget mode. Needs nothing of the last run's inputs. For tests and tools.
 bool selectorLastPoint(const SelectorContext* context, size_t object, int level, double* cost_ms,
                        double* benefit);
 
@@ -152,8 +153,8 @@ struct SelectionJob {
   SelectionStats* stats = nullptr;      // may be null
   SelectorContext* context = nullptr;
 
-  // False on a null context or camera, an invalid camera, spans of the wrong size, more objects than
-  // the context holds, a malformed level table (offsets, more levels than max_levels_per_chain,
+  // False on a null context or camera, an invalid camera, spans of the wrong size, more objects or
+  // level rows than the context holds, a malformed level table (offsets, more levels than max_levels_per_chain,
   // decreasing or non-finite widths), a chain id out of range, non-positive budget in budget mode or
   // non-positive pixels_per_cell. Cost: O(objects + rows).
   bool validate() const;

@@ -1,0 +1,303 @@
+// Vertex clustering (Low & Tan 1997 floating cells; Rossignac & Borrel uniform grid) against
+// meshoptimizer's meshopt_simplifySloppy and meshopt_simplify, in the same process on the same mesh.
+// Peak extra memory is measured by counting every operator new/delete of this program.
+#include <malloc.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <meshoptimizer.h>
+#include <tbb/global_control.h>
+
+#include "scenelod/lodcore/chain.h"
+#include "scenelod/lodcore/cluster.h"
+#include "scenelod/lodcore/obj_io.h"
+
+// ---- allocation counting (current and peak bytes through operator new) ----
+namespace {
+std::atomic<long long> g_current{0};
+std::atomic<long long> g_peak{0};
+
+void noteAlloc(void* p) {
+  if (!p) return;
+  const long long now = g_current.fetch_add(static_cast<long long>(malloc_usable_size(p))) +
+                        static_cast<long long>(malloc_usable_size(p));
+  long long peak = g_peak.load();
+  while (now > peak && !g_peak.compare_exchange_weak(peak, now)) {
+  }
+}
+void noteFree(void* p) {
+  if (p) g_current.fetch_sub(static_cast<long long>(malloc_usable_size(p)));
+}
+void* countedAlloc(size_t n) {
+  void* p = std::malloc(n ? n : 1);
+  if (!p) throw std::bad_alloc();
+  noteAlloc(p);
+  return p;
+}
+void* countedAlignedAlloc(size_t n, std::align_val_t al) {
+  void* p = nullptr;
+  if (posix_memalign(&p, static_cast<size_t>(al), n ? n : 1) != 0) throw std::bad_alloc();
+  noteAlloc(p);
+  return p;
+}
+void countedFree(void* p) {
+  noteFree(p);
+  std::free(p);
+}
+}  // namespace
+
+void* operator new(size_t n) { return countedAlloc(n); }
+void* operator new[](size_t n) { return countedAlloc(n); }
+void* operator new(size_t n, std::align_val_t al) { return countedAlignedAlloc(n, al); }
+void* operator new[](size_t n, std::align_val_t al) { return countedAlignedAlloc(n, al); }
+void operator delete(void* p) noexcept { countedFree(p); }
+void operator delete[](void* p) noexcept { countedFree(p); }
+void operator delete(void* p, size_t) noexcept { countedFree(p); }
+void operator delete[](void* p, size_t) noexcept { countedFree(p); }
+void operator delete(void* p, std::align_val_t) noexcept { countedFree(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { countedFree(p); }
+void operator delete(void* p, size_t, std::align_val_t) noexcept { countedFree(p); }
+void operator delete[](void* p, size_t, std::align_val_t) noexcept { countedFree(p); }
+
+using namespace scenelod;
+
+namespace {
+
+const Mesh& bunny() {
+  static Mesh m = [] {
+    Mesh b;
+    if (Error e = readObj(SCENELOD_BUNNY_PATH, b)) {
+      std::fprintf(stderr, "cluster_bench: %s\n", e.message.c_str());
+      std::exit(1);
+    }
+    return b;
+  }();
+  return m;
+}
+
+// UV sphere with bumps: rings x segments quads, about 2 x rings x segments triangles
+Mesh bumpySphere(int rings, int segments) {
+  Mesh m;
+  const float pi = 3.14159265358979f;
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const float th = pi * float(r) / float(rings), ph = 2.0f * pi * float(s) / float(segments);
+      const float rad = 1.0f + 0.05f * std::sin(9.0f * th) * std::cos(7.0f * ph);
+      m.positions.push_back(rad * glm::vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const uint32_t a = uint32_t(r * segments + s), b = uint32_t(r * segments + (s + 1) % segments);
+      const uint32_t c = b + uint32_t(segments), d = a + uint32_t(segments);
+      if (r > 0) m.triangles.insert(m.triangles.end(), {a, d, b});
+      if (r + 1 < rings) m.triangles.insert(m.triangles.end(), {b, d, c});
+    }
+  return m;
+}
+
+const Mesh& bigMesh() {
+  static Mesh m = bumpySphere(720, 720);  // 1,035,360 triangles
+  return m;
+}
+
+struct Prepared {
+  PreparedMesh p;
+  ClusterParams params;
+  size_t triangles = 0;
+};
+
+// a prepared mesh and the cell width that keeps about `fraction` of its triangles
+Prepared& prepared(const Mesh& m, double fraction, ClusterParams params = ClusterParams()) {
+  static std::vector<std::pair<std::pair<const Mesh*, double>, Prepared*>> cache;
+  for (auto& c : cache)
+    if (c.first.first == &m && c.first.second == fraction && c.second->params.method == params.method)
+      return *c.second;
+  Prepared* pr = new Prepared;
+  pr->params = params;
+  prepareMesh(m, params, pr->p);
+  findCellWidthForTarget(pr->p, params, size_t(double(m.triangleCount()) * fraction), pr->params.cell_width, 0.01);
+  Mesh out;
+  clusterPrepared(pr->p, pr->params, out);
+  pr->triangles = out.triangleCount();
+  cache.push_back({{&m, fraction}, pr});
+  return *pr;
+}
+
+void reportTriangles(benchmark::State& state, const Mesh& in, size_t out_triangles) {
+  state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(in.triangleCount()));
+  state.counters["in_tris"] = double(in.triangleCount());
+  state.counters["out_tris"] = double(out_triangles);
+}
+
+void BM_FloatingLevel_Bunny(benchmark::State& state) {
+  const double fraction = double(state.range(0)) / 100.0;
+  Prepared& pr = prepared(bunny(), fraction);
+  Mesh out;
+  for (auto _ : state) {
+    clusterPrepared(pr.p, pr.params, out);
+    benchmark::DoNotOptimize(out.triangles.data());
+  }
+  reportTriangles(state, bunny(), out.triangleCount());
+  state.counters["cell_width"] = pr.params.cell_width;
+}
+BENCHMARK(BM_FloatingLevel_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
+
+void BM_UniformLevel_Bunny(benchmark::State& state) {
+  ClusterParams params;
+  params.method = LodMethod::kUniform;
+  Prepared& pr = prepared(bunny(), double(state.range(0)) / 100.0, params);
+  Mesh out;
+  for (auto _ : state) {
+    clusterPrepared(pr.p, pr.params, out);
+    benchmark::DoNotOptimize(out.triangles.data());
+  }
+  reportTriangles(state, bunny(), out.triangleCount());
+}
+BENCHMARK(BM_UniformLevel_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
+
+// the once-per-mesh part: validation, grading, sort by weight
+void BM_Prepare_Bunny(benchmark::State& state) {
+  PreparedMesh p;
+  for (auto _ : state) {
+    prepareMesh(bunny(), ClusterParams(), p);
+    benchmark::DoNotOptimize(p.order.data());
+  }
+  reportTriangles(state, bunny(), 0);
+}
+BENCHMARK(BM_Prepare_Bunny)->Unit(benchmark::kMillisecond);
+
+// meshopt_simplifySloppy to the triangle count our level at the same Arg produced
+void BM_Sloppy_Bunny(benchmark::State& state) {
+  const Mesh& m = bunny();
+  const size_t target = prepared(m, double(state.range(0)) / 100.0).triangles;
+  std::vector<unsigned int> dst(m.triangles.size());
+  size_t n = 0;
+  for (auto _ : state) {
+    n = meshopt_simplifySloppy(dst.data(), m.triangles.data(), m.triangles.size(), &m.positions[0].x,
+                               m.positions.size(), sizeof(glm::vec3), target * 3, 1.0f, nullptr);
+    benchmark::DoNotOptimize(dst.data());
+  }
+  reportTriangles(state, m, n / 3);
+}
+BENCHMARK(BM_Sloppy_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
+
+void BM_MeshoptSimplify_Bunny(benchmark::State& state) {
+  const Mesh& m = bunny();
+  const size_t target = prepared(m, double(state.range(0)) / 100.0).triangles;
+  std::vector<unsigned int> dst(m.triangles.size());
+  size_t n = 0;
+  for (auto _ : state) {
+    n = meshopt_simplify(dst.data(), m.triangles.data(), m.triangles.size(), &m.positions[0].x, m.positions.size(),
+                         sizeof(glm::vec3), target * 3, 1.0f, 0, nullptr);
+    benchmark::DoNotOptimize(dst.data());
+  }
+  reportTriangles(state, m, n / 3);
+}
+BENCHMARK(BM_MeshoptSimplify_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
+
+// whole 8-level chain (grading, sort, w1 search when Arg 0, levels in parallel on all threads)
+void BM_Chain8_Bunny(benchmark::State& state) {
+  ChainParams cp;
+  cp.level_count = 8;
+  if (state.range(0) == 1) cp.first_cell_width = prepared(bunny(), 0.5).params.cell_width;
+  LodChain chain;
+  for (auto _ : state) {
+    buildChain(bunny(), cp, chain);
+    benchmark::DoNotOptimize(chain.levels.data());
+  }
+  reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
+  state.SetLabel(state.range(0) == 1 ? "w1 given" : "w1 searched");
+}
+BENCHMARK(BM_Chain8_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_Chain8_Bunny_OneThread(benchmark::State& state) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+  ChainParams cp;
+  cp.level_count = 8;
+  cp.first_cell_width = prepared(bunny(), 0.5).params.cell_width;
+  LodChain chain;
+  for (auto _ : state) {
+    buildChain(bunny(), cp, chain);
+    benchmark::DoNotOptimize(chain.levels.data());
+  }
+  reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
+  state.SetLabel("w1 given, 1 thread");
+}
+BENCHMARK(BM_Chain8_Bunny_OneThread)->Unit(benchmark::kMillisecond);
+
+void BM_Sloppy10pct_Bunny(benchmark::State& state) {
+  const Mesh& m = bunny();
+  std::vector<unsigned int> dst(m.triangles.size());
+  size_t n = 0;
+  const size_t target = m.triangles.size() / 10 / 3 * 3;
+  for (auto _ : state) {
+    n = meshopt_simplifySloppy(dst.data(), m.triangles.data(), m.triangles.size(), &m.positions[0].x,
+                               m.positions.size(), sizeof(glm::vec3), target, 1.0f, nullptr);
+    benchmark::DoNotOptimize(dst.data());
+  }
+  reportTriangles(state, m, n / 3);
+}
+BENCHMARK(BM_Sloppy10pct_Bunny)->Unit(benchmark::kMillisecond);
+
+// one level on a generated mesh of about 1 M triangles, one thread
+void BM_FloatingLevel_1M(benchmark::State& state) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+  Prepared& pr = prepared(bigMesh(), double(state.range(0)) / 100.0);
+  Mesh out;
+  for (auto _ : state) {
+    clusterPrepared(pr.p, pr.params, out);
+    benchmark::DoNotOptimize(out.triangles.data());
+  }
+  reportTriangles(state, bigMesh(), out.triangleCount());
+}
+BENCHMARK(BM_FloatingLevel_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
+
+void BM_Sloppy_1M(benchmark::State& state) {
+  const Mesh& m = bigMesh();
+  const size_t target = prepared(m, double(state.range(0)) / 100.0).triangles;
+  std::vector<unsigned int> dst(m.triangles.size());
+  size_t n = 0;
+  for (auto _ : state) {
+    n = meshopt_simplifySloppy(dst.data(), m.triangles.data(), m.triangles.size(), &m.positions[0].x,
+                               m.positions.size(), sizeof(glm::vec3), target * 3, 1.0f, nullptr);
+    benchmark::DoNotOptimize(dst.data());
+  }
+  reportTriangles(state, m, n / 3);
+}
+BENCHMARK(BM_Sloppy_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
+
+// peak extra memory (operator new) while building an 8-level chain, per input vertex and triangle;
+// "retained" is what the finished chain holds, "transient" the rest of the peak
+void chainMemory(benchmark::State& state, const Mesh& m) {
+  long long peak_extra = 0, retained = 0;
+  for (auto _ : state) {
+    LodChain chain;
+    ChainParams cp;
+    cp.level_count = 8;
+    const long long base = g_current.load();
+    g_peak.store(base);
+    buildChain(m, cp, chain);
+    peak_extra = g_peak.load() - base;
+    retained = g_current.load() - base;
+    benchmark::DoNotOptimize(chain.levels.data());
+  }
+  const double v = double(m.vertexCount()), t = double(m.triangleCount());
+  const double budget = 64.0 * v + 16.0 * t;
+  state.counters["peak_MB"] = double(peak_extra) / 1e6;
+  state.counters["retained_MB"] = double(retained) / 1e6;
+  state.counters["peak_over_budget"] = double(peak_extra) / budget;
+  state.counters["transient_over_budget"] = double(peak_extra - retained) / budget;
+  state.counters["budget_MB"] = budget / 1e6;
+}
+void BM_ChainMemory_Bunny(benchmark::State& state) { chainMemory(state, bunny()); }
+BENCHMARK(BM_ChainMemory_Bunny)->Unit(benchmark::kMillisecond)->Iterations(1);
+void BM_ChainMemory_1M(benchmark::State& state) { chainMemory(state, bigMesh()); }
+BENCHMARK(BM_ChainMemory_1M)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace

@@ -1,0 +1,196 @@
+// LOD chains by vertex clustering (Low & Tan 1997 §3.2.2, §4): the mesh is graded and sorted once,
+// then every level is clustered from the original at w_k = w_1 * growth^(k-1), in parallel (each
+// level only reads the shared prepared mesh, so the result is the same for any thread count).
+#include "scenelod/lodcore/chain.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <mutex>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include "cluster_internal.h"
+#include "scenelod/lodcore/zhang.h"
+
+namespace scenelod {
+
+Sphere computeBoundingSphere(const Mesh& mesh) {
+  Sphere s;
+  if (mesh.positions.empty()) return s;
+  const Aabb box = computeBounds(mesh);
+  s.center = box.center();
+  float r2 = 0.0f;
+  for (const glm::vec3& p : mesh.positions) r2 = std::max(r2, glm::dot(p - s.center, p - s.center));
+  // one ulp of slack so that every vertex tests inside despite rounding
+  s.radius = std::sqrt(r2) * (1.0f + 1e-6f);
+  return s;
+}
+
+Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
+                             double tolerance) {
+  cell_width = 0.0f;
+  if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
+  if (!p.mesh || p.mesh->triangleCount() == 0 || p.order.empty())
+    return {Status::kInvalidArgument, "cannot search a cell width for a mesh without triangles"};
+  if (!(tolerance >= 0.0) || !std::isfinite(tolerance))
+    return {Status::kInvalidArgument, "tolerance must be a finite number >= 0"};
+  ClusterParams cp = params;
+  const double diag = std::max(double(p.bounds.diagonal()), 1e-30);
+  // bracket: lo keeps (nearly) every triangle, hi merges the mesh into one or two cells
+  double lo = std::max(double(p.mean_edge_length) / 16.0, diag * 1e-6);
+  double hi = diag * 2.0;
+  size_t best_diff = SIZE_MAX;
+  float best = static_cast<float>(lo);
+  auto count = [&](double w, size_t& n) {
+    cp.cell_width = static_cast<float>(w);
+    return countClusteredTriangles(p, cp, n);
+  };
+  size_t n = 0;
+  if (Error e = count(lo, n)) return e;
+  if (n <= target) {  // even the finest width cannot keep more
+    cell_width = static_cast<float>(lo);
+    return {};
+  }
+  best_diff = n - target;
+  for (int it = 0; it < 48; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    if (Error e = count(mid, n)) return e;
+    const size_t diff = n > target ? n - target : target - n;
+    if (diff < best_diff) best_diff = diff, best = static_cast<float>(mid);
+    if (double(diff) <= tolerance * double(target)) break;
+    if (n > target) lo = mid; else hi = mid;
+    if (hi / lo < 1.0 + 1e-6) break;
+  }
+  // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
+  // scan widths around the best one and keep the closest
+  if (double(best_diff) > tolerance * double(target)) {
+    const double centre = best;
+    for (int k = -16; k <= 16 && double(best_diff) > tolerance * double(target); ++k) {
+      const double w = centre * std::pow(1.25, double(k) / 16.0);
+      if (Error e = count(w, n)) return e;
+      const size_t diff = n > target ? n - target : target - n;
+      if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
+    }
+  }
+  cell_width = best;
+  return {};
+}
+
+Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, size_t target, float& cell_width,
+                             double tolerance) {
+  cell_width = 0.0f;
+  if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
+  PreparedMesh p;
+  if (Error e = prepareMesh(original, params, p)) return e;
+  return findCellWidthForTarget(p, params, target, cell_width, tolerance);
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats& stats) {
+  params.progress(0.0, "grading");
+  PreparedMesh p;
+  Clock::time_point t0 = Clock::now();
+  if (Error e = prepareMesh(original, params.cluster, p)) return e;
+  stats.prepare_seconds = since(t0);
+  out.levels.resize(1);
+  LodLevel& base = out.levels[0];
+  base.mesh = original;
+  base.cell_width = 0.0f;
+  base.max_error = 0.0f;
+  base.method = LodMethod::kOriginal;
+  base.bounds = computeBoundingSphere(original);
+  if (p.order.empty() || params.level_count == 0) {
+    params.progress(1.0, "done");
+    return {};
+  }
+
+  float w1 = params.first_cell_width;
+  t0 = Clock::now();
+  if (w1 == 0.0f) {
+    params.progress(0.05, "choosing w1");
+    const size_t tn = original.triangleCount();
+    if (tn >= 2) {
+      if (Error e = findCellWidthForTarget(p, params.cluster, tn / 2, w1, 0.05)) return e;
+    } else {
+      w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
+    }
+  }
+  stats.first_width_seconds = since(t0);
+  if (Error e = detail::checkCellWidth(p, w1)) return e;
+
+  const size_t n = params.level_count;
+  out.levels.resize(n + 1);
+  std::vector<Error> errors(n);
+  stats.level_seconds.assign(n, 0.0);
+  std::mutex progress_mutex;
+  std::atomic<size_t> done{0};
+  tbb::parallel_for(size_t(0), n, [&](size_t k) {
+    const Clock::time_point start = Clock::now();
+    ClusterParams cp = params.cluster;
+    cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+    LodLevel& level = out.levels[k + 1];
+    ClusterStats cs;
+    errors[k] = clusterPrepared(p, cp, level.mesh, &cs);
+    level.cell_width = cp.cell_width;
+    level.max_error = cs.max_error;
+    level.method = cp.method;
+    level.bounds = computeBoundingSphere(level.mesh);
+    stats.level_seconds[k] = since(start);
+    const size_t d = ++done;
+    if (params.progress.fn) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
+    }
+  });
+  for (const Error& e : errors)
+    if (e) {
+      out.levels.clear();
+      return e;
+    }
+  return {};
+}
+
+}  // namespace
+
+Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats* stats_out) {
+  out.levels.clear();
+  ChainStats local;
+  ChainStats& stats = stats_out ? *stats_out : local;
+  stats = ChainStats();
+  if (!std::isfinite(params.first_cell_width) || params.first_cell_width < 0.0f)
+    return {Status::kInvalidArgument,
+            "first cell width " + std::to_string(params.first_cell_width) + " is negative or not finite"};
+  if (!std::isfinite(params.growth) || !(params.growth > 1.0f))
+    return {Status::kInvalidArgument, "growth " + std::to_string(params.growth) + " must be finite and > 1"};
+  switch (params.cluster.method) {
+    case LodMethod::kUniform:
+    case LodMethod::kFloatingHeaviest:
+    case LodMethod::kFloatingNearest:
+    {
+      const Clock::time_point t0 = Clock::now();
+      const Error e = buildClusterChain(original, params, out, stats);
+      stats.total_seconds = since(t0);
+      return e;
+    }
+    case LodMethod::kZhang:
+      return buildZhangChain(original, params, out);
+    case LodMethod::kScrooge:
+      return {Status::kUnsupported, std::string("the '") + lodMethodName(params.cluster.method) +
+                                        "' generator is not part of this build"};
+    case LodMethod::kOriginal:
+      break;
+  }
+  return {Status::kInvalidArgument, std::string("method '") + lodMethodName(params.cluster.method) +
+                                        "' does not generate levels"};
+}
+
+}  // namespace scenelod

@@ -1,0 +1,149 @@
+#pragma once
+// Shared pieces of the clustering pipeline (grading, uniform and floating-cell assignment, synthesis,
+// elimination, thick edges, normals): the per-level assignment record and a flat grid hash.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "scenelod/lodcore/cluster.h"
+
+namespace scenelod::detail {
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+// Integer coordinates of a grid cube.
+struct GridKey {
+  int32_t x, y, z;
+  bool operator==(const GridKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+// Open-addressing hash from grid cube to a uint32 value (a cluster id or a list head). Grows by
+// doubling at half load. A slot is empty while its value is kNone, so callers store a value other
+// than kNone right after at() inserts. Lookup order never affects results: callers break ties by value.
+class GridHash {
+ public:
+  explicit GridHash(size_t expected) {
+    size_t cap = 64;
+    while (cap < expected * 2) cap <<= 1;
+    slots_.assign(cap, Slot{0, 0, 0, kNone});
+  }
+
+  // returns the value stored for `k`, or kNone
+  uint32_t find(const GridKey& k) const {
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
+      const Slot& s = slots_[i];
+      if (s.value == kNone) return kNone;
+      if (s.x == k.x && s.y == k.y && s.z == k.z) return s.value;
+    }
+  }
+
+  // returns a reference to the value of `k`; a new key's value is kNone and must be set at once
+  uint32_t& at(const GridKey& k) {
+    if ((size_ + 1) * 2 > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
+      Slot& s = slots_[i];
+      if (s.value == kNone) {
+        s.x = k.x, s.y = k.y, s.z = k.z;
+        ++size_;
+        return s.value;
+      }
+      if (s.x == k.x && s.y == k.y && s.z == k.z) return s.value;
+    }
+  }
+
+  size_t size() const { return size_; }
+
+ private:
+  struct Slot {  // 16 bytes: key and value in one cache line access
+    int32_t x, y, z;
+    uint32_t value;
+  };
+  static size_t hash(const GridKey& k) {
+    uint64_t h = uint64_t(uint32_t(k.x)) * 0x9E3779B97F4A7C15ull + uint64_t(uint32_t(k.y)) * 0xC2B2AE3D27D4EB4Full +
+                 uint64_t(uint32_t(k.z)) * 0x165667B19E3779F9ull;
+    h ^= h >> 32;
+    h *= 0xff51afd7ed558ccdull;
+    return static_cast<size_t>(h ^ (h >> 29));
+  }
+  void grow() {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(old.size() * 2, Slot{0, 0, 0, kNone});
+    size_ = 0;
+    for (const Slot& s : old)
+      if (s.value != kNone) at({s.x, s.y, s.z}) = s.value;
+  }
+
+  std::vector<Slot> slots_;
+  size_t size_ = 0;
+};
+
+// Which cluster each vertex joined, and the cell each cluster is bound to (for clamping).
+struct Assignment {
+  std::vector<uint32_t> cluster_of;  // per vertex; kNone for vertices no primitive references
+  std::vector<uint32_t> heaviest;    // per cluster: its heaviest vertex (the floating cell's centre)
+  uint32_t cluster_count = 0;
+  float cell_width = 0.0f;
+  bool uniform = false;
+  glm::vec3 grid_origin{0.0f};       // uniform: the bounding-box minimum the grid starts at
+  CellShape shape = CellShape::kCube;
+
+  // the box a representative of cluster c is clamped to (a sphere cell clamps in synthesis)
+  void cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const;
+};
+
+// floor to int32 without a libm call (inputs are checked to stay within +-2^30)
+inline int32_t floorToInt(float x) {
+  const int32_t i = static_cast<int32_t>(x);
+  return i - static_cast<int32_t>(x < static_cast<float>(i));
+}
+
+// Largest cell-grid coordinate we accept along an axis (keeps GridKey in int32 with headroom).
+constexpr double kMaxGridCoordinate = 1073741824.0;  // 2^30
+
+// Checks that `cell_width` is finite, > 0 and not too small for the bounds.
+Error checkCellWidth(const PreparedMesh& p, float cell_width);
+
+// uniform_cluster.cpp: Rossignac & Borrel grid over the bounding box.
+void assignUniform(const PreparedMesh& p, float cell_width, Assignment& out);
+// floating_cell_cluster.cpp: Low & Tan §3.2 and §4.
+void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bool nearest, Assignment& out);
+
+// synthesis.cpp: one representative per cluster, plus the cluster's area-weighted colour and normal.
+struct Representatives {
+  std::vector<glm::vec3> positions;  // per cluster
+  std::vector<glm::vec3> colors;     // per cluster, empty when the input has none
+  std::vector<glm::vec3> normals;    // per cluster: area-weighted input face normal (for edges, points)
+};
+void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out);
+
+// elimination.cpp: cluster-level primitives after removing degenerate, duplicate and covered ones.
+struct Eliminated {
+  std::vector<uint32_t> triangles;  // cluster ids, 3 per triangle
+  std::vector<uint32_t> edges;      // cluster ids, 2 per edge
+  std::vector<float> edge_thickness;
+  std::vector<uint32_t> points;     // cluster ids
+  size_t collapsed_triangles = 0;
+};
+// with compute_thickness false, edge_thickness stays empty (counting only)
+void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points,
+               bool compute_thickness, Eliminated& out);
+
+// thick_edge.cpp: §3.3.1 thickness D_A + D_B of edges made by collapsing triangles. `edge_of_pair`
+// maps the sorted cluster pair (a < b) of each collapsed triangle to its edge index in `e`.
+struct CollapsedTriangle {
+  uint32_t triangle;
+  uint32_t edge;  // index into e.edges / 2
+};
+void computeThickness(const PreparedMesh& p, const Assignment& a, const std::vector<CollapsedTriangle>& collapsed,
+                      Eliminated& e);
+
+// normals.cpp: builds the output mesh from cluster-level primitives, splitting vertices whose
+// incident faces meet at more than the crease angle.
+void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
+
+}  // namespace scenelod::detail

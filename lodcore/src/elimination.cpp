@@ -1,0 +1,186 @@
+// Elimination (Low & Tan 1997 §2 step 5, Rossignac & Borrel 1993): each input triangle is mapped to
+// the clusters of its corners; three distinct clusters keep a triangle, two make an edge, one a
+// point. Duplicate triangles of the same orientation are removed; a pair of opposite orientation is
+// a two-sided sheet and both stay (each is visible from its own side with back-face culling).
+// Edges covered by a kept triangle, and points covered by a kept edge or triangle, are removed.
+// Input edges and points are mapped the same way.
+#include <algorithm>
+
+#include "cluster_internal.h"
+
+namespace scenelod::detail {
+
+namespace {
+
+// open addressing from a 64-bit key to a uint32 value; grows at half load
+class U64Map {
+ public:
+  explicit U64Map(size_t expected) {
+    size_t cap = 64;
+    while (cap < expected * 2) cap <<= 1;
+    keys_.resize(cap);
+    values_.assign(cap, kNone);
+  }
+  uint32_t find(uint64_t k) const {
+    const size_t mask = keys_.size() - 1;
+    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
+      if (values_[i] == kNone) return kNone;
+      if (keys_[i] == k) return values_[i];
+    }
+  }
+  // the value of k; a new key holds kNone and must be set at once
+  uint32_t& at(uint64_t k) {
+    if ((size_ + 1) * 2 > keys_.size()) grow();
+    const size_t mask = keys_.size() - 1;
+    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
+      if (values_[i] == kNone) {
+        keys_[i] = k;
+        ++size_;
+        return values_[i];
+      }
+      if (keys_[i] == k) return values_[i];
+    }
+  }
+
+ private:
+  static size_t hash(uint64_t k) {
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdull;
+    k ^= k >> 33;
+    return static_cast<size_t>(k);
+  }
+  void grow() {
+    std::vector<uint64_t> ok;
+    std::vector<uint32_t> ov;
+    ok.swap(keys_);
+    ov.swap(values_);
+    keys_.resize(ok.size() * 2);
+    values_.assign(keys_.size(), kNone);
+    size_ = 0;
+    for (size_t i = 0; i < ok.size(); ++i)
+      if (ov[i] != kNone) at(ok[i]) = ov[i];
+  }
+  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> values_;
+  size_t size_ = 0;
+};
+
+uint64_t pairKey(uint32_t a, uint32_t b) {
+  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
+}
+
+}  // namespace
+
+void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
+               Eliminated& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t* co = a.cluster_of.data();
+  out.triangles.clear();
+  out.edges.clear();
+  out.edge_thickness.clear();
+  out.points.clear();
+  out.collapsed_triangles = 0;
+
+  const size_t tn = m.triangleCount();
+  // triangles: a table of output triangle indices keyed by the rotation starting at the smallest id
+  size_t cap = 64;
+  while (cap * 3 < tn * 4) cap <<= 1;
+  std::vector<uint32_t> table(cap, kNone);
+  const size_t mask = cap - 1;
+  std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
+  std::vector<float> input_thickness;   // per candidate edge: largest thickness of an input edge on it
+  U64Map edge_index(64);
+  std::vector<CollapsedTriangle> collapsed;
+  std::vector<uint32_t> point_candidates;
+  auto edgeSlot = [&](uint32_t x, uint32_t y) {
+    uint32_t& e = edge_index.at(pairKey(x, y));
+    if (e == kNone) {
+      e = static_cast<uint32_t>(edges.size() / 2);
+      edges.push_back(std::min(x, y));
+      edges.push_back(std::max(x, y));
+      input_thickness.push_back(0.0f);
+    }
+    return e;
+  };
+
+  for (size_t t = 0; t < tn; ++t) {
+    uint32_t c0 = co[m.triangles[3 * t]], c1 = co[m.triangles[3 * t + 1]], c2 = co[m.triangles[3 * t + 2]];
+    if (c0 != c1 && c1 != c2 && c0 != c2) {
+      // rotate (keeping orientation) so the smallest id comes first
+      if (c1 < c0 && c1 < c2) { const uint32_t t0 = c0; c0 = c1; c1 = c2; c2 = t0; }
+      else if (c2 < c0 && c2 < c1) { const uint32_t t0 = c0; c0 = c2; c2 = c1; c1 = t0; }
+      const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
+                         (uint64_t(c2) * 0x165667B19E3779F9ull);
+      for (size_t i = (h ^ (h >> 31)) & mask;; i = (i + 1) & mask) {
+        const uint32_t o = table[i];
+        if (o == kNone) {
+          table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
+          out.triangles.push_back(c0);
+          out.triangles.push_back(c1);
+          out.triangles.push_back(c2);
+          break;
+        }
+        if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) break;
+      }
+      continue;
+    }
+    ++out.collapsed_triangles;
+    if (c0 == c1 && c1 == c2) {
+      if (keep_points) point_candidates.push_back(c0);
+      continue;
+    }
+    if (!keep_edges) continue;
+    const uint32_t x = c0, y = c0 == c1 ? c2 : c1;
+    const uint32_t e = edgeSlot(x, y);
+    if (compute_thickness) collapsed.push_back({static_cast<uint32_t>(t), e});
+  }
+  for (size_t e = 0; e < m.edgeCount(); ++e) {
+    const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
+    if (x == y) {
+      point_candidates.push_back(x);
+      continue;
+    }
+    const uint32_t s = edgeSlot(x, y);
+    input_thickness[s] = std::max(input_thickness[s], m.edgeThickness(e));
+  }
+  for (uint32_t v : m.points) point_candidates.push_back(co[v]);
+  std::vector<uint32_t>().swap(table);
+
+  // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
+  const size_t en = edges.size() / 2;
+  std::vector<uint8_t> covered(en, 0);
+  std::vector<uint8_t> used(a.cluster_count, 0);
+  if (en > 0) {
+    for (size_t t = 0; t < out.triangles.size(); t += 3)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t e = edge_index.find(pairKey(out.triangles[t + k], out.triangles[t + (k + 1) % 3]));
+        if (e != kNone) covered[e] = 1;
+      }
+  }
+  for (uint32_t c : out.triangles) used[c] = 1;
+  std::vector<uint32_t> remap(en, kNone);
+  for (size_t e = 0; e < en; ++e) {
+    if (covered[e]) continue;
+    remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
+    out.edges.push_back(edges[2 * e]);
+    out.edges.push_back(edges[2 * e + 1]);
+    used[edges[2 * e]] = used[edges[2 * e + 1]] = 1;
+  }
+  for (uint32_t c : point_candidates)
+    if (!used[c]) {
+      used[c] = 1;
+      out.points.push_back(c);
+    }
+
+  if (!compute_thickness) return;
+  out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
+  size_t kept = 0;
+  for (const CollapsedTriangle& ct : collapsed)
+    if (remap[ct.edge] != kNone) collapsed[kept++] = {ct.triangle, remap[ct.edge]};
+  collapsed.resize(kept);
+  computeThickness(p, a, collapsed, out);
+  for (size_t e = 0; e < en; ++e)
+    if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], input_thickness[e]);
+}
+
+}  // namespace scenelod::detail

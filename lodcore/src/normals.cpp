@@ -1,0 +1,85 @@
+// Adjustment of normals (Low & Tan 1997 §2 step 6): face normals of the simplified triangles, and
+// vertex normals that average only faces within a crease angle of each other, splitting a cluster's
+// vertex into one copy per distinct normal. Vertices only used by edges and points take the
+// cluster's area-weighted normal of the original faces (edges are shaded with dynamic normals).
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "cluster_internal.h"
+
+namespace scenelod::detail {
+
+void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
+  out = Mesh();
+  const size_t nc = r.positions.size();
+  const size_t tn = e.triangles.size() / 3;
+  const bool colors = !r.colors.empty();
+  const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
+
+  std::vector<glm::vec3> face(tn);  // unnormalised (area-weighted) face normals
+  std::vector<glm::vec3> unit(tn);
+  for (size_t t = 0; t < tn; ++t) {
+    const glm::vec3& a = r.positions[e.triangles[3 * t]];
+    face[t] = glm::cross(r.positions[e.triangles[3 * t + 1]] - a, r.positions[e.triangles[3 * t + 2]] - a);
+    const float l = glm::length(face[t]);
+    unit[t] = l > 0.0f ? face[t] / l : glm::vec3(0.0f);
+  }
+  // cluster -> incident triangle corners
+  std::vector<uint32_t> offsets(nc + 1, 0);
+  for (uint32_t c : e.triangles) ++offsets[c + 1];
+  for (size_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
+  std::vector<uint32_t> corners(e.triangles.size());
+  {
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (size_t i = 0; i < e.triangles.size(); ++i) corners[fill[e.triangles[i]]++] = static_cast<uint32_t>(i);
+  }
+  std::vector<uint8_t> needs_vertex(nc, 0);
+  for (uint32_t c : e.edges) needs_vertex[c] = 1;
+  for (uint32_t c : e.points) needs_vertex[c] = 1;
+
+  std::vector<uint32_t> corner_vertex(e.triangles.size());
+  std::vector<uint32_t> base_vertex(nc, kNone);
+  out.positions.reserve(nc);
+  out.normals.reserve(nc);
+  auto addVertex = [&](uint32_t c, const glm::vec3& n) {
+    out.positions.push_back(r.positions[c]);
+    out.normals.push_back(n);
+    if (colors) out.colors.push_back(r.colors[c]);
+    return static_cast<uint32_t>(out.positions.size() - 1);
+  };
+  for (uint32_t c = 0; c < nc; ++c) {
+    const uint32_t b = offsets[c], en = offsets[c + 1];
+    const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
+    for (uint32_t i = b; i < en; ++i) {
+      const uint32_t t = corners[i] / 3;
+      glm::vec3 n(0.0f);
+      for (uint32_t j = b; j < en; ++j) {
+        const uint32_t u = corners[j] / 3;
+        if (u == t || glm::dot(unit[t], unit[u]) >= cos_crease) n += face[u];
+      }
+      const float l = glm::length(n);
+      n = l > 0.0f ? n / l : r.normals[c];
+      uint32_t v = kNone;
+      for (uint32_t k = first_vertex; k < out.positions.size(); ++k)
+        if (out.normals[k] == n) {
+          v = k;
+          break;
+        }
+      if (v == kNone) v = addVertex(c, n);
+      corner_vertex[corners[i]] = v;
+    }
+    if (b != en) base_vertex[c] = first_vertex;
+    else if (needs_vertex[c]) base_vertex[c] = addVertex(c, r.normals[c]);
+  }
+  out.triangles = std::move(corner_vertex);
+  out.edges.resize(e.edges.size());
+  for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];
+  out.edge_thickness = e.edge_thickness;
+  if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
+  out.points.resize(e.points.size());
+  for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];
+}
+
+}  // namespace scenelod::detail

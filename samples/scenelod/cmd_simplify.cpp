@@ -1,0 +1,96 @@
+// scenelod simplify: one level of vertex clustering (Low & Tan 1997 floating cells, or the Rossignac
+// & Borrel uniform grid) of a whole model in world space.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "args.h"
+#include "cluster_options.h"
+#include "command.h"
+
+namespace scenelod::tool {
+
+namespace {
+
+const std::string kUsage = std::string(
+    "usage: scenelod simplify IN -o OUT [--method M] [--cell W | --cell-rel F | --target-triangles N]\n"
+    "                         [--grading G] [--synthesis S] [--cell-shape C]\n"
+    "\n"
+    "Simplifies IN (.obj, .gltf, .glb; the whole model in world space) by vertex clustering into OUT\n"
+    "(.obj: triangles as f, edges as l with '#t' thickness comments, points as p; .glb: one node with\n"
+    "TRIANGLES, LINES with _THICKNESS, POINTS).\n"
+    "\n"
+    "  --cell W              absolute object-space cell width\n"
+    "  --cell-rel F          F x the bounding-box diagonal (default 0.02)\n"
+    "  --target-triangles N  search the cell width that gives about N triangles\n") +
+    kClusterOptionsHelp;
+
+int runSimplify(const std::vector<std::string>& argv) {
+  std::vector<std::string> options = clusterOptionNames();
+  for (const char* o : {"--out", "--cell", "--cell-rel", "--target-triangles"}) options.push_back(o);
+  Args args(argv, {}, options);
+  if (!args.ok()) return usageError("simplify", args.error());
+  if (args.positional().size() != 1) return usageError("simplify", "expected one input file");
+  if (!args.has("--out")) return usageError("simplify", "missing -o OUT");
+  const std::string in = args.positional()[0], out = args.get("--out");
+  const std::string ext = fileExtension(out);
+  if (ext != ".obj" && ext != ".glb") return usageError("simplify", "the output must end in .obj or .glb: " + out);
+  int size_options = int(args.has("--cell")) + int(args.has("--cell-rel")) + int(args.has("--target-triangles"));
+  if (size_options > 1) return usageError("simplify", "give only one of --cell, --cell-rel, --target-triangles");
+  ClusterParams params;
+  std::string err;
+  if (!parseClusterOptions(args, params, err)) return usageError("simplify", err);
+  double cell = 0.0, rel = 0.02;
+  long target = 0;
+  Args& a = args;
+  if (args.has("--cell") && (!a.getDouble("--cell", cell) || !std::isfinite(cell) || cell <= 0.0))
+    return usageError("simplify", a.ok() ? "--cell must be a finite number > 0" : a.error());
+  if (args.has("--cell-rel") && (!a.getDouble("--cell-rel", rel) || !std::isfinite(rel) || rel <= 0.0))
+    return usageError("simplify", a.ok() ? "--cell-rel must be a finite number > 0" : a.error());
+  if (args.has("--target-triangles") && (!a.getInt("--target-triangles", target) || target <= 0))
+    return usageError("simplify", a.ok() ? "--target-triangles must be an integer > 0" : a.error());
+
+  Mesh mesh;
+  if (Error e = loadWorldMesh(in, mesh)) return runError("simplify", e.message);
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point t0 = Clock::now();
+  PreparedMesh prepared;
+  if (Error e = prepareMesh(mesh, params, prepared, in)) return runError("simplify", e.message);
+  const double prepare_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  if (prepared.order.empty()) return runError("simplify", in + ": the model has no triangles, edges or points");
+  if (target > 0) {
+    float w = 0.0f;
+    if (Error e = findCellWidthForTarget(prepared, params, size_t(target), w)) return runError("simplify", in + ": " + e.message);
+    params.cell_width = w;
+  } else if (cell > 0.0) {
+    params.cell_width = float(cell);
+  } else {
+    params.cell_width = float(rel * double(prepared.bounds.diagonal()));
+  }
+  const Clock::time_point t1 = Clock::now();
+  Mesh result;
+  ClusterStats stats;
+  if (Error e = clusterPrepared(prepared, params, result, &stats)) return runError("simplify", in + ": " + e.message);
+  const double level_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+  if (Error e = writeMeshFile(out, result, "simplified")) return runError("simplify", e.message);
+  std::printf("%s: %zu vertices, %zu triangles, %zu edges, %zu points\n", in.c_str(), mesh.vertexCount(),
+              mesh.triangleCount(), mesh.edgeCount(), mesh.pointCount());
+  std::printf("method %s, grading %s, synthesis %s, cells %s, cell width %.6g (%.4g x diagonal)\n",
+              lodMethodName(params.method), gradingName(params.grading), synthesisName(params.synthesis),
+              cellShapeName(params.cell_shape), double(params.cell_width),
+              double(params.cell_width) / std::max(1e-30, double(prepared.bounds.diagonal())));
+  std::printf("%s: %zu vertices, %zu triangles, %zu edges, %zu points; %zu clusters, max error %.6g\n", out.c_str(),
+              result.vertexCount(), result.triangleCount(), result.edgeCount(), result.pointCount(),
+              stats.cluster_count, double(stats.max_error));
+  std::printf("time: grading and sort %.1f ms, clustering %.1f ms\n", prepare_ms, level_ms);
+  return 0;
+}
+
+const CommandRegistration kRegister({"simplify", "simplify a model by vertex clustering (one level)", kUsage.c_str(),
+                                     &runSimplify});
+
+}  // namespace
+
+}  // namespace scenelod::tool

@@ -1,0 +1,245 @@
+// clusterMesh as a whole: output validity for every method and option, the consistency experiment of
+// Low & Tan 1997 §3.2.2, synthesis bounds, bad input.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+
+using namespace scenelod;
+
+namespace {
+
+void expectValidOutput(const Mesh& in, const Mesh& out) {
+  ASSERT_TRUE(validateMesh(out, "output").ok()) << validateMesh(out, "output").message;
+  EXPECT_LE(out.triangleCount(), in.triangleCount());
+  EXPECT_EQ(out.normals.size(), out.positions.size());
+  for (size_t t = 0; t < out.triangleCount(); ++t) {
+    const uint32_t a = out.triangles[3 * t], b = out.triangles[3 * t + 1], c = out.triangles[3 * t + 2];
+    ASSERT_TRUE(a != b && b != c && a != c) << "degenerate triangle " << t;
+  }
+  for (size_t e = 0; e < out.edgeCount(); ++e) ASSERT_NE(out.edges[2 * e], out.edges[2 * e + 1]);
+  for (const glm::vec3& n : out.normals) ASSERT_NEAR(glm::length(n), 1.0f, 1e-3f);
+  EXPECT_EQ(out.edge_thickness.size(), out.edgeCount());
+  EXPECT_TRUE(out.uvs.empty());
+}
+
+// canonical triangle as positions, rotated to start at the lexicographically smallest corner
+struct Tri {
+  glm::vec3 c[3];
+};
+bool lessVec(const glm::vec3& a, const glm::vec3& b) {
+  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+}
+std::vector<Tri> trianglesIn(const Mesh& m, const Aabb& region) {
+  std::vector<Tri> out;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    Tri tr;
+    bool in = true;
+    for (int k = 0; k < 3; ++k) {
+      tr.c[k] = m.positions[m.triangles[3 * t + k]];
+      in = in && glm::all(glm::greaterThanEqual(tr.c[k], region.min)) && glm::all(glm::lessThanEqual(tr.c[k], region.max));
+    }
+    if (!in) continue;
+    int first = 0;
+    for (int k = 1; k < 3; ++k)
+      if (lessVec(tr.c[k], tr.c[first])) first = k;
+    std::rotate(tr.c, tr.c + first, tr.c + 3);
+    out.push_back(tr);
+  }
+  return out;
+}
+// triangles of `a` with no triangle of `b` within `eps` at every corner
+size_t changedTriangles(const std::vector<Tri>& a, const std::vector<Tri>& b, float eps) {
+  size_t changed = 0;
+  for (const Tri& x : a) {
+    bool found = false;
+    for (const Tri& y : b)
+      if (glm::length(x.c[0] - y.c[0]) <= eps && glm::length(x.c[1] - y.c[1]) <= eps && glm::length(x.c[2] - y.c[2]) <= eps) {
+        found = true;
+        break;
+      }
+    if (!found) ++changed;
+  }
+  return changed;
+}
+
+}  // namespace
+
+TEST(ClusterMesh, OutputIsValidForEveryMethodShapeAndSynthesis) {
+  Mesh m = test::makeCadPart();
+  m.colors.assign(m.positions.size(), glm::vec3(0.2f, 0.4f, 0.6f));
+  for (LodMethod method : {LodMethod::kUniform, LodMethod::kFloatingHeaviest, LodMethod::kFloatingNearest})
+    for (CellShape shape : {CellShape::kCube, CellShape::kSphere})
+      for (Synthesis s : {Synthesis::kMean, Synthesis::kHeaviest, Synthesis::kQuadric})
+        for (float w : {0.05f, 0.3f, 2.0f}) {
+          ClusterParams p;
+          p.method = method;
+          p.cell_shape = shape;
+          p.synthesis = s;
+          p.cell_width = w;
+          Mesh out;
+          float err = -1.0f;
+          SCOPED_TRACE(std::string(lodMethodName(method)) + " " + cellShapeName(shape) + " " + synthesisName(s) +
+                       " w=" + std::to_string(w));
+          ASSERT_TRUE(clusterMesh(m, p, out, &err).ok());
+          expectValidOutput(m, out);
+          // a vertex and its representative share a cell of width w: at most its diagonal apart
+          EXPECT_LE(err, w * std::sqrt(3.0f) * 1.0001f);
+          EXPECT_GE(err, 0.0f);
+          // area-weighted average of one colour is that colour
+          ASSERT_EQ(out.colors.size(), out.positions.size());
+          for (const glm::vec3& c : out.colors) EXPECT_NEAR(glm::length(c - glm::vec3(0.2f, 0.4f, 0.6f)), 0.0f, 1e-4f);
+        }
+}
+
+TEST(ClusterMesh, HeaviestSynthesisPutsRepresentativesOnTheCellCentres) {
+  const Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 16, 24);
+  ClusterParams p;
+  p.synthesis = Synthesis::kHeaviest;
+  p.cell_width = 0.4f;
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(m, p, out).ok());
+  for (const glm::vec3& v : out.positions) EXPECT_NEAR(glm::length(v), 1.0f, 1e-5f);  // original vertices
+}
+
+TEST(ClusterMesh, QuadricSynthesisKeepsBoxCornersAndFaces) {
+  // every cluster of a box lies on its faces; the quadric minimiser keeps the corners exactly and
+  // the face and edge clusters on their planes (the singular directions stay at the mean)
+  const Mesh box = test::makeBox({0, 0, 0}, {2, 2, 2}, 8);
+  ClusterParams p;
+  p.synthesis = Synthesis::kQuadric;
+  p.cell_width = 0.55f;
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(box, p, out).ok());
+  int corners = 0;
+  for (const glm::vec3& v : out.positions) {
+    const glm::vec3 d = glm::min(glm::abs(v), glm::abs(v - glm::vec3(2.0f)));
+    EXPECT_NEAR(std::min({d.x, d.y, d.z}), 0.0f, 1e-4f) << v.x << " " << v.y << " " << v.z;
+    if (d.x < 1e-4f && d.y < 1e-4f && d.z < 1e-4f) ++corners;
+  }
+  EXPECT_GE(corners, 8);  // the 8 corners (split by normals into several vertices each)
+}
+
+TEST(ClusterMesh, CreaseAngleSplitsVerticesOfSharpEdges) {
+  const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1}, 1);
+  ClusterParams p;
+  p.cell_width = 0.1f;  // keeps the box
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(box, p, out).ok());
+  EXPECT_EQ(out.triangleCount(), 12u);
+  EXPECT_EQ(out.positions.size(), 24u);  // each corner split into 3 (one per face)
+  p.crease_angle_deg = 120.0f;           // 90 degree edges are now smooth
+  ASSERT_TRUE(clusterMesh(box, p, out).ok());
+  EXPECT_EQ(out.positions.size(), 8u);
+}
+
+// §3.2.2 / plate 5: adding an object far away changes the bounding box. Floating cells sit on the
+// heaviest vertices and do not move; uniform cells are anchored to the bounding box and shift.
+TEST(ClusterMesh, FarAwayObjectChangesUniformButNotFloatingCells) {
+  const Mesh part = test::makeCadPart();
+  Mesh scene = part;
+  test::appendMesh(scene, test::makeSphere({-37.3f, -41.7f, -53.1f}, 2.0f, 12, 16));
+  Aabb region = computeBounds(part);
+  region.min -= glm::vec3(1.0f);
+  region.max += glm::vec3(1.0f);
+  for (LodMethod method : {LodMethod::kFloatingNearest, LodMethod::kFloatingHeaviest, LodMethod::kUniform}) {
+    ClusterParams p;
+    p.method = method;
+    p.cell_width = 0.3f;
+    Mesh a, b;
+    ASSERT_TRUE(clusterMesh(part, p, a).ok());
+    ASSERT_TRUE(clusterMesh(scene, p, b).ok());
+    const std::vector<Tri> ta = trianglesIn(a, region), tb = trianglesIn(b, region);
+    const size_t changed = changedTriangles(ta, tb, 1e-5f);
+    SCOPED_TRACE(lodMethodName(method));
+    ASSERT_GT(ta.size(), 100u);
+    if (method == LodMethod::kUniform) EXPECT_GT(changed, ta.size() / 5);
+    else EXPECT_LE(changed, ta.size() / 100);
+  }
+}
+
+TEST(ClusterMesh, BadInputGivesClearErrors) {
+  const Mesh good = test::makeSphere({0, 0, 0}, 1.0f, 6, 8);
+  Mesh out;
+  ClusterParams p;
+  for (float w : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    p.cell_width = w;
+    const Error e = clusterMesh(good, p, out);
+    EXPECT_EQ(e.status, Status::kInvalidArgument) << w;
+    EXPECT_NE(e.message.find("cell width"), std::string::npos) << e.message;
+  }
+  p.cell_width = 1e-30f;  // 2^30 cells along an axis would overflow the grid
+  EXPECT_EQ(clusterMesh(good, p, out).status, Status::kInvalidArgument);
+  p.cell_width = 0.5f;
+  Mesh nan = good;
+  nan.positions[3].x = std::numeric_limits<float>::quiet_NaN();
+  Error e = clusterMesh(nan, p, out);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_NE(e.message.find("vertex 3"), std::string::npos) << e.message;
+  Mesh inf = good;
+  inf.positions[1].z = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(clusterMesh(inf, p, out).status, Status::kInvalidMesh);
+  Mesh range = good;
+  range.triangles[5] = 1000;
+  e = clusterMesh(range, p, out);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_NE(e.message.find("1000"), std::string::npos) << e.message;
+  p.method = LodMethod::kZhang;
+  EXPECT_EQ(clusterMesh(good, p, out).status, Status::kInvalidArgument);
+}
+
+TEST(ClusterMesh, EmptyMeshGivesEmptyResult) {
+  Mesh out;
+  ClusterParams p;
+  p.cell_width = 1.0f;
+  Mesh empty;
+  ASSERT_TRUE(clusterMesh(empty, p, out).ok());
+  EXPECT_TRUE(out.empty());
+  Mesh unreferenced;
+  unreferenced.positions = {{0, 0, 0}, {1, 1, 1}};
+  ASSERT_TRUE(clusterMesh(unreferenced, p, out).ok());
+  EXPECT_TRUE(out.empty());
+  EXPECT_TRUE(out.positions.empty());
+}
+
+TEST(ClusterMesh, DuplicateVerticesMerge) {
+  const Mesh single_in = test::makeSphere({0, 0, 0}, 1.0f, 8, 12);
+  Mesh m = single_in;
+  // duplicate every vertex and build a second copy of the sphere on the duplicates
+  const size_t n = m.positions.size(), tn = m.triangles.size();
+  for (size_t i = 0; i < n; ++i) m.positions.push_back(m.positions[i]);
+  for (size_t i = 0; i < tn; ++i) m.triangles.push_back(m.triangles[i] + uint32_t(n));
+  ClusterParams p;
+  p.cell_width = 0.3f;
+  Mesh out, single;
+  ASSERT_TRUE(clusterMesh(m, p, out).ok());
+  expectValidOutput(m, out);
+  ASSERT_TRUE(clusterMesh(single_in, p, single).ok());
+  // the copy lands in the same clusters, its triangles are duplicates of the same orientation
+  EXPECT_EQ(out.triangleCount(), single.triangleCount());
+  EXPECT_EQ(out.vertexCount(), single.vertexCount());
+}
+
+TEST(ClusterMesh, DegenerateTrianglesAreHandled) {
+  Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 8, 12);
+  // zero-area triangles: a repeated index, and three collinear points (two of them close)
+  m.positions.push_back({3, 0, 0});
+  m.positions.push_back({3.05f, 0, 0});
+  m.positions.push_back({5, 0, 0});
+  const uint32_t a = uint32_t(m.positions.size() - 3);
+  m.triangles.insert(m.triangles.end(), {0, 0, 1, a, a + 1, a + 2});
+  ClusterParams p;
+  p.cell_width = 0.3f;
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(m, p, out).ok());
+  expectValidOutput(m, out);
+  EXPECT_EQ(out.edgeCount(), 1u);  // the collinear triangle became the edge 3-5
+  ASSERT_EQ(out.edge_thickness.size(), 1u);
+  EXPECT_TRUE(std::isfinite(out.edge_thickness[0]));
+}

@@ -1,0 +1,128 @@
+// Elimination (Low & Tan 1997 §2 step 5) and thick edges (§3.3.1) on constructed meshes.
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+#include "scenelod/lodcore/thick_edge.h"
+
+using namespace scenelod;
+
+namespace {
+
+ClusterParams floating(float w) {
+  ClusterParams p;
+  p.method = LodMethod::kFloatingNearest;
+  p.cell_width = w;
+  return p;
+}
+
+Mesh run(const Mesh& m, const ClusterParams& p) {
+  Mesh out;
+  const Error e = clusterMesh(m, p, out);
+  EXPECT_TRUE(e.ok()) << e.message;
+  return out;
+}
+
+}  // namespace
+
+TEST(Elimination, ThreeOneAndTwoClusterTrianglesBecomeTriangleEdgeAndPoint) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0},               // big: 3 clusters
+                 {10, 0, 0}, {10.01f, 0, 0}, {10, 4, 0},        // thin: 2 clusters
+                 {20, 0, 0}, {20.01f, 0, 0}, {20, 0.01f, 0}};   // tiny: 1 cluster
+  m.triangles = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  const Mesh out = run(m, floating(0.2f));
+  EXPECT_EQ(out.triangleCount(), 1u);
+  EXPECT_EQ(out.edgeCount(), 1u);
+  EXPECT_EQ(out.pointCount(), 1u);
+  EXPECT_NEAR(out.positions[out.points[0]].x, 20.0f, 0.02f);
+}
+
+TEST(Elimination, DuplicateTrianglesOfTheSameOrientationMerge) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {0.01f, 0, 0}, {3.01f, 0, 0}, {0.01f, 3, 0}};
+  m.triangles = {0, 1, 2, 4, 5, 3};  // the second is a rotation of a near-copy
+  const Mesh out = run(m, floating(0.2f));
+  EXPECT_EQ(out.triangleCount(), 1u);
+  EXPECT_EQ(out.edgeCount(), 0u);
+  EXPECT_EQ(out.pointCount(), 0u);
+}
+
+TEST(Elimination, OppositeOrientationsStayAsATwoSidedSheet) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {0.01f, 0, 0}, {3.01f, 0, 0}, {0.01f, 3, 0}};
+  m.triangles = {0, 1, 2, 3, 5, 4};  // reversed winding
+  const Mesh out = run(m, floating(0.2f));
+  ASSERT_EQ(out.triangleCount(), 2u);
+  // same corners (as positions), opposite normals
+  const glm::vec3 n0 = glm::cross(out.positions[out.triangles[1]] - out.positions[out.triangles[0]],
+                                  out.positions[out.triangles[2]] - out.positions[out.triangles[0]]);
+  const glm::vec3 n1 = glm::cross(out.positions[out.triangles[4]] - out.positions[out.triangles[3]],
+                                  out.positions[out.triangles[5]] - out.positions[out.triangles[3]]);
+  EXPECT_LT(glm::dot(glm::normalize(n0), glm::normalize(n1)), -0.999f);
+}
+
+TEST(Elimination, EdgesCoveredByTrianglesAndPointsCoveredByEdgesAreRemoved) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0},      // a triangle
+                 {3.01f, 0.01f, 0},                     // sliver (0, 1, 3) collapses onto its edge 0-1
+                 {0.01f, 0.01f, 0}, {0.0f, 0.02f, 0},   // tiny triangle (0, 4, 5) collapses onto vertex 0
+                 {10, 0, 0}, {13, 0, 0}, {10.01f, 0, 0}, {13.01f, 0.01f, 0}};  // two slivers on one edge
+  m.triangles = {0, 1, 2, 0, 3, 1, 0, 4, 5, 6, 7, 9, 6, 8, 7};
+  const Mesh out = run(m, floating(0.2f));
+  EXPECT_EQ(out.triangleCount(), 1u);
+  EXPECT_EQ(out.edgeCount(), 1u);   // 10-13 once; 0-3 is covered by the triangle
+  EXPECT_EQ(out.pointCount(), 0u);  // vertex 0 is covered by the triangle
+}
+
+TEST(Elimination, InputEdgesAndPointsAreClusteredToo) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {5, 0, 0}, {0.01f, 0, 0}, {9, 9, 9}, {9.01f, 9, 9}};
+  m.edges = {0, 1, 0, 2, 3, 4};
+  m.edge_thickness = {0.3f, 0.0f, 0.0f};
+  m.points = {2};
+  const Mesh out = run(m, floating(0.2f));
+  EXPECT_EQ(out.edgeCount(), 1u);   // 0-1 stays, 0-2 collapses to a point covered by it
+  EXPECT_EQ(out.pointCount(), 1u);  // 3-4 collapses to a point
+  ASSERT_EQ(out.edge_thickness.size(), 1u);
+  EXPECT_FLOAT_EQ(out.edge_thickness[0], 0.3f);  // input thickness kept
+}
+
+TEST(ThickEdge, ThinCylinderCollapsesToEdgesAsThickAsItsDiameter) {
+  const float r = 0.05f;
+  const Mesh cyl = test::makeCylinder(0.0f, 6.0f, r, 24, 16);
+  const Mesh out = run(cyl, floating(0.6f));
+  EXPECT_EQ(out.triangleCount(), 0u);
+  ASSERT_GT(out.edgeCount(), 3u);
+  ASSERT_EQ(out.edge_thickness.size(), out.edgeCount());
+  // V_A is a full ring around the axis: P_A is on the axis and D_A = r, so thickness = 2r
+  for (float t : out.edge_thickness) EXPECT_NEAR(t, 2.0f * r, 2e-3f);
+}
+
+TEST(ThickEdge, ThinBoxThicknessLiesBetweenItsWidthAndDiagonal) {
+  const float s = 0.1f;
+  const Mesh box = test::makeBox({0, 0, 0}, {4.0f, s, s}, 8);
+  const Mesh out = run(box, floating(0.6f));
+  ASSERT_GT(out.edgeCount(), 2u);
+  for (float t : out.edge_thickness) {
+    // cross-section vertices lie between s/2 (side middles) and s/sqrt(2) (corners) from the axis
+    EXPECT_GE(t, s - 1e-4f);
+    EXPECT_LE(t, s * std::sqrt(2.0f) + 1e-4f);
+  }
+}
+
+TEST(ThickEdge, DynamicNormalIsPerpendicularAndFacesTheCamera) {
+  const glm::vec3 v1(0, 0, 0), v2(2, 0.5f, 0), cam(1, 3, 4);
+  const glm::vec3 n = dynamicNormal(v1, v2, cam);
+  EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+  EXPECT_NEAR(glm::dot(n, v2 - v1), 0.0f, 1e-5f);                        // perpendicular to the edge
+  EXPECT_NEAR(glm::dot(n, glm::cross(v1 - cam, v2 - cam)), 0.0f, 1e-4f);  // in the edge-camera plane
+  EXPECT_GT(glm::dot(n, cam - v1), 0.0f);                                 // acute angle to the camera
+  EXPECT_GT(glm::dot(n, cam - v2), 0.0f);
+  EXPECT_EQ(dynamicNormal(v1, v2, 0.5f * v2), glm::vec3(0.0f));           // camera on the edge's line
+  EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.5f, 0.1f), 5.0f);
+  EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.01f, 0.1f), 1.0f);
+}

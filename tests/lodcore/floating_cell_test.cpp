@@ -1,0 +1,158 @@
+// Floating-cell clustering (Low & Tan 1997 §3.2, §4) and uniform subdivision (Rossignac & Borrel):
+// invariants of the cells, checked by brute force against the paper's definitions.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+
+using namespace scenelod;
+
+namespace {
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+bool inside(const glm::vec3& d, float w, CellShape shape) {
+  const float h = 0.5f * w;
+  return shape == CellShape::kCube ? (std::fabs(d.x) <= h && std::fabs(d.y) <= h && std::fabs(d.z) <= h)
+                                   : glm::dot(d, d) <= h * h;
+}
+
+struct Case {
+  LodMethod method;
+  CellShape shape;
+};
+
+}  // namespace
+
+TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
+  Mesh m = test::makeCadPart();
+  PreparedMesh p;
+  ClusterParams params;
+  ASSERT_TRUE(prepareMesh(m, params, p).ok());
+  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere}, Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+    for (float w : {0.15f, 0.4f, 1.1f}) {
+      params.method = c.method;
+      params.cell_shape = c.shape;
+      params.cell_width = w;
+      ClusterAssignment a;
+      ASSERT_TRUE(assignClusters(p, params, a).ok());
+      const size_t nc = a.heaviest.size();
+      SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
+      // cells are created heaviest first
+      for (size_t k = 1; k < nc; ++k) EXPECT_GE(p.weights[a.heaviest[k - 1]], p.weights[a.heaviest[k]]);
+      // no cell centre is inside another cell
+      for (size_t i = 0; i < nc; ++i)
+        for (size_t j = i + 1; j < nc; ++j)
+          ASSERT_FALSE(inside(m.positions[a.heaviest[i]] - m.positions[a.heaviest[j]], w, c.shape)) << i << " " << j;
+      // at most 8 cube cells (64 sphere cells) per grid cube of side w
+      std::map<std::tuple<int, int, int>, int> per_cube;
+      int most = 0;
+      for (uint32_t v : a.heaviest) {
+        const glm::vec3 q = glm::floor(m.positions[v] / w);
+        most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
+      }
+      EXPECT_LE(most, c.shape == CellShape::kCube ? 8 : 64);
+      // every referenced vertex is assigned, lies in its cell, and is assigned by the variant's rule
+      // among the cells that existed when it was visited (centres earlier in the weight order)
+      std::vector<size_t> rank(m.positions.size());
+      for (size_t i = 0; i < p.order.size(); ++i) rank[p.order[i]] = i;
+      for (size_t v = 0; v < m.positions.size(); ++v) {
+        const uint32_t cl = a.cluster_of[v];
+        ASSERT_NE(cl, kNone);
+        ASSERT_LT(cl, nc);
+        const glm::vec3 pv = m.positions[v];
+        ASSERT_TRUE(inside(pv - m.positions[a.heaviest[cl]], w, c.shape));
+        for (uint32_t o = 0; o < nc; ++o) {
+          const glm::vec3 d = pv - m.positions[a.heaviest[o]];
+          if (!inside(d, w, c.shape) || rank[a.heaviest[o]] > rank[v]) continue;
+          if (c.method == LodMethod::kFloatingHeaviest) {
+            ASSERT_GE(o, cl) << "vertex " << v << " is inside an earlier (heavier) cell";
+          } else {
+            const glm::vec3 dc = pv - m.positions[a.heaviest[cl]];
+            ASSERT_GE(glm::dot(d, d), glm::dot(dc, dc)) << "vertex " << v << " has a nearer centre";
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(UniformCluster, ClustersAreGridCellsOfTheBoundingBox) {
+  Mesh m = test::makeSphere({0.3f, -0.2f, 0.1f}, 1.0f, 12, 16);
+  PreparedMesh p;
+  ClusterParams params;
+  params.method = LodMethod::kUniform;
+  params.cell_width = 0.37f;
+  ASSERT_TRUE(prepareMesh(m, params, p).ok());
+  ClusterAssignment a;
+  ASSERT_TRUE(assignClusters(p, params, a).ok());
+  std::map<std::tuple<int, int, int>, uint32_t> cell_cluster;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const glm::vec3 q = glm::floor((m.positions[v] - p.bounds.min) / params.cell_width);
+    const auto key = std::make_tuple(int(q.x), int(q.y), int(q.z));
+    auto it = cell_cluster.find(key);
+    if (it == cell_cluster.end()) cell_cluster[key] = a.cluster_of[v];
+    else EXPECT_EQ(it->second, a.cluster_of[v]);  // one cluster per grid cell
+  }
+  EXPECT_EQ(cell_cluster.size(), a.heaviest.size());  // and one grid cell per cluster
+}
+
+// Fig. 4 / §3.2.3: V1 heavier than V2; V3 inside both cells, nearer V2. The thin triangle (P, V3, V2)
+// stays a triangle, widened from |V3 V2| to |R1 R2|, when V3 joins the heaviest cell; it collapses
+// into an edge when V3 joins the nearest centre.
+TEST(FloatingCell, NearestCentreVariantCollapsesTheThinTriangleOfFigure4) {
+  Mesh m;
+  //             V1          V2            V3             P            Q1          Q2
+  m.positions = {{0, 0, 0}, {0.9f, 0, 0}, {0.48f, 0.02f, 0}, {0.7f, 4, 0}, {-3, 0, 0}, {-3, 1, 0}};
+  m.triangles = {3, 2, 1,    // the thin triangle P, V3, V2
+                 0, 4, 5};   // a triangle that makes V1 referenced
+  PreparedMesh p;
+  ClusterParams params;
+  params.synthesis = Synthesis::kHeaviest;
+  params.cell_width = 1.0f;
+  ASSERT_TRUE(prepareMesh(m, params, p).ok());
+  // the rule under test is the assignment, so fix the weight order V1 > P > Q1 > Q2 > V2 > V3
+  p.order = {0, 3, 4, 5, 1, 2};
+  p.sorted_positions.clear();
+  for (uint32_t v : p.order) p.sorted_positions.push_back(m.positions[v]);
+  p.weights = {1.0f, 0.5f, 0.4f, 0.9f, 0.8f, 0.7f};
+
+  params.method = LodMethod::kFloatingHeaviest;
+  ClusterAssignment a;
+  ASSERT_TRUE(assignClusters(p, params, a).ok());
+  EXPECT_EQ(a.cluster_of[2], a.cluster_of[0]);  // V3 joins V1's cell
+  Mesh heavy;
+  ASSERT_TRUE(clusterPrepared(p, params, heavy).ok());
+  ASSERT_EQ(heavy.triangleCount(), 2u);
+  EXPECT_EQ(heavy.edgeCount(), 0u);
+  // the side of P's triangle opposite P, after clustering, against |V3 V2| before
+  float base_after = -1.0f;
+  const glm::vec3 P = m.positions[3];
+  for (size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k)
+      if (glm::length(heavy.positions[heavy.triangles[3 * t + k]] - P) < 1e-6f)
+        base_after = glm::length(heavy.positions[heavy.triangles[3 * t + (k + 1) % 3]] -
+                                 heavy.positions[heavy.triangles[3 * t + (k + 2) % 3]]);
+  const float base_before = glm::length(m.positions[2] - m.positions[1]);
+  ASSERT_GT(base_after, 0.0f) << "no output triangle has P as a corner";
+  EXPECT_GT(base_after, 2.0f * base_before);  // |R1 R2| = |V1 V2| = 0.9 against 0.42
+
+  params.method = LodMethod::kFloatingNearest;
+  ASSERT_TRUE(assignClusters(p, params, a).ok());
+  EXPECT_EQ(a.cluster_of[2], a.cluster_of[1]);  // V3 joins the nearer V2
+  Mesh nearest;
+  ASSERT_TRUE(clusterPrepared(p, params, nearest).ok());
+  EXPECT_EQ(nearest.triangleCount(), 1u);  // only the far triangle remains
+  ASSERT_EQ(nearest.edgeCount(), 1u);      // the thin triangle became the edge P-V2
+  const glm::vec3 e0 = nearest.positions[nearest.edges[0]], e1 = nearest.positions[nearest.edges[1]];
+  EXPECT_NEAR(std::min(glm::length(e0 - m.positions[3]), glm::length(e1 - m.positions[3])), 0.0f, 1e-6f);
+  EXPECT_NEAR(std::min(glm::length(e0 - m.positions[1]), glm::length(e1 - m.positions[1])), 0.0f, 1e-6f);
+}

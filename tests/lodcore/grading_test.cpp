@@ -1,0 +1,114 @@
+// Grading (Low & Tan 1997 §3.1; Rossignac & Borrel 1993) on constructed vertices.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+
+using namespace scenelod;
+
+namespace {
+
+// a square pyramid with apex 4 at height h over the square (+-1, +-1, 0), base closed by 2 triangles
+Mesh pyramid(float h) {
+  Mesh m;
+  m.positions = {{1, 1, 0}, {-1, 1, 0}, {-1, -1, 0}, {1, -1, 0}, {0, 0, h}};
+  m.triangles = {0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4, 0, 2, 1, 0, 3, 2};
+  return m;
+}
+
+}  // namespace
+
+TEST(Grading, FlatInteriorVertexHasZeroAngularFactorAndWeight) {
+  // theta = pi for a vertex inside a plane (opposite incident edges), so cos(theta/2) = 0: a flat
+  // vertex is never on a silhouette and weighs nothing, with or without the feature boost
+  const Mesh grid = test::makeGrid(4, 4.0f);
+  const uint32_t centre = 2 * 5 + 2;
+  for (bool boost : {false, true}) {
+    std::vector<float> w, ang;
+    gradeVertices(grid, Grading::kLowTan, boost, w, &ang);
+    EXPECT_NEAR(ang[centre], 0.0f, 1e-4f);
+    EXPECT_NEAR(w[centre], 0.0f, 1e-4f);
+  }
+}
+
+TEST(Grading, CubeCornerIsCosineOfHalfRightAngle) {
+  // every incident edge of the box's min corner points into the positive octant, the widest pair is
+  // 90 degrees apart: cos(45 deg); the corner also has the mesh's longest edge (a face diagonal)
+  const Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1}, 1);
+  std::vector<float> w, ang;
+  float longest = 0.0f;
+  gradeVertices(box, Grading::kLowTan, false, w, &ang, &longest);
+  EXPECT_NEAR(longest, std::sqrt(2.0f), 1e-5f);
+  EXPECT_NEAR(ang[0], std::cos(3.14159265f / 4.0f), 1e-5f);
+  EXPECT_NEAR(w[0], std::cos(3.14159265f / 4.0f), 1e-5f);  // longest incident edge / longest edge = 1
+}
+
+TEST(Grading, SharpApexApproachesOneAndMatchesFormula) {
+  for (float h : {0.5f, 3.0f, 20.0f}) {
+    const Mesh m = pyramid(h);
+    std::vector<float> w, ang;
+    float longest = 0.0f;
+    gradeVertices(m, Grading::kLowTan, false, w, &ang, &longest);
+    // widest pair at the apex: edges to opposite base corners (1,1,-h) and (-1,-1,-h)
+    const float cos_theta = (h * h - 2.0f) / (h * h + 2.0f);
+    const float theta = std::acos(cos_theta);
+    EXPECT_NEAR(ang[4], std::cos(theta / 2.0f), 1e-5f) << "h = " << h;
+    EXPECT_NEAR(w[4], ang[4] * std::sqrt(2.0f + h * h) / longest, 1e-5f);
+    std::vector<float> wr, angr;
+    gradeVertices(m, Grading::kRossignac, false, wr, &angr);
+    EXPECT_NEAR(angr[4], 3.14159265f / theta, 1e-3f) << "h = " << h;
+  }
+  // the sharper the apex, the heavier under cos(theta/2), bounded by 1
+  std::vector<float> a, b, ang_a, ang_b;
+  gradeVertices(pyramid(0.5f), Grading::kLowTan, false, a, &ang_a);
+  gradeVertices(pyramid(20.0f), Grading::kLowTan, false, b, &ang_b);
+  EXPECT_LT(ang_a[4], ang_b[4]);
+  EXPECT_LE(ang_b[4], 1.0f);
+}
+
+TEST(Grading, BoostRaisesBoundaryAndCreaseVertices) {
+  // a vertex in the middle of a grid's border: theta = pi, so 0 without the boost, 0.5 with it
+  const Mesh grid = test::makeGrid(4, 4.0f);
+  const uint32_t border = 2;  // (2, 0)
+  std::vector<float> w, ang;
+  gradeVertices(grid, Grading::kLowTan, false, w, &ang);
+  EXPECT_NEAR(ang[border], 0.0f, 1e-4f);
+  gradeVertices(grid, Grading::kLowTan, true, w, &ang);
+  EXPECT_NEAR(ang[border], 0.5f, 1e-5f);
+  // a vertex in the middle of a box edge: theta = pi, dihedral 90 degrees: (1 - cos 90)/2 = 0.5
+  const Mesh box = test::makeBox({0, 0, 0}, {2, 2, 2}, 2);
+  const uint32_t mid_edge = 1;  // on face z = 0, at (0, 1, 0)
+  ASSERT_NEAR(box.positions[mid_edge].y, 1.0f, 1e-6f);
+  ASSERT_NEAR(box.positions[mid_edge].x, 0.0f, 1e-6f);
+  gradeVertices(box, Grading::kLowTan, false, w, &ang);
+  EXPECT_NEAR(ang[mid_edge], 0.0f, 1e-4f);
+  gradeVertices(box, Grading::kLowTan, true, w, &ang);
+  EXPECT_NEAR(ang[mid_edge], 0.5f, 1e-4f);
+}
+
+TEST(Grading, PreparedOrderIsHeaviestFirstAndSkipsUnreferencedVertices) {
+  Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 8, 12);
+  m.positions.push_back({5, 5, 5});  // referenced by nothing
+  PreparedMesh p;
+  ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+  EXPECT_EQ(p.order.size(), m.positions.size() - 1);
+  for (size_t i = 1; i < p.order.size(); ++i) {
+    EXPECT_GE(p.weights[p.order[i - 1]], p.weights[p.order[i]]);
+    if (p.weights[p.order[i - 1]] == p.weights[p.order[i]]) {
+      EXPECT_LT(p.order[i - 1], p.order[i]);
+    }
+  }
+  EXPECT_LE(p.bounds.max.x, 1.0f + 1e-6f);  // the unreferenced vertex is not in the bounds
+}
+
+TEST(Grading, ZeroLengthEdgesGiveFiniteWeights) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {0, 1, 2, 0, 3, 4};
+  std::vector<float> w;
+  gradeVertices(m, Grading::kLowTan, true, w);
+  for (float x : w) EXPECT_TRUE(std::isfinite(x) && x >= 0.0f);
+  EXPECT_EQ(w[1], 0.0f);  // only zero-length edges
+}

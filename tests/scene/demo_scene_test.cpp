@@ -1,0 +1,124 @@
+#include "scenelod/scene/demo_scene.h"
+
+#include <map>
+#include <tuple>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+using namespace scenelod;
+using namespace scenelod::scene;
+
+namespace {
+
+// every undirected edge (vertices welded by exact position) used by an even, non-zero number of
+// triangles: the mesh is a union of closed shells
+bool closedShells(const Mesh& m) {
+  std::map<std::tuple<float, float, float>, uint32_t> weld;
+  std::vector<uint32_t> id(m.vertexCount());
+  for (size_t v = 0; v < m.vertexCount(); ++v) {
+    const glm::vec3& p = m.positions[v];
+    id[v] = weld.emplace(std::make_tuple(p.x, p.y, p.z), uint32_t(weld.size())).first->second;
+  }
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = id[m.triangles[3 * t + k]], b = id[m.triangles[3 * t + (k + 1) % 3]];
+      if (a > b) std::swap(a, b);
+      ++uses[{a, b}];
+    }
+  for (const auto& e : uses)
+    if (e.second % 2 != 0) return false;
+  return true;
+}
+
+}  // namespace
+
+TEST(DemoScene, IsDeterministicValidAndSharesMeshes) {
+  DemoSceneParams p;
+  p.bunny_path = "";  // the generated blob: this test must not depend on installed files
+  SceneData a, b;
+  DemoSceneInfo info;
+  ASSERT_TRUE(makeDemoScene(a, p, &info).ok());
+  ASSERT_TRUE(makeDemoScene(b, p).ok());
+  EXPECT_FALSE(info.bunny_loaded);
+  EXPECT_NE(info.note.find("generated organic blob"), std::string::npos) << info.note;
+  EXPECT_TRUE(validateSceneData(a, "demo").ok());
+  ASSERT_EQ(a.meshes.size(), b.meshes.size());
+  for (size_t m = 0; m < a.meshes.size(); ++m) {
+    EXPECT_EQ(a.meshes[m].mesh.positions, b.meshes[m].mesh.positions);
+    EXPECT_EQ(a.meshes[m].mesh.triangles, b.meshes[m].mesh.triangles);
+  }
+  const std::vector<int32_t> objects = objectNodes(a);
+  EXPECT_GE(objects.size(), 50u);
+  EXPECT_LT(a.meshes.size(), objects.size() / 3);  // instances share meshes
+  std::vector<int> instances(a.meshes.size(), 0);
+  for (int32_t n : objects) ++instances[a.nodes[n].mesh];
+  for (size_t m = 0; m < a.meshes.size(); ++m) EXPECT_GE(instances[m], 1) << a.meshes[m].name;
+  EXPECT_EQ(instances.back(), 4);  // the bunny stand-in, instanced bunny_count times
+}
+
+TEST(DemoScene, PartsAreClosedShellsWithoutDegenerateTriangles) {
+  DemoSceneParams p;
+  p.bunny_path = "";
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  for (const MeshData& md : s.meshes) {
+    const Mesh& m = md.mesh;
+    EXPECT_TRUE(closedShells(m)) << md.name;
+    // outward winding: a closed shell wound outwards encloses a positive signed volume
+    double volume = 0.0;
+    for (size_t t = 0; t < m.triangleCount(); ++t)
+      volume += glm::dot(glm::dvec3(m.positions[m.triangles[3 * t]]),
+                         glm::cross(glm::dvec3(m.positions[m.triangles[3 * t + 1]]), glm::dvec3(m.positions[m.triangles[3 * t + 2]]))) / 6.0;
+    EXPECT_GT(volume, 0.0) << md.name;
+    ASSERT_EQ(m.normals.size(), m.vertexCount()) << md.name;
+    ASSERT_EQ(m.colors.size(), m.vertexCount()) << md.name;
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+      const glm::vec3 a = m.positions[m.triangles[3 * t]], b = m.positions[m.triangles[3 * t + 1]],
+                      c = m.positions[m.triangles[3 * t + 2]];
+      const glm::vec3 n = glm::cross(b - a, c - a);
+      ASSERT_GT(glm::length(n), 0.0f) << md.name << " triangle " << t;
+      // flat faces: the stored normal agrees with the winding
+      const glm::vec3 avg = m.normals[m.triangles[3 * t]] + m.normals[m.triangles[3 * t + 1]] + m.normals[m.triangles[3 * t + 2]];
+      EXPECT_GT(glm::dot(n, avg), 0.0f) << md.name << " triangle " << t << " is wound against its normals";
+    }
+  }
+}
+
+TEST(DemoScene, HasThinPartsForThickEdges) {
+  DemoSceneParams p;
+  p.bunny_path = "";
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  int thin = 0;
+  for (const MeshData& md : s.meshes) {
+    const glm::vec3 e = computeBounds(md.mesh).extent();
+    const float smallest = std::min(e.x, std::min(e.y, e.z)), largest = std::max(e.x, std::max(e.y, e.z));
+    if (smallest < 0.05f * largest) ++thin;  // fins and rods
+  }
+  EXPECT_GE(thin, 2);
+}
+
+TEST(DemoScene, UsesTheBunnyWhenInstalled) {
+  SCENELOD_REQUIRE_BUNNY();
+  SceneData s;
+  DemoSceneInfo info;
+  ASSERT_TRUE(makeDemoScene(s, {}, &info).ok());
+  EXPECT_TRUE(info.bunny_loaded) << info.note;
+  EXPECT_EQ(s.meshes.back().name, "bunny");
+  EXPECT_EQ(s.meshes.back().mesh.vertexCount(), 34835u);
+  EXPECT_EQ(s.meshes.back().mesh.triangleCount(), 69666u);
+}
+
+TEST(DemoScene, BadParametersAreRefused) {
+  SceneData s;
+  DemoSceneParams p;
+  p.segments = 2;
+  EXPECT_EQ(makeDemoScene(s, p).status, Status::kInvalidArgument);
+  p = DemoSceneParams{};
+  p.gearbox_count = 0;
+  EXPECT_EQ(makeDemoScene(s, p).status, Status::kInvalidArgument);
+}
