@@ -234,6 +234,7 @@ Error replaySceneFromSceneData(const scene::SceneData& d, const std::vector<LodC
     s.chain_bounds.push_back(b);
     s.chain_names.push_back(d.meshes[m].name);
   }
+  s.chains = chains;  // geometry for ray queries (ReplayVisibility)
   for (const scene::NodeData& n : d.nodes) {
     s.node_parent.push_back(n.parent);
     s.node_local.push_back(n.local);

@@ -33,6 +33,8 @@ struct ReplayScene {
   std::vector<uint32_t> object_chain;    // per object: its chain
   std::vector<float> importance;         // per object
   std::vector<uint8_t> must_draw;        // per object
+  std::vector<LodChain> chains;          // per chain, the meshes when the source had them (glTF/GLB/
+                                         // OBJ); empty for level-scene files and built-in scenes
 
   size_t objectCount() const { return object_node.size(); }
 };
