@@ -1,0 +1,103 @@
+// scenelod record and replay, run as a separate process (SCENELOD_TOOL_PATH).
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace {
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+std::string shellQuote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+ToolRun tool(const std::vector<std::string>& args) {
+  const std::string dir = scenelod::test::scratchDir();
+  std::string cmd = shellQuote(SCENELOD_TOOL_PATH);
+  for (const std::string& a : args) cmd += " " + shellQuote(a);
+  cmd += " >" + dir + "/replay_out.txt 2>" + dir + "/replay_err.txt";
+  const int status = std::system(cmd.c_str());
+  ToolRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(dir + "/replay_out.txt");
+  r.err = slurp(dir + "/replay_err.txt");
+  return r;
+}
+
+size_t lineCount(const std::string& text) {
+  size_t n = 0;
+  for (char c : text) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST(ReplayCommands, RecordThenReplayWritesLogReportAndPlots) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  const std::string replay = dir + "/orbit.jsonl", log = dir + "/orbit_log.jsonl", report = dir + "/orbit_report.md";
+  ToolRun r = tool({"record", "builtin:small", "--path", "orbit", "--frames", "40", "--budget", "1.0", "-o", replay});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(lineCount(slurp(replay)), 41u);  // header + 40 frames
+  r = tool({"replay", replay, "--out", log, "--report", report});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(log);
+  EXPECT_EQ(lineCount(text), 40u);
+  EXPECT_NE(text.find("\"levels\": ["), std::string::npos);
+  EXPECT_NE(text.find("\"budget_ms\": 1.0000"), std::string::npos);
+  const std::string md = slurp(report);
+  EXPECT_NE(md.find("frame cost vs budget"), std::string::npos);
+  EXPECT_TRUE(scenelod::test::fileExists(dir + "/orbit_report_cost.png"));
+  EXPECT_TRUE(scenelod::test::fileExists(dir + "/orbit_report_levels.png"));
+  EXPECT_TRUE(scenelod::test::fileExists(dir + "/orbit_report_switches.png"));
+  // the same replay in distance mode: no budget in the log
+  r = tool({"replay", replay, "-o", log, "--distance"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(slurp(log).find("\"budget_ms\": null"), std::string::npos);
+}
+
+TEST(ReplayCommands, BadInputGivesClearErrors) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  ToolRun r = tool({"replay", dir + "/no_such.jsonl", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no_such.jsonl: cannot open replay file"), std::string::npos) << r.err;
+  r = tool({"replay", dir + "/no_such.jsonl"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nothing to write"), std::string::npos) << r.err;
+  r = tool({"replay", dir + "/a.jsonl", "-o", dir + "/x.jsonl", "--budget", "-1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--budget must be > 0"), std::string::npos) << r.err;
+  r = tool({"record", "builtin:small", "--path", "spiral", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--path must be orbit, flythrough or approach"), std::string::npos) << r.err;
+  r = tool({"record", dir + "/missing.glb", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("missing.glb"), std::string::npos) << r.err;
+  // a replay naming a scene that does not exist
+  {
+    std::ofstream f(dir + "/lost.jsonl");
+    f << "{\"scenelod_replay\": 1, \"scene\": \"lost_scene.json\"}\n{\"frame\": 0, \"eye\": [0,0,5], \"target\": [0,0,0]}\n";
+  }
+  r = tool({"replay", dir + "/lost.jsonl", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("lost_scene.json: cannot open level scene"), std::string::npos) << r.err;
+}
