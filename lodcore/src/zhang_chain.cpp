@@ -51,7 +51,7 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
     previous_triangles = stats[i].output_triangles;
     LodLevel level;
     level.max_error = stats[i].max_displacement;
-    level.cell_width = std::max({zhangEquivalentCellWidth(level.max_error), min_width,
+    level.cell_width = std::max({zhangEquivalentCellWidth(stats[i].max_surface_distance), min_width,
                                  std::nextafter(previous_width, INFINITY) * (1.0f + 1e-6f)});
     previous_width = level.cell_width;
     level.method = LodMethod::kZhang;

@@ -117,6 +117,30 @@ inline float fastAngle(const glm::vec3& a, const glm::vec3& b) {
   return fastAcos(glm::dot(a, b));
 }
 
+// squared distance from p to the triangle abc (closest point by Voronoi regions, Ericson 2005 §5.1.5)
+float pointTriangleDistance2(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+  const glm::vec3 ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  auto dist2 = [&](const glm::vec3& q) { return glm::dot(p - q, p - q); };
+  if (d1 <= 0.0f && d2 <= 0.0f) return dist2(a);
+  const glm::vec3 bp = p - b;
+  const float d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0.0f && d4 <= d3) return dist2(b);
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) return dist2(a + ab * (d1 / (d1 - d3)));
+  const glm::vec3 cp = p - c;
+  const float d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0.0f && d5 <= d6) return dist2(c);
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) return dist2(a + ac * (d2 / (d2 - d6)));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f)
+    return dist2(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+  const float sum = va + vb + vc;
+  if (!(sum > 0.0f)) return std::min({dist2(a), dist2(b), dist2(c)});  // degenerate triangle
+  return dist2(a + ab * (vb / sum) + ac * (vc / sum));
+}
+
 glm::vec3 safeNormalize(const glm::vec3& v) {
   const float len = glm::length(v);
   return len > 0.0f ? v / len : glm::vec3(0.0f);
@@ -765,6 +789,32 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
     max_d2 = std::max(max_d2, glm::dot(d, d));
   }
   stats_.max_displacement = std::sqrt(max_d2);
+  // an upper bound of the distance from the input vertices to the result: from each input vertex's
+  // representative, walk over the result towards the vertex (to the fan vertex nearest to it, at most
+  // 16 steps) and take the nearest triangle met; the result's nearest triangle can only be nearer
+  float max_s2 = 0.0f;
+  for (size_t v = 0; v < vn; ++v) {
+    uint32_t c = find(static_cast<uint32_t>(v));
+    if (remap[c] == kNone) continue;
+    const glm::vec3& q = in.positions[v];
+    float best = glm::dot(q - pos_[c], q - pos_[c]);
+    for (int step = 0; step < 16; ++step) {
+      uint32_t next = c;
+      float next_d2 = glm::dot(q - pos_[c], q - pos_[c]);
+      forStar(c, [&](uint32_t t, uint32_t) {
+        const Face& f = faces_[t];
+        best = std::min(best, pointTriangleDistance2(q, pos_[f.v[0]], pos_[f.v[1]], pos_[f.v[2]]));
+        for (uint32_t u : f.v) {
+          const float d2 = glm::dot(q - pos_[u], q - pos_[u]);
+          if (d2 < next_d2) next_d2 = d2, next = u;
+        }
+      });
+      if (next == c) break;
+      c = next;
+    }
+    max_s2 = std::max(max_s2, best);
+  }
+  stats_.max_surface_distance = std::sqrt(max_s2);
   stats_.output_triangles = alive_tris_;
   stats_.stop_reason = alive_tris_ > current_target_ && stopped_ ? ZhangStopReason::kNoValidCollapse
                                                                  : ZhangStopReason::kTargetReached;

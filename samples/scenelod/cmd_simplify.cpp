@@ -42,9 +42,9 @@ int runZhangSimplify(const std::string& in, const std::string& out, const Mesh& 
   std::printf("%s: %zu vertices, %zu triangles\n", in.c_str(), mesh.vertexCount(), mesh.triangleCount());
   std::printf("method zhang (%s, placement %s, influence %s), target %zu triangles\n", zhangModeName(zp.mode),
               zhangPlacementName(zp.placement), zhangInfluenceName(zp.influence), t);
-  std::printf("%s: %zu vertices, %zu triangles; %zu collapses, %s, max vertex displacement %.6g\n", out.c_str(),
-              result.vertexCount(), result.triangleCount(), st.collapses, zhangStopReasonName(st.stop_reason),
-              double(st.max_displacement));
+  std::printf("%s: %zu vertices, %zu triangles; %zu collapses, %s, max vertex displacement %.6g, surface "
+              "distance bound %.6g\n", out.c_str(), result.vertexCount(), result.triangleCount(), st.collapses,
+              zhangStopReasonName(st.stop_reason), double(st.max_displacement), double(st.max_surface_distance));
   std::printf("rejected: %zu fold-over, %zu topology; dropped input triangles: %zu degenerate, %zu duplicate\n",
               st.rejected_fold, st.rejected_topology, st.dropped_degenerate, st.dropped_duplicate);
   std::printf("time: %.1f ms\n", ms);

@@ -517,6 +517,9 @@ TEST(ZhangChain, LevelsHalveAndWidthsIncrease) {
   LodChain chain;
   ASSERT_TRUE(buildZhangChain(in, cp, chain).ok());
   ASSERT_EQ(chain.levelCount(), 6u);
+  std::vector<Mesh> runs;
+  std::vector<ZhangStats> stats;
+  ASSERT_TRUE(simplifyZhangMulti(in, {2560, 1280, 640, 320, 160}, ZhangParams{}, runs, &stats).ok());
   EXPECT_EQ(chain.levels[0].method, LodMethod::kOriginal);
   EXPECT_EQ(chain.levels[0].mesh.triangles, in.triangles);
   for (size_t k = 1; k < chain.levelCount(); ++k) {
@@ -524,7 +527,10 @@ TEST(ZhangChain, LevelsHalveAndWidthsIncrease) {
     EXPECT_EQ(l.method, LodMethod::kZhang);
     EXPECT_LE(l.mesh.triangleCount(), in.triangleCount() >> k);
     EXPECT_GT(l.cell_width, chain.levels[k - 1].cell_width);
-    EXPECT_GE(l.cell_width, zhangEquivalentCellWidth(l.max_error));
+    EXPECT_GE(l.cell_width, zhangEquivalentCellWidth(stats[k - 1].max_surface_distance));
+    EXPECT_LE(stats[k - 1].max_surface_distance, l.max_error);
+    EXPECT_EQ(l.max_error, stats[k - 1].max_displacement);
+    EXPECT_EQ(l.mesh.triangles, runs[k - 1].triangles);
     for (const glm::vec3& p : l.mesh.positions)
       EXPECT_LE(glm::length(p - l.bounds.center), l.bounds.radius * (1.0f + 1e-6f));
     expectClosedManifold(l.mesh);
@@ -589,4 +595,31 @@ TEST(ZhangEdgeCollapse, WeldingJoinsSplitSeams) {
   ASSERT_EQ(out.normals.size(), out.vertexCount());
   for (size_t v = 0; v < out.vertexCount(); ++v)
     EXPECT_GT(glm::dot(out.normals[v], glm::normalize(out.positions[v])), 0.8f);
+}
+
+TEST(ZhangEdgeCollapse, SurfaceDistanceIsAnUpperBound) {
+  // brute force: every input vertex against every output triangle
+  const Mesh in = torus(32, 16);
+  Mesh out;
+  ZhangStats st;
+  ASSERT_TRUE(simplifyZhang(in, 150, ZhangParams{}, out, &st).ok());
+  float worst = 0.0f;
+  for (const glm::vec3& p : in.positions) {
+    float best = INFINITY;
+    for (size_t t = 0; t < out.triangleCount(); ++t) {
+      // sample the triangle densely: the distance to the samples is at least the distance to it
+      const glm::vec3 a = out.positions[out.triangles[3 * t]], b = out.positions[out.triangles[3 * t + 1]],
+                      c = out.positions[out.triangles[3 * t + 2]];
+      for (int i = 0; i <= 20; ++i)
+        for (int j = 0; i + j <= 20; ++j) {
+          const glm::vec3 q = a + (b - a) * (i / 20.0f) + (c - a) * (j / 20.0f);
+          best = std::min(best, glm::length(p - q));
+        }
+    }
+    worst = std::max(worst, best);
+  }
+  EXPECT_GT(st.max_surface_distance, 0.0f);
+  EXPECT_LE(st.max_surface_distance, st.max_displacement);
+  // sampled distances overestimate the true one by at most half a sample spacing (edges < 1)
+  EXPECT_GE(st.max_surface_distance + 1e-6f, worst - 0.05f) << "bound " << st.max_surface_distance << " worst " << worst;
 }

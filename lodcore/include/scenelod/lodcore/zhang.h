@@ -103,6 +103,9 @@ struct ZhangStats {
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
   float max_displacement = 0.0f;  // largest distance an input vertex moved to its representative
+  // upper bound of the largest distance from an input vertex to the result's surface: each input
+  // vertex measured against the triangles around its representative
+  float max_surface_distance = 0.0f;
   ZhangStopReason stop_reason = ZhangStopReason::kTargetReached;
 };
 
@@ -123,14 +126,16 @@ Error simplifyZhangMulti(const Mesh& in, const std::vector<size_t>& targets, con
                          std::vector<Mesh>& out, std::vector<ZhangStats>* stats = nullptr,
                          const ProgressCallback& progress = {});
 
-// The "equivalent cell width" of a level whose vertices moved at most `max_displacement`: the width
-// of a cube cell whose centre is within that distance of every point of the cell, 2 d / sqrt(3).
-float zhangEquivalentCellWidth(float max_displacement);
+// The "equivalent cell width" of a level whose error is at most `max_distance`: the width of a cube
+// cell whose centre is within that distance of every point of the cell, 2 d / sqrt(3).
+float zhangEquivalentCellWidth(float max_distance);
 
 // Builds level 0 (a copy of `original`) and up to params.level_count levels at triangle targets
 // halving each level (T / 2, T / 4, ...), from one recorded run of simplifyZhang. Each level gets
 // method kZhang, its measured max_error (max vertex displacement), bounds, and cell_width =
-// zhangEquivalentCellWidth(max_error), raised where needed so widths strictly increase. Stops early
+// zhangEquivalentCellWidth(ZhangStats::max_surface_distance) (the bound of the input vertices'
+// distance to the level, much tighter than the displacement for edge collapse; docs/ZHANG.md),
+// raised where needed so widths strictly increase. Stops early
 // when a level would have fewer than 4 triangles or no collapse is possible any more.
 // params.cluster is ignored but for its method; params.first_cell_width and growth are ignored.
 // Errors: invalid mesh. Cost: one simplification run; allocates.
