@@ -37,7 +37,77 @@ bool degenerateTriangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3&
   const double cross = glm::length(glm::cross(glm::dvec3(b - a), glm::dvec3(c - a)));
   const double longest = std::max({glm::length(glm::dvec3(b - a)), glm::length(glm::dvec3(c - b)),
                                     glm::length(glm::dvec3(a - c))});
-  return !(cross > 1e-12 * longest * longest) || !(longest > 0.0);
+  // also in float, the precision a renderer (and the output's user) sees
+  return !(cross > 1e-12 * longest * longest) || !(longest > 0.0) || !(glm::length(glm::cross(b - a, c - a)) > 0.0f);
+}
+
+double minAngle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  auto angle = [](const glm::dvec3& p, const glm::dvec3& q, const glm::dvec3& r) {
+    const glm::dvec3 u = q - p, v = r - p;
+    const double lu = glm::length(u), lv = glm::length(v);
+    return lu > 0.0 && lv > 0.0 ? std::acos(std::clamp(glm::dot(u, v) / (lu * lv), -1.0, 1.0)) : 0.0;
+  };
+  return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+}
+
+// Triangulates out's faces into out.triangles. A face convex in its Newell plane is clipped ear by
+// ear, always taking the ear with the largest smallest angle (a fan over a many-cornered curved
+// polygon makes slivers whose normals stand across the surface); other faces use the general ear
+// clipping of mesh.cpp. Cost O(k^2) per convex face of k corners.
+void triangulatePolygons(Mesh& out) {
+  Mesh general;
+  general.positions = out.positions;
+  general.face_offsets.push_back(0);
+  out.triangles.clear();
+  std::vector<uint32_t> ring;
+  std::vector<glm::dvec2> q;
+  for (size_t f = 0; f < out.faceCount(); ++f) {
+    const size_t b = out.face_offsets[f], k = out.face_offsets[f + 1] - b;
+    if (k < 3) continue;
+    ring.assign(out.face_corners.begin() + std::ptrdiff_t(b), out.face_corners.begin() + std::ptrdiff_t(b + k));
+    glm::dvec3 n(0.0);
+    for (size_t i = 0; i < k; ++i) n += glm::cross(glm::dvec3(out.positions[ring[i]]), glm::dvec3(out.positions[ring[(i + 1) % k]]));
+    bool convex = glm::length(n) > 0.0;
+    if (convex) {
+      n = glm::normalize(n);
+      const glm::dvec3 t = glm::normalize(std::fabs(n.x) > 0.9 ? glm::cross(n, glm::dvec3(0, 1, 0)) : glm::cross(n, glm::dvec3(1, 0, 0)));
+      const glm::dvec3 s = glm::cross(n, t);
+      q.resize(k);
+      double extent = 0.0;
+      for (size_t i = 0; i < k; ++i) {
+        const glm::dvec3 p(out.positions[ring[i]]);
+        q[i] = glm::dvec2(glm::dot(p, t), glm::dot(p, s));
+        extent = std::max(extent, glm::length(q[i] - q[0]));
+      }
+      for (size_t i = 0; i < k && convex; ++i) {
+        const glm::dvec2 a = q[(i + k - 1) % k], c = q[i], d = q[(i + 1) % k];
+        if ((c.x - a.x) * (d.y - a.y) - (c.y - a.y) * (d.x - a.x) < -1e-9 * extent * extent) convex = false;
+      }
+    }
+    if (!convex) {
+      general.face_corners.insert(general.face_corners.end(), ring.begin(), ring.end());
+      general.face_offsets.push_back(uint32_t(general.face_corners.size()));
+      continue;
+    }
+    while (ring.size() > 3) {
+      size_t best = 0;
+      double best_angle = -1.0;
+      for (size_t i = 0; i < ring.size(); ++i) {
+        const size_t m = ring.size();
+        const double a = minAngle(glm::dvec3(out.positions[ring[(i + m - 1) % m]]), glm::dvec3(out.positions[ring[i]]),
+                                  glm::dvec3(out.positions[ring[(i + 1) % m]]));
+        if (a > best_angle) { best_angle = a; best = i; }
+      }
+      const size_t m = ring.size();
+      out.triangles.insert(out.triangles.end(), {ring[(best + m - 1) % m], ring[best], ring[(best + 1) % m]});
+      ring.erase(ring.begin() + std::ptrdiff_t(best));
+    }
+    out.triangles.insert(out.triangles.end(), ring.begin(), ring.end());
+  }
+  if (general.faceCount() > 0) {
+    triangulateFaces(general);
+    out.triangles.insert(out.triangles.end(), general.triangles.begin(), general.triangles.end());
+  }
 }
 
 }  // namespace
@@ -99,7 +169,7 @@ void assembleMesh(const Mesh& in, const Model& m, const ScroogeParams& params, M
   }
 
   // triangles of the polygons, without the zero-area ones a fan over co-linear corners can make
-  triangulateFaces(out);
+  triangulatePolygons(out);
   std::vector<uint32_t> tris;
   for (size_t t = 0; t + 2 < out.triangles.size(); t += 3) {
     const uint32_t a = out.triangles[t], b = out.triangles[t + 1], c = out.triangles[t + 2];

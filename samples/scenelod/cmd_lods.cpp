@@ -1,6 +1,7 @@
 // scenelod lods: a chain of vertex-clustering levels (Low & Tan 1997 §3.2.2: every level from the
 // original, cell widths doubling) of a whole model in world space, with a table of the levels.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include "args.h"
 #include "cluster_options.h"
 #include "command.h"
+#include "zhang_options.h"
 #include "progress.h"
 #include "scenelod/scene/gltf_io.h"
 #include "scenelod/scene/lod_build.h"
@@ -33,7 +35,8 @@ const std::string kUsage = std::string(
     "  --cell-rel F  first cell width as F x the bounding-box diagonal\n"
     "  --split       one file per level (the whole model in world space)\n"
     "  --flatten     OUT.glb holds one chain of the whole model in world space\n") +
-    kClusterOptionsHelp;
+    kClusterOptionsHelp + kZhangOptionsHelp +
+    "  zhang levels halve the triangle count; their cell width is 2 x max displacement / sqrt(3)\n";
 
 // every unique mesh's chain in object space, written as one GLB with MSFT_lod per mesh node
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
@@ -103,6 +106,7 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
 int runLods(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
   for (const char* o : {"--out", "--levels", "--cell", "--cell-rel"}) options.push_back(o);
+  for (const std::string& o : zhangOptionNames()) options.push_back(o);
   Args args(argv, {"--split", "--flatten"}, options);
   if (!args.ok()) return usageError("lods", args.error());
   if (args.positional().size() != 1) return usageError("lods", "expected one input file");
@@ -114,6 +118,10 @@ int runLods(const std::vector<std::string>& argv) {
   ChainParams cp;
   std::string err;
   if (!parseClusterOptions(args, cp.cluster, err)) return usageError("lods", err);
+  ZhangParams zp;
+  if (!parseZhangOptions(args, zp, err)) return usageError("lods", err);
+  if (cp.cluster.method == LodMethod::kZhang && (args.has("--cell") || args.has("--cell-rel")))
+    return usageError("lods", "--method zhang chooses its levels by triangle count, not --cell or --cell-rel");
   long levels = 8;
   double cell = 0.0, rel = 0.0;
   if (args.has("--levels") && (!args.getInt("--levels", levels) || levels < 0 || levels > 64))
@@ -133,7 +141,12 @@ int runLods(const std::vector<std::string>& argv) {
   cp.progress = bar.callback();
   LodChain chain;
   ChainStats stats;
-  if (Error e = buildChain(mesh, cp, chain, &stats)) return runError("lods", in + ": " + e.message);
+  const auto t_build = std::chrono::steady_clock::now();
+  const Error built = cp.cluster.method == LodMethod::kZhang ? buildZhangChain(mesh, cp, zp, chain)
+                                                             : buildChain(mesh, cp, chain, &stats);
+  if (cp.cluster.method == LodMethod::kZhang)  // one run for all levels: only the total is known
+    stats.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+  if (built) return runError("lods", in + ": " + built.message);
   bar.finish();
 
   const std::string stem = out.substr(0, out.size() - ext.size());
@@ -160,8 +173,14 @@ int runLods(const std::vector<std::string>& argv) {
     std::printf("wrote %s-level1%s .. %s-level%zu%s\n", stem.c_str(), ext.c_str(), stem.c_str(),
                 chain.levelCount() - 1, ext.c_str());
   }
-  std::printf("%s: method %s, grading %s, synthesis %s, cells %s\n", in.c_str(), lodMethodName(cp.cluster.method),
-              gradingName(cp.cluster.grading), synthesisName(cp.cluster.synthesis), cellShapeName(cp.cluster.cell_shape));
+  if (cp.cluster.method == LodMethod::kZhang) {
+    std::printf("%s: method zhang (%s, placement %s, influence %s)\n", in.c_str(), zhangModeName(zp.mode),
+                zhangPlacementName(zp.placement), zhangInfluenceName(zp.influence));
+  } else {
+    std::printf("%s: method %s, grading %s, synthesis %s, cells %s\n", in.c_str(), lodMethodName(cp.cluster.method),
+                gradingName(cp.cluster.grading), synthesisName(cp.cluster.synthesis),
+                cellShapeName(cp.cluster.cell_shape));
+  }
   printLevelTable(chain, &stats);
   std::printf("time: grading and sort %.1f ms, w1 search %.1f ms, whole chain %.1f ms (levels in parallel)\n",
               stats.prepare_seconds * 1e3, stats.first_width_seconds * 1e3, stats.total_seconds * 1e3);
