@@ -131,7 +131,12 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell-rel") && (!args.getDouble("--cell-rel", rel) || !(rel > 0.0)))
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
-  if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) return runSceneLods(in, out, cp, float(cell), float(rel));
+  if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) {
+    // per-mesh chains go through buildChain, which runs zhang with its default options
+    for (const std::string& o : zhangOptionNames())
+      if (args.has(o)) return usageError("lods", o + " applies to the whole-model chain: add --flatten");
+    return runSceneLods(in, out, cp, float(cell), float(rel));
+  }
 
   Mesh mesh;
   if (Error e = loadWorldMesh(in, mesh)) return runError("lods", e.message);

@@ -315,7 +315,9 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
 
   DemoSceneInfo local_info;
   Mesh organic;
-  if (!p.bunny_path.empty() && readBunnyObj(p.bunny_path, organic)) {
+  if (p.bunny_count == 0) {
+    local_info.note = "no bunny instances";
+  } else if (!p.bunny_path.empty() && readBunnyObj(p.bunny_path, organic)) {
     local_info.bunny_loaded = true;
     local_info.note = "bunny instances use " + p.bunny_path;
   } else {
@@ -325,8 +327,8 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
                                                  "; bunny instances use a generated organic blob instead";
   }
   const Aabb ob = computeBounds(organic);
-  const int32_t bunny = mesh(local_info.bunny_loaded ? "bunny" : "organic_blob", std::move(organic), -1);
-  out.meshes.back().primitive_materials = {m_dark};
+  // no mesh without an instance: unused meshes would only surprise exporters and tables
+  const int32_t bunny = p.bunny_count == 0 ? -1 : mesh(local_info.bunny_loaded ? "bunny" : "organic_blob", std::move(organic), m_dark);
 
   auto node = [&](int32_t parent, const std::string& name, const glm::mat4& local, int32_t mesh_index) {
     NodeData n;
@@ -374,7 +376,7 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   node(root, "wedge", T(0.0f, 0.3f, 0.2f) * R(90, {1, 0, 0}), trim);
   // bunnies: scaled so that their box diagonal is 0.8 units, standing on the plate
   const float scale = 0.8f / std::max(ob.diagonal(), 1e-6f);
-  const int32_t zoo = node(root, "bunnies", T(0.0f, 0.0f, 0.3f), -1);
+  const int32_t zoo = p.bunny_count == 0 ? -1 : node(root, "bunnies", T(0.0f, 0.0f, 0.3f), -1);
   for (size_t b = 0; b < p.bunny_count; ++b) {
     const float x = -1.5f + 3.0f * float(b) / float(std::max<size_t>(p.bunny_count - 1, 1));
     const glm::mat4 place = T(x, -ob.min.y * scale, 0.0f) * R(float(hashMix(uint32_t(b)) % 360), {0, 1, 0}) *

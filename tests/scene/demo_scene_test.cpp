@@ -113,6 +113,18 @@ TEST(DemoScene, UsesTheBunnyWhenInstalled) {
   EXPECT_EQ(s.meshes.back().mesh.triangleCount(), 69666u);
 }
 
+TEST(DemoScene, NoBunniesMeansNoBunnyMesh) {
+  DemoSceneParams p;
+  p.bunny_count = 0;
+  SceneData s;
+  DemoSceneInfo info;
+  ASSERT_TRUE(makeDemoScene(s, p, &info).ok());
+  EXPECT_EQ(s.meshes.size(), 11u);
+  std::vector<int> instances(s.meshes.size(), 0);
+  for (int32_t n : objectNodes(s)) ++instances[s.nodes[n].mesh];
+  for (size_t m = 0; m < s.meshes.size(); ++m) EXPECT_GE(instances[m], 1) << s.meshes[m].name;
+}
+
 TEST(DemoScene, BadParametersAreRefused) {
   SceneData s;
   DemoSceneParams p;

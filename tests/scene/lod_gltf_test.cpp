@@ -7,6 +7,7 @@
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/demo_scene.h"
 #include "scenelod/scene/gltf_io.h"
+#include "scenelod/scene/lod_build.h"
 #include "test_support.h"
 
 using namespace scenelod;
@@ -46,6 +47,12 @@ void makeChains(const SceneData& s, std::vector<LodChain>& chains) {
     chains[m].levels.push_back(l2);
     computeChainBounds(chains[m]);
   }
+}
+
+std::vector<glm::vec3> corners(const Mesh& m, const std::vector<uint32_t>& indices) {
+  std::vector<glm::vec3> out;
+  for (uint32_t i : indices) out.push_back(m.positions[i]);
+  return out;
 }
 
 }  // namespace
@@ -93,6 +100,52 @@ TEST(LodGltf, MsftLodOutputReimportsToTheSameChains) {
       for (size_t v = 0; v < a.mesh.normals.size(); ++v) EXPECT_NEAR(glm::length(b.mesh.normals[v] - a.mesh.normals[v]), 0.0f, 1e-6f);
       // every vertex inside the recomputed level sphere
       for (const glm::vec3& q : b.mesh.positions) EXPECT_LE(glm::length(q - b.bounds.center), b.bounds.radius);
+    }
+  }
+  std::remove(path.c_str());
+}
+
+TEST(LodGltf, BuiltChainsSurviveTheMsftLodRoundTrip) {
+  DemoSceneParams p;
+  p.bunny_count = 0;
+  p.gearbox_count = 1;
+  p.segments = 12;
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  LodBuildParams params;
+  params.chain.level_count = 5;
+  SceneLods lods;
+  ASSERT_TRUE(buildLods(s, params, lods).ok());
+  size_t edges = 0, points = 0;
+  for (const LodChain& c : lods.chains)
+    for (const LodLevel& l : c.levels) {
+      edges += l.mesh.edgeCount();
+      points += l.mesh.pointCount();
+    }
+  EXPECT_GT(edges, 0u);  // the thin fins and rods collapse into thick edges
+  std::vector<const LodChain*> ptrs;
+  for (const LodChain& c : lods.chains) ptrs.push_back(&c);
+  const std::string path = scenelod::test::scratchDir() + "/built_lods.glb";
+  ASSERT_TRUE(exportGlb(path, s, &ptrs).ok());
+  SceneData back;
+  std::vector<LodChain> chains;
+  const Error e = importGltfLods(path, back, chains);
+  ASSERT_TRUE(e.ok()) << e.message;
+  ASSERT_EQ(chains.size(), lods.chains.size());
+  for (size_t m = 0; m < chains.size(); ++m) {
+    ASSERT_EQ(chains[m].levelCount(), lods.chains[m].levelCount()) << s.meshes[m].name;
+    for (size_t l = 0; l < chains[m].levelCount(); ++l) {
+      const LodLevel &a = lods.chains[m].levels[l], &b = chains[m].levels[l];
+      SCOPED_TRACE(s.meshes[m].name + " level " + std::to_string(l));
+      // the same primitives at the same positions, corner by corner (the importer may merge
+      // vertices that the clustering left as exact duplicates, so indices can differ)
+      EXPECT_EQ(corners(b.mesh, b.mesh.triangles), corners(a.mesh, a.mesh.triangles));
+      EXPECT_EQ(corners(b.mesh, b.mesh.edges), corners(a.mesh, a.mesh.edges));
+      EXPECT_EQ(corners(b.mesh, b.mesh.points), corners(a.mesh, a.mesh.points));
+      if (a.mesh.edgeCount() > 0) EXPECT_EQ(b.mesh.edge_thickness, a.mesh.edge_thickness);
+      EXPECT_EQ(b.cell_width, a.cell_width);
+      EXPECT_EQ(b.max_error, a.max_error);
+      EXPECT_EQ(b.method, a.method);
     }
   }
   std::remove(path.c_str());
