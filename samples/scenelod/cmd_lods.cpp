@@ -1,5 +1,6 @@
 // scenelod lods: a chain of vertex-clustering levels (Low & Tan 1997 §3.2.2: every level from the
 // original, cell widths doubling) of a whole model in world space, with a table of the levels.
+#include <chrono>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include "cluster_options.h"
 #include "command.h"
 #include "progress.h"
+#include "scrooge_options.h"
 #include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::tool {
@@ -27,11 +29,12 @@ const std::string kUsage = std::string(
     "  --cell W1     first cell width, object space (default: level 1 has about half the triangles)\n"
     "  --cell-rel F  first cell width as F x the bounding-box diagonal\n"
     "  --split       one file per level\n") +
-    kClusterOptionsHelp;
+    kClusterOptionsHelp + kScroogeOptionsHelp;
 
 int runLods(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
   for (const char* o : {"--out", "--levels", "--cell", "--cell-rel"}) options.push_back(o);
+  for (const std::string& o : scroogeOptionNames()) options.push_back(o);
   Args args(argv, {"--split"}, options);
   if (!args.ok()) return usageError("lods", args.error());
   if (args.positional().size() != 1) return usageError("lods", "expected one input file");
@@ -42,7 +45,16 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell") && args.has("--cell-rel")) return usageError("lods", "give only one of --cell, --cell-rel");
   ChainParams cp;
   std::string err;
-  if (!parseClusterOptions(args, cp.cluster, err)) return usageError("lods", err);
+  const bool scrooge = isScroogeMethod(args);
+  ScroogeParams sp;
+  if (scrooge) {
+    if (!parseScroogeOptions(args, sp, err)) return usageError("lods", err);
+    cp.cluster.method = LodMethod::kScrooge;
+  } else if (!parseClusterOptions(args, cp.cluster, err)) {
+    return usageError("lods", err);
+  } else if (args.has("--subvolume") || args.has("--theta-max")) {
+    return usageError("lods", "--subvolume and --theta-max need --method scrooge");
+  }
   long levels = 8;
   double cell = 0.0, rel = 0.0;
   if (args.has("--levels") && (!args.getInt("--levels", levels) || levels < 0 || levels > 64))
@@ -55,13 +67,22 @@ int runLods(const std::vector<std::string>& argv) {
 
   Mesh mesh;
   if (Error e = loadWorldMesh(in, mesh)) return runError("lods", e.message);
-  if (rel > 0.0) cell = rel * double(computeBounds(mesh).diagonal());
+  if (scrooge) {  // --cell-rel F: sub-volume diagonal = F x bbox diagonal; --subvolume 1/64|1/8|1
+    float w = 0.0f;
+    if (!scroogeFirstWidth(args, mesh, w, err)) return usageError("lods", in + ": " + err);
+    cell = w;
+  } else if (rel > 0.0) {
+    cell = rel * double(computeBounds(mesh).diagonal());
+  }
   cp.first_cell_width = float(cell);
   ProgressBar bar("lods");
   cp.progress = bar.callback();
   LodChain chain;
   ChainStats stats;
-  if (Error e = buildChain(mesh, cp, chain, &stats)) return runError("lods", in + ": " + e.message);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Error e = scrooge ? buildScroogeChain(mesh, cp, sp, chain) : buildChain(mesh, cp, chain, &stats))
+    return runError("lods", in + ": " + e.message);
+  if (scrooge) stats.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bar.finish();
 
   const std::string stem = out.substr(0, out.size() - ext.size());
@@ -88,9 +109,13 @@ int runLods(const std::vector<std::string>& argv) {
     std::printf("wrote %s-level1%s .. %s-level%zu%s\n", stem.c_str(), ext.c_str(), stem.c_str(),
                 chain.levelCount() - 1, ext.c_str());
   }
-  std::printf("%s: method %s, grading %s, synthesis %s, cells %s\n", in.c_str(), lodMethodName(cp.cluster.method),
-              gradingName(cp.cluster.grading), synthesisName(cp.cluster.synthesis), cellShapeName(cp.cluster.cell_shape));
-  printLevelTable(chain, &stats);
+  if (scrooge)
+    std::printf("%s: method scrooge, theta %g..%g deg; cell width = sub-volume edge, max error = largest vertex move\n",
+                in.c_str(), double(sp.theta_min_deg), double(sp.theta_max_deg));
+  else
+    std::printf("%s: method %s, grading %s, synthesis %s, cells %s\n", in.c_str(), lodMethodName(cp.cluster.method),
+                gradingName(cp.cluster.grading), synthesisName(cp.cluster.synthesis), cellShapeName(cp.cluster.cell_shape));
+  printLevelTable(chain, scrooge ? nullptr : &stats);
   std::printf("time: grading and sort %.1f ms, w1 search %.1f ms, whole chain %.1f ms (levels in parallel)\n",
               stats.prepare_seconds * 1e3, stats.first_width_seconds * 1e3, stats.total_seconds * 1e3);
   return 0;
