@@ -54,7 +54,7 @@ void runQuality(benchmark::State& state, const std::string& name, int divisions,
       return;
     }
   }
-  if (cluster) st.output_polygons = out.triangleCount();
+  if (cluster) st.output_polygons = st.output_triangles = out.triangleCount();
   eval::DistanceResult d;
   if (Error e = eval::measureSurfaceDistance(*m, out, eval::DistanceParams{}, d)) {
     state.SkipWithError(e.message.c_str());
