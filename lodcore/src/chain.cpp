@@ -52,20 +52,18 @@ Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params,
     return countClusteredTriangles(p, cp, n);
   };
   size_t n = 0;
-  if (Error e = count(lo, n)) return e;
-  if (n <= target) {  // even the finest width cannot keep more
-    cell_width = static_cast<float>(lo);
-    return {};
-  }
-  best_diff = n - target;
+  // safeguarded secant on the model count ~ w^-2 (a surface's clusters): a first guess from the
+  // area, then w * sqrt(count / target), falling back to bisection of the bracket [lo, hi]
+  double w = p.surface_area > 0.0 ? std::sqrt(2.0 * p.surface_area / double(target)) : std::sqrt(lo * hi);
   for (int it = 0; it < 48; ++it) {
-    const double mid = std::sqrt(lo * hi);
-    if (Error e = count(mid, n)) return e;
+    if (!(w > lo && w < hi)) w = std::sqrt(lo * hi);
+    if (Error e = count(w, n)) return e;
     const size_t diff = n > target ? n - target : target - n;
-    if (diff < best_diff) best_diff = diff, best = static_cast<float>(mid);
+    if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
     if (double(diff) <= tolerance * double(target)) break;
-    if (n > target) lo = mid; else hi = mid;
+    if (n > target) lo = w; else hi = w;
     if (hi / lo < 1.0 + 1e-6) break;
+    w = n > 0 ? w * std::sqrt(double(n) / double(target)) : std::sqrt(lo * hi);
   }
   // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
   // scan widths around the best one and keep the closest

@@ -2,6 +2,8 @@
 // (std::from_chars, no iostreams per token), so a 70k-triangle model loads in milliseconds.
 #include "scenelod/lodcore/obj_io.h"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -25,6 +27,9 @@ using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 Error readWholeFile(const std::string& path, std::string& data) {
   FilePtr f(std::fopen(path.c_str(), "rb"));
   if (!f) return {Status::kIoError, path + ": cannot open file (" + std::strerror(errno) + ")"};
+  struct stat st;
+  if (::fstat(::fileno(f.get()), &st) != 0 || !S_ISREG(st.st_mode))
+    return {Status::kIoError, path + ": cannot open file (not a regular file)"};
   if (std::fseek(f.get(), 0, SEEK_END) != 0) return {Status::kIoError, path + ": cannot seek (not a regular file?)"};
   const long size = std::ftell(f.get());
   if (size < 0) return {Status::kIoError, path + ": cannot tell the file size (not a regular file?)"};

@@ -295,9 +295,28 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   mark_.assign(std::max(vn, tn), 0);
   mark_gen_ = 0;
 
+  // welding: vertices at exactly the same position become one (the lowest id) for the topology
+  if (params_.weld_positions && vn > 1) {
+    std::vector<uint32_t> order(vn);
+    for (uint32_t v = 0; v < vn; ++v) order[v] = v;
+    auto less = [&](uint32_t x, uint32_t y) {
+      const glm::vec3 &a = in.positions[x], &b = in.positions[y];
+      if (a.x != b.x) return a.x < b.x;
+      if (a.y != b.y) return a.y < b.y;
+      if (a.z != b.z) return a.z < b.z;
+      return x < y;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (size_t i = 1; i < vn; ++i)
+      if (in.positions[order[i]] == in.positions[order[i - 1]]) parent_[order[i]] = parent_[order[i - 1]];
+    attr_nrm_.clear();  // split normals of hard edges do not survive a weld; geometric normals are output
+  }
+  auto welded = [&](uint32_t v) { return parent_[v]; };
+
   // triangles: drop repeated indices and repeated vertex sets (the first occurrence stays)
   for (size_t t = 0; t < tn; ++t) {
-    const uint32_t a = in.triangles[3 * t], b = in.triangles[3 * t + 1], c = in.triangles[3 * t + 2];
+    const uint32_t a = welded(in.triangles[3 * t]), b = welded(in.triangles[3 * t + 1]),
+                   c = welded(in.triangles[3 * t + 2]);
     if (a == b || b == c || a == c) {
       ++stats_.dropped_degenerate;
       continue;
@@ -316,7 +335,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     const uint32_t id = static_cast<uint32_t>(faces_.size());
     Face f;
     for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = in.triangles[3 * t + k];
+      const uint32_t v = welded(in.triangles[3 * t + k]);
       f.v[k] = v;
       f.next[k] = vhead_[v];
       vhead_[v] = 3 * id + k;

@@ -11,7 +11,8 @@ namespace scenelod::tool {
 const char kClusterOptionsHelp[] =
     "  --method M        floating (default: floating cells with the best measured grading, synthesis\n"
     "                    and variant), floating-heaviest (Low & Tan 3.2), floating-nearest (3.2.3),\n"
-    "                    uniform (Rossignac & Borrel grid over the bounding box)\n"
+    "                    uniform (Rossignac & Borrel grid over the bounding box), zhang (edge\n"
+    "                    collapse by vision characteristic, Zhang, Shu & Luo 2003; see below)\n"
     "  --grading G       lowtan (cos(theta/2) x longest edge) or rossignac (1/theta x longest edge)\n"
     "  --synthesis S     mean (weighted mean), heaviest (the cell centre) or quadric (Lindstrom)\n"
     "  --cell-shape C    cube or sphere (diameter = cell width); floating methods only\n";
@@ -26,8 +27,10 @@ bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error)
     p.method = LodMethod::kFloatingNearest;
   } else if (method == "uniform") {
     p.method = LodMethod::kUniform;
+  } else if (method == "zhang") {
+    p.method = LodMethod::kZhang;
   } else {
-    error = "unknown --method '" + method + "' (floating, floating-heaviest, floating-nearest, uniform)";
+    error = "unknown --method '" + method + "' (floating, floating-heaviest, floating-nearest, uniform, zhang)";
     return false;
   }
   if (args.has("--grading")) {

@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "command.h"
+#include "progress.h"
 #include "scenelod/lodcore/obj_io.h"
 #include "scenelod/scene/gltf_io.h"
 
@@ -48,14 +49,20 @@ int runConvert(const std::vector<std::string>& argv) {
   if (ext != ".glb" && ext != ".obj")
     return usageError("convert", "cannot write '" + out + "': the output must end in .glb or .obj");
 
+  // coarse stages: the bar appears only when the whole conversion takes more than a second
+  ProgressBar bar("convert");
+  bar.update(0.0, "reading");
   scene::SceneData s;
   if (Error e = scene::loadScene(in, s)) return runError("convert", e.message);
+  bar.update(0.5, "writing");
   if (ext == ".glb") {
     if (Error e = scene::exportGlb(out, s)) return runError("convert", e.message);
   } else {
     const Mesh flat = scene::flattenScene(s);
     if (Error e = writeObj(out, flat)) return runError("convert", e.message);
   }
+  bar.update(1.0, "done");
+  bar.finish();
   std::printf("wrote %s\n", out.c_str());
   return 0;
 }

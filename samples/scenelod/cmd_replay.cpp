@@ -6,6 +6,7 @@
 #include "args.h"
 #include "command.h"
 #include "replay_report.h"
+#include "scenelod/selection/replay_visibility.h"
 #include "scenelod/selection/replay.h"
 #include "scenelod/selection/replay_runner.h"
 #include "scenelod/selection/replay_scene.h"
@@ -33,20 +34,25 @@ const char kUsage[] =
     "  --skip               skip upgrades that do not fit instead of stopping at the first\n"
     "  --no-calibrate       keep the prior cost model\n"
     "  --seed N             seed of the synthetic renderer's noise (default 1)\n"
-    "  --noise F            its relative standard deviation (default 0.05)";
+    "  --noise F            its relative standard deviation (default 0.05)\n"
+    "  --visibility         Embree occlusion estimates and pick focus feed the selection (docs/VISIBILITY.md);\n"
+    "                       the log adds visible, pick_object, hidden_count, hidden_cost_ms,\n"
+    "                       hidden_cost_without_ms, occlusion_saved_ms\n"
+    "  --ray-budget N       occlusion samples per frame with --visibility (default 20000)";
 
 int run(const std::vector<std::string>& argv) {
-  Args args(argv, {"--distance", "--skip", "--no-calibrate"},
-            {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise"});
+  Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility"},
+            {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget"});
   if (!args.ok()) return usageError("replay", args.error());
   if (args.positional().size() != 1) return usageError("replay", "expected one replay file");
   if (!args.has("--out") && !args.has("--report")) return usageError("replay", "nothing to write: give -o LOG and/or --report FILE.md");
   ReplayRunOptions opt;
   double budget = 0.0, hysteresis = 0.1, noise = 0.05;
-  long seed = 1;
+  long seed = 1, ray_budget = 20000;
   if (!args.getDouble("--budget", budget) || !args.getDouble("--hysteresis", hysteresis) || !args.getInt("--seed", seed) ||
-      !args.getDouble("--noise", noise))
+      !args.getDouble("--noise", noise) || !args.getInt("--ray-budget", ray_budget))
     return usageError("replay", args.error());
+  if (ray_budget < 0 || ray_budget > 100000000) return usageError("replay", "--ray-budget must be in [0, 1e8]");
   if (args.has("--budget")) {
     if (!(budget > 0.0)) return usageError("replay", "--budget must be > 0");
     opt.override_budget = true;
@@ -71,16 +77,28 @@ int run(const std::vector<std::string>& argv) {
   const std::string scene_path = resolveReplayScene(path, replay.header.scene);
   ReplayScene scene;
   if (Error e = loadReplayScene(scene_path, scene)) return runError("replay", e.message);
+  ReplayVisibility visibility;
+  if (args.has("--visibility")) {
+    ReplayVisibilityParams vp;
+    vp.occlusion.ray_budget = static_cast<uint32_t>(ray_budget);
+    if (Error e = visibility.init(scene, vp)) return runError("replay", scene_path + ": visibility: " + e.message);
+    opt.visibility = &visibility;
+  }
   std::vector<ReplayLogFrame> log;
   if (Error e = runReplay(replay, scene, opt, log)) return runError("replay", e.message);
   if (args.has("--out"))
     if (Error e = writeReplayLog(args.get("--out"), log)) return runError("replay", e.message);
   const ReplaySummary s = summarizeReplay(log);
-  std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s\n", s.frames,
-              s.objects, s.mean_predicted_ms, s.mean_measured_ms, s.switches_per_object_per_second);
+  std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s, "
+              "mean benefit %.6g\n", s.frames, s.objects, s.mean_predicted_ms, s.mean_measured_ms,
+              s.switches_per_object_per_second, s.mean_benefit);
   if (s.budget_frames)
     std::printf("budget frames after warm-up within +10 %%: %zu / %zu (%.1f %%)\n", s.within_10_percent, s.budget_frames,
                 100.0 * s.within_10_percent / s.budget_frames);
+  if (s.visibility_frames)
+    std::printf("visibility: %.1f %% of objects hidden on average; occlusion saved %.3f ms of predicted cost per frame "
+                "(%.3f ms went to hidden objects without it); %zu picks hit an object\n",
+                100.0 * s.mean_hidden_share, s.mean_occlusion_saved_ms, s.mean_hidden_cost_without_ms, s.pick_frames);
   if (args.has("--report")) {
     ReplayReportInput in;
     in.replay_path = path;

@@ -10,6 +10,7 @@
 #include "cluster_options.h"
 #include "command.h"
 #include "scrooge_options.h"
+#include "zhang_options.h"
 
 namespace scenelod::tool {
 
@@ -26,11 +27,36 @@ const std::string kUsage = std::string(
     "  --cell W              absolute object-space cell width\n"
     "  --cell-rel F          F x the bounding-box diagonal (default 0.02)\n"
     "  --target-triangles N  search the cell width that gives about N triangles\n") +
-    kClusterOptionsHelp + kScroogeOptionsHelp;
+    kClusterOptionsHelp + kZhangOptionsHelp +
+    "  zhang takes --target-triangles N (default: half the triangles); --cell and --cell-rel do not apply\n" +
+    kScroogeOptionsHelp;
+
+// --method zhang: edge collapse to a triangle count
+int runZhangSimplify(const std::string& in, const std::string& out, const Mesh& mesh, long target,
+                     const ZhangParams& zp) {
+  const size_t t = target > 0 ? size_t(target) : mesh.triangleCount() / 2;
+  const auto t0 = std::chrono::steady_clock::now();
+  Mesh result;
+  ZhangStats st;
+  if (Error e = simplifyZhang(mesh, t, zp, result, &st)) return runError("simplify", in + ": " + e.message);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (Error e = writeMeshFile(out, result, "simplified")) return runError("simplify", e.message);
+  std::printf("%s: %zu vertices, %zu triangles\n", in.c_str(), mesh.vertexCount(), mesh.triangleCount());
+  std::printf("method zhang (%s, placement %s, influence %s), target %zu triangles\n", zhangModeName(zp.mode),
+              zhangPlacementName(zp.placement), zhangInfluenceName(zp.influence), t);
+  std::printf("%s: %zu vertices, %zu triangles; %zu collapses, %s, max vertex displacement %.6g\n", out.c_str(),
+              result.vertexCount(), result.triangleCount(), st.collapses, zhangStopReasonName(st.stop_reason),
+              double(st.max_displacement));
+  std::printf("rejected: %zu fold-over, %zu topology; dropped input triangles: %zu degenerate, %zu duplicate\n",
+              st.rejected_fold, st.rejected_topology, st.dropped_degenerate, st.dropped_duplicate);
+  std::printf("time: %.1f ms\n", ms);
+  return 0;
+}
 
 int runSimplify(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
   for (const char* o : {"--out", "--cell", "--cell-rel", "--target-triangles"}) options.push_back(o);
+  for (const std::string& o : zhangOptionNames()) options.push_back(o);
   for (const std::string& o : scroogeOptionNames()) options.push_back(o);
   Args args(argv, {}, options);
   if (!args.ok()) return usageError("simplify", args.error());
@@ -57,8 +83,14 @@ int runSimplify(const std::vector<std::string>& argv) {
   if (args.has("--target-triangles") && (!a.getInt("--target-triangles", target) || target <= 0))
     return usageError("simplify", a.ok() ? "--target-triangles must be an integer > 0" : a.error());
 
+  ZhangParams zp;
+  if (!parseZhangOptions(args, zp, err)) return usageError("simplify", err);
+  if (params.method == LodMethod::kZhang && (args.has("--cell") || args.has("--cell-rel")))
+    return usageError("simplify", "--method zhang takes --target-triangles, not --cell or --cell-rel");
+
   Mesh mesh;
   if (Error e = loadWorldMesh(in, mesh)) return runError("simplify", e.message);
+  if (params.method == LodMethod::kZhang) return runZhangSimplify(in, out, mesh, target, zp);
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
   PreparedMesh prepared;

@@ -88,6 +88,26 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     }
     o << "\n";
   }
+
+  // runs made with --visibility: what occlusion saved (docs/VISIBILITY.md)
+  bool any_visibility = false;
+  for (const auto* log : in.runs)
+    for (const ReplayLogFrame& f : *log) any_visibility = any_visibility || f.has_visibility;
+  if (any_visibility) {
+    o << "\n## Occlusion and focus\n\n"
+         "Hidden objects read a visible fraction below 0.05 from the Embree occlusion estimate. The saving is the "
+         "predicted cost a selection without visibility (same parameters, focus and cost model) spends on them, "
+         "minus what the selection with visibility spends on them.\n\n"
+         "| run | frames | hidden objects (mean share) | predicted ms on hidden objects without occlusion | "
+         "occlusion saved ms / frame | frames whose pick hit an object |\n|---|---|---|---|---|---|\n";
+    for (size_t r = 0; r < in.runs.size(); ++r) {
+      const ReplaySummary s = summarizeReplay(*in.runs[r]);
+      if (!s.visibility_frames) continue;
+      o << "| " << in.run_names[r] << " | " << s.visibility_frames << " | " << num(100.0 * s.mean_hidden_share, 1) << " % | "
+        << num(s.mean_hidden_cost_without_ms) << " | " << num(s.mean_occlusion_saved_ms) << " | " << s.pick_frames << " |\n";
+    }
+  }
+
   // plots beside the report
   const size_t slash = md_path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? std::string() : md_path.substr(0, slash + 1);

@@ -47,6 +47,12 @@ bool readFileBytes(const std::string& path, std::vector<unsigned char>& out, std
     err = std::strerror(errno);
     return false;
   }
+  struct stat st;
+  if (::fstat(::fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+    std::fclose(f);
+    err = "not a regular file";
+    return false;
+  }
   std::fseek(f, 0, SEEK_END);
   const long size = std::ftell(f);
   std::rewind(f);
@@ -446,7 +452,7 @@ class GltfReader {
     std::vector<char> has_normal;
     bool any_normal = false, any_uv = false, any_color = false;
     std::vector<glm::vec3> vertex_color;
-    std::vector<float> vertex_thickness;
+    std::vector<float> edge_thickness;  // one per edge, from its own primitive's _THICKNESS
     bool any_thickness = false;
 
     for (size_t pi = 0; pi < src.primitives.size(); ++pi) {
@@ -529,11 +535,11 @@ class GltfReader {
           }
           any_color = true;
         }
-        vertex_thickness.resize(m.positions.size(), 0.0f);
         shared.emplace(key, Cached{base, count});
       }
+      std::vector<double> thickness;  // per vertex of this primitive, when it has _THICKNESS
       if (thick_acc >= 0) {
-        std::vector<double> v;
+        std::vector<double>& v = thickness;
         int comps = 0;
         if (Error e = readVec(thick_acc, what, "_THICKNESS", 1, 1, v, comps)) return e;
         if (v.size() != count)
@@ -542,9 +548,13 @@ class GltfReader {
         for (uint32_t i = 0; i < count; ++i) {
           if (!std::isfinite(v[i]) || v[i] < 0.0)
             return fail(Status::kInvalidMesh, what + " _THICKNESS: element " + std::to_string(i) + " is negative or not finite");
-          vertex_thickness[base + i] = static_cast<float>(v[i]);
         }
       }
+      // per-vertex thickness to per-edge: the mean of the two ends (equal for files we write)
+      auto addEdge = [&](uint32_t a, uint32_t b) {
+        m.edges.insert(m.edges.end(), {base + a, base + b});
+        edge_thickness.push_back(thickness.empty() ? 0.0f : static_cast<float>(0.5 * (thickness[a] + thickness[b])));
+      };
 
       std::vector<uint32_t> idx;
       if (p.indices >= 0) {
@@ -577,13 +587,13 @@ class GltfReader {
         case TINYGLTF_MODE_LINE:
           if (n % 2 != 0)
             return fail(Status::kInvalidMesh, what + ": LINES with " + std::to_string(n) + " indices (not a multiple of 2)");
-          for (size_t i = 0; i < n; ++i) m.edges.push_back(base + idx[i]);
+          for (size_t i = 0; i < n; i += 2) addEdge(idx[i], idx[i + 1]);
           any_thickness |= thick_acc >= 0;
           break;
         case TINYGLTF_MODE_LINE_STRIP:
         case TINYGLTF_MODE_LINE_LOOP:
-          for (size_t i = 0; i + 1 < n; ++i) m.edges.insert(m.edges.end(), {base + idx[i], base + idx[i + 1]});
-          if (mode == TINYGLTF_MODE_LINE_LOOP && n > 2) m.edges.insert(m.edges.end(), {base + idx[n - 1], base + idx[0]});
+          for (size_t i = 0; i + 1 < n; ++i) addEdge(idx[i], idx[i + 1]);
+          if (mode == TINYGLTF_MODE_LINE_LOOP && n > 2) addEdge(idx[n - 1], idx[0]);
           any_thickness |= thick_acc >= 0;
           break;
         case TINYGLTF_MODE_POINTS:
@@ -592,12 +602,7 @@ class GltfReader {
         default: break;
       }
     }
-    if (any_thickness) {
-      // per-vertex thickness to per-edge: the mean of the two ends (equal for files we write)
-      m.edge_thickness.resize(m.edgeCount());
-      for (size_t e = 0; e < m.edgeCount(); ++e)
-        m.edge_thickness[e] = 0.5f * (vertex_thickness[m.edges[2 * e]] + vertex_thickness[m.edges[2 * e + 1]]);
-    }
+    if (any_thickness) m.edge_thickness = std::move(edge_thickness);
     if (!any_uv) m.uvs.clear();
     if (any_color) m.colors = std::move(vertex_color);
     if (!any_normal) {

@@ -48,6 +48,10 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
     ChainParams cp = params.chain;
     cp.progress = ProgressCallback{};
     const MeshData& md = data.meshes[m];
+    if (params.first_cell_rel > 0.0f) {
+      const float diagonal = computeBounds(md.mesh).diagonal();
+      cp.first_cell_width = diagonal > 0.0f ? params.first_cell_rel * diagonal : 0.0f;
+    }
     if (Error e = buildChain(md.mesh, cp, out.chains[m])) {
       errors[m] = Error(e.status, what + " mesh " + std::to_string(m) + (md.name.empty() ? "" : " '" + md.name + "'") +
                                       ": " + e.message);

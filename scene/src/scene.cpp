@@ -9,6 +9,10 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 #include "scenelod/scene/bounding_sphere.h"
 
 namespace scenelod::scene {
@@ -36,6 +40,46 @@ inline float scaleBound(const float* m) {
   // a few ulps up so float rounding of the products never makes the bound too small
   return std::sqrt(row) * (1.0f + 4.0f * 1.1920929e-7f);
 }
+
+#if defined(__SSE2__)
+// the same bound and the centre transform with 4-wide vectors: columns a, b, c, t of the matrix are
+// transposed to rows so that the Gram matrix's diagonal (aa, bb, cc) and off-diagonal (ab, bc, ca)
+// come out as two vectors without horizontal sums
+inline void sphereSse(const float* w, const Sphere& s, float* center_out, float& scale_out) {
+  __m128 a = _mm_loadu_ps(w), b = _mm_loadu_ps(w + 4), c = _mm_loadu_ps(w + 8);
+  const __m128 t = _mm_loadu_ps(w + 12);
+  const __m128 center = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, _mm_set1_ps(s.center.x)), _mm_mul_ps(b, _mm_set1_ps(s.center.y))),
+                                   _mm_add_ps(_mm_mul_ps(c, _mm_set1_ps(s.center.z)), t));
+  __m128 zero = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(a, b, c, zero);  // a = (a0 b0 c0 0), b = (a1 b1 c1 0), c = (a2 b2 c2 0)
+  const __m128 diag = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, a), _mm_mul_ps(b, b)), _mm_mul_ps(c, c));
+  const __m128 ra = _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 0, 2, 1)), rb = _mm_shuffle_ps(b, b, _MM_SHUFFLE(3, 0, 2, 1)),
+               rc = _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 0, 2, 1));
+  __m128 off = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, ra), _mm_mul_ps(b, rb)), _mm_mul_ps(c, rc));  // (ab, bc, ca, 0)
+  off = _mm_andnot_ps(_mm_set1_ps(-0.0f), off);
+  // rows of |G|: (aa + ab + ca, bb + bc + ab, cc + ca + bc)
+  const __m128 rows = _mm_add_ps(_mm_add_ps(diag, off), _mm_shuffle_ps(off, off, _MM_SHUFFLE(3, 1, 0, 2)));
+  const __m128 m1 = _mm_max_ps(rows, _mm_shuffle_ps(rows, rows, _MM_SHUFFLE(3, 0, 2, 1)));
+  const __m128 m2 = _mm_max_ps(m1, _mm_shuffle_ps(rows, rows, _MM_SHUFFLE(3, 1, 0, 2)));
+  scale_out = _mm_cvtss_f32(_mm_sqrt_ss(m2)) * (1.0f + 4.0f * 1.1920929e-7f);
+  alignas(16) float out[4];
+  _mm_store_ps(out, center);
+  center_out[0] = out[0];
+  center_out[1] = out[1];
+  center_out[2] = out[2];
+}
+
+// out = p * l for column-major 4x4 matrices (out may not alias p or l)
+inline void mulMat4Sse(const float* p, const float* l, float* out) {
+  const __m128 p0 = _mm_loadu_ps(p), p1 = _mm_loadu_ps(p + 4), p2 = _mm_loadu_ps(p + 8), p3 = _mm_loadu_ps(p + 12);
+  for (int j = 0; j < 4; ++j) {
+    const float* c = l + 4 * j;
+    const __m128 r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(p0, _mm_set1_ps(c[0])), _mm_mul_ps(p1, _mm_set1_ps(c[1]))),
+                                _mm_add_ps(_mm_mul_ps(p2, _mm_set1_ps(c[2])), _mm_mul_ps(p3, _mm_set1_ps(c[3]))));
+    _mm_storeu_ps(out + 4 * j, r);
+  }
+}
+#endif
 
 }  // namespace
 
@@ -376,7 +420,13 @@ size_t Scene::update() {
     const int32_t p = parent[i];
     if (p >= 0) {
       if (dirty[p]) dirty[i] = 1;
-      if (dirty[i]) world_[i] = world_[p] * local_[i];
+      if (dirty[i]) {
+#if defined(__SSE2__)
+        mulMat4Sse(&world_[p][0][0], &local_[i][0][0], &world_[i][0][0]);
+#else
+        world_[i] = world_[p] * local_[i];
+#endif
+      }
     } else if (dirty[i]) {
       world_[i] = local_[i];
     }
@@ -396,10 +446,15 @@ size_t Scene::update() {
     if (!(all | object_dirty[k] | dirty[node])) continue;
     const float* w = &world_[node][0][0];
     const Sphere& s = chains[chain_of[k]];
+#if defined(__SSE2__)
+    float scale;
+    sphereSse(w, s, &centers[k].x, scale);
+#else
     const float scale = scaleBound(w);
     const float x = s.center.x, y = s.center.y, z = s.center.z;
     centers[k] = glm::vec3(w[0] * x + w[4] * y + w[8] * z + w[12], w[1] * x + w[5] * y + w[9] * z + w[13],
                            w[2] * x + w[6] * y + w[10] * z + w[14]);
+#endif
     radii[k] = s.radius * scale;
     scales[k] = scale;
     object_dirty[k] = 0;

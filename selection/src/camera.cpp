@@ -71,10 +71,4 @@ Frustum computeFrustum(const Camera& c) {
   return fr;
 }
 
-bool sphereInFrustum(const Frustum& fr, const glm::vec3& c, float radius) {
-  for (const glm::vec4& p : fr.planes)
-    if (p.x * c.x + p.y * c.y + p.z * c.z + p.w < -radius) return false;
-  return true;
-}
-
 }  // namespace scenelod::selection

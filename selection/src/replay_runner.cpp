@@ -1,6 +1,7 @@
 // Replay driver: the selector in a simulated frame loop, with a synthetic renderer whose true costs
 // follow the same linear model (Funkhouser & Sequin 1993 §4.1) plus seeded Gaussian noise.
 #include "scenelod/selection/replay_runner.h"
+#include "scenelod/selection/replay_visibility.h"
 
 #include <cmath>
 #include <cstdio>
@@ -116,7 +117,10 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
     job.levels_out = Span<int8_t>(out.levels.data(), n);
     job.stats = &st;
     job.context = ctx.c;
+    if (options.visibility)
+      if (Error e = options.visibility->beforeSelect(scene, cam, f, job)) return Error(e.status, where + ": " + e.message);
     if (!job.run()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame's input");
+    if (options.visibility) options.visibility->afterSelect(job, out);
     out.frame = f.frame;
     out.time_s = f.time_s;
     out.has_budget = budget;
@@ -161,8 +165,22 @@ std::string replayLogLine(const ReplayLogFrame& f) {
   for (size_t i = 0; i < f.levels.size(); ++i) o << (i ? "," : "") << static_cast<int>(f.levels[i]);
   o << "], \"switches\": " << f.switches << ", \"drawn\": " << f.drawn << ", \"culled\": " << f.culled
     << ", \"dropped\": " << f.dropped << ", \"flags\": " << f.flags;
-  std::snprintf(buf, sizeof(buf), ", \"triangles\": %.0f}", f.triangles);
+  std::snprintf(buf, sizeof(buf), ", \"triangles\": %.0f", f.triangles);
   o << buf;
+  if (f.has_visibility) {
+    o << ", \"visible\": [";
+    for (size_t i = 0; i < f.visible.size(); ++i) {
+      std::snprintf(buf, sizeof(buf), "%s%.2f", i ? "," : "", f.visible[i]);
+      o << buf;
+    }
+    o << "], \"pick_object\": " << f.pick_object << ", \"hidden_count\": " << f.hidden_count;
+    std::snprintf(buf, sizeof(buf), ", \"hidden_cost_ms\": %.4f, \"hidden_cost_without_ms\": %.4f", f.hidden_cost_ms,
+                  f.hidden_cost_without_ms);
+    o << buf;
+    std::snprintf(buf, sizeof(buf), ", \"occlusion_saved_ms\": %.4f", f.occlusion_saved_ms);
+    o << buf;
+  }
+  o << "}";
   return o.str();
 }
 
@@ -188,6 +206,7 @@ ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t war
     if (f.flags & kFlagOverBudget) ++s.over_budget_flagged;
     s.mean_predicted_ms += f.predicted_ms;
     s.mean_triangles += f.triangles;
+    s.mean_benefit += f.benefit;
     if (i > 0) switches += f.switches;
     for (int8_t l : f.levels) {
       const size_t b = static_cast<size_t>(l + 1);
@@ -205,9 +224,24 @@ ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t war
   }
   s.mean_predicted_ms /= static_cast<double>(log.size());
   s.mean_triangles /= static_cast<double>(log.size());
+  s.mean_benefit /= static_cast<double>(log.size());
   if (measured) {
     s.mean_measured_ms /= static_cast<double>(measured);
     s.mean_abs_prediction_error /= static_cast<double>(measured);
+  }
+  for (const ReplayLogFrame& f : log) {
+    if (!f.has_visibility) continue;
+    ++s.visibility_frames;
+    if (!f.visible.empty()) s.mean_hidden_share += static_cast<double>(f.hidden_count) / static_cast<double>(f.visible.size());
+    s.mean_occlusion_saved_ms += f.occlusion_saved_ms;
+    s.mean_hidden_cost_without_ms += f.hidden_cost_without_ms;
+    if (f.pick_object >= 0) ++s.pick_frames;
+  }
+  if (s.visibility_frames) {
+    const double k = static_cast<double>(s.visibility_frames);
+    s.mean_hidden_share /= k;
+    s.mean_occlusion_saved_ms /= k;
+    s.mean_hidden_cost_without_ms /= k;
   }
   // the first frame's switches are the initial choice, not switches
   if (s.duration_s > 0.0 && s.objects > 0)

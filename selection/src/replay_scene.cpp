@@ -12,6 +12,8 @@
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
+#include "scenelod/scene/gltf_io.h"
+#include "scenelod/scene/lod_build.h"
 #include "scenelod/scene/pack.h"
 #include "scenelod/scene/scene_data.h"
 
@@ -208,7 +210,7 @@ Error makeBuiltinScene(const std::string& name, ReplayScene& s) {
 }
 
 Error replaySceneFromSceneData(const scene::SceneData& d, const std::vector<LodChain>& chains, const std::string& what,
-                               ReplayScene& s) {
+                               ReplayScene& s, const std::vector<Sphere>* chain_spheres) {
   s = ReplayScene();
   s.name = what;
   if (chains.size() != d.meshes.size())
@@ -228,9 +230,11 @@ Error replaySceneFromSceneData(const scene::SceneData& d, const std::vector<LodC
         b.radius = std::max(b.radius, r);
       }
     }
+    if (chain_spheres && m < chain_spheres->size()) b = (*chain_spheres)[m];
     s.chain_bounds.push_back(b);
     s.chain_names.push_back(d.meshes[m].name);
   }
+  s.chains = chains;  // geometry for ray queries (ReplayVisibility)
   for (const scene::NodeData& n : d.nodes) {
     s.node_parent.push_back(n.parent);
     s.node_local.push_back(n.local);
@@ -424,9 +428,27 @@ Error loadReplayScene(const std::string& path, ReplayScene& out) {
   std::string ext = dot == std::string::npos ? std::string() : path.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == "json") return loadLevelScene(path, out);
-  if (ext == "pack" || ext == "slod") return loadPackScene(path, out);
-  return Error(Status::kUnsupported, path + ": replay scenes are builtin:NAME, level-scene .json files or LOD packs "
-                                            "(.pack; glTF/GLB once chains can be built in this build)");
+  if (ext == "slodpack" || ext == "pack") return loadPackScene(path, out);
+  if (ext == "gltf" || ext == "glb" || ext == "obj") {
+    scene::SceneData data;
+    std::vector<LodChain> chains;
+    if (ext == "obj") {
+      if (Error e = scene::loadScene(path, data)) return e;
+    } else {
+      if (Error e = scene::importGltfLods(path, data, chains)) return e;
+    }
+    // files with MSFT_lod levels keep them; otherwise every mesh's chain is built here
+    bool have_levels = !chains.empty();
+    for (const LodChain& c : chains) have_levels = have_levels && c.levelCount() > 1;
+    if (!have_levels) {
+      scene::SceneLods lods;
+      if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, path)) return e;
+      return replaySceneFromSceneData(data, lods.chains, path, out, &lods.chain_spheres);
+    }
+    return replaySceneFromSceneData(data, chains, path, out);
+  }
+  return Error(Status::kUnsupported, path + ": a replay scene is builtin:NAME, a level-scene .json, a LOD pack (.slodpack) "
+                                            "or a .gltf/.glb/.obj file");
 }
 
 }  // namespace scenelod::selection

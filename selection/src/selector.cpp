@@ -487,6 +487,8 @@ bool SelectionJob::run() {
     const double avail = cap - mandatory;
     struct Pt { float c, b; int l; };
     Pt pts[65];
+    double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
+    size_t segments = 0;
     for (size_t s = 0; s < slots; ++s) {
       const size_t i = ctx.slot_object[s];
       const uint32_t row0 = levels.chain_level_offset[chains[i]];
@@ -525,6 +527,8 @@ bool SelectionJob::run() {
       }
       for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
       ctx.hull_count[s] = static_cast<uint8_t>(hn);
+      top_cost += hp[hn - 1].c;
+      segments += hn - 1;
     }
 
     int64_t split_slot = -1;
@@ -539,8 +543,10 @@ bool SelectionJob::run() {
       ctx.greedy(slots, base_total, obj_cap, params.stop_at_first_non_fitting, &split_slot, &split_step);
     } else {
       const double inf = std::numeric_limits<double>::infinity();
-      PassResult all = ctx.pass(slots, 0.0, 0.0, inf);
-      ++passes;
+      // the pass at lambda = 0 (every upgrade taken) was summed while building the hulls
+      PassResult all;
+      all.cost = top_cost;
+      all.above = segments;
       size_t in_bracket = all.above;
       double lo = 0.0, hi = inf;
       if (all.cost <= obj_cap) {

@@ -147,6 +147,13 @@ TEST(ObjIo, MissingFileNamesThePath) {
   EXPECT_TRUE(contains(e.message, "/nonexistent/dir/nothing.obj: cannot open file")) << e.message;
 }
 
+TEST(ObjIo, DirectoryIsNotAFile) {
+  Mesh m;
+  const Error e = readObj(test::scratchDir(), m);
+  EXPECT_EQ(e.status, Status::kIoError);
+  EXPECT_TRUE(contains(e.message, test::scratchDir() + ": cannot open file (not a regular file)")) << e.message;
+}
+
 TEST(ObjIo, IndexOutOfRangeNamesFileAndLine) {
   const std::string path = writeFile("oor.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
   Mesh m;

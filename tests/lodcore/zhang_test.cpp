@@ -563,3 +563,30 @@ TEST(ZhangEdgeCollapse, BunnyToTenPercentStaysClosed) {
   expectClosedManifold(out);
   EXPECT_EQ(eulerCharacteristic(out), chi);
 }
+
+TEST(ZhangEdgeCollapse, WeldingJoinsSplitSeams) {
+  // a sphere split along its seams the way glTF exports do: every triangle gets its own three vertices
+  const Mesh joined = icosphere(3);
+  Mesh split;
+  for (uint32_t i : joined.triangles) {
+    split.triangles.push_back(static_cast<uint32_t>(split.positions.size()));
+    split.positions.push_back(joined.positions[i]);
+    split.normals.push_back(glm::normalize(joined.positions[i]));
+  }
+  Mesh out;
+  ZhangStats st;
+  ASSERT_TRUE(simplifyZhang(split, 200, ZhangParams{}, out, &st).ok());
+  EXPECT_EQ(st.collapses, 0u) << "unwelded, every vertex is a border vertex and is kept";
+  EXPECT_EQ(st.stop_reason, ZhangStopReason::kNoValidCollapse);
+  ZhangParams weld;
+  weld.weld_positions = true;
+  ASSERT_TRUE(simplifyZhang(split, 200, weld, out, &st).ok());
+  EXPECT_EQ(st.stop_reason, ZhangStopReason::kTargetReached);
+  EXPECT_LE(out.triangleCount(), 200u);
+  expectValid(out);
+  expectClosedManifold(out);
+  EXPECT_EQ(eulerCharacteristic(out), 2);
+  ASSERT_EQ(out.normals.size(), out.vertexCount());
+  for (size_t v = 0; v < out.vertexCount(); ++v)
+    EXPECT_GT(glm::dot(out.normals[v], glm::normalize(out.positions[v])), 0.8f);
+}

@@ -113,6 +113,31 @@ TEST(GltfImport, ReadsAnExternalBufferSquare) {
   EXPECT_EQ(s.meshes[0].primitive_materials, (std::vector<int32_t>{-1}));
 }
 
+TEST(GltfImport, ReadsAnEmbeddedDataUriBuffer) {
+  const std::string dir = makeDir("datauri");
+  SquareGltf g;
+  g.write(dir);
+  const std::vector<unsigned char> bin = readBytes(dir + "/square.bin");
+  static const char kB64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string b64;
+  for (size_t i = 0; i < bin.size(); i += 3) {
+    const uint32_t v = (uint32_t(bin[i]) << 16) | (i + 1 < bin.size() ? uint32_t(bin[i + 1]) << 8 : 0u) |
+                       (i + 2 < bin.size() ? uint32_t(bin[i + 2]) : 0u);
+    b64 += kB64[(v >> 18) & 63];
+    b64 += kB64[(v >> 12) & 63];
+    b64 += i + 1 < bin.size() ? kB64[(v >> 6) & 63] : '=';
+    b64 += i + 2 < bin.size() ? kB64[v & 63] : '=';
+  }
+  g.uri = "data:application/octet-stream;base64," + b64;
+  const std::string path = g.write(dir, "embedded.gltf");
+  ::remove((dir + "/square.bin").c_str());  // only the data URI can provide the bytes now
+  SceneData s;
+  const Error e = importGltf(path, s);
+  ASSERT_TRUE(e.ok()) << e.message;
+  EXPECT_EQ(s.meshes[0].mesh.triangles, (std::vector<uint32_t>{0, 1, 2, 1, 3, 2}));
+  EXPECT_EQ(s.meshes[0].mesh.positions[3], glm::vec3(1, 1, 0));
+}
+
 TEST(GltfImport, ConvertsStripsFansLineStripsLoopsAndPoints) {
   const std::string dir = makeDir("modes");
   struct Case {
@@ -139,6 +164,44 @@ TEST(GltfImport, ConvertsStripsFansLineStripsLoopsAndPoints) {
     EXPECT_EQ(m.edges, c.edges) << "mode " << c.mode;
     EXPECT_EQ(m.points, c.points) << "mode " << c.mode;
   }
+}
+
+TEST(GltfImport, LinePrimitivesSharingVerticesKeepTheirOwnThickness) {
+  // two LINES primitives on the same POSITION accessor, each with its own _THICKNESS
+  const std::string dir = makeDir("thick");
+  Bin bin;
+  const float pos[] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+  const uint16_t idx_a[] = {0, 1}, idx_b[] = {1, 2};
+  const float thick_a[] = {0.5f, 0.5f, 0.0f}, thick_b[] = {0.0f, 0.25f, 0.75f};
+  const size_t o0 = bin.add(pos, sizeof(pos)), o1 = bin.add(idx_a, 4), o2 = bin.add(idx_b, 4), o3 = bin.add(thick_a, 12),
+               o4 = bin.add(thick_b, 12);
+  writeBytes(dir + "/t.bin", bin.bytes);
+  std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"uri":"t.bin","byteLength":@LEN@}],
+    "bufferViews":[{"buffer":0,"byteOffset":@O0@,"byteLength":36},{"buffer":0,"byteOffset":@O1@,"byteLength":4},
+                   {"buffer":0,"byteOffset":@O2@,"byteLength":4},{"buffer":0,"byteOffset":@O3@,"byteLength":12},
+                   {"buffer":0,"byteOffset":@O4@,"byteLength":12}],
+    "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},
+                 {"bufferView":1,"componentType":5123,"count":2,"type":"SCALAR"},
+                 {"bufferView":2,"componentType":5123,"count":2,"type":"SCALAR"},
+                 {"bufferView":3,"componentType":5126,"count":3,"type":"SCALAR"},
+                 {"bufferView":4,"componentType":5126,"count":3,"type":"SCALAR"}],
+    "meshes":[{"primitives":[{"attributes":{"POSITION":0,"_THICKNESS":3},"indices":1,"mode":1},
+                             {"attributes":{"POSITION":0,"_THICKNESS":4},"indices":2,"mode":1}]}],
+    "nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  json = replaceAll(json, "@LEN@", std::to_string(bin.bytes.size()));
+  json = replaceAll(json, "@O0@", std::to_string(o0));
+  json = replaceAll(json, "@O1@", std::to_string(o1));
+  json = replaceAll(json, "@O2@", std::to_string(o2));
+  json = replaceAll(json, "@O3@", std::to_string(o3));
+  json = replaceAll(json, "@O4@", std::to_string(o4));
+  writeText(dir + "/t.gltf", json);
+  SceneData s;
+  const Error e = importGltf(dir + "/t.gltf", s);
+  ASSERT_TRUE(e.ok()) << e.message;
+  const Mesh& m = s.meshes[0].mesh;
+  EXPECT_EQ(m.vertexCount(), 3u);  // one vertex set: both primitives use the same accessors
+  EXPECT_EQ(m.edges, (std::vector<uint32_t>{0, 1, 1, 2}));
+  EXPECT_EQ(m.edge_thickness, (std::vector<float>{0.5f, 0.5f}));  // (0.5+0.5)/2 and (0.25+0.75)/2
 }
 
 TEST(GltfImport, NonIndexedPrimitiveUsesVerticesInOrder) {

@@ -353,7 +353,7 @@ TEST(Selector, LagrangianMatchesGreedyChoices) {
       for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
       EXPECT_EQ(differ, 0u) << "seed " << seed << " frame " << frame;
       EXPECT_EQ(sa.predicted_ms, sb.predicted_ms);
-      if (frame > 0 && sb.total_benefit > 0 && sb.flags == 0) {
+      if (sb.lambda > 0.0) {  // the budget binds: the price search ran (bracket capacity is small)
         EXPECT_GT(sb.search_passes, 0u);
       }
       lambda_prev = sb.lambda;

@@ -1,13 +1,18 @@
 #include "scenelod/selection/visibility.h"
 
 #include "scenelod/scene/scene.h"
+#include "scenelod/selection/camera_path.h"
 #include "scenelod/selection/level_table.h"
+#include "scenelod/selection/replay_runner.h"
+#include "scenelod/selection/replay_scene.h"
+#include "scenelod/selection/replay_visibility.h"
 #include "scenelod/selection/selector.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -695,4 +700,110 @@ TEST(Visibility, SelectorGivesAnOccludedObjectItsCoarsestLevelOrNone) {
   EXPECT_LE(seen[2], blind[2]);
   EXPECT_EQ(vis[2], 1.0f);
   destroySelectorContext(ctx);
+}
+
+TEST(Visibility, ReplayWithVisibilityDropsHiddenObjectsAndLogsEstimates) {
+  ReplayScene scene;
+  ASSERT_TRUE(makeBuiltinScene("builtin:city", scene).ok());
+  Replay replay;
+  replay.header.scene = "builtin:city";
+  replay.header.has_budget = true;
+  replay.header.budget_ms = 8.0;
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kFlythrough, 40, 60.0, replay);
+  for (size_t i = 0; i < replay.frames.size(); i += 10) {
+    replay.frames[i].has_pick = true;
+    replay.frames[i].pick_px[0] = 640.0f;
+    replay.frames[i].pick_px[1] = 360.0f;
+  }
+  ReplayVisibility vis;
+  ASSERT_TRUE(vis.init(scene).ok());
+  ReplayRunOptions opt;
+  opt.visibility = &vis;
+  std::vector<ReplayLogFrame> log;
+  ReplayScene run_scene = scene;
+  ASSERT_TRUE(runReplay(replay, run_scene, opt, log).ok());
+  ASSERT_EQ(log.size(), replay.frames.size());
+  const LevelTable table = scene.table.view();
+  size_t hidden_total = 0, picks = 0;
+  for (const ReplayLogFrame& f : log) {
+    ASSERT_TRUE(f.has_visibility);
+    ASSERT_EQ(f.visible.size(), scene.objectCount());
+    EXPECT_NE(replayLogLine(f).find("\"visible\": ["), std::string::npos);
+    hidden_total += f.hidden_count;
+    picks += f.pick_object >= 0 ? 1 : 0;
+    for (size_t i = 0; i < f.visible.size(); ++i) {
+      EXPECT_GE(f.visible[i], 0.0f);
+      EXPECT_LE(f.visible[i], 1.0f);
+      if (f.visible[i] != 0.0f) continue;
+      // nothing to gain from detail: not drawn, or the coarsest level
+      const uint32_t c = scene.object_chain[i];
+      const int coarsest = static_cast<int>(table.chain_level_offset[c + 1] - table.chain_level_offset[c]) - 1;
+      EXPECT_TRUE(f.levels[i] == -1 || f.levels[i] == coarsest)
+          << "frame " << f.frame << " object " << i << " hidden but at level " << int(f.levels[i]);
+    }
+  }
+  EXPECT_GT(hidden_total, 0u) << "the city fly-through should hide some buildings";
+  EXPECT_GT(picks, 0u);
+  // without visibility the log keeps its documented keys only
+  std::vector<ReplayLogFrame> plain;
+  ReplayScene plain_scene = scene;
+  ASSERT_TRUE(runReplay(replay, plain_scene, ReplayRunOptions(), plain).ok());
+  EXPECT_EQ(replayLogLine(plain[0]).find("visible"), std::string::npos);
+}
+
+TEST(Visibility, OrthographicCameraPicksAndFindsTheHiddenCube) {
+  WallScene s = occludedScene();
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  Camera cam = frontCamera();
+  cam.projection = Projection::kOrthographic;
+  cam.ortho_height = 10.0f;
+  // the centre pixel's ray is parallel to -z through x = y = 0: the wall is first
+  const PickHit h = rs.pick(cam, {80.0f, 60.0f});
+  EXPECT_EQ(h.object, 1);
+  EXPECT_NEAR(h.point.z, 4.05f, 1e-4f);
+  EXPECT_NEAR(h.distance, 10.0f - 4.05f, 1e-4f);
+  OcclusionEstimator est;
+  ASSERT_TRUE(est.init(64).ok());
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  EXPECT_EQ(est.visibleFraction(rs, 0), 0.0f);
+  // parallel rays: a cube beside the wall (x = 5, beyond its half width 4) is seen in full
+  rs.setTransform(0, at({5.0f, 0.0f, 0.0f}));
+  rs.commit();
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  EXPECT_EQ(est.visibleFraction(rs, 0), 1.0f);
+}
+
+TEST(Visibility, ConcurrentQueriesAfterCommitMatchSerialOnes) {
+  WallScene s = occludedScene();
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  const Camera cam = frontCamera();
+  std::vector<int32_t> serial;
+  for (uint32_t y = 0; y < 120; y += 3)
+    for (uint32_t x = 0; x < 160; x += 3) serial.push_back(rs.pick(cam, {x + 0.5f, y + 0.5f}).object);
+  OcclusionEstimator serial_est;
+  ASSERT_TRUE(serial_est.init(64).ok());
+  std::vector<float> serial_vis(rs.objectCapacity());
+  ASSERT_TRUE(serial_est.update(rs, cam, Span<float>(serial_vis)));
+
+  std::vector<std::vector<int32_t>> picks(2);
+  std::vector<std::vector<float>> vis(2, std::vector<float>(rs.objectCapacity()));
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&, t] {
+      OcclusionEstimator est;  // one estimator per thread
+      if (!est.init(64).ok()) return;
+      for (int round = 0; round < 20; ++round) {
+        picks[t].clear();
+        for (uint32_t y = 0; y < 120; y += 3)
+          for (uint32_t x = 0; x < 160; x += 3) picks[t].push_back(rs.pick(cam, {x + 0.5f, y + 0.5f}).object);
+      }
+      est.update(rs, cam, Span<float>(vis[t]));
+    });
+  for (std::thread& th : threads) th.join();
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_EQ(picks[t], serial);
+    EXPECT_EQ(vis[t], serial_vis);
+  }
 }

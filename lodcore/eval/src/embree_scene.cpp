@@ -72,8 +72,13 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
     const auto& tri = self->mesh_->triangles;
     const auto& pos = self->mesh_->positions;
     const size_t k = static_cast<size_t>(args->primID) * 3;
-    const glm::vec3 c = closestPointOnTriangle(q, pos[tri[k]], pos[tri[k + 1]], pos[tri[k + 2]]);
-    d = glm::length(q - c);
+    const glm::vec3 &a = pos[tri[k]], &b = pos[tri[k + 1]], &c = pos[tri[k + 2]];
+    // cheap reject: the triangle's box is already farther than the best answer
+    const glm::vec3 lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
+    const glm::vec3 out = glm::max(lo - q, glm::max(q - hi, glm::vec3(0.0f)));
+    if (glm::dot(out, out) >= st->best * st->best) return false;
+    const glm::vec3 p = closestPointOnTriangle(q, a, b, c);
+    d = glm::length(q - p);
   } else {
     const RoundPrim& p = self->rounds_[args->primID];
     d = std::max(0.0f, distanceToSegment(q, p.a, p.b) - p.radius);
@@ -254,7 +259,11 @@ Error EmbreeScene::build(const Mesh& mesh, float min_radius) {
 float EmbreeScene::closestDistance(const glm::vec3& p, float hint) const {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   if (empty()) return kInf;
-  for (float radius : {hint > 0.0f ? hint : kInf, kInf}) {
+  // growing radii: a bounded query visits only what is inside it, an unbounded one may visit much
+  // before its radius shrinks
+  float radius = hint > 0.0f ? hint : kInf;
+  for (int pass = 0;; ++pass) {
+    if (pass >= 6) radius = kInf;
     RTCPointQuery q;
     q.x = p.x;
     q.y = p.y;
@@ -267,8 +276,8 @@ float EmbreeScene::closestDistance(const glm::vec3& p, float hint) const {
     QueryState st{this, radius};
     rtcPointQuery(scene_, &q, &ctx, closestCallback, &st);
     if (st.best < radius || radius == kInf) return st.best;
+    radius *= 4.0f;
   }
-  return kInf;
 }
 
 RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, float t_max) const {

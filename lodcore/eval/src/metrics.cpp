@@ -118,15 +118,48 @@ std::vector<glm::vec3> samplePoints(const Mesh& m, const DistanceParams& params)
   return out;
 }
 
-OneSidedDistance measureOneSided(const std::vector<glm::vec3>& samples, const detail::EmbreeScene& target,
+// spreads the low 21 bits of v to every third bit (for a 63-bit Morton code)
+uint64_t spreadBits(uint64_t v) {
+  v &= 0x1FFFFF;
+  v = (v | v << 32) & 0x1F00000000FFFFull;
+  v = (v | v << 16) & 0x1F0000FF0000FFull;
+  v = (v | v << 8) & 0x100F00F00F00F00Full;
+  v = (v | v << 4) & 0x10C30C30C30C30C3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
+// samples in Morton order, so consecutive samples are neighbours in space
+std::vector<glm::vec3> mortonOrder(std::vector<glm::vec3> pts) {
+  if (pts.size() < 2) return pts;
+  glm::vec3 lo = pts[0], hi = pts[0];
+  for (const auto& p : pts) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const glm::vec3 ext = glm::max(hi - lo, glm::vec3(1e-30f));
+  std::vector<std::pair<uint64_t, uint32_t>> keys(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const glm::vec3 u = (pts[i] - lo) / ext * 2097151.0f;
+    keys[i] = {spreadBits(static_cast<uint64_t>(u.x)) | spreadBits(static_cast<uint64_t>(u.y)) << 1 |
+                   spreadBits(static_cast<uint64_t>(u.z)) << 2,
+               static_cast<uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());  // (code, index): a total order, so deterministic
+  std::vector<glm::vec3> out(pts.size());
+  for (size_t i = 0; i < keys.size(); ++i) out[i] = pts[keys[i].second];
+  return out;
+}
+
+OneSidedDistance measureOneSided(const std::vector<glm::vec3>& unordered, const detail::EmbreeScene& target,
                                  float scale) {
+  const std::vector<glm::vec3> samples = mortonOrder(unordered);
   std::vector<float> d(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    // search radius hint from the previous answer; answers are exact whatever the hint
+    // the previous sample's distance plus the step to this sample bounds this sample's distance
+    // (triangle inequality): a tight search radius. Answers are exact whatever the hint.
     float hint = 0.01f * scale;
     for (size_t i = r.begin(); i < r.end(); ++i) {
+      if (i > r.begin())
+        hint = (d[i - 1] + glm::length(samples[i] - samples[i - 1])) * 1.001f + 1e-6f * scale;
       d[i] = target.closestDistance(samples[i], hint);
-      hint = std::max(2.0f * d[i], 1e-4f * scale);
     }
   });
   OneSidedDistance out;

@@ -63,6 +63,11 @@ struct ZhangParams {
   float max_normal_turn_deg = 60.0f;
   // the paper processes angle vertices; set to keep them fixed (cube corners stay exact)
   bool keep_angle_vertices = false;
+  // treat vertices at exactly the same position as one vertex, so that attribute seams (glTF splits a
+  // vertex per distinct normal / uv) stop being borders that are never simplified. The merged
+  // vertex keeps the attributes of its lowest id and input normals are replaced by geometric ones,
+  // so texture seams are not preserved.
+  bool weld_positions = false;
 };
 
 // Per-vertex measures of definitions 5-9 on the input mesh (not updated by simplification).

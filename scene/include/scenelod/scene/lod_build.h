@@ -15,6 +15,8 @@ class Scene;
 
 struct LodBuildParams {
   ChainParams chain;         // for every mesh; chain.progress is ignored (use `progress`)
+  float first_cell_rel = 0;  // > 0: each mesh's w_1 = this x its bounding-box diagonal (overrides
+                             // chain.first_cell_width)
   ProgressCallback progress; // whole-scene progress, weighted by triangle count; never concurrent
 };
 

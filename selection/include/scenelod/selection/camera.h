@@ -50,6 +50,11 @@ Frustum computeFrustum(const Camera& camera);
 
 // False when the sphere lies entirely outside one plane (conservative: a sphere near a corner may be
 // reported inside). A sphere entirely behind the eye is always outside (the near plane).
-bool sphereInFrustum(const Frustum& frustum, const glm::vec3& center, float radius);
+// Inline: selection calls it once per object per frame.
+inline bool sphereInFrustum(const Frustum& frustum, const glm::vec3& center, float radius) {
+  for (const glm::vec4& p : frustum.planes)
+    if (p.x * center.x + p.y * center.y + p.z * center.z + p.w < -radius) return false;
+  return true;
+}
 
 }  // namespace scenelod::selection

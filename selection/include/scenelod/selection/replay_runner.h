@@ -19,6 +19,8 @@ namespace scenelod::selection {
 // has something to learn.
 CostCoefficients syntheticTrueCost();
 
+class ReplayVisibility;
+
 struct ReplayRunOptions {
   SelectionParams params;              // mode, budget and pixels_per_cell are taken from the header
   bool force_distance = false;         // distance mode whatever the header says
@@ -29,6 +31,8 @@ struct ReplayRunOptions {
   double noise = 0.05;                 // relative standard deviation of the synthetic measurement
   uint64_t seed = 1;
   CostCoefficients initial_cost;       // the selector's prior
+  ReplayVisibility* visibility = nullptr;  // optional occlusion and pick focus (replay_visibility.h),
+                                           // initialised on the same scene
 };
 
 struct ReplayLogFrame {
@@ -48,6 +52,15 @@ struct ReplayLogFrame {
   uint32_t flags = 0;
   double benefit = 0.0;
   double triangles = 0.0;
+  // with ReplayRunOptions::visibility only (logged as "visible", "pick_object", "hidden_count",
+  // "hidden_cost_ms", "hidden_cost_without_ms", "occlusion_saved_ms")
+  bool has_visibility = false;
+  std::vector<float> visible;          // estimated visible fraction per object
+  int32_t pick_object = -1;            // object under the frame's pick point, -1 for none or no pick
+  uint32_t hidden_count = 0;           // objects read as hidden
+  double hidden_cost_ms = 0.0;         // predicted cost of the chosen levels of hidden objects
+  double hidden_cost_without_ms = 0.0; // the same for a selection without visibility
+  double occlusion_saved_ms = 0.0;     // hidden_cost_without_ms - hidden_cost_ms
 };
 
 // Runs every frame of `replay` on `scene` (moves change the scene). Errors: an invalid scene, a move
@@ -73,7 +86,13 @@ struct ReplaySummary {
   double mean_abs_prediction_error = 0.0;  // |predicted - measured| / measured, after warm-up
   double switches_per_object_per_second = 0.0;
   double mean_triangles = 0.0;
+  double mean_benefit = 0.0;          // total benefit of the chosen levels, per frame
   std::vector<size_t> level_histogram; // index 0 = not drawn, k + 1 = level k; over all frames and objects
+  size_t visibility_frames = 0;        // frames with visibility estimates
+  double mean_hidden_share = 0.0;      // hidden objects / objects, over those frames
+  double mean_occlusion_saved_ms = 0.0;
+  double mean_hidden_cost_without_ms = 0.0;
+  size_t pick_frames = 0;              // frames whose pick hit an object
 };
 
 ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup = 30);

@@ -33,6 +33,8 @@ struct ReplayScene {
   std::vector<uint32_t> object_chain;    // per object: its chain
   std::vector<float> importance;         // per object
   std::vector<uint8_t> must_draw;        // per object
+  std::vector<LodChain> chains;          // per chain, the meshes when the source had them (glTF/GLB/
+                                         // OBJ); empty for level-scene files and built-in scenes
 
   size_t objectCount() const { return object_node.size(); }
 };
@@ -60,9 +62,11 @@ Error makeBuiltinScene(const std::string& name, ReplayScene& out);
 
 // The scene of `scene_data` (objects numbered as objectNodes) with one chain per mesh; `chains`
 // holds one chain per mesh of scene_data. Errors: a chain count that differs from the mesh count,
-// a chain with more than 64 levels.
+// a chain with more than 64 levels. `chain_spheres` (one per chain, e.g. SceneLods::chain_spheres)
+// replaces the sphere derived from the levels' bounds when given.
 Error replaySceneFromSceneData(const scene::SceneData& scene_data, const std::vector<LodChain>& chains,
-                               const std::string& what, ReplayScene& out);
+                               const std::string& what, ReplayScene& out,
+                               const std::vector<Sphere>* chain_spheres = nullptr);
 
 // Level-scene JSON files (docs/REPLAY.md): chains (sphere, levels as [cell width, triangles,
 // vertices, edges + points]), nodes (parent, translation, rotation, scale) and objects.
@@ -72,8 +76,9 @@ Error writeLevelScene(const std::string& path, const ReplayScene& scene);
 // A LOD pack (scene/pack.h): its nodes, objects (importance, must-draw) and chains' level rows.
 Error loadPackScene(const std::string& path, ReplayScene& out);
 
-// Loads any scene a replay may name: "builtin:NAME", a level-scene .json or a LOD pack (.pack).
-// Errors name the file.
+// Loads any scene a replay may name: "builtin:NAME", a level-scene .json, a LOD pack (.slodpack or .pack), or a
+// .gltf/.glb/.obj file (MSFT_lod levels when the file has them, otherwise every mesh's chain built
+// with default parameters by scene::buildLods). Errors name the file.
 Error loadReplayScene(const std::string& path, ReplayScene& out);
 
 }  // namespace scenelod::selection

@@ -1,0 +1,222 @@
+/* scenelod C API (C99).
+ *
+ * A stable way into scenelod for engines that are not C++ or not built with the same compiler:
+ * opaque handles, status codes, argument structs with *_init functions (new fields are added at the
+ * end and get defaults there, so old callers keep working), no C++ exception crosses this boundary.
+ *
+ * Typical frame loop:
+ *   slod_context_desc cd; slod_context_desc_init(&cd); cd.max_objects = 5000;
+ *   slod_context* ctx; slod_context_create(&cd, &ctx);
+ *   slod_chain_build(ctx, &mesh, &chain_desc, &chain);          (once per unique mesh)
+ *   slod_object_add(ctx, &object_desc, &object);                 (once per instance)
+ *   each frame: slod_object_set_trs(...) for what moved; slod_select(ctx, &camera, &params, out, n, &result);
+ *               draw out[i].level of out[i].object; slod_report_frame_time(ctx, result.frame, ms);
+ *
+ * Threads: a context is used by one thread at a time, except slod_report_frame_time, which may be
+ * called from one other thread (the render thread) while slod_select runs. Different contexts are
+ * independent. Each function's comment repeats what applies.
+ *
+ * ABI policy: libscenelod.so.MAJOR; within a major version functions and enum values are only added,
+ * struct fields only appended (callers always go through *_init), so binaries built against an older
+ * 0.x minor keep working. Only slod_ symbols are exported. */
+#ifndef SCENELOD_SCENELOD_H
+#define SCENELOD_SCENELOD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(SCENELOD_CAPI_BUILD)
+#define SLOD_API __attribute__((visibility("default")))
+#else
+#define SLOD_API
+#endif
+
+#define SLOD_VERSION_MAJOR 0
+#define SLOD_VERSION_MINOR 1
+
+typedef enum slod_status {
+  SLOD_OK = 0,
+  SLOD_ERROR_INVALID_ARGUMENT = 1, /* null pointer, value out of range, stale handle */
+  SLOD_ERROR_INVALID_MESH = 2,     /* NaN coordinate, index out of range */
+  SLOD_ERROR_IO = 3,               /* missing or unwritable file */
+  SLOD_ERROR_PARSE = 4,            /* malformed file */
+  SLOD_ERROR_UNSUPPORTED = 5,
+  SLOD_ERROR_CORRUPT = 6,          /* truncated or damaged binary data */
+  SLOD_ERROR_OUT_OF_MEMORY = 7,
+  SLOD_ERROR_NOT_FOUND = 8,        /* stale object handle, unknown chain */
+  SLOD_ERROR_CAPACITY = 9,         /* more objects than max_objects, output array too small */
+  SLOD_ERROR_UNKNOWN = 10
+} slod_status;
+
+typedef struct slod_context slod_context;
+
+/* An object handle: slot and generation; a removed object's handle is refused, never reused. */
+typedef uint64_t slod_object;
+#define SLOD_NULL_OBJECT ((slod_object)0)
+
+typedef struct slod_allocator {
+  void* (*allocate)(void* user, size_t bytes, size_t alignment); /* null = the C library's */
+  void (*free)(void* user, void* pointer);
+  void* user;
+} slod_allocator;
+
+/* Called with every error a function returns, with its message (valid during the call). */
+typedef void (*slod_error_callback)(void* user, slod_status status, const char* message);
+
+typedef struct slod_context_desc {
+  size_t max_objects;              /* objects the context can hold, > 0 (default 1024) */
+  slod_allocator allocator;        /* memory of the per-frame selector state (default: C library) */
+  slod_error_callback error_callback; /* optional */
+  void* error_user;
+} slod_context_desc;
+
+SLOD_API void slod_context_desc_init(slod_context_desc* desc);
+/* Creates a context. Thread-safe (contexts are independent). */
+SLOD_API slod_status slod_context_create(const slod_context_desc* desc, slod_context** out);
+/* Destroys a context and everything in it. Null is ignored. */
+SLOD_API void slod_context_destroy(slod_context* ctx);
+/* The status and message of the last failing call on this context ("" when none). */
+SLOD_API slod_status slod_last_error(const slod_context* ctx);
+SLOD_API const char* slod_last_error_message(const slod_context* ctx);
+SLOD_API const char* slod_status_name(slod_status status);
+SLOD_API const char* slod_version_string(void);
+
+/* ---- LOD chains ---- */
+
+typedef enum slod_method {
+  SLOD_METHOD_FLOATING = 0,   /* Low & Tan floating cells with the measured defaults */
+  SLOD_METHOD_UNIFORM = 1,    /* Rossignac & Borrel uniform grid */
+  SLOD_METHOD_ZHANG = 2,      /* vision-characteristic edge collapse */
+  SLOD_METHOD_SCROOGE = 3     /* SCROOGE perceptual reduction */
+} slod_method;
+
+typedef struct slod_mesh_desc {
+  const float* positions;      /* 3 floats per vertex */
+  size_t vertex_count;
+  size_t position_stride;      /* bytes between vertices; 0 = 12 */
+  const uint32_t* indices;     /* 3 per triangle */
+  size_t index_count;
+  const char* name;            /* for messages; may be null */
+} slod_mesh_desc;
+
+typedef struct slod_chain_desc {
+  slod_method method;          /* default SLOD_METHOD_FLOATING */
+  uint32_t level_count;        /* simplified levels after the original (default 8) */
+  float first_cell_width;      /* object space; 0 = automatic (level 1 has about half the triangles) */
+} slod_chain_desc;
+
+SLOD_API void slod_mesh_desc_init(slod_mesh_desc* desc);
+SLOD_API void slod_chain_desc_init(slod_chain_desc* desc);
+/* Builds a chain from caller memory (copied). Writes its id to *out_chain. Not thread-safe on ctx. */
+SLOD_API slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh, const slod_chain_desc* desc,
+                                      uint32_t* out_chain);
+/* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space). */
+SLOD_API slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc,
+                                          uint32_t* out_chain);
+SLOD_API uint32_t slod_chain_count(const slod_context* ctx);
+/* Number of levels of a chain (0 for an unknown chain). */
+SLOD_API uint32_t slod_chain_level_count(const slod_context* ctx, uint32_t chain);
+
+typedef struct slod_level_data {
+  float cell_width;            /* object space; 0 for level 0 */
+  float max_error;             /* measured maximum vertex displacement, object space */
+  uint32_t vertex_count, triangle_count, edge_count, point_count;
+  const float* positions;      /* 3 floats per vertex */
+  const float* normals;        /* 3 floats per vertex, or null */
+  const uint32_t* triangles;   /* 3 per triangle */
+  const uint32_t* edges;       /* 2 per edge */
+  const float* edge_thickness; /* 1 per edge (object space), or null */
+  const uint32_t* points;      /* 1 per point */
+} slod_level_data;
+
+/* Fills *out with a level's counts and pointers into the context's memory (valid until the context is
+ * destroyed), for upload to the GPU. Not thread-safe with chain building on the same ctx. */
+SLOD_API slod_status slod_level_get(const slod_context* ctx, uint32_t chain, uint32_t level, slod_level_data* out);
+
+/* ---- objects ---- */
+
+typedef struct slod_object_desc {
+  uint32_t chain;
+  float translation[3];        /* world placement: T * R * S */
+  float rotation[4];           /* unit quaternion x, y, z, w (default 0, 0, 0, 1) */
+  float scale;                 /* uniform scale, > 0 (default 1) */
+  float importance;            /* benefit weight, >= 0 (default 1) */
+  int must_draw;               /* nonzero: always drawn, at least at the coarsest level */
+  uint64_t user_data;          /* returned untouched in slod_selection */
+} slod_object_desc;
+
+SLOD_API void slod_object_desc_init(slod_object_desc* desc);
+SLOD_API slod_status slod_object_add(slod_context* ctx, const slod_object_desc* desc, slod_object* out);
+/* Removes an object; its handle becomes stale. Refused while recording. */
+SLOD_API slod_status slod_object_remove(slod_context* ctx, slod_object object);
+/* Moves an object. O(1), no allocation (while not recording). */
+SLOD_API slod_status slod_object_set_trs(slod_context* ctx, slod_object object, const float translation[3],
+                                         const float rotation_xyzw[4], float scale);
+SLOD_API slod_status slod_object_set_importance(slod_context* ctx, slod_object object, float importance);
+SLOD_API uint32_t slod_object_count(const slod_context* ctx);
+
+/* ---- per frame ---- */
+
+typedef struct slod_camera {
+  float eye[3], target[3], up[3];
+  float fov_y_deg;             /* default 60 */
+  uint32_t viewport_width, viewport_height; /* pixels, default 1280 x 720 */
+} slod_camera;
+
+typedef struct slod_frame_params {
+  float budget_ms;             /* > 0: budget mode (Funkhouser & Sequin); <= 0: distance mode. Default 16.7 */
+  float pixels_per_cell;       /* X: a level is accurate enough when a cell covers <= X pixels. Default 1 */
+} slod_frame_params;
+
+typedef struct slod_selection {
+  slod_object object;
+  uint64_t user_data;
+  int32_t level;               /* level to draw, -1 = not drawn */
+} slod_selection;
+
+typedef struct slod_frame_result {
+  uint64_t frame;              /* pass to slod_report_frame_time */
+  float predicted_ms;          /* predicted cost of the chosen levels */
+  uint32_t drawn_count, culled_count, dropped_count, switch_count;
+  int over_budget;             /* nonzero when even the mandatory levels did not fit */
+} slod_frame_result;
+
+SLOD_API void slod_camera_init(slod_camera* camera);
+SLOD_API void slod_frame_params_init(slod_frame_params* params);
+/* Selects one level per object. Writes slod_object_count() entries to out (capacity entries available).
+ * No heap allocation after the first frame (unless recording); one thread at a time per context. */
+SLOD_API slod_status slod_select(slod_context* ctx, const slod_camera* camera, const slod_frame_params* params,
+                                 slod_selection* out, size_t capacity, slod_frame_result* result);
+/* Reports how long frame `frame` really took, to calibrate the cost model. May be called from one
+ * other thread while slod_select runs (lock-free hand-over). */
+SLOD_API slod_status slod_report_frame_time(slod_context* ctx, uint64_t frame, float measured_ms);
+
+typedef struct slod_pick_result {
+  slod_object object;          /* SLOD_NULL_OBJECT when nothing was hit */
+  int32_t level;               /* the level drawn in the last selection, the one the ray hit */
+  float point[3];              /* world-space hit point */
+  float distance;
+} slod_pick_result;
+
+/* Casts a ray through pixel (x, y) (top-left origin) against the levels chosen by the last
+ * slod_select. Not thread-safe on ctx. */
+SLOD_API slod_status slod_pick(slod_context* ctx, const slod_camera* camera, float x, float y, slod_pick_result* out);
+
+/* ---- record and replay ---- */
+
+/* Starts recording: writes the scene (objects and chains) as a LOD pack at pack_path now, and from the
+ * next slod_select on one replay line per frame (camera, moves, reported frame times); the replay file
+ * (docs/REPLAY.md) is written by slod_record_stop. `scenelod replay` reproduces the selections exactly
+ * when the same frame params are used throughout. */
+SLOD_API slod_status slod_record_start(slod_context* ctx, const char* replay_path, const char* pack_path);
+SLOD_API slod_status slod_record_stop(slod_context* ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SCENELOD_SCENELOD_H */

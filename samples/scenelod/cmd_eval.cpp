@@ -1,0 +1,177 @@
+// scenelod eval: geometric and image error between an original and a simplified model.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "args.h"
+#include "command.h"
+#include "eval_support.h"
+#include "scenelod/eval/metrics.h"
+#include "scenelod/eval/render.h"
+#include "scenelod/lodcore/chain.h"
+
+namespace scenelod::tool {
+namespace {
+
+const char* kUsage =
+    "usage: scenelod eval ORIGINAL SIMPLIFIED [--json] [--samples N] [--resolution N] [--force]\n"
+    "       scenelod eval MODEL --chain [--levels N] [--pixels X] [--json] [--samples N]\n"
+    "\n"
+    "Measures how far SIMPLIFIED is from ORIGINAL (OBJ, glTF or GLB; each flattened to one\n"
+    "world-space mesh):\n"
+    "  hausdorff   symmetric Hausdorff distance, relative to the original's bounding-box diagonal\n"
+    "  rms         symmetric RMS distance (the larger of the two one-sided RMS), same unit\n"
+    "  silhouette  pixels covered by exactly one model over pixels covered by either, 14 views\n"
+    "  normal_deg  mean angle between the normals where both are hit, degrees\n"
+    "Edges of thickness t count as capsules of radius t/2, points as spheres of radius 0.\n"
+    "\n"
+    "  --json           print one JSON object instead of the table\n"
+    "  --samples N      area samples per surface (default 100000; all vertices are added)\n"
+    "  --resolution N   pixels across each of the 14 orthographic views (default 256)\n"
+    "  --force          measure even when the bounding boxes differ by more than 10x\n"
+    "\n"
+    "With --chain, builds MODEL's LOD chain (buildChain, default settings, --levels simplified levels,\n"
+    "default 8) and prints per level its counts, cell width, Hausdorff and RMS against level 0, and\n"
+    "per transition the popping: the image error between levels k and k+1 at the distance where the\n"
+    "selector switches (cell width of k+1 = X pixels, --pixels X, default 1).\n";
+
+int runChain(const std::string& path, long levels, double pixels, size_t samples, bool json) {
+  Mesh mesh;
+  if (Error e = loadFlatMesh(path, mesh)) return runError("eval", e.message);
+  if (mesh.triangleCount() == 0)
+    return runError("eval", path + ": the model has no triangles; the error is measured against its surface");
+  LodChain chain;
+  ChainParams cp;
+  cp.level_count = static_cast<size_t>(levels);
+  if (Error e = buildChain(mesh, cp, chain)) return runError("eval", path + ": " + e.message);
+  std::vector<eval::DistanceResult> dist(chain.levelCount());
+  eval::DistanceParams dp;
+  dp.area_sample_count = samples;
+  for (size_t k = 1; k < chain.levelCount(); ++k) {
+    if (chain.levels[k].mesh.empty()) continue;
+    if (Error e = eval::measureSurfaceDistance(chain.levels[0].mesh, chain.levels[k].mesh, dp, dist[k]))
+      return runError("eval", path + ", level " + std::to_string(k) + ": " + e.message);
+  }
+  eval::PoppingParams pp;
+  pp.pixels_per_cell = static_cast<float>(pixels);
+  std::vector<eval::PoppingTransition> pops;
+  if (chain.levelCount() >= 2)
+    if (Error e = eval::measurePopping(chain, pp, pops)) return runError("eval", path + ": " + e.message);
+  if (json) {
+    std::printf("{\"model\": %s, \"pixels_per_cell\": %s, \"levels\": [", jsonString(path).c_str(),
+                jsonNumber(pixels).c_str());
+    for (size_t k = 0; k < chain.levelCount(); ++k) {
+      const LodLevel& lv = chain.levels[k];
+      std::printf("%s{\"level\": %zu, \"cell_width\": %s, \"triangles\": %zu, \"edges\": %zu, \"points\": %zu, "
+                  "\"hausdorff\": %s, \"rms\": %s}",
+                  k ? ", " : "", k, jsonNumber(lv.cell_width).c_str(), lv.mesh.triangleCount(), lv.mesh.edgeCount(),
+                  lv.mesh.pointCount(), jsonNumber(dist[k].hausdorff).c_str(), jsonNumber(dist[k].rms).c_str());
+    }
+    std::printf("], \"popping\": [");
+    for (size_t i = 0; i < pops.size(); ++i)
+      std::printf("%s{\"from\": %zu, \"to\": %zu, \"resolution\": %d, \"silhouette\": %s, \"normal_deg\": %s}",
+                  i ? ", " : "", pops[i].from_level, pops[i].to_level, pops[i].resolution,
+                  jsonNumber(pops[i].error.silhouette).c_str(), jsonNumber(pops[i].error.normal_deg).c_str());
+    std::printf("]}\n");
+    return 0;
+  }
+  std::printf("%s: chain of %zu levels; errors in %% of level 0's diagonal\n", path.c_str(), chain.levelCount());
+  std::printf("%6s %12s %10s %9s %9s %11s %9s\n", "level", "cell width", "triangles", "edges", "points", "hausdorff",
+              "rms");
+  for (size_t k = 0; k < chain.levelCount(); ++k) {
+    const LodLevel& lv = chain.levels[k];
+    std::printf("%6zu %12.5g %10zu %9zu %9zu %10.4f%% %8.4f%%\n", k, lv.cell_width, lv.mesh.triangleCount(),
+                lv.mesh.edgeCount(), lv.mesh.pointCount(), 100.0 * dist[k].hausdorff, 100.0 * dist[k].rms);
+  }
+  std::printf("\npopping at the switch distance (cell width = %g pixels), 14 views:\n", pixels);
+  std::printf("%10s %12s %12s %12s\n", "switch", "image px", "silhouette", "normal deg");
+  for (const auto& p : pops)
+    std::printf("%5zu->%-4zu %12d %11.4f%% %12.3f\n", p.from_level, p.to_level, p.resolution,
+                100.0 * p.error.silhouette, p.error.normal_deg);
+  return 0;
+}
+
+int runEval(const std::vector<std::string>& argv) {
+  Args args(argv, {"--json", "--force", "--chain"}, {"--samples", "--resolution", "--levels", "--pixels"});
+  long samples = 100000, resolution = 256, levels = 8;
+  double pixels = 1.0;
+  args.getInt("--samples", samples);
+  args.getInt("--resolution", resolution);
+  args.getInt("--levels", levels);
+  args.getDouble("--pixels", pixels);
+  if (!args.ok()) return usageError("eval", args.error());
+  if (args.has("--chain")) {
+    if (args.positional().size() != 1) return usageError("eval", "--chain needs exactly one MODEL");
+    if (levels < 1 || levels > 32) return usageError("eval", "--levels must be in [1, 32]");
+    if (!(pixels > 0.0)) return usageError("eval", "--pixels must be > 0");
+    if (samples < 1 || samples > 100000000) return usageError("eval", "--samples must be in [1, 1e8]");
+    return runChain(args.positional()[0], levels, pixels, static_cast<size_t>(samples), args.has("--json"));
+  }
+  if (args.positional().size() != 2) return usageError("eval", "needs ORIGINAL and SIMPLIFIED");
+  if (samples < 1 || samples > 100000000) return usageError("eval", "--samples must be in [1, 1e8]");
+  if (resolution < 1 || resolution > 8192) return usageError("eval", "--resolution must be in [1, 8192]");
+  const std::string& a_path = args.positional()[0];
+  const std::string& b_path = args.positional()[1];
+
+  Mesh original, simplified;
+  if (Error e = loadFlatMesh(a_path, original)) return runError("eval", e.message);
+  if (Error e = loadFlatMesh(b_path, simplified)) return runError("eval", e.message);
+  if (original.triangleCount() == 0)
+    return runError("eval", a_path + ": the original has no triangles; the error is measured against its surface");
+  if (simplified.empty()) return runError("eval", b_path + ": the simplified model has no triangles, edges or points");
+  if (Error e = eval::checkComparableScales(original, a_path, simplified, b_path)) {
+    if (!args.has("--force")) return runError("eval", e.message + " (use --force to measure anyway)");
+    std::fprintf(stderr, "scenelod eval: warning: %s\n", e.message.c_str());
+  }
+
+  eval::DistanceParams dp;
+  dp.area_sample_count = static_cast<size_t>(samples);
+  eval::DistanceResult d;
+  if (Error e = eval::measureSurfaceDistance(original, simplified, dp, d)) return runError("eval", e.message);
+  eval::ImageErrorParams ip;
+  ip.resolution = static_cast<int>(resolution);
+  eval::ImageErrorResult im;
+  if (Error e = eval::measureImageError(original, simplified, ip, im)) return runError("eval", e.message);
+
+  if (args.has("--json")) {
+    std::printf(
+        "{\"original\": %s, \"simplified\": %s, \"hausdorff\": %s, \"rms\": %s, \"mean\": %s, "
+        "\"hausdorff_forward\": %s, \"hausdorff_backward\": %s, \"rms_forward\": %s, \"rms_backward\": %s, "
+        "\"silhouette\": %s, \"normal_deg\": %s, \"diagonal\": %s, \"samples_forward\": %zu, "
+        "\"samples_backward\": %zu, \"resolution\": %ld, \"views\": %d, \"original_triangles\": %zu, "
+        "\"simplified_triangles\": %zu, \"simplified_edges\": %zu, \"simplified_points\": %zu}\n",
+        jsonString(a_path).c_str(), jsonString(b_path).c_str(), jsonNumber(d.hausdorff).c_str(),
+        jsonNumber(d.rms).c_str(), jsonNumber(d.mean).c_str(), jsonNumber(d.forward.max / d.diagonal).c_str(),
+        jsonNumber(d.backward.max / d.diagonal).c_str(), jsonNumber(d.forward.rms / d.diagonal).c_str(),
+        jsonNumber(d.backward.rms / d.diagonal).c_str(), jsonNumber(im.silhouette).c_str(),
+        jsonNumber(im.normal_deg).c_str(), jsonNumber(d.diagonal).c_str(), d.forward.sample_count,
+        d.backward.sample_count, resolution, eval::kStandardViewCount, original.triangleCount(),
+        simplified.triangleCount(), simplified.edgeCount(), simplified.pointCount());
+    return 0;
+  }
+  std::printf("original    %s: %zu triangles, %zu edges, %zu points, bounding-box diagonal %g\n", a_path.c_str(),
+              original.triangleCount(), original.edgeCount(), original.pointCount(), d.diagonal);
+  std::printf("simplified  %s: %zu triangles, %zu edges, %zu points\n", b_path.c_str(), simplified.triangleCount(),
+              simplified.edgeCount(), simplified.pointCount());
+  std::printf("\ngeometric error, %% of the original's diagonal (%zu + %zu samples):\n", d.forward.sample_count,
+              d.backward.sample_count);
+  std::printf("  %-10s %9s %12s %12s\n", "", "symmetric", "orig->simp", "simp->orig");
+  std::printf("  %-10s %8.4f%% %11.4f%% %11.4f%%\n", "hausdorff", 100.0 * d.hausdorff,
+              100.0 * d.forward.max / d.diagonal, 100.0 * d.backward.max / d.diagonal);
+  std::printf("  %-10s %8.4f%% %11.4f%% %11.4f%%\n", "rms", 100.0 * d.rms, 100.0 * d.forward.rms / d.diagonal,
+              100.0 * d.backward.rms / d.diagonal);
+  std::printf("  %-10s %8.4f%% %11.4f%% %11.4f%%\n", "mean", 100.0 * d.mean, 100.0 * d.forward.mean / d.diagonal,
+              100.0 * d.backward.mean / d.diagonal);
+  std::printf("\nimage error, %d orthographic views of %ldx%ld pixels:\n", eval::kStandardViewCount, resolution,
+              resolution);
+  std::printf("  silhouette mismatch  %.4f%%  (%zu of %zu covered pixels)\n", 100.0 * im.silhouette, im.one_px,
+              im.either_px);
+  std::printf("  normal deviation     %.3f deg  (mean over %zu pixels hit by both)\n", im.normal_deg, im.both_px);
+  return 0;
+}
+
+CommandRegistration reg({"eval", "geometric and image error between an original and a simplified model", kUsage,
+                         runEval});
+
+}  // namespace
+}  // namespace scenelod::tool
