@@ -1,10 +1,12 @@
 // SCROOGE (Reddy 1996) quality on the shared models and the bunny at sub-volumes of 1/64, 1/8 and 1
-// of the bounding volume (§8): the timed loop is the reduction; after it, the symmetric Hausdorff
+// of the bounding volume (§8), next to floating-cell clustering (Low & Tan, ClusterParams defaults) at
+// the same cell size (the longest sub-volume edge): the timed loop is the reduction; after it, the symmetric Hausdorff
 // and RMS surface distances (relative to the bbox diagonal, eval/metrics.h) and the image error over
 // the 14 standard views (eval/render.h) are reported as counters. BM_ScroogePictureGrid renders every
 // model and level into one PNG when $SCENELOD_SCROOGE_GRID names the file to write.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <string>
 
@@ -13,6 +15,7 @@
 #include "scenelod/eval/metrics.h"
 #include "scenelod/eval/render.h"
 #include "scenelod/eval/text.h"
+#include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/scrooge.h"
 
 namespace {
@@ -27,7 +30,15 @@ Error reduce(const Mesh& mesh, int divisions, Mesh& out, ScroogeStats* st) {
   return scroogeMesh(mesh, p, out, st);
 }
 
-void runQuality(benchmark::State& state, const std::string& name, int divisions) {
+// floating-cell clustering with the cell width of the sub-volume's longest edge
+Error clusterAtSubvolume(const Mesh& mesh, int divisions, Mesh& out) {
+  const glm::vec3 s = scroogeSubvolumeForDivisions(computeBounds(mesh), divisions);
+  ClusterParams cp;
+  cp.cell_width = std::max({s.x, s.y, s.z});
+  return clusterMesh(mesh, cp, out);
+}
+
+void runQuality(benchmark::State& state, const std::string& name, int divisions, bool cluster) {
   std::string error;
   const Mesh* m = bench::loadModel(name, error);
   if (!m) {
@@ -38,11 +49,12 @@ void runQuality(benchmark::State& state, const std::string& name, int divisions)
   Mesh out;
   ScroogeStats st;
   for (auto _ : state) {
-    if (Error e = reduce(*m, divisions, out, &st)) {
+    if (Error e = cluster ? clusterAtSubvolume(*m, divisions, out) : reduce(*m, divisions, out, &st)) {
       state.SkipWithError(e.message.c_str());
       return;
     }
   }
+  if (cluster) st.output_polygons = st.output_triangles = out.triangleCount();
   eval::DistanceResult d;
   if (Error e = eval::measureSurfaceDistance(*m, out, eval::DistanceParams{}, d)) {
     state.SkipWithError(e.message.c_str());
@@ -71,7 +83,8 @@ void BM_ScroogePictureGrid(benchmark::State& state) {
   }
   const int cell = 160, label = 12;
   const std::vector<std::string>& names = bench::scroogeModelNames();
-  const std::vector<std::string> columns = {"original", "scrooge 1/64", "scrooge 1/8", "scrooge 1"};
+  const std::vector<std::string> columns = {"original",     "scrooge 1/64", "scrooge 1/8", "scrooge 1",
+                                            "cluster 1/64", "cluster 1/8",  "cluster 1"};
   for (auto _ : state) {
     eval::Image grid(int(columns.size()) * cell, int(names.size()) * (cell + label) + label);
     for (size_t c = 0; c < columns.size(); ++c)
@@ -89,7 +102,8 @@ void BM_ScroogePictureGrid(benchmark::State& state) {
         ScroogeStats st;
         const Mesh* shown = m;
         if (c > 0) {
-          if (Error e = reduce(*m, c == 1 ? 4 : c == 2 ? 2 : 1, level, &st)) continue;
+          const int divisions = (c - 1) % 3 == 0 ? 4 : (c - 1) % 3 == 1 ? 2 : 1;
+          if (Error e = c <= 3 ? reduce(*m, divisions, level, &st) : clusterAtSubvolume(*m, divisions, level)) continue;
           shown = &level;
         }
         eval::Image img;
@@ -108,8 +122,10 @@ struct RegisterModels {
   RegisterModels() {
     for (const std::string& name : bench::scroogeModelNames())
       for (int divisions : {4, 2, 1})
-        benchmark::RegisterBenchmark(("BM_ScroogeQuality/" + name + "/" + fractionName(divisions)).c_str(),
-                                     [name, divisions](benchmark::State& state) { runQuality(state, name, divisions); })
+      for (bool cluster : {false, true})
+        benchmark::RegisterBenchmark(
+            ((cluster ? "BM_ClusterQuality/" : "BM_ScroogeQuality/") + name + "/" + fractionName(divisions)).c_str(),
+            [name, divisions, cluster](benchmark::State& state) { runQuality(state, name, divisions, cluster); })
             ->Unit(benchmark::kMillisecond)
             ->Iterations(1);
   }

@@ -5,10 +5,12 @@
 // seconds); run with --benchmark_filter to pick models.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "lodcore/scrooge_models.h"
+#include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/scrooge.h"
 
 namespace {
@@ -65,12 +67,46 @@ void BM_ScroogeSphere(benchmark::State& state) {
 }
 BENCHMARK(BM_ScroogeSphere)->Arg(4)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// floating-cell clustering (ClusterParams defaults) with the cell width of the sub-volume's longest edge
+void runCluster(benchmark::State& state, const Mesh& mesh, int divisions) {
+  const glm::vec3 s = scroogeSubvolumeForDivisions(computeBounds(mesh), divisions);
+  ClusterParams cp;
+  cp.cell_width = std::max({s.x, s.y, s.z});
+  Mesh out;
+  float max_error = 0.0f;
+  for (auto _ : state) {
+    if (Error e = clusterMesh(mesh, cp, out, &max_error)) {
+      state.SkipWithError(e.message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(out.triangles.data());
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(mesh.triangleCount()));
+  state.counters["in_tris"] = double(mesh.triangleCount());
+  state.counters["tris"] = double(out.triangleCount());
+  state.counters["verts"] = double(out.vertexCount());
+  state.counters["max_move_rel"] = double(max_error) / double(computeBounds(mesh).diagonal());
+}
+
 const char* fractionName(int divisions) { return divisions == 4 ? "1/64" : divisions == 2 ? "1/8" : "1"; }
 
 struct RegisterModels {
   RegisterModels() {
     for (const std::string& name : bench::scroogeModelNames())
-      for (int divisions : {4, 2, 1})
+      for (int divisions : {4, 2, 1}) {
+        benchmark::RegisterBenchmark(("BM_ClusterModel/" + name + "/" + fractionName(divisions)).c_str(),
+                                     [name, divisions](benchmark::State& state) {
+                                       std::string error;
+                                       const Mesh* m = bench::loadModel(name, error);
+                                       if (!m) {
+                                         state.SkipWithError(("cannot read " + name + ": " + error).c_str());
+                                         for (auto _ : state) {}
+                                         return;
+                                       }
+                                       runCluster(state, *m, divisions);
+                                     })
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1);
         benchmark::RegisterBenchmark(("BM_ScroogeModel/" + name + "/" + fractionName(divisions)).c_str(),
                                      [name, divisions](benchmark::State& state) {
                                        std::string error;
@@ -84,6 +120,7 @@ struct RegisterModels {
                                      })
             ->Unit(benchmark::kMillisecond)
             ->Iterations(1);
+      }
   }
 } register_models;
 

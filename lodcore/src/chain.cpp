@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "cluster_internal.h"
+#include "scenelod/lodcore/scrooge.h"
 #include "scenelod/lodcore/zhang.h"
 
 namespace scenelod {
@@ -182,8 +183,12 @@ Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out,
     case LodMethod::kZhang:
       return buildZhangChain(original, params, out);
     case LodMethod::kScrooge:
-      return {Status::kUnsupported, std::string("the '") + lodMethodName(params.cluster.method) +
-                                        "' generator is not part of this build"};
+    {
+      const Clock::time_point t0 = Clock::now();
+      const Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
+      stats.total_seconds = since(t0);
+      return e;
+    }
     case LodMethod::kOriginal:
       break;
   }

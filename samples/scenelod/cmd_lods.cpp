@@ -2,6 +2,7 @@
 // original, cell widths doubling) of a whole model in world space, with a table of the levels.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "command.h"
 #include "zhang_options.h"
 #include "progress.h"
+#include "scrooge_options.h"
 #include "scenelod/scene/gltf_io.h"
 #include "scenelod/scene/lod_build.h"
 
@@ -36,7 +38,9 @@ const std::string kUsage = std::string(
     "  --split       one file per level (the whole model in world space)\n"
     "  --flatten     OUT.glb holds one chain of the whole model in world space\n") +
     kClusterOptionsHelp + kZhangOptionsHelp +
-    "  zhang levels halve the triangle count; their cell width is 2 x max displacement / sqrt(3)\n";
+    "  zhang levels halve the triangle count; their cell width is 2 x max displacement / sqrt(3)\n" +
+    kScroogeOptionsHelp +
+    "  scrooge levels in OUT.glb without --split/--flatten are per mesh in object space: --cell-rel only\n";
 
 // every unique mesh's chain in object space, written as one GLB with MSFT_lod per mesh node
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
@@ -107,6 +111,7 @@ int runLods(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
   for (const char* o : {"--out", "--levels", "--cell", "--cell-rel"}) options.push_back(o);
   for (const std::string& o : zhangOptionNames()) options.push_back(o);
+  for (const std::string& o : scroogeOptionNames()) options.push_back(o);
   Args args(argv, {"--split", "--flatten"}, options);
   if (!args.ok()) return usageError("lods", args.error());
   if (args.positional().size() != 1) return usageError("lods", "expected one input file");
@@ -117,7 +122,16 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell") && args.has("--cell-rel")) return usageError("lods", "give only one of --cell, --cell-rel");
   ChainParams cp;
   std::string err;
-  if (!parseClusterOptions(args, cp.cluster, err)) return usageError("lods", err);
+  const bool scrooge = isScroogeMethod(args);
+  ScroogeParams sp;
+  if (scrooge) {
+    if (!parseScroogeOptions(args, sp, err)) return usageError("lods", err);
+    cp.cluster.method = LodMethod::kScrooge;
+  } else if (!parseClusterOptions(args, cp.cluster, err)) {
+    return usageError("lods", err);
+  } else if (args.has("--subvolume") || args.has("--theta-max")) {
+    return usageError("lods", "--subvolume and --theta-max need --method scrooge");
+  }
   ZhangParams zp;
   if (!parseZhangOptions(args, zp, err)) return usageError("lods", err);
   if (cp.cluster.method == LodMethod::kZhang && (args.has("--cell") || args.has("--cell-rel")))
@@ -135,12 +149,22 @@ int runLods(const std::vector<std::string>& argv) {
     // per-mesh chains go through buildChain, which runs zhang with its default options
     for (const std::string& o : zhangOptionNames())
       if (args.has(o)) return usageError("lods", o + " applies to the whole-model chain: add --flatten");
-    return runSceneLods(in, out, cp, float(cell), float(rel));
+    if (scrooge && (args.has("--subvolume") || args.has("--theta-max")))
+      return usageError("lods", "per-mesh scrooge chains take --cell or --cell-rel; use --flatten or --split for "
+                                "--subvolume and --theta-max");
+    // scrooge: --cell-rel F is the sub-volume diagonal, so the cube edge is F / sqrt(3) x the diagonal
+    return runSceneLods(in, out, cp, float(cell), float(scrooge ? rel / std::sqrt(3.0) : rel));
   }
 
   Mesh mesh;
   if (Error e = loadWorldMesh(in, mesh)) return runError("lods", e.message);
-  if (rel > 0.0) cell = rel * double(computeBounds(mesh).diagonal());
+  if (scrooge) {  // --cell-rel F: sub-volume diagonal = F x bbox diagonal; --subvolume 1/64|1/8|1
+    float w = 0.0f;
+    if (!scroogeFirstWidth(args, mesh, w, err)) return usageError("lods", in + ": " + err);
+    cell = w;
+  } else if (rel > 0.0) {
+    cell = rel * double(computeBounds(mesh).diagonal());
+  }
   cp.first_cell_width = float(cell);
   ProgressBar bar("lods");
   cp.progress = bar.callback();
@@ -148,8 +172,9 @@ int runLods(const std::vector<std::string>& argv) {
   ChainStats stats;
   const auto t_build = std::chrono::steady_clock::now();
   const Error built = cp.cluster.method == LodMethod::kZhang ? buildZhangChain(mesh, cp, zp, chain)
-                                                             : buildChain(mesh, cp, chain, &stats);
-  if (cp.cluster.method == LodMethod::kZhang)  // one run for all levels: only the total is known
+                      : scrooge                             ? buildScroogeChain(mesh, cp, sp, chain)
+                                                            : buildChain(mesh, cp, chain, &stats);
+  if (cp.cluster.method == LodMethod::kZhang || scrooge)  // one run for all levels: only the total is known
     stats.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
   if (built) return runError("lods", in + ": " + built.message);
   bar.finish();
@@ -178,7 +203,10 @@ int runLods(const std::vector<std::string>& argv) {
     std::printf("wrote %s-level1%s .. %s-level%zu%s\n", stem.c_str(), ext.c_str(), stem.c_str(),
                 chain.levelCount() - 1, ext.c_str());
   }
-  if (cp.cluster.method == LodMethod::kZhang) {
+  if (scrooge) {
+    std::printf("%s: method scrooge, theta %g..%g deg; cell width = sub-volume edge, max error = largest vertex move\n",
+                in.c_str(), double(sp.theta_min_deg), double(sp.theta_max_deg));
+  } else if (cp.cluster.method == LodMethod::kZhang) {
     std::printf("%s: method zhang (%s, placement %s, influence %s)\n", in.c_str(), zhangModeName(zp.mode),
                 zhangPlacementName(zp.placement), zhangInfluenceName(zp.influence));
   } else {

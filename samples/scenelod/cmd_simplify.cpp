@@ -9,6 +9,7 @@
 #include "args.h"
 #include "cluster_options.h"
 #include "command.h"
+#include "scrooge_options.h"
 #include "zhang_options.h"
 
 namespace scenelod::tool {
@@ -27,7 +28,8 @@ const std::string kUsage = std::string(
     "  --cell-rel F          F x the bounding-box diagonal (default 0.02)\n"
     "  --target-triangles N  search the cell width that gives about N triangles\n") +
     kClusterOptionsHelp + kZhangOptionsHelp +
-    "  zhang takes --target-triangles N (default: half the triangles); --cell and --cell-rel do not apply\n";
+    "  zhang takes --target-triangles N (default: half the triangles); --cell and --cell-rel do not apply\n" +
+    kScroogeOptionsHelp;
 
 // --method zhang: edge collapse to a triangle count
 int runZhangSimplify(const std::string& in, const std::string& out, const Mesh& mesh, long target,
@@ -55,6 +57,7 @@ int runSimplify(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
   for (const char* o : {"--out", "--cell", "--cell-rel", "--target-triangles"}) options.push_back(o);
   for (const std::string& o : zhangOptionNames()) options.push_back(o);
+  for (const std::string& o : scroogeOptionNames()) options.push_back(o);
   Args args(argv, {}, options);
   if (!args.ok()) return usageError("simplify", args.error());
   if (args.positional().size() != 1) return usageError("simplify", "expected one input file");
@@ -62,6 +65,9 @@ int runSimplify(const std::vector<std::string>& argv) {
   const std::string in = args.positional()[0], out = args.get("--out");
   const std::string ext = fileExtension(out);
   if (ext != ".obj" && ext != ".glb") return usageError("simplify", "the output must end in .obj or .glb: " + out);
+  if (isScroogeMethod(args)) return runScroogeSimplify(args, in, out);
+  if (args.has("--subvolume") || args.has("--theta-max"))
+    return usageError("simplify", "--subvolume and --theta-max need --method scrooge");
   int size_options = int(args.has("--cell")) + int(args.has("--cell-rel")) + int(args.has("--target-triangles"));
   if (size_options > 1) return usageError("simplify", "give only one of --cell, --cell-rel, --target-triangles");
   ClusterParams params;
