@@ -36,7 +36,8 @@ const std::string kUsage = std::string(
     "  --split       one file per level (the whole model in world space)\n"
     "  --flatten     OUT.glb holds one chain of the whole model in world space\n") +
     kClusterOptionsHelp + kZhangOptionsHelp +
-    "  zhang levels halve the triangle count; their cell width is 2 x max displacement / sqrt(3)\n";
+    "  zhang levels halve the triangle count; their cell width is 2 x d / sqrt(3), d a bound of the\n"
+    "  original vertices' distance to the level (docs/ZHANG.md)\n";
 
 // every unique mesh's chain in object space, written as one GLB with MSFT_lod per mesh node
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
@@ -131,7 +132,11 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell-rel") && (!args.getDouble("--cell-rel", rel) || !(rel > 0.0)))
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
-  if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) return runSceneLods(in, out, cp, float(cell), float(rel));
+  if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) {
+    for (const std::string& o : zhangOptionNames())  // per-mesh chains go through buildChain's defaults
+      if (args.has(o)) return usageError("lods", o + " needs --flatten or --split (per-mesh chains use the zhang defaults)");
+    return runSceneLods(in, out, cp, float(cell), float(rel));
+  }
 
   Mesh mesh;
   if (Error e = loadWorldMesh(in, mesh)) return runError("lods", e.message);
