@@ -38,7 +38,8 @@ const std::string kUsage = std::string(
     "  --split       one file per level (the whole model in world space)\n"
     "  --flatten     OUT.glb holds one chain of the whole model in world space\n") +
     kClusterOptionsHelp + kZhangOptionsHelp +
-    "  zhang levels halve the triangle count; their cell width is 2 x max displacement / sqrt(3)\n" +
+    "  zhang levels halve the triangle count; their cell width is 2 x d / sqrt(3), d a bound of the\n"
+    "  original vertices' distance to the level (docs/ZHANG.md)\n" +
     kScroogeOptionsHelp +
     "  scrooge levels in OUT.glb without --split/--flatten are per mesh in object space: --cell-rel only\n";
 
@@ -146,9 +147,8 @@ int runLods(const std::vector<std::string>& argv) {
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
   if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) {
-    // per-mesh chains go through buildChain, which runs zhang with its default options
-    for (const std::string& o : zhangOptionNames())
-      if (args.has(o)) return usageError("lods", o + " applies to the whole-model chain: add --flatten");
+    for (const std::string& o : zhangOptionNames())  // per-mesh chains go through buildChain's defaults
+      if (args.has(o)) return usageError("lods", o + " needs --flatten or --split (per-mesh chains use the zhang defaults)");
     if (scrooge && (args.has("--subvolume") || args.has("--theta-max")))
       return usageError("lods", "per-mesh scrooge chains take --cell or --cell-rel; use --flatten or --split for "
                                 "--subvolume and --theta-max");

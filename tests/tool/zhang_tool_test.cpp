@@ -96,6 +96,9 @@ TEST(ZhangTool, RefusesBadOptions) {
   r = runTool("simplify " + in + " -o x.obj --method zhang --cell 0.1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("--method zhang takes --target-triangles"), std::string::npos) << r.output;
+  r = runTool("lods " + in + " -o x.glb --method zhang --zhang-mode triangle");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--zhang-mode needs --flatten or --split"), std::string::npos) << r.output;
   r = runTool("lods " + in + " -o x.obj --method zhang --cell-rel 0.1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("not --cell or --cell-rel"), std::string::npos) << r.output;
