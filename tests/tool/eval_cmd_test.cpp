@@ -12,27 +12,12 @@
 
 #include <gtest/gtest.h>
 
-#include "test_support.h"
+#include "tool_runner.h"
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string output;  // stdout and stderr
-};
-
-Result runTool(const std::string& args) {
-  Result r;
-  const std::string cmd = std::string(SCENELOD_TOOL_PATH) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = scenelod::test::ToolRun;
+using scenelod::test::runTool;
 
 // a box [lo, hi]^3 as OBJ text
 std::string boxObj(double lo, double hi) {

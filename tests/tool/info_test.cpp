@@ -12,40 +12,16 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/lodcore/obj_io.h"
-#include "test_support.h"
+#include "tool_runner.h"
 
 using namespace scenelod;
 
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
+using RunResult = scenelod::test::ToolOutput;
+using scenelod::test::readText;
 
-std::string readText(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-RunResult runTool(const std::vector<std::string>& args) {
-  const std::string dir = test::scratchDir();
-  std::string cmd = quote(SCENELOD_TOOL_PATH);
-  for (const std::string& a : args) cmd += " " + quote(a);
-  cmd += " >" + dir + "/tool_out.txt 2>" + dir + "/tool_err.txt";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = readText(dir + "/tool_out.txt");
-  r.err = readText(dir + "/tool_err.txt");
-  return r;
-}
+RunResult runTool(const std::vector<std::string>& args) { return scenelod::test::runToolSeparate(args, "info"); }
 
 // the integer value of "key": in a one-line JSON object; -1 when absent
 long long jsonInt(const std::string& json, const std::string& key) {

@@ -9,38 +9,14 @@
 
 #include <gtest/gtest.h>
 
-#include "test_support.h"
+#include "tool_runner.h"
 
 namespace {
 
-struct ToolRun {
-  int exit_code = -1;
-  std::string out, err;
-};
+using ToolRun = scenelod::test::ToolOutput;
+const auto& slurp = scenelod::test::readText;
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-std::string shellQuote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-ToolRun tool(const std::vector<std::string>& args) {
-  const std::string dir = scenelod::test::scratchDir();
-  std::string cmd = shellQuote(SCENELOD_TOOL_PATH);
-  for (const std::string& a : args) cmd += " " + shellQuote(a);
-  cmd += " >" + dir + "/replay_out.txt 2>" + dir + "/replay_err.txt";
-  const int status = std::system(cmd.c_str());
-  ToolRun r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(dir + "/replay_out.txt");
-  r.err = slurp(dir + "/replay_err.txt");
-  return r;
-}
+ToolRun tool(const std::vector<std::string>& args) { return scenelod::test::runToolSeparate(args, "replay"); }
 
 size_t lineCount(const std::string& text) {
   size_t n = 0;

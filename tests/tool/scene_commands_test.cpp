@@ -9,29 +9,14 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/scene/gltf_io.h"
-#include "test_support.h"
+#include "tool_runner.h"
 
 using namespace scenelod;
 
 namespace {
 
-struct ToolRun {
-  int code = -1;
-  std::string output;  // stdout and stderr
-};
-
-ToolRun runTool(const std::string& args) {
-  ToolRun r;
-  const std::string cmd = std::string(SCENELOD_TOOL_PATH) + " " + args + " 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using scenelod::test::ToolRun;
+using scenelod::test::runTool;
 
 }  // namespace
 
