@@ -1,0 +1,88 @@
+#pragma once
+// An OpenGL 3.3 core renderer for LOD chains, headless through EGL (Mesa's surfaceless platform or
+// the default display with a pbuffer; software rendering works, no GPU or display needed).
+//
+// Uploads every level of every chain to GPU buffers once, then draws per frame the level the
+// selector chose for each object under its world matrix: triangles with a headlight; thick edges
+// expanded to camera-facing quads in the vertex shader, shaded with Low & Tan 1997 §3.3's dynamic
+// normal ((V1 - C) x (V2 - C)) x (V2 - V1) and as wide as their thickness in world units (at least
+// one pixel); points as GL_POINTS. drawFrame returns the measured frame time (CPU time of issuing
+// the draws plus glFinish), which the caller hands to selection::reportFrameTime so the cost model
+// is fitted to real rendering.
+//
+// Threads: one thread owns a Renderer (its GL context is current on the thread that called init).
+// No GL or EGL type appears in this header.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+
+#include "scenelod/eval/image.h"
+#include "scenelod/lodcore/lod_chain.h"
+#include "scenelod/lodcore/span.h"
+#include "scenelod/lodcore/status.h"
+#include "scenelod/selection/camera.h"
+
+namespace scenelod::gl {
+
+struct RendererConfig {
+  uint32_t width_px = 1280;    // the offscreen render target, 1..8192
+  uint32_t height_px = 720;
+  float background[3] = {0.08f, 0.09f, 0.11f};  // linear RGB clear colour
+  float point_size_px = 3.0f;  // size of point primitives
+};
+
+struct FrameInput {
+  const selection::Camera* camera = nullptr;  // its viewport should match the render target
+  Span<const glm::mat4> object_world;         // per object: object-to-world matrix
+  Span<const uint32_t> object_chain;          // per object: chain index (< uploaded chain count)
+  Span<const int8_t> levels;                  // per object: level to draw, -1 = not drawn
+};
+
+struct FrameResult {
+  double measured_ms = 0.0;    // CPU time from the first GL call of the frame to glFinish returning
+  uint64_t triangles = 0;      // drawn this frame
+  uint64_t edges = 0;
+  uint64_t points = 0;
+  uint32_t draw_calls = 0;
+};
+
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Starts EGL, creates an OpenGL 3.3 core context (current on this thread), an RGBA8 + depth FBO of
+  // the configured size, and compiles the shaders. On failure returns an error; `*unavailable` (when
+  // not null) is set true when the failure is that EGL or an OpenGL 3.3 context cannot start on this
+  // machine (the caller may skip), false when it is anything else. Cost: context creation, ~10s of ms.
+  Error init(const RendererConfig& config, bool* unavailable = nullptr);
+
+  // A description of the context ("OpenGL 4.5 (Core Profile) Mesa ..., llvmpipe ...") after init.
+  std::string description() const;
+
+  // Uploads every level of every chain (one vertex and index buffer per level and primitive kind).
+  // Meshes without normals get area-weighted vertex normals. Replaces earlier uploads. Errors: init
+  // not done, a level whose indices are out of range, a GL error (out of memory). Allocates.
+  Error uploadChains(const std::vector<LodChain>& chains);
+  size_t chainCount() const;
+  size_t gpuBytes() const;  // buffer bytes uploaded
+
+  // Clears and draws the frame into the offscreen target and waits for it (glFinish). Objects with
+  // level -1, an out-of-range chain or level are skipped. Allocates nothing. Returns false (result
+  // untouched) before init or on mismatched span sizes or a null camera.
+  bool drawFrame(const FrameInput& input, FrameResult* result);
+
+  // Reads the last frame back into `out` (rows top to bottom). Errors: init not done.
+  Error readPixels(eval::Image& out);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace scenelod::gl

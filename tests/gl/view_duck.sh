@@ -1,0 +1,22 @@
+#!/bin/sh
+# Runs `scenelod view` headless on the Duck for 10 frames and checks a screenshot shows it.
+# Exit code 77 (CTest SKIP_RETURN_CODE) when the shared models are absent or EGL cannot start.
+# usage: view_duck.sh SCENELOD PNG_CHECK MODEL.glb SCRATCH_DIR
+tool=$1 check=$2 model=$3 dir=$4
+if [ ! -f "$model" ]; then
+  echo "SKIP: $model is absent (the shared glTF models live beside the checkout in ../shared/models)"
+  exit 77
+fi
+rm -rf "$dir"
+"$tool" view "$model" --headless --frames 10 --every 5 --size 160 120 --png "$dir"
+rc=$?
+if [ $rc -eq 77 ]; then
+  echo "SKIP: headless OpenGL (EGL) cannot start on this machine"
+  exit 77
+fi
+[ $rc -eq 0 ] || { echo "FAIL: scenelod view exited with $rc"; exit 1; }
+for f in frame_0000.png frame_0005.png frame_0009.png; do
+  [ -f "$dir/$f" ] || { echo "FAIL: $dir/$f was not written"; exit 1; }
+done
+"$check" "$dir/frame_0000.png" 160 120 2 || { echo "FAIL: the screenshot shows (almost) only background"; exit 1; }
+"$check" "$dir/frame_0009.png" 160 120 2 || { echo "FAIL: the last screenshot shows (almost) only background"; exit 1; }
