@@ -415,20 +415,44 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1: cull; per slot the level-independent terms and the finest candidate level
+  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits,
+  // a loop the compiler vectorises), into chosen[] as scratch (it is written again before it is read)
+  uint8_t* const outside = ctx.chosen;
+  {
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
+    const float* xyz = n ? &centers[0].x : nullptr;
+    const float* rad = radii.data;
+    float pl[6][4];
+    for (int k = 0; k < 6; ++k)
+      for (int j = 0; j < 4; ++j) pl[k][j] = frustum.planes[k][j];
+    for (size_t i = 0; i < n; ++i) {
+      const float x = xyz[3 * i], y = xyz[3 * i + 1], z = xyz[3 * i + 2], nr = -rad[i];
+      int o = 0;
+      for (int k = 0; k < 6; ++k) o |= pl[k][0] * x + pl[k][1] * y + pl[k][2] * z + pl[k][3] < nr;
+      outside[i] = static_cast<uint8_t>(o);
+    }
+  }
+  // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
+  // object's level starts at -1 and the slots' levels are written at the end
   size_t slots = 0;
-  double mandatory = coef.per_frame_ms;
-  uint32_t culled = 0;
   for (size_t i = 0; i < n; ++i) {
+    const uint32_t chain = chains[i];
+    const bool out = outside[i] != 0 || levels.chain_level_offset[chain + 1] == levels.chain_level_offset[chain];
+    levels_out[i] = -1;
+    ctx.slot_object[slots] = static_cast<uint32_t>(i);
+    slots += out ? 0 : 1;
+  }
+  const uint32_t culled = static_cast<uint32_t>(n - slots);
+
+  // pass 1c: per slot the level-independent terms and the finest candidate level
+  double mandatory = coef.per_frame_ms;
+  for (size_t s = 0; s < slots; ++s) {
+    const size_t i = ctx.slot_object[s];
     const glm::vec3 c = centers[i];
     const float r = radii[i];
-    const uint32_t row0 = levels.chain_level_offset[chains[i]];
-    const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
-    if (level_count == 0 || !sphereInFrustum(frustum, c, r)) {
-      levels_out[i] = -1;
-      ++culled;
-      continue;
-    }
+    const uint32_t chain = chains[i];
+    const uint32_t row0 = levels.chain_level_offset[chain];
+    const uint32_t level_count = levels.chain_level_offset[chain + 1] - row0;
     float pixel = ortho_pixel;
     if (!ortho) {
       const glm::vec3 d = c - cam.eye;
@@ -446,8 +470,6 @@ bool SelectionJob::run() {
     if (focus.count) b *= focus[i];
     if (motion.count) b *= motion[i];
     if (visible_fraction.count) b *= visible_fraction[i];
-    const size_t s = slots++;
-    ctx.slot_object[s] = static_cast<uint32_t>(i);
     ctx.slot_a[s] = c_obj + c_px * px;
     ctx.slot_b[s] = b;
     ctx.slot_q[s] = q;
@@ -473,9 +495,7 @@ bool SelectionJob::run() {
 
   if (!budget) {
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = ctx.slot_object[s];
-      const uint32_t row0 = levels.chain_level_offset[chains[i]];
-      const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
+      const uint32_t level_count = ctx.slot_levels[s];
       int level = ctx.slot_finest[s];
       const int p = ctx.slot_prev[s];
       // hysteresis: a coarser current level stays while it is within the margin
@@ -490,9 +510,7 @@ bool SelectionJob::run() {
     double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
     size_t segments = 0;
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = ctx.slot_object[s];
-      const uint32_t row0 = levels.chain_level_offset[chains[i]];
-      const int level_count = static_cast<int>(levels.chain_level_offset[chains[i] + 1] - row0);
+      const int level_count = static_cast<int>(ctx.slot_levels[s]);
       size_t m = 0;
       if (!ctx.slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
       for (int l = ctx.slot_finest[s]; l < level_count; ++l) pts[m++] = {ctx.pointCost(s, l), ctx.pointBenefit(s, l), l};
