@@ -434,52 +434,74 @@ bool SelectionJob::run() {
   }
   // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
   // object's level starts at -1 and the slots' levels are written at the end
+  // (locals for every array below: the byte stores would otherwise make the compiler reload the
+  // pointers from the job and the context on every iteration)
+  const uint32_t* const chain_offset = levels.chain_level_offset.data;
+  const uint32_t* const chain_of = chains.data;
+  int8_t* const level_of = levels_out.data;
+  uint32_t* const slot_object = ctx.slot_object;
   size_t slots = 0;
   for (size_t i = 0; i < n; ++i) {
-    const uint32_t chain = chains[i];
-    const bool out = outside[i] != 0 || levels.chain_level_offset[chain + 1] == levels.chain_level_offset[chain];
-    levels_out[i] = -1;
-    ctx.slot_object[slots] = static_cast<uint32_t>(i);
+    const uint32_t chain = chain_of[i];
+    const bool out = outside[i] != 0 || chain_offset[chain + 1] == chain_offset[chain];
+    level_of[i] = -1;
+    slot_object[slots] = static_cast<uint32_t>(i);
     slots += out ? 0 : 1;
   }
   const uint32_t culled = static_cast<uint32_t>(n - slots);
 
   // pass 1c: per slot the level-independent terms and the finest candidate level
   double mandatory = coef.per_frame_ms;
+  const glm::vec3* const center_of = centers.data;
+  const float* const radius_of = radii.data;
+  const float* const scale_of = max_scales.data;
+  const float* const row_inv_w = ctx.row_inv_w;
+  const int8_t* const prev_level = ctx.prev_level;
+  float* const slot_a = ctx.slot_a;
+  float* const slot_b = ctx.slot_b;
+  float* const slot_q = ctx.slot_q;
+  float* const slot_px = ctx.slot_px;
+  uint8_t* const slot_finest = ctx.slot_finest;
+  uint8_t* const slot_must = ctx.slot_must;
+  uint32_t* const slot_row0 = ctx.slot_row0;
+  int8_t* const slot_prev = ctx.slot_prev;
+  uint8_t* const slot_levels = ctx.slot_levels;
+  const glm::vec3 eye = cam.eye;
+  const float near_plane = cam.near_plane;
   for (size_t s = 0; s < slots; ++s) {
-    const size_t i = ctx.slot_object[s];
-    const glm::vec3 c = centers[i];
-    const float r = radii[i];
-    const uint32_t chain = chains[i];
-    const uint32_t row0 = levels.chain_level_offset[chain];
-    const uint32_t level_count = levels.chain_level_offset[chain + 1] - row0;
+    const size_t i = slot_object[s];
+    const glm::vec3 c = center_of[i];
+    const float r = radius_of[i];
+    const uint32_t chain = chain_of[i];
+    const uint32_t row0 = chain_offset[chain];
+    const uint32_t level_count = chain_offset[chain + 1] - row0;
     float pixel = ortho_pixel;
     if (!ortho) {
-      const glm::vec3 d = c - cam.eye;
+      const glm::vec3 d = c - eye;
       const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-      pixel = std::max(dist - r, cam.near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+      pixel = std::max(dist - r, near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
     }
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, viewport_px);
-    const float q = x_cells * pixel / max_scales[i];
+    const float q = x_cells * pixel / scale_of[i];
     // the coarsest level of accuracy 1 (level 0, w = 0, always is)
     int finest = static_cast<int>(level_count) - 1;
-    while (finest > 0 && !(q * ctx.row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
+    while (finest > 0 && !(q * row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
     float b = px;
     if (importance.count) b *= importance[i];
     if (focus.count) b *= focus[i];
     if (motion.count) b *= motion[i];
     if (visible_fraction.count) b *= visible_fraction[i];
-    ctx.slot_a[s] = c_obj + c_px * px;
-    ctx.slot_b[s] = b;
-    ctx.slot_q[s] = q;
-    ctx.slot_px[s] = px;
-    ctx.slot_finest[s] = static_cast<uint8_t>(finest);
-    ctx.slot_row0[s] = row0;
-    ctx.slot_prev[s] = ctx.prev_level[i];
-    ctx.slot_levels[s] = static_cast<uint8_t>(level_count);
+    slot_a[s] = c_obj + c_px * px;
+    slot_b[s] = b;
+    slot_q[s] = q;
+    slot_px[s] = px;
+    slot_finest[s] = static_cast<uint8_t>(finest);
+    slot_row0[s] = row0;
+    slot_prev[s] = prev_level[i];
+    slot_levels[s] = static_cast<uint8_t>(level_count);
     const bool must = must_draw.count && must_draw[i];
-    ctx.slot_must[s] = must ? 1 : 0;
+    slot_must[s] = must ? 1 : 0;
     if (must && budget) {
       float cheapest = std::numeric_limits<float>::infinity();
       for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
@@ -721,9 +743,14 @@ bool SelectionJob::run() {
       if (levels_out[i] >= 0) cost_ms_out[i] = ctx.pointCost(s, levels_out[i]);
     }
   }
-  for (size_t i = 0; i < n; ++i) {
-    if (levels_out[i] != ctx.prev_level[i]) ++st.switch_count;
-    ctx.prev_level[i] = levels_out[i];
+  {
+    int8_t* const prev = ctx.prev_level;
+    uint32_t switches = 0;
+    for (size_t i = 0; i < n; ++i) {
+      switches += level_of[i] != prev[i] ? 1u : 0u;
+      prev[i] = level_of[i];
+    }
+    st.switch_count = switches;
   }
   st.predicted_ms = predicted;
   st.total_benefit = benefit;
