@@ -443,10 +443,10 @@ bool SelectionJob::run() {
   size_t slots = 0;
   for (size_t i = 0; i < n; ++i) {
     const uint32_t chain = chain_of[i];
-    const bool out = outside[i] != 0 || chain_offset[chain + 1] == chain_offset[chain];
+    const uint32_t out = static_cast<uint32_t>(outside[i]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
     level_of[i] = -1;
     slot_object[slots] = static_cast<uint32_t>(i);
-    slots += out ? 0 : 1;
+    slots += 1u - out;
   }
   const uint32_t culled = static_cast<uint32_t>(n - slots);
 
