@@ -467,6 +467,11 @@ bool SelectionJob::run() {
   int8_t* const slot_prev = ctx.slot_prev;
   uint8_t* const slot_levels = ctx.slot_levels;
   const glm::vec3 eye = cam.eye;
+  const float* const importance_of = importance.count ? importance.data : nullptr;
+  const float* const focus_of = focus.count ? focus.data : nullptr;
+  const float* const motion_of = motion.count ? motion.data : nullptr;
+  const float* const visible_of = visible_fraction.count ? visible_fraction.data : nullptr;
+  const uint8_t* const must_of = must_draw.count ? must_draw.data : nullptr;
   const float near_plane = cam.near_plane;
   for (size_t s = 0; s < slots; ++s) {
     const size_t i = slot_object[s];
@@ -488,10 +493,10 @@ bool SelectionJob::run() {
     int finest = static_cast<int>(level_count) - 1;
     while (finest > 0 && !(q * row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
     float b = px;
-    if (importance.count) b *= importance[i];
-    if (focus.count) b *= focus[i];
-    if (motion.count) b *= motion[i];
-    if (visible_fraction.count) b *= visible_fraction[i];
+    if (importance_of) b *= importance_of[i];
+    if (focus_of) b *= focus_of[i];
+    if (motion_of) b *= motion_of[i];
+    if (visible_of) b *= visible_of[i];
     slot_a[s] = c_obj + c_px * px;
     slot_b[s] = b;
     slot_q[s] = q;
@@ -500,7 +505,7 @@ bool SelectionJob::run() {
     slot_row0[s] = row0;
     slot_prev[s] = prev_level[i];
     slot_levels[s] = static_cast<uint8_t>(level_count);
-    const bool must = must_draw.count && must_draw[i];
+    const bool must = must_of && must_of[i];
     slot_must[s] = must ? 1 : 0;
     if (must && budget) {
       float cheapest = std::numeric_limits<float>::infinity();
