@@ -536,13 +536,29 @@ bool SelectionJob::run() {
     Pt pts[65];
     double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
     size_t segments = 0;
+    const float* const row_cost = ctx.row_cost;
+    const float h1 = ctx.h1;
+    uint8_t* const hull = ctx.hull;
+    uint8_t* const hull_count = ctx.hull_count;
+    const size_t hull_stride = ctx.hull_stride;
     for (size_t s = 0; s < slots; ++s) {
-      const int level_count = static_cast<int>(ctx.slot_levels[s]);
+      const int level_count = static_cast<int>(slot_levels[s]);
+      // pointCost / pointBenefit with the slot's terms in registers
+      const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
+      const uint32_t row0 = slot_row0[s];
+      const int prev = slot_prev[s];
       size_t m = 0;
-      if (!ctx.slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
-      for (int l = ctx.slot_finest[s]; l < level_count; ++l) pts[m++] = {ctx.pointCost(s, l), ctx.pointBenefit(s, l), l};
-      // insertion sort: cost ascending, benefit descending, coarser level first (costs usually
-      // already descend with the level, so this is nearly linear)
+      if (!slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
+      // coarsest level first: costs usually fall with the level, so the points arrive nearly in
+      // cost order and the insertion sort below is close to linear (its order is total, so the
+      // sorted result does not depend on the arrival order)
+      for (int l = level_count - 1; l >= static_cast<int>(slot_finest[s]); --l) {
+        const uint32_t row = row0 + static_cast<uint32_t>(l);
+        float acc = std::min(1.0f, sq * row_inv_w[row]);
+        if (l == prev) acc *= h1;
+        pts[m++] = {sa + row_cost[row], sb * acc, l};
+      }
+      // insertion sort: cost ascending, benefit descending, coarser level first
       for (size_t a = 1; a < m; ++a) {
         const Pt p = pts[a];
         size_t j = a;
@@ -558,20 +574,25 @@ bool SelectionJob::run() {
         pts[j] = p;
       }
       const float base_cost = pts[0].c;
-      uint8_t* h = ctx.hull + s * ctx.hull_stride;
+      uint8_t* h = hull + s * hull_stride;
       Pt hp[65];
+      float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
       size_t hn = 0;
       for (size_t a = 0; a < m; ++a) {
         const Pt& p = pts[a];
         if (hn > 0 && static_cast<double>(p.c) - base_cost > avail) break;  // cannot fit even alone
         if (hn > 0 && !(p.b > hp[hn - 1].b)) continue;
-        while (hn >= 2 && !(SelectorContext::ratio(hp[hn - 2].c, hp[hn - 2].b, hp[hn - 1].c, hp[hn - 1].b) >
-                            SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b)))
+        float r_new = 0.0f;
+        while (hn >= 1) {
+          r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
+          if (hn < 2 || hr[hn - 1] > r_new) break;
           --hn;
+        }
+        hr[hn] = r_new;
         hp[hn++] = p;
       }
       for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
-      ctx.hull_count[s] = static_cast<uint8_t>(hn);
+      hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
       segments += hn - 1;
     }
