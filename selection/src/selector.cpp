@@ -310,33 +310,62 @@ bool SelectionJob::validate() const {
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
-  PassResult r;
+  // pointCost / pointBenefit spelled out over locals, and the sums in locals: the compiler keeps
+  // them in registers instead of reloading the context's arrays for every hull point
+  const uint8_t* const hull_levels = hull;
+  const uint8_t* const counts = hull_count;
+  const float* const sa = slot_a;
+  const float* const sb = slot_b;
+  const float* const sq = slot_q;
+  const float* const rc = row_cost;
+  const float* const riw = row_inv_w;
+  const uint32_t* const r0 = slot_row0;
+  const int8_t* const sp = slot_prev;
+  const float hh = h1;
+  const size_t stride = hull_stride;
+  double cost = 0.0;
+  size_t above = 0, below = 0;
   for (size_t s = 0; s < slot_count; ++s) {
-    const size_t n = hull_count[s];
+    const size_t n = counts[s];
+    const uint8_t* const h = hull_levels + s * stride;
+    const float a = sa[s], b = sb[s], q = sq[s];
+    const uint32_t row0 = r0[s];
+    const int prev = sp[s];
+    auto cost_of = [&](int l) { return l < 0 ? 0.0f : a + rc[row0 + static_cast<uint32_t>(l)]; };
+    auto benefit_of = [&](int l) {
+      if (l < 0) return 0.0f;
+      float acc = std::min(1.0f, q * riw[row0 + static_cast<uint32_t>(l)]);
+      if (l == prev) acc *= hh;
+      return b * acc;
+    };
     size_t k = 0;
-    int l0 = hullLevel(s, 0);
-    float c0 = pointCost(s, l0), b0 = pointBenefit(s, l0);
+    int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
+    float c0 = cost_of(l0), b0 = benefit_of(l0);
     double chosen_cost = c0;
     bool taking = true;
     while (k + 1 < n) {
-      const int l1 = hullLevel(s, k + 1);
-      const float c1 = pointCost(s, l1), b1 = pointBenefit(s, l1);
-      const double q = ratio(c0, b0, c1, b1);
-      if (q <= lo) break;
-      if (taking && q > lambda) {
+      const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
+      const float c1 = cost_of(l1), b1 = benefit_of(l1);
+      const double r = ratio(c0, b0, c1, b1);
+      if (r <= lo) break;
+      if (taking && r > lambda) {
         chosen_cost = c1;
-        if (q <= hi) ++r.above;
+        if (r <= hi) ++above;
       } else {
         taking = false;
-        ++r.below;
+        ++below;
       }
       ++k;
       c0 = c1;
       b0 = b1;
     }
-    r.cost += chosen_cost;
+    cost += chosen_cost;
   }
-  return r;
+  PassResult result;
+  result.cost = cost;
+  result.above = above;
+  result.below = below;
+  return result;
 }
 
 void SelectorContext::greedy(size_t slot_count, double total, double cap, bool stop, int64_t* split_slot,
