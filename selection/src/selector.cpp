@@ -699,31 +699,47 @@ bool SelectionJob::run() {
         // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
         double total = 0.0;
         size_t count = 0;
+        uint8_t* const chosen = ctx.chosen;
+        BracketEntry* const bracket = ctx.bracket;
         for (size_t s = 0; s < slots; ++s) {
-          const size_t hn = ctx.hull_count[s];
+          const size_t hn = hull_count[s];
+          const uint8_t* const h = hull + s * hull_stride;
+          const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
+          const uint32_t row0 = slot_row0[s];
+          const int prev = slot_prev[s];
+          // ctx.pointCost / ctx.pointBenefit over the slot's terms in registers
+          auto cost_of = [&](int l) { return l < 0 ? 0.0f : sa + row_cost[row0 + static_cast<uint32_t>(l)]; };
+          auto benefit_of = [&](int l) {
+            if (l < 0) return 0.0f;
+            float acc = std::min(1.0f, sq * row_inv_w[row0 + static_cast<uint32_t>(l)]);
+            if (l == prev) acc *= h1;
+            return sb * acc;
+          };
           size_t k = 0;
-          int l0 = ctx.hullLevel(s, 0);
-          float c0 = ctx.pointCost(s, l0), b0 = ctx.pointBenefit(s, l0);
+          int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
+          float c0 = cost_of(l0), b0 = benefit_of(l0);
           float chosen_cost = c0;
           bool taking = true;
+          uint8_t pick = 0;
           while (k + 1 < hn) {
-            const int l1 = ctx.hullLevel(s, k + 1);
-            const float c1 = ctx.pointCost(s, l1), b1 = ctx.pointBenefit(s, l1);
+            const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
+            const float c1 = cost_of(l1), b1 = benefit_of(l1);
             const float q = SelectorContext::ratio(c0, b0, c1, b1);
             if (static_cast<double>(q) <= lo) break;
             if (taking && static_cast<double>(q) > hi) {
               chosen_cost = c1;
-              ctx.chosen[s] = static_cast<uint8_t>(k + 1);
+              pick = static_cast<uint8_t>(k + 1);
             } else {
-              if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+              if (taking) pick = static_cast<uint8_t>(k);
               taking = false;
-              ctx.bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
+              bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
             }
             ++k;
             c0 = c1;
             b0 = b1;
           }
-          if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+          if (taking) pick = static_cast<uint8_t>(k);
+          chosen[s] = pick;
           total += chosen_cost;
         }
         std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
