@@ -777,7 +777,8 @@ bool SelectionJob::run() {
         st.flags |= kFlagSplitFallback;
       }
     }
-    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = static_cast<uint8_t>(ctx.hullLevel(s, ctx.chosen[s]) < 0 ? kNotDrawn : ctx.hullLevel(s, ctx.chosen[s]));
+    // hull entries are level bytes already (kNotDrawn = -1)
+    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = hull[s * hull_stride + ctx.chosen[s]];
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
@@ -787,24 +788,38 @@ bool SelectionJob::run() {
   // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
   CostFeatures f;
   double predicted = coef.per_frame_ms, benefit = 0.0;
-  for (size_t s = 0; s < slots; ++s) {
-    const size_t i = ctx.slot_object[s];
-    const int level = ctx.chosen[s] == kNotDrawn ? -1 : static_cast<int>(ctx.chosen[s]);
-    levels_out[i] = static_cast<int8_t>(level);
-    if (level < 0) {
-      if (ctx.slot_b[s] > 0.0f) ++st.dropped_count;
-      continue;
+  {
+    const uint8_t* const chosen = ctx.chosen;
+    const float* const rc = ctx.row_cost;
+    const float hh = ctx.h1;
+    const uint32_t* const tri = levels.triangle_count.data;
+    const uint32_t* const vert = levels.vertex_count.data;
+    const uint32_t* const lines = levels.line_point_count.data;
+    uint32_t dropped = 0, drawn = 0;
+    for (size_t s = 0; s < slots; ++s) {
+      const size_t i = slot_object[s];
+      const int level = chosen[s] == kNotDrawn ? -1 : static_cast<int>(chosen[s]);
+      level_of[i] = static_cast<int8_t>(level);
+      if (level < 0) {
+        if (slot_b[s] > 0.0f) ++dropped;
+        continue;
+      }
+      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(level);
+      // ctx.pointCost / ctx.pointBenefit at a drawn level
+      const float cost = slot_a[s] + rc[row];
+      float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]);
+      if (level == slot_prev[s]) acc *= hh;
+      predicted += cost;
+      benefit += slot_b[s] * acc;
+      f.objects += 1.0;
+      f.triangles += tri[row];
+      f.vertices += vert[row];
+      f.line_points += lines[row];
+      f.pixels += slot_px[s];
+      ++drawn;
     }
-    const uint32_t row = ctx.slot_row0[s] + static_cast<uint32_t>(level);
-    const float cost = ctx.pointCost(s, level);
-    predicted += cost;
-    benefit += ctx.pointBenefit(s, level);
-    f.objects += 1.0;
-    f.triangles += levels.triangle_count[row];
-    f.vertices += levels.vertex_count[row];
-    f.line_points += levels.line_point_count[row];
-    f.pixels += ctx.slot_px[s];
-    ++st.drawn_count;
+    st.dropped_count = dropped;
+    st.drawn_count = drawn;
   }
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
   if (cost_ms_out.count) {
