@@ -310,33 +310,62 @@ bool SelectionJob::validate() const {
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
-  PassResult r;
+  // pointCost / pointBenefit spelled out over locals, and the sums in locals: the compiler keeps
+  // them in registers instead of reloading the context's arrays for every hull point
+  const uint8_t* const hull_levels = hull;
+  const uint8_t* const counts = hull_count;
+  const float* const sa = slot_a;
+  const float* const sb = slot_b;
+  const float* const sq = slot_q;
+  const float* const rc = row_cost;
+  const float* const riw = row_inv_w;
+  const uint32_t* const r0 = slot_row0;
+  const int8_t* const sp = slot_prev;
+  const float hh = h1;
+  const size_t stride = hull_stride;
+  double cost = 0.0;
+  size_t above = 0, below = 0;
   for (size_t s = 0; s < slot_count; ++s) {
-    const size_t n = hull_count[s];
+    const size_t n = counts[s];
+    const uint8_t* const h = hull_levels + s * stride;
+    const float a = sa[s], b = sb[s], q = sq[s];
+    const uint32_t row0 = r0[s];
+    const int prev = sp[s];
+    auto cost_of = [&](int l) { return l < 0 ? 0.0f : a + rc[row0 + static_cast<uint32_t>(l)]; };
+    auto benefit_of = [&](int l) {
+      if (l < 0) return 0.0f;
+      float acc = std::min(1.0f, q * riw[row0 + static_cast<uint32_t>(l)]);
+      if (l == prev) acc *= hh;
+      return b * acc;
+    };
     size_t k = 0;
-    int l0 = hullLevel(s, 0);
-    float c0 = pointCost(s, l0), b0 = pointBenefit(s, l0);
+    int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
+    float c0 = cost_of(l0), b0 = benefit_of(l0);
     double chosen_cost = c0;
     bool taking = true;
     while (k + 1 < n) {
-      const int l1 = hullLevel(s, k + 1);
-      const float c1 = pointCost(s, l1), b1 = pointBenefit(s, l1);
-      const double q = ratio(c0, b0, c1, b1);
-      if (q <= lo) break;
-      if (taking && q > lambda) {
+      const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
+      const float c1 = cost_of(l1), b1 = benefit_of(l1);
+      const double r = ratio(c0, b0, c1, b1);
+      if (r <= lo) break;
+      if (taking && r > lambda) {
         chosen_cost = c1;
-        if (q <= hi) ++r.above;
+        if (r <= hi) ++above;
       } else {
         taking = false;
-        ++r.below;
+        ++below;
       }
       ++k;
       c0 = c1;
       b0 = b1;
     }
-    r.cost += chosen_cost;
+    cost += chosen_cost;
   }
-  return r;
+  PassResult result;
+  result.cost = cost;
+  result.above = above;
+  result.below = below;
+  return result;
 }
 
 void SelectorContext::greedy(size_t slot_count, double total, double cap, bool stop, int64_t* split_slot,
@@ -415,49 +444,98 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1: cull; per slot the level-independent terms and the finest candidate level
-  size_t slots = 0;
-  double mandatory = coef.per_frame_ms;
-  uint32_t culled = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const glm::vec3 c = centers[i];
-    const float r = radii[i];
-    const uint32_t row0 = levels.chain_level_offset[chains[i]];
-    const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
-    if (level_count == 0 || !sphereInFrustum(frustum, c, r)) {
-      levels_out[i] = -1;
-      ++culled;
-      continue;
+  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits,
+  // a loop the compiler vectorises), into chosen[] as scratch (it is written again before it is read)
+  uint8_t* const outside = ctx.chosen;
+  {
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
+    const float* xyz = n ? &centers[0].x : nullptr;
+    const float* rad = radii.data;
+    float pl[6][4];
+    for (int k = 0; k < 6; ++k)
+      for (int j = 0; j < 4; ++j) pl[k][j] = frustum.planes[k][j];
+    for (size_t i = 0; i < n; ++i) {
+      const float x = xyz[3 * i], y = xyz[3 * i + 1], z = xyz[3 * i + 2], nr = -rad[i];
+      int o = 0;
+      for (int k = 0; k < 6; ++k) o |= pl[k][0] * x + pl[k][1] * y + pl[k][2] * z + pl[k][3] < nr;
+      outside[i] = static_cast<uint8_t>(o);
     }
+  }
+  // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
+  // object's level starts at -1 and the slots' levels are written at the end
+  // (locals for every array below: the byte stores would otherwise make the compiler reload the
+  // pointers from the job and the context on every iteration)
+  const uint32_t* const chain_offset = levels.chain_level_offset.data;
+  const uint32_t* const chain_of = chains.data;
+  int8_t* const level_of = levels_out.data;
+  uint32_t* const slot_object = ctx.slot_object;
+  size_t slots = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t chain = chain_of[i];
+    const uint32_t out = static_cast<uint32_t>(outside[i]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
+    level_of[i] = -1;
+    slot_object[slots] = static_cast<uint32_t>(i);
+    slots += 1u - out;
+  }
+  const uint32_t culled = static_cast<uint32_t>(n - slots);
+
+  // pass 1c: per slot the level-independent terms and the finest candidate level
+  double mandatory = coef.per_frame_ms;
+  const glm::vec3* const center_of = centers.data;
+  const float* const radius_of = radii.data;
+  const float* const scale_of = max_scales.data;
+  const float* const row_inv_w = ctx.row_inv_w;
+  const int8_t* const prev_level = ctx.prev_level;
+  float* const slot_a = ctx.slot_a;
+  float* const slot_b = ctx.slot_b;
+  float* const slot_q = ctx.slot_q;
+  float* const slot_px = ctx.slot_px;
+  uint8_t* const slot_finest = ctx.slot_finest;
+  uint8_t* const slot_must = ctx.slot_must;
+  uint32_t* const slot_row0 = ctx.slot_row0;
+  int8_t* const slot_prev = ctx.slot_prev;
+  uint8_t* const slot_levels = ctx.slot_levels;
+  const glm::vec3 eye = cam.eye;
+  const float* const importance_of = importance.count ? importance.data : nullptr;
+  const float* const focus_of = focus.count ? focus.data : nullptr;
+  const float* const motion_of = motion.count ? motion.data : nullptr;
+  const float* const visible_of = visible_fraction.count ? visible_fraction.data : nullptr;
+  const uint8_t* const must_of = must_draw.count ? must_draw.data : nullptr;
+  const float near_plane = cam.near_plane;
+  for (size_t s = 0; s < slots; ++s) {
+    const size_t i = slot_object[s];
+    const glm::vec3 c = center_of[i];
+    const float r = radius_of[i];
+    const uint32_t chain = chain_of[i];
+    const uint32_t row0 = chain_offset[chain];
+    const uint32_t level_count = chain_offset[chain + 1] - row0;
     float pixel = ortho_pixel;
     if (!ortho) {
-      const glm::vec3 d = c - cam.eye;
+      const glm::vec3 d = c - eye;
       const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-      pixel = std::max(dist - r, cam.near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+      pixel = std::max(dist - r, near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
     }
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, viewport_px);
-    const float q = x_cells * pixel / max_scales[i];
+    const float q = x_cells * pixel / scale_of[i];
     // the coarsest level of accuracy 1 (level 0, w = 0, always is)
     int finest = static_cast<int>(level_count) - 1;
-    while (finest > 0 && !(q * ctx.row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
+    while (finest > 0 && !(q * row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
     float b = px;
-    if (importance.count) b *= importance[i];
-    if (focus.count) b *= focus[i];
-    if (motion.count) b *= motion[i];
-    if (visible_fraction.count) b *= visible_fraction[i];
-    const size_t s = slots++;
-    ctx.slot_object[s] = static_cast<uint32_t>(i);
-    ctx.slot_a[s] = c_obj + c_px * px;
-    ctx.slot_b[s] = b;
-    ctx.slot_q[s] = q;
-    ctx.slot_px[s] = px;
-    ctx.slot_finest[s] = static_cast<uint8_t>(finest);
-    ctx.slot_row0[s] = row0;
-    ctx.slot_prev[s] = ctx.prev_level[i];
-    ctx.slot_levels[s] = static_cast<uint8_t>(level_count);
-    const bool must = must_draw.count && must_draw[i];
-    ctx.slot_must[s] = must ? 1 : 0;
+    if (importance_of) b *= importance_of[i];
+    if (focus_of) b *= focus_of[i];
+    if (motion_of) b *= motion_of[i];
+    if (visible_of) b *= visible_of[i];
+    slot_a[s] = c_obj + c_px * px;
+    slot_b[s] = b;
+    slot_q[s] = q;
+    slot_px[s] = px;
+    slot_finest[s] = static_cast<uint8_t>(finest);
+    slot_row0[s] = row0;
+    slot_prev[s] = prev_level[i];
+    slot_levels[s] = static_cast<uint8_t>(level_count);
+    const bool must = must_of && must_of[i];
+    slot_must[s] = must ? 1 : 0;
     if (must && budget) {
       float cheapest = std::numeric_limits<float>::infinity();
       for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
@@ -473,9 +551,7 @@ bool SelectionJob::run() {
 
   if (!budget) {
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = ctx.slot_object[s];
-      const uint32_t row0 = levels.chain_level_offset[chains[i]];
-      const uint32_t level_count = levels.chain_level_offset[chains[i] + 1] - row0;
+      const uint32_t level_count = ctx.slot_levels[s];
       int level = ctx.slot_finest[s];
       const int p = ctx.slot_prev[s];
       // hysteresis: a coarser current level stays while it is within the margin
@@ -489,15 +565,29 @@ bool SelectionJob::run() {
     Pt pts[65];
     double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
     size_t segments = 0;
+    const float* const row_cost = ctx.row_cost;
+    const float h1 = ctx.h1;
+    uint8_t* const hull = ctx.hull;
+    uint8_t* const hull_count = ctx.hull_count;
+    const size_t hull_stride = ctx.hull_stride;
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = ctx.slot_object[s];
-      const uint32_t row0 = levels.chain_level_offset[chains[i]];
-      const int level_count = static_cast<int>(levels.chain_level_offset[chains[i] + 1] - row0);
+      const int level_count = static_cast<int>(slot_levels[s]);
+      // pointCost / pointBenefit with the slot's terms in registers
+      const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
+      const uint32_t row0 = slot_row0[s];
+      const int prev = slot_prev[s];
       size_t m = 0;
-      if (!ctx.slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
-      for (int l = ctx.slot_finest[s]; l < level_count; ++l) pts[m++] = {ctx.pointCost(s, l), ctx.pointBenefit(s, l), l};
-      // insertion sort: cost ascending, benefit descending, coarser level first (costs usually
-      // already descend with the level, so this is nearly linear)
+      if (!slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
+      // coarsest level first: costs usually fall with the level, so the points arrive nearly in
+      // cost order and the insertion sort below is close to linear (its order is total, so the
+      // sorted result does not depend on the arrival order)
+      for (int l = level_count - 1; l >= static_cast<int>(slot_finest[s]); --l) {
+        const uint32_t row = row0 + static_cast<uint32_t>(l);
+        float acc = std::min(1.0f, sq * row_inv_w[row]);
+        if (l == prev) acc *= h1;
+        pts[m++] = {sa + row_cost[row], sb * acc, l};
+      }
+      // insertion sort: cost ascending, benefit descending, coarser level first
       for (size_t a = 1; a < m; ++a) {
         const Pt p = pts[a];
         size_t j = a;
@@ -513,20 +603,25 @@ bool SelectionJob::run() {
         pts[j] = p;
       }
       const float base_cost = pts[0].c;
-      uint8_t* h = ctx.hull + s * ctx.hull_stride;
+      uint8_t* h = hull + s * hull_stride;
       Pt hp[65];
+      float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
       size_t hn = 0;
       for (size_t a = 0; a < m; ++a) {
         const Pt& p = pts[a];
         if (hn > 0 && static_cast<double>(p.c) - base_cost > avail) break;  // cannot fit even alone
         if (hn > 0 && !(p.b > hp[hn - 1].b)) continue;
-        while (hn >= 2 && !(SelectorContext::ratio(hp[hn - 2].c, hp[hn - 2].b, hp[hn - 1].c, hp[hn - 1].b) >
-                            SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b)))
+        float r_new = 0.0f;
+        while (hn >= 1) {
+          r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
+          if (hn < 2 || hr[hn - 1] > r_new) break;
           --hn;
+        }
+        hr[hn] = r_new;
         hp[hn++] = p;
       }
       for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
-      ctx.hull_count[s] = static_cast<uint8_t>(hn);
+      hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
       segments += hn - 1;
     }
@@ -604,31 +699,47 @@ bool SelectionJob::run() {
         // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
         double total = 0.0;
         size_t count = 0;
+        uint8_t* const chosen = ctx.chosen;
+        BracketEntry* const bracket = ctx.bracket;
         for (size_t s = 0; s < slots; ++s) {
-          const size_t hn = ctx.hull_count[s];
+          const size_t hn = hull_count[s];
+          const uint8_t* const h = hull + s * hull_stride;
+          const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
+          const uint32_t row0 = slot_row0[s];
+          const int prev = slot_prev[s];
+          // ctx.pointCost / ctx.pointBenefit over the slot's terms in registers
+          auto cost_of = [&](int l) { return l < 0 ? 0.0f : sa + row_cost[row0 + static_cast<uint32_t>(l)]; };
+          auto benefit_of = [&](int l) {
+            if (l < 0) return 0.0f;
+            float acc = std::min(1.0f, sq * row_inv_w[row0 + static_cast<uint32_t>(l)]);
+            if (l == prev) acc *= h1;
+            return sb * acc;
+          };
           size_t k = 0;
-          int l0 = ctx.hullLevel(s, 0);
-          float c0 = ctx.pointCost(s, l0), b0 = ctx.pointBenefit(s, l0);
+          int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
+          float c0 = cost_of(l0), b0 = benefit_of(l0);
           float chosen_cost = c0;
           bool taking = true;
+          uint8_t pick = 0;
           while (k + 1 < hn) {
-            const int l1 = ctx.hullLevel(s, k + 1);
-            const float c1 = ctx.pointCost(s, l1), b1 = ctx.pointBenefit(s, l1);
+            const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
+            const float c1 = cost_of(l1), b1 = benefit_of(l1);
             const float q = SelectorContext::ratio(c0, b0, c1, b1);
             if (static_cast<double>(q) <= lo) break;
             if (taking && static_cast<double>(q) > hi) {
               chosen_cost = c1;
-              ctx.chosen[s] = static_cast<uint8_t>(k + 1);
+              pick = static_cast<uint8_t>(k + 1);
             } else {
-              if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+              if (taking) pick = static_cast<uint8_t>(k);
               taking = false;
-              ctx.bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
+              bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
             }
             ++k;
             c0 = c1;
             b0 = b1;
           }
-          if (taking) ctx.chosen[s] = static_cast<uint8_t>(k);
+          if (taking) pick = static_cast<uint8_t>(k);
+          chosen[s] = pick;
           total += chosen_cost;
         }
         std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
@@ -666,7 +777,8 @@ bool SelectionJob::run() {
         st.flags |= kFlagSplitFallback;
       }
     }
-    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = static_cast<uint8_t>(ctx.hullLevel(s, ctx.chosen[s]) < 0 ? kNotDrawn : ctx.hullLevel(s, ctx.chosen[s]));
+    // hull entries are level bytes already (kNotDrawn = -1)
+    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = hull[s * hull_stride + ctx.chosen[s]];
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
@@ -676,24 +788,38 @@ bool SelectionJob::run() {
   // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
   CostFeatures f;
   double predicted = coef.per_frame_ms, benefit = 0.0;
-  for (size_t s = 0; s < slots; ++s) {
-    const size_t i = ctx.slot_object[s];
-    const int level = ctx.chosen[s] == kNotDrawn ? -1 : static_cast<int>(ctx.chosen[s]);
-    levels_out[i] = static_cast<int8_t>(level);
-    if (level < 0) {
-      if (ctx.slot_b[s] > 0.0f) ++st.dropped_count;
-      continue;
+  {
+    const uint8_t* const chosen = ctx.chosen;
+    const float* const rc = ctx.row_cost;
+    const float hh = ctx.h1;
+    const uint32_t* const tri = levels.triangle_count.data;
+    const uint32_t* const vert = levels.vertex_count.data;
+    const uint32_t* const lines = levels.line_point_count.data;
+    uint32_t dropped = 0, drawn = 0;
+    for (size_t s = 0; s < slots; ++s) {
+      const size_t i = slot_object[s];
+      const int level = chosen[s] == kNotDrawn ? -1 : static_cast<int>(chosen[s]);
+      level_of[i] = static_cast<int8_t>(level);
+      if (level < 0) {
+        if (slot_b[s] > 0.0f) ++dropped;
+        continue;
+      }
+      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(level);
+      // ctx.pointCost / ctx.pointBenefit at a drawn level
+      const float cost = slot_a[s] + rc[row];
+      float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]);
+      if (level == slot_prev[s]) acc *= hh;
+      predicted += cost;
+      benefit += slot_b[s] * acc;
+      f.objects += 1.0;
+      f.triangles += tri[row];
+      f.vertices += vert[row];
+      f.line_points += lines[row];
+      f.pixels += slot_px[s];
+      ++drawn;
     }
-    const uint32_t row = ctx.slot_row0[s] + static_cast<uint32_t>(level);
-    const float cost = ctx.pointCost(s, level);
-    predicted += cost;
-    benefit += ctx.pointBenefit(s, level);
-    f.objects += 1.0;
-    f.triangles += levels.triangle_count[row];
-    f.vertices += levels.vertex_count[row];
-    f.line_points += levels.line_point_count[row];
-    f.pixels += ctx.slot_px[s];
-    ++st.drawn_count;
+    st.dropped_count = dropped;
+    st.drawn_count = drawn;
   }
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
   if (cost_ms_out.count) {
@@ -703,9 +829,14 @@ bool SelectionJob::run() {
       if (levels_out[i] >= 0) cost_ms_out[i] = ctx.pointCost(s, levels_out[i]);
     }
   }
-  for (size_t i = 0; i < n; ++i) {
-    if (levels_out[i] != ctx.prev_level[i]) ++st.switch_count;
-    ctx.prev_level[i] = levels_out[i];
+  {
+    int8_t* const prev = ctx.prev_level;
+    uint32_t switches = 0;
+    for (size_t i = 0; i < n; ++i) {
+      switches += level_of[i] != prev[i] ? 1u : 0u;
+      prev[i] = level_of[i];
+    }
+    st.switch_count = switches;
   }
   st.predicted_ms = predicted;
   st.total_benefit = benefit;
