@@ -145,8 +145,17 @@ Error stale(const char* what) { return {Status::kNotFound, std::string("stale or
 template <class A>
 A toAffine(const glm::mat4& m) {
   A a;
+#if defined(__SSE2__)
+  // the first three rows of the column-major matrix: a 4x4 transpose, last row dropped
+  __m128 c0 = _mm_loadu_ps(&m[0][0]), c1 = _mm_loadu_ps(&m[1][0]), c2 = _mm_loadu_ps(&m[2][0]), c3 = _mm_loadu_ps(&m[3][0]);
+  _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
+  _mm_store_ps(a.row[0], c0);
+  _mm_store_ps(a.row[1], c1);
+  _mm_store_ps(a.row[2], c2);
+#else
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) a.row[r][c] = m[c][r];
+#endif
   return a;
 }
 
