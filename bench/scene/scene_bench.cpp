@@ -79,7 +79,7 @@ void BM_UpdateAfterMoveAll(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
 }
-BENCHMARK(BM_UpdateAfterMoveAll)->Arg(100000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UpdateAfterMoveAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
 // and the setLocal calls alone (no update: the nodes just stay dirty)
 void BM_SetLocalAll(benchmark::State& state) {
@@ -94,7 +94,7 @@ void BM_SetLocalAll(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
 }
-BENCHMARK(BM_SetLocalAll)->Arg(100000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SetLocalAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
 // the sphere part alone: chain spheres change (every object dirty) but no node moved
 void BM_WorldSpheresOnly(benchmark::State& state) {
