@@ -62,6 +62,40 @@ void BM_MoveAllAndUpdate(benchmark::State& state) {
 }
 BENCHMARK(BM_MoveAllAndUpdate)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
+// the split of the above: update() alone after every node got a new local transform (the
+// setLocal loop runs with the timer paused)
+void BM_UpdateAfterMoveAll(benchmark::State& state) {
+  Fixture f;
+  const size_t n = static_cast<size_t>(state.range(0));
+  build(f, n);
+  int frame = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const auto& pose = f.poses[frame++ & 1];
+    for (size_t i = 0; i < n; ++i) f.scene.setLocal(f.nodes[i], pose[i]);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(f.scene.update());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
+}
+BENCHMARK(BM_UpdateAfterMoveAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
+// and the setLocal calls alone (no update: the nodes just stay dirty)
+void BM_SetLocalAll(benchmark::State& state) {
+  Fixture f;
+  const size_t n = static_cast<size_t>(state.range(0));
+  build(f, n);
+  int frame = 0;
+  for (auto _ : state) {
+    const auto& pose = f.poses[frame++ & 1];
+    for (size_t i = 0; i < n; ++i) f.scene.setLocal(f.nodes[i], pose[i]);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
+}
+BENCHMARK(BM_SetLocalAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
 // the sphere part alone: chain spheres change (every object dirty) but no node moved
 void BM_WorldSpheresOnly(benchmark::State& state) {
   Fixture f;

@@ -10,7 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #if defined(__SSE2__)
-#include <xmmintrin.h>
+#include <emmintrin.h>
 #endif
 
 #include "scenelod/scene/bounding_sphere.h"
@@ -42,42 +42,89 @@ inline float scaleBound(const float* m) {
 }
 
 #if defined(__SSE2__)
-// the same bound and the centre transform with 4-wide vectors: columns a, b, c, t of the matrix are
-// transposed to rows so that the Gram matrix's diagonal (aa, bb, cc) and off-diagonal (ab, bc, ca)
-// come out as two vectors without horizontal sums
-inline void sphereSse(const float* w, const Sphere& s, float* center_out, float& scale_out) {
-  __m128 a = _mm_loadu_ps(w), b = _mm_loadu_ps(w + 4), c = _mm_loadu_ps(w + 8);
-  const __m128 t = _mm_loadu_ps(w + 12);
-  const __m128 center = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, _mm_set1_ps(s.center.x)), _mm_mul_ps(b, _mm_set1_ps(s.center.y))),
-                                   _mm_add_ps(_mm_mul_ps(c, _mm_set1_ps(s.center.z)), t));
-  __m128 zero = _mm_setzero_ps();
-  _MM_TRANSPOSE4_PS(a, b, c, zero);  // a = (a0 b0 c0 0), b = (a1 b1 c1 0), c = (a2 b2 c2 0)
-  const __m128 diag = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, a), _mm_mul_ps(b, b)), _mm_mul_ps(c, c));
-  const __m128 ra = _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 0, 2, 1)), rb = _mm_shuffle_ps(b, b, _MM_SHUFFLE(3, 0, 2, 1)),
-               rc = _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 0, 2, 1));
-  __m128 off = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, ra), _mm_mul_ps(b, rb)), _mm_mul_ps(c, rc));  // (ab, bc, ca, 0)
+// out = p * l for affine transforms stored as rows (see Scene::Affine): row r of the product is
+// p_r0 * l_row0 + p_r1 * l_row1 + p_r2 * l_row2 + (0, 0, 0, p_r3). The sums are grouped as
+// (x + y) + (z + t), the order the earlier 4x4 column product used, so the bits are the same.
+inline void mulAffine(const float* p, const float* l, float* out) {
+  const __m128 l0 = _mm_load_ps(l), l1 = _mm_load_ps(l + 4), l2 = _mm_load_ps(l + 8);
+  const __m128 last = _mm_castsi128_ps(_mm_set_epi32(-1, 0, 0, 0));
+  for (int r = 0; r < 3; ++r) {
+    const __m128 pr = _mm_load_ps(p + 4 * r);
+    const __m128 x = _mm_shuffle_ps(pr, pr, _MM_SHUFFLE(0, 0, 0, 0)), y = _mm_shuffle_ps(pr, pr, _MM_SHUFFLE(1, 1, 1, 1)),
+                 z = _mm_shuffle_ps(pr, pr, _MM_SHUFFLE(2, 2, 2, 2));
+    _mm_store_ps(out + 4 * r, _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, l0), _mm_mul_ps(y, l1)),
+                                         _mm_add_ps(_mm_mul_ps(z, l2), _mm_and_ps(pr, last))));
+  }
+}
+
+// a world transform prepared for the objects on its node: its columns (for centres) and its
+// maxScaleBound
+struct NodeSphereXform {
+  __m128 c0, c1, c2, t;
+  float scale;
+};
+
+// the rows of the 3x4 block are the transposed columns a, b, c (lane 3 holds the translation), so
+// the Gram matrix's diagonal (aa, bb, cc) and off-diagonal (ab, bc, ca) come out as two vectors
+// without horizontal sums; lane 3 never reaches the result
+inline NodeSphereXform prepareXform(const float* w) {
+  const __m128 r0 = _mm_load_ps(w), r1 = _mm_load_ps(w + 4), r2 = _mm_load_ps(w + 8);
+  const __m128 diag = _mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, r0), _mm_mul_ps(r1, r1)), _mm_mul_ps(r2, r2));
+  const __m128 s0 = _mm_shuffle_ps(r0, r0, _MM_SHUFFLE(3, 0, 2, 1)), s1 = _mm_shuffle_ps(r1, r1, _MM_SHUFFLE(3, 0, 2, 1)),
+               s2 = _mm_shuffle_ps(r2, r2, _MM_SHUFFLE(3, 0, 2, 1));
+  __m128 off = _mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, s0), _mm_mul_ps(r1, s1)), _mm_mul_ps(r2, s2));  // (ab, bc, ca, .)
   off = _mm_andnot_ps(_mm_set1_ps(-0.0f), off);
   // rows of |G|: (aa + ab + ca, bb + bc + ab, cc + ca + bc)
   const __m128 rows = _mm_add_ps(_mm_add_ps(diag, off), _mm_shuffle_ps(off, off, _MM_SHUFFLE(3, 1, 0, 2)));
   const __m128 m1 = _mm_max_ps(rows, _mm_shuffle_ps(rows, rows, _MM_SHUFFLE(3, 0, 2, 1)));
   const __m128 m2 = _mm_max_ps(m1, _mm_shuffle_ps(rows, rows, _MM_SHUFFLE(3, 1, 0, 2)));
-  scale_out = _mm_cvtss_f32(_mm_sqrt_ss(m2)) * (1.0f + 4.0f * 1.1920929e-7f);
-  alignas(16) float out[4];
-  _mm_store_ps(out, center);
-  center_out[0] = out[0];
-  center_out[1] = out[1];
-  center_out[2] = out[2];
+  NodeSphereXform x;
+  x.scale = _mm_cvtss_f32(_mm_sqrt_ss(m2)) * (1.0f + 4.0f * 1.1920929e-7f);
+  x.c0 = r0;
+  x.c1 = r1;
+  x.c2 = r2;
+  x.t = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(x.c0, x.c1, x.c2, x.t);
+  return x;
 }
 
-// out = p * l for column-major 4x4 matrices (out may not alias p or l)
-inline void mulMat4Sse(const float* p, const float* l, float* out) {
-  const __m128 p0 = _mm_loadu_ps(p), p1 = _mm_loadu_ps(p + 4), p2 = _mm_loadu_ps(p + 8), p3 = _mm_loadu_ps(p + 12);
-  for (int j = 0; j < 4; ++j) {
-    const float* c = l + 4 * j;
-    const __m128 r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(p0, _mm_set1_ps(c[0])), _mm_mul_ps(p1, _mm_set1_ps(c[1]))),
-                                _mm_add_ps(_mm_mul_ps(p2, _mm_set1_ps(c[2])), _mm_mul_ps(p3, _mm_set1_ps(c[3]))));
-    _mm_storeu_ps(out + 4 * j, r);
+// centre = M * c as (a * cx + b * cy) + (c * cz + t), radius = r * scale
+inline void objectSphere(const NodeSphereXform& x, const Sphere& s, float* center_out, float& radius_out) {
+  const __m128 center = _mm_add_ps(_mm_add_ps(_mm_mul_ps(x.c0, _mm_set1_ps(s.center.x)), _mm_mul_ps(x.c1, _mm_set1_ps(s.center.y))),
+                                   _mm_add_ps(_mm_mul_ps(x.c2, _mm_set1_ps(s.center.z)), x.t));
+  _mm_storel_pi(reinterpret_cast<__m64*>(center_out), center);
+  _mm_store_ss(center_out + 2, _mm_movehl_ps(center, center));
+  radius_out = s.radius * x.scale;
+}
+#else
+inline void mulAffine(const float* p, const float* l, float* out) {
+  for (int r = 0; r < 3; ++r) {
+    const float* pr = p + 4 * r;
+    for (int j = 0; j < 4; ++j)
+      out[4 * r + j] = (pr[0] * l[j] + pr[1] * l[4 + j]) + (pr[2] * l[8 + j] + (j == 3 ? pr[3] : 0.0f));
   }
+}
+
+struct NodeSphereXform {
+  float m[16];  // column-major 4x4, last row unused
+  float scale;
+};
+
+inline NodeSphereXform prepareXform(const float* w) {
+  NodeSphereXform x;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 3; ++r) x.m[4 * c + r] = w[4 * r + c];
+  x.m[3] = x.m[7] = x.m[11] = 0.0f;
+  x.m[15] = 1.0f;
+  x.scale = scaleBound(x.m);
+  return x;
+}
+
+inline void objectSphere(const NodeSphereXform& x, const Sphere& s, float* center_out, float& radius_out) {
+  const float* w = x.m;
+  const float cx = s.center.x, cy = s.center.y, cz = s.center.z;
+  for (int r = 0; r < 3; ++r) center_out[r] = (w[r] * cx + w[4 + r] * cy) + (w[8 + r] * cz + w[12 + r]);
+  radius_out = s.radius * x.scale;
 }
 #endif
 
@@ -94,6 +141,31 @@ Sphere transformSphere(const Sphere& s, const glm::mat4& m) {
 
 namespace {
 Error stale(const char* what) { return {Status::kNotFound, std::string("stale or invalid ") + what + " handle"}; }
+
+template <class A>
+A toAffine(const glm::mat4& m) {
+  A a;
+#if defined(__SSE2__)
+  // the first three rows of the column-major matrix: a 4x4 transpose, last row dropped
+  __m128 c0 = _mm_loadu_ps(&m[0][0]), c1 = _mm_loadu_ps(&m[1][0]), c2 = _mm_loadu_ps(&m[2][0]), c3 = _mm_loadu_ps(&m[3][0]);
+  _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
+  _mm_store_ps(a.row[0], c0);
+  _mm_store_ps(a.row[1], c1);
+  _mm_store_ps(a.row[2], c2);
+#else
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) a.row[r][c] = m[c][r];
+#endif
+  return a;
+}
+
+template <class A>
+glm::mat4 toMat4(const A& a) {
+  glm::mat4 m(1.0f);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) m[c][r] = a.row[r][c];
+  return m;
+}
 }  // namespace
 
 bool Scene::nodeLive(NodeHandle h) const {
@@ -133,6 +205,7 @@ Error Scene::setChainSphere(uint32_t chain, const Sphere& sphere) {
   chain_spheres_[chain] = sphere;
   for (size_t i = 0; i < object_chain_.size(); ++i)
     if (object_chain_[i] == chain) object_dirty_[i] = 1;
+  some_objects_dirty_ = true;
   return {};
 }
 
@@ -154,9 +227,11 @@ Error Scene::addNode(NodeHandle parent, const glm::mat4& local, NodeHandle& out)
   node_dense_[slot] = static_cast<uint32_t>(order_.size());
   order_.push_back(slot);
   parent_dense_.push_back(parent_dense);
-  node_dirty_.push_back(1);
-  local_.push_back(local);
-  world_.push_back(local);
+  node_dirty_.push_back(0);
+  local_.push_back(toAffine<Affine>(local));
+  world_.push_back(local_.back());
+  node_first_object_.push_back(-1);
+  markNodeDirty(order_.size() - 1);
   out = NodeHandle{slot, node_generation_[slot]};
   return {};
 }
@@ -197,6 +272,7 @@ Error Scene::removeNode(NodeHandle node) {
     node_dirty_[w] = node_dirty_[i];
     local_[w] = local_[i];
     world_[w] = world_[i];
+    node_first_object_[w] = node_first_object_[i];
     ++w;
   }
   order_.resize(w);
@@ -204,6 +280,9 @@ Error Scene::removeNode(NodeHandle node) {
   node_dirty_.resize(w);
   local_.resize(w);
   world_.resize(w);
+  node_first_object_.resize(w);
+  // dirty rows only moved down to positions >= first
+  if (first < dirty_from_) dirty_from_ = first;
   rebuildParentIndices();
   return {};
 }
@@ -221,7 +300,7 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
       if (static_cast<size_t>(a) == i)
         return {Status::kInvalidArgument, "cannot move a node under one of its own descendants"};
   }
-  node_dirty_[i] = 1;
+  markNodeDirty(i);  // the subtree's rows stay at positions >= i
   if (to_root || p < i) {
     parent_dense_[i] = to_root ? -1 : static_cast<int32_t>(p);
     return {};
@@ -239,10 +318,10 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
         in_subtree[node_dense_[parent_slot] - i])
       in_subtree[k - i] = 1;
   }
-  struct Row { uint32_t slot; int32_t parent; uint8_t dirty; glm::mat4 local, world; };
+  struct Row { uint32_t slot; int32_t parent; uint8_t dirty; int32_t first_object; Affine local, world; };
   std::vector<Row> keep, moved;
   for (size_t k = i; k <= p; ++k) {
-    Row r{order_[k], parent_dense_[k], node_dirty_[k], local_[k], world_[k]};
+    Row r{order_[k], parent_dense_[k], node_dirty_[k], node_first_object_[k], local_[k], world_[k]};
     (in_subtree[k - i] ? moved : keep).push_back(r);
   }
   size_t w = i;
@@ -251,6 +330,7 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
       order_[w] = r.slot;
       parent_dense_[w] = r.parent;
       node_dirty_[w] = r.dirty;
+      node_first_object_[w] = r.first_object;
       local_[w] = r.local;
       world_[w] = r.world;
       ++w;
@@ -262,8 +342,8 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
 Error Scene::setLocal(NodeHandle node, const glm::mat4& local) {
   if (!nodeLive(node)) return stale("node");
   const uint32_t i = node_dense_[node.slot];
-  local_[i] = local;
-  node_dirty_[i] = 1;
+  local_[i] = toAffine<Affine>(local);
+  markNodeDirty(i);
   return {};
 }
 
@@ -271,13 +351,13 @@ Error Scene::setLocal(NodeHandle node, const Trs& trs) { return setLocal(node, c
 
 Error Scene::getLocal(NodeHandle node, glm::mat4& out) const {
   if (!nodeLive(node)) return stale("node");
-  out = local_[node_dense_[node.slot]];
+  out = toMat4(local_[node_dense_[node.slot]]);
   return {};
 }
 
 Error Scene::getWorld(NodeHandle node, glm::mat4& out) const {
   if (!nodeLive(node)) return stale("node");
-  out = world_[node_dense_[node.slot]];
+  out = toMat4(world_[node_dense_[node.slot]]);
   return {};
 }
 
@@ -312,10 +392,13 @@ Error Scene::addObject(const ObjectDesc& d, ObjectHandle& out) {
   object_node_slot_.push_back(d.node.slot);
   object_node_dense_.push_back(node_dense_[d.node.slot]);
   object_dirty_.push_back(1);
+  object_next_.push_back(-1);
   importance_.push_back(d.importance);
   must_draw_.push_back(d.must_draw ? 1 : 0);
   user_data_.push_back(d.user_data);
   object_slot_.push_back(slot);
+  linkObject(static_cast<uint32_t>(object_chain_.size() - 1));
+  some_objects_dirty_ = true;
   out = ObjectHandle{slot, object_generation_[slot]};
   return {};
 }
@@ -323,7 +406,13 @@ Error Scene::addObject(const ObjectDesc& d, ObjectHandle& out) {
 Error Scene::removeObject(ObjectHandle h) {
   if (!objectLive(h)) return stale("object");
   const size_t k = object_dense_[h.slot], last = object_chain_.size() - 1;
+  unlinkObject(static_cast<uint32_t>(k));
   if (k != last) {
+    // the last object takes index k: its node's list must name k instead of last
+    int32_t* link = &node_first_object_[object_node_dense_[last]];
+    while (*link != static_cast<int32_t>(last)) link = &object_next_[static_cast<size_t>(*link)];
+    *link = static_cast<int32_t>(k);
+    object_next_[k] = object_next_[last];
     world_center_[k] = world_center_[last];
     world_radius_[k] = world_radius_[last];
     max_scale_[k] = max_scale_[last];
@@ -344,6 +433,7 @@ Error Scene::removeObject(ObjectHandle h) {
   object_node_slot_.pop_back();
   object_node_dense_.pop_back();
   object_dirty_.pop_back();
+  object_next_.pop_back();
   importance_.pop_back();
   must_draw_.pop_back();
   user_data_.pop_back();
@@ -358,9 +448,12 @@ Error Scene::setObjectNode(ObjectHandle h, NodeHandle node) {
   if (!objectLive(h)) return stale("object");
   if (!nodeLive(node)) return stale("node");
   const uint32_t k = object_dense_[h.slot];
+  unlinkObject(k);
   object_node_slot_[k] = node.slot;
   object_node_dense_[k] = node_dense_[node.slot];
+  linkObject(k);
   object_dirty_[k] = 1;
+  some_objects_dirty_ = true;
   return {};
 }
 
@@ -371,6 +464,7 @@ Error Scene::setObjectChain(ObjectHandle h, uint32_t chain) {
   const uint32_t k = object_dense_[h.slot];
   object_chain_[k] = chain;
   object_dirty_[k] = 1;
+  some_objects_dirty_ = true;
   return {};
 }
 
@@ -411,57 +505,80 @@ Error Scene::objectIndex(ObjectHandle h, size_t& out) const {
   return {};
 }
 
+void Scene::linkObject(uint32_t k) {
+  int32_t& head = node_first_object_[object_node_dense_[k]];
+  object_next_[k] = head;
+  head = static_cast<int32_t>(k);
+}
+
+void Scene::unlinkObject(uint32_t k) {
+  int32_t* link = &node_first_object_[object_node_dense_[k]];
+  while (*link != static_cast<int32_t>(k)) link = &object_next_[static_cast<size_t>(*link)];
+  *link = object_next_[k];
+}
+
+// with GCC on x86-64 the pass is also compiled for AVX (VEX encoding: no register copies around the
+// shuffles, broadcasts from memory) and picked at load time; no FMA, so both give the same bits
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__SSE2__) && !defined(__AVX__)
+__attribute__((target_clones("avx", "default")))
+#endif
 size_t Scene::update() {
   const size_t n = order_.size();
-  uint8_t* dirty = node_dirty_.data();
-  const int32_t* parent = parent_dense_.data();
-  // parents come first, so a parent's flag is final when its children are visited
-  for (size_t i = 0; i < n; ++i) {
-    const int32_t p = parent[i];
-    if (p >= 0) {
-      if (dirty[p]) dirty[i] = 1;
-      if (dirty[i]) {
-#if defined(__SSE2__)
-        mulMat4Sse(&world_[p][0][0], &local_[i][0][0], &world_[i][0][0]);
-#else
-        world_[i] = world_[p] * local_[i];
-#endif
-      }
-    } else if (dirty[i]) {
-      world_[i] = local_[i];
-    }
-  }
-  const size_t m = object_chain_.size();
   size_t recomputed = 0;
   const bool all = all_objects_dirty_;
-  const uint32_t* node_of = object_node_dense_.data();
   const uint32_t* chain_of = object_chain_.data();
   const Sphere* chains = chain_spheres_.data();
   uint8_t* object_dirty = object_dirty_.data();
   glm::vec3* centers = world_center_.data();
   float* radii = world_radius_.data();
   float* scales = max_scale_.data();
-  for (size_t k = 0; k < m; ++k) {
-    const uint32_t node = node_of[k];
-    if (!(all | object_dirty[k] | dirty[node])) continue;
-    const float* w = &world_[node][0][0];
-    const Sphere& s = chains[chain_of[k]];
-#if defined(__SSE2__)
-    float scale;
-    sphereSse(w, s, &centers[k].x, scale);
-#else
-    const float scale = scaleBound(w);
-    const float x = s.center.x, y = s.center.y, z = s.center.z;
-    centers[k] = glm::vec3(w[0] * x + w[4] * y + w[8] * z + w[12], w[1] * x + w[5] * y + w[9] * z + w[13],
-                           w[2] * x + w[6] * y + w[10] * z + w[14]);
-#endif
-    radii[k] = s.radius * scale;
-    scales[k] = scale;
-    object_dirty[k] = 0;
-    ++recomputed;
+  if (dirty_from_ < n) {
+    uint8_t* dirty = node_dirty_.data();
+    const int32_t* parent = parent_dense_.data();
+    const int32_t* first_object = node_first_object_.data();
+    const int32_t* next_object = object_next_.data();
+    const Affine* local = local_.data();
+    Affine* world = world_.data();
+    // parents come first, so a parent's flag is final when its children are visited; nothing
+    // before dirty_from_ is dirty
+    for (size_t i = dirty_from_; i < n; ++i) {
+      const int32_t p = parent[i];
+      if (p >= 0 && dirty[p]) dirty[i] = 1;
+      if (!dirty[i]) continue;
+      if (p >= 0) {
+        mulAffine(&world[p].row[0][0], &local[i].row[0][0], &world[i].row[0][0]);
+      } else {
+        world[i] = local[i];
+      }
+      // the objects on this node, while its world transform is in registers
+      int32_t k = first_object[i];
+      if (all || k < 0) continue;
+      const NodeSphereXform x = prepareXform(&world[i].row[0][0]);
+      for (; k >= 0; k = next_object[k]) {
+        objectSphere(x, chains[chain_of[k]], &centers[k].x, radii[k]);
+        scales[k] = x.scale;
+        object_dirty[k] = 0;
+        ++recomputed;
+      }
+    }
+    std::fill(node_dirty_.begin() + static_cast<std::ptrdiff_t>(dirty_from_), node_dirty_.end(), uint8_t(0));
+    dirty_from_ = kNoneDirty;
   }
-  std::fill(node_dirty_.begin(), node_dirty_.end(), uint8_t(0));
+  if (all || some_objects_dirty_) {
+    // objects edited themselves (chain, node, chain sphere, new): one pass over the flags
+    const size_t m = object_chain_.size();
+    const uint32_t* node_of = object_node_dense_.data();
+    for (size_t k = 0; k < m; ++k) {
+      if (!(all | object_dirty[k])) continue;
+      const NodeSphereXform x = prepareXform(&world_[node_of[k]].row[0][0]);
+      objectSphere(x, chains[chain_of[k]], &centers[k].x, radii[k]);
+      scales[k] = x.scale;
+      object_dirty[k] = 0;
+      ++recomputed;
+    }
+  }
   all_objects_dirty_ = false;
+  some_objects_dirty_ = false;
   return recomputed;
 }
 
@@ -505,9 +622,11 @@ Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string&
     const int32_t p = data.nodes[i].parent;
     out.parent_dense_.push_back(p < 0 ? -1 : static_cast<int32_t>(out.node_dense_[p]));
     out.node_dirty_.push_back(1);
-    out.local_.push_back(data.nodes[i].local);
-    out.world_.push_back(data.nodes[i].local);
+    out.local_.push_back(toAffine<Affine>(data.nodes[i].local));
+    out.world_.push_back(out.local_.back());
+    out.node_first_object_.push_back(-1);
   }
+  out.dirty_from_ = 0;
   out.setChainCount(data.meshes.size());
   for (size_t m = 0; m < data.meshes.size(); ++m) {
     const auto& pos = data.meshes[m].mesh.positions;

@@ -1,6 +1,7 @@
 #include "scenelod/scene/scene.h"
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include <glm/geometric.hpp>
@@ -328,5 +329,52 @@ TEST(Scene, RandomEditsKeepWorldSpheresAndHandlesConsistent) {
     }
     for (NodeHandle h : dead_nodes) EXPECT_EQ(s.setLocal(h, glm::mat4(1.0f)).status, Status::kNotFound);
     for (ObjectHandle h : dead_objects) EXPECT_EQ(s.setImportance(h, 1.0f).status, Status::kNotFound);
+  }
+}
+
+TEST(Scene, UpdateCountsFollowEditsAndBothSpherePassesGiveTheSameBits) {
+  std::mt19937 rng(5);
+  Scene s;
+  s.setChainCount(2);
+  ASSERT_TRUE(s.setChainSphere(0, Sphere{{0.3f, -0.2f, 0.1f}, 1.5f}).ok());
+  ASSERT_TRUE(s.setChainSphere(1, Sphere{{-1.0f, 0.5f, 2.0f}, 0.25f}).ok());
+  NodeHandle r, a, b, c;
+  ASSERT_TRUE(s.addNode({}, randomAffine(rng, false), r).ok());
+  ASSERT_TRUE(s.addNode(r, randomAffine(rng, true), a).ok());
+  ASSERT_TRUE(s.addNode(r, randomAffine(rng, false), b).ok());
+  ASSERT_TRUE(s.addNode(a, randomAffine(rng, true), c).ok());
+  ObjectHandle on_a0, on_a1, on_b, on_c;
+  ASSERT_TRUE(s.addObject(ObjectDesc{a, 0}, on_a0).ok());
+  ASSERT_TRUE(s.addObject(ObjectDesc{a, 1}, on_a1).ok());
+  ASSERT_TRUE(s.addObject(ObjectDesc{b, 1}, on_b).ok());
+  ASSERT_TRUE(s.addObject(ObjectDesc{c, 0}, on_c).ok());
+  EXPECT_EQ(s.update(), 4u);
+  EXPECT_EQ(s.update(), 0u);
+  ASSERT_TRUE(s.setLocal(a, randomAffine(rng, true)).ok());
+  EXPECT_EQ(s.update(), 3u);  // both objects on a and the one on its child c
+  ASSERT_TRUE(s.setObjectChain(on_b, 0).ok());
+  EXPECT_EQ(s.update(), 1u);
+  ASSERT_TRUE(s.setObjectNode(on_a1, b).ok());
+  EXPECT_EQ(s.update(), 1u);
+  ASSERT_TRUE(s.setLocal(b, randomAffine(rng, false)).ok());
+  EXPECT_EQ(s.update(), 2u);  // on_b and on_a1, now on b
+  ASSERT_TRUE(s.removeObject(on_a0).ok());  // swap-remove: another object takes its index
+  ASSERT_TRUE(s.setLocal(a, randomAffine(rng, false)).ok());
+  EXPECT_EQ(s.update(), 1u);  // only on_c is left under a
+  ASSERT_TRUE(s.removeNode(c).ok());
+  EXPECT_EQ(s.update(), 0u);
+  ASSERT_TRUE(s.setLocal(r, randomAffine(rng, true)).ok());
+  EXPECT_EQ(s.update(), 2u);
+  // spheres from the node pass (above) and from the object pass (every chain marked dirty, nothing
+  // moved) are the same bits
+  std::vector<glm::vec3> centres(s.worldCenters().begin(), s.worldCenters().end());
+  std::vector<float> radii(s.worldRadii().begin(), s.worldRadii().end());
+  std::vector<float> scales(s.maxScales().begin(), s.maxScales().end());
+  s.setChainCount(2);
+  EXPECT_EQ(s.update(), 2u);
+  for (size_t k = 0; k < s.objectCount(); ++k) {
+    EXPECT_EQ(std::memcmp(&centres[k], &s.worldCenters()[k], sizeof(glm::vec3)), 0) << k;
+    EXPECT_EQ(std::memcmp(&radii[k], &s.worldRadii()[k], sizeof(float)), 0) << k;
+    EXPECT_EQ(std::memcmp(&scales[k], &s.maxScales()[k], sizeof(float)), 0) << k;
   }
 }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "scenelod/scene/demo_scene.h"
 #include "scenelod/scene/gltf_io.h"
 #include "tool_runner.h"
 
@@ -19,6 +20,75 @@ using scenelod::test::ToolRun;
 using scenelod::test::runTool;
 
 }  // namespace
+
+TEST(SceneCommands, DemoPrintsOneRowPerMeshWithInstanceAndTriangleCounts) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the scenelod tool is not built";
+  const std::string dir = scenelod::test::scratchDir() + "/demo_table";
+  const ToolRun r = runTool("demo --table-only -o " + dir +
+                            " --segments 8 --gearboxes 2 --bunnies 3 --bunny /nonexistent/bunny.obj");
+  ASSERT_EQ(r.code, 0) << r.output;
+  // the same scene built here: instances and level-0 triangles per mesh
+  scene::DemoSceneParams p;
+  p.segments = 8;
+  p.gearbox_count = 2;
+  p.bunny_count = 3;
+  p.bunny_path = "/nonexistent/bunny.obj";
+  scene::SceneData s;
+  ASSERT_TRUE(scene::makeDemoScene(s, p).ok());
+  const std::vector<int32_t> objects = scene::objectNodes(s);
+  std::vector<size_t> instances(s.meshes.size(), 0);
+  size_t drawn = 0;
+  for (int32_t n : objects) {
+    ++instances[static_cast<size_t>(s.nodes[n].mesh)];
+    drawn += s.meshes[static_cast<size_t>(s.nodes[n].mesh)].mesh.triangleCount();
+  }
+  ASSERT_LE(s.meshes.size(), 30u);  // no mesh row is folded at this size
+  std::vector<std::string> lines;
+  for (size_t a = 0, b; a < r.output.size(); a = b + 1) {
+    b = r.output.find('\n', a);
+    if (b == std::string::npos) b = r.output.size();
+    lines.push_back(r.output.substr(a, b - a));
+  }
+  size_t header = lines.size();
+  for (size_t i = 0; i < lines.size(); ++i)
+    if (lines[i].rfind("mesh  name", 0) == 0) header = i;
+  ASSERT_LT(header + s.meshes.size() + 2, lines.size() + 1) << r.output;
+  for (size_t m = 0; m < s.meshes.size(); ++m) {
+    char name[64];
+    size_t id = 99, inst = 0, tris = 0, levels = 0;
+    char objs[64];
+    ASSERT_EQ(std::sscanf(lines[header + 1 + m].c_str(), "%zu %63s %zu %63s %zu %zu", &id, name, &inst, objs, &tris, &levels), 6)
+        << lines[header + 1 + m];
+    EXPECT_EQ(id, m);
+    const std::string& full = s.meshes[m].name;
+    EXPECT_EQ(std::string(name), full.size() > 14 ? full.substr(0, 13) + "~" : full);
+    EXPECT_EQ(inst, instances[m]) << s.meshes[m].name;
+    EXPECT_EQ(tris, s.meshes[m].mesh.triangleCount()) << s.meshes[m].name;
+    EXPECT_GE(levels, 2u) << s.meshes[m].name;
+  }
+  EXPECT_NE(r.output.find(std::to_string(objects.size()) + " objects folded into " + std::to_string(s.meshes.size()) +
+                          " mesh rows: " + std::to_string(drawn) + " triangles drawn at level 0"),
+            std::string::npos)
+      << r.output;
+  // the full table: a header and one row per object, in object order
+  const std::string csv = scenelod::test::readText(dir + "/demo_objects.csv");
+  EXPECT_NE(r.output.find("per-object table (" + std::to_string(objects.size()) + " rows"), std::string::npos);
+  size_t rows = 0;
+  for (char c : csv) rows += c == '\n';
+  EXPECT_EQ(rows, objects.size() + 1);
+  EXPECT_EQ(csv.find("object,node,mesh,"), 0u);
+  EXPECT_NE(csv.find("\n0,\"" + s.nodes[objects[0]].name + "\","), std::string::npos);
+}
+
+TEST(SceneCommands, DemoRefusesBadSceneOptions) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the scenelod tool is not built";
+  ToolRun r = runTool("demo --table-only --segments 2 -o " + scenelod::test::scratchDir() + "/demo_bad");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--segments must be in 3..4096"), std::string::npos) << r.output;
+  r = runTool("demo --table-only --gearboxes 0 -o " + scenelod::test::scratchDir() + "/demo_bad");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--gearboxes must be in 1..1000"), std::string::npos) << r.output;
+}
 
 TEST(SceneCommands, DemoSceneWritesAGlbThatLoadsBack) {
   if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the scenelod tool is not built";

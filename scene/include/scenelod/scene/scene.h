@@ -99,10 +99,12 @@ class Scene {
   // Reorders the update order so parents stay first: O(nodes) worst case.
   Error reparent(NodeHandle node, NodeHandle new_parent);
   // Set a node's local transform and mark it dirty. Errors: stale handle. O(1), no allocation.
+  // Transforms are affine: only the upper 3x4 part (linear part and translation) is stored, the
+  // last row reads back as (0, 0, 0, 1).
   Error setLocal(NodeHandle node, const glm::mat4& local);
   Error setLocal(NodeHandle node, const Trs& trs);
   Error getLocal(NodeHandle node, glm::mat4& out) const;
-  // World transform as of the last update(). Errors: stale handle.
+  // World transform as of the last update() (affine, last row (0, 0, 0, 1)). Errors: stale handle.
   Error getWorld(NodeHandle node, glm::mat4& out) const;
   Error getParent(NodeHandle node, NodeHandle& out) const;  // null handle for a root
   bool isValid(NodeHandle node) const;
@@ -130,9 +132,12 @@ class Scene {
   size_t objectCount() const { return object_chain_.size(); }
 
   // Recomputes world transforms of dirty nodes and their descendants in one linear pass in
-  // parent-before-child order, then the world spheres of objects whose node moved (or whose chain
-  // or node changed). Returns the number of objects whose sphere was recomputed.
-  // Cost: O(nodes + objects); no allocation, no locks; single-threaded.
+  // parent-before-child order, with the world spheres of the objects on each recomputed node; then
+  // the spheres of objects whose chain, chain sphere or node changed. Returns the number of objects
+  // whose sphere was recomputed.
+  // Cost: O(nodes after the first dirty one + objects on moved nodes), plus O(objects) when an
+  // object itself was edited since the last update; O(1) when nothing changed. No allocation, no
+  // locks; single-threaded.
   size_t update();
 
   // ---- hot per-object data, dense arrays indexed by object dense index (valid after update()) ----
@@ -145,9 +150,22 @@ class Scene {
   Span<const uint64_t> userData() const { return {user_data_.data(), user_data_.size()}; }
 
  private:
+  // an affine transform as the first three rows of its 4x4 matrix, row r = (m[0][r], m[1][r],
+  // m[2][r], translation[r]): a row-major 3x4 block, 16-byte aligned
+  struct alignas(16) Affine {
+    float row[3][4];
+  };
+  static constexpr size_t kNoneDirty = ~size_t(0);
+
   bool nodeLive(NodeHandle h) const;
   bool objectLive(ObjectHandle h) const;
   void rebuildParentIndices();  // also refreshes object_node_dense_
+  void linkObject(uint32_t k);    // pushes object k onto its node's object list
+  void unlinkObject(uint32_t k);  // takes object k off its node's object list
+  void markNodeDirty(size_t i) {
+    node_dirty_[i] = 1;
+    if (i < dirty_from_) dirty_from_ = i;
+  }
 
   // node slots (stable, indexed by handle slot)
   std::vector<uint32_t> node_generation_;  // 4 B: bumped on removal
@@ -157,8 +175,10 @@ class Scene {
   std::vector<uint32_t> order_;            // 4 B: slot of the node at this position
   std::vector<int32_t> parent_dense_;      // 4 B: parent's position, -1 for a root (hot: update pass)
   std::vector<uint8_t> node_dirty_;        // 1 B: local changed since the last update (hot)
-  std::vector<glm::mat4> local_;           // 64 B (hot: update pass)
-  std::vector<glm::mat4> world_;           // 64 B (hot: update pass, sphere pass)
+  std::vector<Affine> local_;              // 48 B (hot: update pass)
+  std::vector<Affine> world_;              // 48 B (hot: update pass and its sphere step)
+  std::vector<int32_t> node_first_object_; // 4 B: first object on the node, -1 none (update pass)
+  size_t dirty_from_ = kNoneDirty;         // no node before this position is dirty
 
   // object slots
   std::vector<uint32_t> object_generation_;
@@ -171,6 +191,7 @@ class Scene {
   std::vector<uint32_t> object_chain_;     // 4 B: chain id
   std::vector<uint32_t> object_node_dense_; // 4 B: the node's position in the update order (sphere pass)
   std::vector<uint8_t> object_dirty_;      // 1 B: sphere must be recomputed
+  std::vector<int32_t> object_next_;       // 4 B: next object on the same node, -1 end (update pass)
   // read by selection:
   std::vector<float> importance_;          // 4 B
   std::vector<uint8_t> must_draw_;         // 1 B
@@ -181,6 +202,7 @@ class Scene {
 
   std::vector<Sphere> chain_spheres_;      // object space, per chain id
   bool all_objects_dirty_ = false;
+  bool some_objects_dirty_ = false;        // some object_dirty_ flag may be set
 };
 
 }  // namespace scenelod::scene
