@@ -26,6 +26,11 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr size_t kRingSize = 16;   // frames whose features are kept for late time reports
 constexpr uint8_t kNotDrawn = 0xFF;
+// price histogram: a window of kHistBinades binades (powers of two) of the ratio, each cut into up to
+// 2^kHistMaxSubBits buckets by the top mantissa bits
+constexpr int kHistBinades = 32;
+constexpr int kHistMaxSubBits = 9;
+constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2;
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -100,6 +105,11 @@ class SelectorContext {
   uint8_t* chosen = nullptr;     // index into the slot's hull
   HeapEntry* heap = nullptr;
   BracketEntry* bracket = nullptr;
+  // price histogram of this frame's hull segments (Lagrangian form): per bucket of the ratio's float
+  // bits, the summed cost step (8 bytes) and the segment count (4 bytes); kHistBuckets + 2 entries,
+  // the first and last for ratios below and above the window
+  double* hist_cost = nullptr;
+  uint32_t* hist_count = nullptr;
 
   // cost model and calibration
   CostCalibrator calibrator;
@@ -174,15 +184,16 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
   constexpr size_t kPerObjectParts = 15;
-  Part parts[18] = {
+  Part parts[20] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0}};
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0},
+      {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 18; ++i) {
+  for (size_t i = 0; i < 20; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -215,6 +226,8 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
   c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
   c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
+  c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
+  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
   c->max_rows = rows;
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
@@ -561,9 +574,44 @@ bool SelectionJob::run() {
   } else {
     // pass 2: each slot's upper convex hull over the points that fit alone
     const double avail = cap - mandatory;
+    const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
+    const bool use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
+    // Lagrangian form: every hull segment's ratio goes into a histogram over its float bits (a
+    // positive float's bits are monotone in its value), bucket = exponent and top mantissa bits, over
+    // a window of kHistBinades binades around last frame's price (or a sampled guess). A hull's ratios
+    // fall strictly, so at any price an object takes exactly the segments above it and C(lambda) at a
+    // bucket edge is a suffix sum of the histogram: the bucket holding the budget's edge is found
+    // without a pass over the objects.
+    const int sub_bits = std::min(kHistMaxSubBits, std::max(4, static_cast<int>(std::log2(static_cast<double>(slots + 1))) - 5));
+    const int key_shift = 23 - sub_bits;
+    const int64_t inner_buckets = int64_t(kHistBinades) << sub_bits;  // buckets 1..inner; 0 below, inner + 1 above
+    int64_t key_base = 0;
+    double* const hist_cost = ctx.hist_cost;
+    uint32_t* const hist_count = ctx.hist_count;
+    if (!use_greedy) {
+      double centre = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
+      if (!(centre > 0.0) && slots > 0) {
+        // benefit per ms of the finest candidates of about 256 sampled slots
+        double b = 0.0, c = 0.0;
+        const size_t step = std::max<size_t>(1, slots / 256);
+        for (size_t s = 0; s < slots; s += step) {
+          b += slot_b[s];
+          c += static_cast<double>(slot_a[s]) + ctx.row_cost[slot_row0[s] + slot_finest[s]];
+        }
+        centre = c > 0.0 && b > 0.0 ? b / c : 1.0;
+      }
+      const float centre_f = static_cast<float>(std::min(centre, 1e30));
+      uint32_t centre_bits;
+      std::memcpy(&centre_bits, &centre_f, sizeof(centre_bits));
+      const int e0 = std::min(255 - kHistBinades, std::max(1, static_cast<int>((centre_bits >> 23) & 0xff) - kHistBinades / 2));
+      key_base = int64_t(e0) << sub_bits;
+      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
+      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
+    }
     struct Pt { float c, b; int l; };
     Pt pts[65];
-    double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
+    double top_cost = 0.0;   // every upgrade taken: what the pass at lambda = 0 would sum
+    double base_total = 0.0; // no upgrade taken
     size_t segments = 0;
     const float* const row_cost = ctx.row_cost;
     const float h1 = ctx.h1;
@@ -623,13 +671,23 @@ bool SelectionJob::run() {
       for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
       hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
+      base_total += hp[0].c;
       segments += hn - 1;
+      if (!use_greedy) {
+        for (size_t k = 1; k < hn; ++k) {
+          uint32_t bits;
+          std::memcpy(&bits, &hr[k], sizeof(bits));
+          // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
+          int64_t key = static_cast<int64_t>(bits >> key_shift) - key_base + 1;
+          key = key < 0 ? 0 : (key > inner_buckets + 1 ? inner_buckets + 1 : key);
+          hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
+          hist_count[key] += 1;
+        }
+      }
     }
 
     int64_t split_slot = -1;
     uint32_t split_step = 0;
-    const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
-    const bool use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
     uint32_t passes = 0;
     double lambda = 0.0;
     if (use_greedy) {
@@ -638,32 +696,78 @@ bool SelectionJob::run() {
       ctx.greedy(slots, base_total, obj_cap, params.stop_at_first_non_fitting, &split_slot, &split_step);
     } else {
       const double inf = std::numeric_limits<double>::infinity();
-      // the pass at lambda = 0 (every upgrade taken) was summed while building the hulls
-      PassResult all;
-      all.cost = top_cost;
-      all.above = segments;
-      size_t in_bracket = all.above;
-      double lo = 0.0, hi = inf;
-      if (all.cost <= obj_cap) {
-        hi = 0.0;  // everything fits
-        in_bracket = 0;
-      } else {
-        double guess = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
-        if (!(guess > 0.0)) {
-          // a first guess: the mean benefit per ms of the finest fitting points
-          double b = 0.0, c = 0.0;
-          for (size_t s = 0; s < slots; ++s) {
-            const int l = ctx.hullLevel(s, ctx.hull_count[s] - 1u);
-            b += ctx.pointBenefit(s, l);
-            c += ctx.pointCost(s, l);
-          }
-          guess = c > 0.0 && b > 0.0 ? b / c : 1.0;
+      auto float_below = [](int64_t bits) {  // the largest float whose bits are below `bits` (0 for none)
+        if (bits <= 0) return 0.0;
+        const uint32_t b = static_cast<uint32_t>(bits - 1);
+        float f;
+        std::memcpy(&f, &b, sizeof(f));
+        return static_cast<double>(f);
+      };
+      // The price search: a bracket (lo, hi] of the price with C(hi) <= cap < C(lo) holding at most
+      // bracket_capacity upgrades. `from_histogram` starts from the histogram's bucket, otherwise from
+      // last frame's price (the fallback when the histogram's rounded sums disagree with the exact ones).
+      auto search = [&](bool from_histogram, double* lo_out, double* hi_out, bool* separated) {
+        // the pass at lambda = 0 (every upgrade taken) was summed while building the hulls
+        size_t in_bracket = segments;
+        double lo = 0.0, hi = inf;
+        if (top_cost <= obj_cap) {
+          *lo_out = 0.0;
+          *hi_out = 0.0;  // everything fits
+          *separated = true;
+          return;
         }
-        // C(lambda) falls from C(0) = all.cost; find hi with C(hi) <= cap by growing steps from the
+        double cost_lo = top_cost, cost_hi = 0.0, lam = 0.0, step = 1.1;
+        bool have_lam = false;
+        if (from_histogram) {
+          // C at the lower edge of bucket j = base_total + the steps of buckets j and above
+          int64_t j = inner_buckets + 1;
+          double t = base_total;
+          bool found = t > obj_cap;
+          if (!found) {
+            for (;; --j) {
+              const double t_next = t + hist_cost[j];
+              if (t_next > obj_cap) {
+                found = true;
+                cost_hi = t;
+                cost_lo = t_next;
+                break;
+              }
+              t = t_next;
+              if (j == 0) break;
+            }
+          }
+          if (found) {
+            lo = j == 0 ? 0.0 : float_below((j - 1 + key_base) << key_shift);
+            hi = j == inner_buckets + 1 ? inf : float_below((j + key_base) << key_shift);
+            in_bracket = hist_count[j];
+            if (hi == inf) {
+              lam = lo > 0.0 ? lo * step : 0.0;
+              step *= step;
+            } else {
+              double tt = cost_lo > cost_hi ? (cost_lo - obj_cap) / (cost_lo - cost_hi) : 0.5;
+              lam = lo + std::min(0.9, std::max(0.1, tt)) * (hi - lo);
+            }
+            have_lam = lam > lo && lam < hi;
+          }
+        }
+        if (!have_lam && in_bracket > ctx.bracket_capacity) {
+          lam = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
+          if (!(lam > 0.0)) {
+            // a first guess: the mean benefit per ms of the finest fitting points
+            double b = 0.0, c = 0.0;
+            for (size_t s = 0; s < slots; ++s) {
+              const int l = ctx.hullLevel(s, ctx.hull_count[s] - 1u);
+              b += ctx.pointBenefit(s, l);
+              c += ctx.pointCost(s, l);
+            }
+            lam = c > 0.0 && b > 0.0 ? b / c : 1.0;
+          }
+          if (!(lam > lo && lam < hi)) in_bracket = ctx.bracket_capacity + 1;  // forces the greedy below
+        }
+        // C(lambda) falls from C(0) = top_cost; find hi with C(hi) <= cap by growing steps from the
         // guess (last frame's price when the camera moves smoothly), then interpolate C linearly
         // between lo and hi, kept off the ends, until few upgrades remain in (lo, hi]
-        double lam = guess, cost_lo = all.cost, cost_hi = 0.0, step = 1.1;
-        while (in_bracket > ctx.bracket_capacity && passes < 64) {
+        while (in_bracket > ctx.bracket_capacity && passes < 64 && lam > lo && lam < hi) {
           const PassResult pr = ctx.pass(slots, lam, lo, hi);
           ++passes;
           if (pr.cost <= obj_cap) {
@@ -688,19 +792,20 @@ bool SelectionJob::run() {
           if (!(next > lo && next < hi)) break;  // no double strictly inside: all ties
           lam = next;
         }
-      }
-      lambda = hi;
-      if (in_bracket > ctx.bracket_capacity) {
-        // ties the bracket cannot separate: the heap greedy gives the same order
-        double base_total = 0.0;
-        for (size_t s = 0; s < slots; ++s) base_total += ctx.pointCost(s, ctx.hullLevel(s, 0));
-        ctx.greedy(slots, base_total, obj_cap, true, &split_slot, &split_step);
-      } else {
-        // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
+        *lo_out = lo;
+        *hi_out = hi;
+        *separated = in_bracket <= ctx.bracket_capacity;
+      };
+      // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
+      enum class Collected { kDone, kOverflow, kEdgeOutside };
+      auto collect = [&](double lo, double hi) {
+        lambda = hi;
+        split_slot = -1;
         double total = 0.0;
         size_t count = 0;
         uint8_t* const chosen = ctx.chosen;
         BracketEntry* const bracket = ctx.bracket;
+        const size_t capacity = ctx.bracket_capacity;
         for (size_t s = 0; s < slots; ++s) {
           const size_t hn = hull_count[s];
           const uint8_t* const h = hull + s * hull_stride;
@@ -732,6 +837,7 @@ bool SelectionJob::run() {
             } else {
               if (taking) pick = static_cast<uint8_t>(k);
               taking = false;
+              if (count == capacity) return Collected::kOverflow;
               bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
             }
             ++k;
@@ -742,6 +848,8 @@ bool SelectionJob::run() {
           chosen[s] = pick;
           total += chosen_cost;
         }
+        // the bracket must hold the budget's edge: the upgrades above it fit, all of them together not
+        if (hi != inf && total > obj_cap) return Collected::kEdgeOutside;
         std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
         for (size_t e = 0; e < count; ++e) {
           const BracketEntry& be = ctx.bracket[e];
@@ -759,6 +867,33 @@ bool SelectionJob::run() {
             break;
           }
         }
+        return split_slot >= 0 || lo == 0.0 ? Collected::kDone : Collected::kEdgeOutside;
+      };
+      auto heapGreedy = [&]() {
+        // ties the bracket cannot separate: the heap greedy gives the same order
+        double base = 0.0;
+        for (size_t s = 0; s < slots; ++s) base += ctx.pointCost(s, ctx.hullLevel(s, 0));
+        split_slot = -1;
+        ctx.greedy(slots, base, obj_cap, true, &split_slot, &split_step);
+      };
+      // first from the histogram; if its rounded sums put the edge outside the bucket that the exact
+      // sums find (the budget within rounding of a bucket edge), again by passes from last frame's price
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        double lo = 0.0, hi = 0.0;
+        bool separated = false;
+        search(attempt == 0, &lo, &hi, &separated);
+        if (!separated) {
+          lambda = hi;
+          heapGreedy();
+          break;
+        }
+        const Collected result = collect(lo, hi);
+        if (result == Collected::kOverflow) {
+          lambda = hi;
+          heapGreedy();
+          break;
+        }
+        if (result == Collected::kDone || attempt == 1) break;
       }
     }
     // the 1/2 guarantee: the first upgrade that did not fit, alone with every other object at its base

@@ -333,9 +333,12 @@ TEST(Selector, TinyBudgetDropsObjectsButKeepsMustDrawAndFlags) {
 }
 
 TEST(Selector, LagrangianMatchesGreedyChoices) {
+  // the bracket capacity (2 or 16..31) is small: some frames find the budget's edge from the price
+  // histogram alone, others need passes over the objects; both must match the greedy
+  size_t histogram_only = 0, with_passes = 0;
   for (uint32_t seed = 20; seed < 32; ++seed) {
     SyntheticScene s = makeScene(seed, 1500, 6, 8, 120.0f, true);
-    Owned g(makeContext(1500)), l(makeContext(1500, 16 + seed));
+    Owned g(makeContext(1500)), l(makeContext(1500, seed % 2 ? 16 + seed : 2));
     std::mt19937 rng(seed);
     double lambda_prev = 0.0;
     for (int frame = 0; frame < 6; ++frame) {
@@ -353,13 +356,16 @@ TEST(Selector, LagrangianMatchesGreedyChoices) {
       for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
       EXPECT_EQ(differ, 0u) << "seed " << seed << " frame " << frame;
       EXPECT_EQ(sa.predicted_ms, sb.predicted_ms);
-      if (sb.lambda > 0.0) {  // the budget binds: the price search ran (bracket capacity is small)
-        EXPECT_GT(sb.search_passes, 0u);
+      if (sb.lambda > 0.0) {  // the budget binds
+        if (sb.search_passes > 0) ++with_passes; else ++histogram_only;
       }
       lambda_prev = sb.lambda;
     }
     (void)lambda_prev;
   }
+  std::printf("binding frames: %zu from the histogram alone, %zu with passes\n", histogram_only, with_passes);
+  EXPECT_GT(histogram_only, 0u);
+  EXPECT_GT(with_passes, 0u);
 }
 
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
