@@ -624,41 +624,13 @@ bool SelectionJob::run() {
       const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
       const uint32_t row0 = slot_row0[s];
       const int prev = slot_prev[s];
-      size_t m = 0;
-      if (!slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
-      // coarsest level first: costs usually fall with the level, so the points arrive nearly in
-      // cost order and the insertion sort below is close to linear (its order is total, so the
-      // sorted result does not depend on the arrival order)
-      for (int l = level_count - 1; l >= static_cast<int>(slot_finest[s]); --l) {
-        const uint32_t row = row0 + static_cast<uint32_t>(l);
-        float acc = std::min(1.0f, sq * row_inv_w[row]);
-        if (l == prev) acc *= h1;
-        pts[m++] = {sa + row_cost[row], sb * acc, l};
-      }
-      // insertion sort: cost ascending, benefit descending, coarser level first
-      for (size_t a = 1; a < m; ++a) {
-        const Pt p = pts[a];
-        size_t j = a;
-        auto before = [](const Pt& x, const Pt& y) {
-          if (x.c != y.c) return x.c < y.c;
-          if (x.b != y.b) return x.b > y.b;
-          return x.l > y.l;
-        };
-        while (j > 0 && before(p, pts[j - 1])) {
-          pts[j] = pts[j - 1];
-          --j;
-        }
-        pts[j] = p;
-      }
-      const float base_cost = pts[0].c;
       uint8_t* h = hull + s * hull_stride;
       Pt hp[65];
       float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
       size_t hn = 0;
-      for (size_t a = 0; a < m; ++a) {
-        const Pt& p = pts[a];
-        if (hn > 0 && static_cast<double>(p.c) - base_cost > avail) break;  // cannot fit even alone
-        if (hn > 0 && !(p.b > hp[hn - 1].b)) continue;
+      // one step of the upper hull over points in sorted order (Andrew's monotone chain)
+      auto addPoint = [&](const Pt& p) {
+        if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
         float r_new = 0.0f;
         while (hn >= 1) {
           r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
@@ -667,6 +639,61 @@ bool SelectionJob::run() {
         }
         hr[hn] = r_new;
         hp[hn++] = p;
+      };
+      auto pointAt = [&](int l) {
+        const uint32_t row = row0 + static_cast<uint32_t>(l);
+        float acc = std::min(1.0f, sq * row_inv_w[row]);
+        if (l == prev) acc *= h1;
+        return Pt{sa + row_cost[row], sb * acc, l};
+      };
+      const bool must = slot_must[s] != 0;
+      const int finest = slot_finest[s];
+      // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
+      // cost, which is the sorted order, and all fit alone; then the hull is built as they arrive
+      bool general = false;
+      {
+        float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
+        if (!must) {
+          addPoint(Pt{0.0f, 0.0f, -1});
+          last_c = 0.0f;
+        }
+        for (int l = level_count - 1; l >= finest; --l) {
+          const Pt p = pointAt(l);
+          if (hn == 0) base_cost = p.c;
+          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail) {
+            general = true;
+            break;
+          }
+          last_c = p.c;
+          addPoint(p);
+        }
+      }
+      if (general) {
+        size_t m = 0;
+        if (!must) pts[m++] = {0.0f, 0.0f, -1};
+        for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
+        // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
+        // the sorted result does not depend on the arrival order)
+        for (size_t a = 1; a < m; ++a) {
+          const Pt p = pts[a];
+          size_t j = a;
+          auto before = [](const Pt& x, const Pt& y) {
+            if (x.c != y.c) return x.c < y.c;
+            if (x.b != y.b) return x.b > y.b;
+            return x.l > y.l;
+          };
+          while (j > 0 && before(p, pts[j - 1])) {
+            pts[j] = pts[j - 1];
+            --j;
+          }
+          pts[j] = p;
+        }
+        const float base_cost = pts[0].c;
+        hn = 0;
+        for (size_t a = 0; a < m; ++a) {
+          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail) break;  // cannot fit even alone
+          addPoint(pts[a]);
+        }
       }
       for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
       hull_count[s] = static_cast<uint8_t>(hn);
