@@ -561,6 +561,9 @@ bool SelectionJob::run() {
   st.culled_count = culled;
   st.mandatory_ms = budget ? mandatory : 0.0;
   const double cap = static_cast<double>(params.budget_ms);
+  int64_t half_slot = -1;  // the 1/2 guarantee's alternative: this slot at hull step half_step,
+  uint32_t half_step = 0;  // every other slot at its base, with this benefit
+  double half_alt_benefit = 0.0;
 
   if (!budget) {
     for (size_t s = 0; s < slots; ++s) {
@@ -612,6 +615,7 @@ bool SelectionJob::run() {
     Pt pts[65];
     double top_cost = 0.0;   // every upgrade taken: what the pass at lambda = 0 would sum
     double base_total = 0.0; // no upgrade taken
+    double base_benefit = 0.0;  // benefit with no upgrade taken (the 1/2 guarantee's alternative)
     size_t segments = 0;
     const float* const row_cost = ctx.row_cost;
     const float h1 = ctx.h1;
@@ -699,6 +703,7 @@ bool SelectionJob::run() {
       hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
       base_total += hp[0].c;
+      base_benefit += hp[0].b;
       segments += hn - 1;
       if (!use_greedy) {
         for (size_t k = 1; k < hn; ++k) {
@@ -923,21 +928,14 @@ bool SelectionJob::run() {
         if (result == Collected::kDone || attempt == 1) break;
       }
     }
-    // the 1/2 guarantee: the first upgrade that did not fit, alone with every other object at its base
+    // the 1/2 guarantee (the first upgrade that did not fit, alone with every other object at its
+    // base) is checked after the write-out below, which sums the greedy's benefit in the same order
     if (params.half_approximation && split_slot >= 0) {
-      double greedy_benefit = 0.0, base_benefit = 0.0;
-      for (size_t s = 0; s < slots; ++s) {
-        greedy_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, ctx.chosen[s]));
-        base_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, 0));
-      }
       const size_t js = static_cast<size_t>(split_slot);
-      const double alt = base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, split_step + 1)) -
+      half_alt_benefit = base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, split_step + 1)) -
                          ctx.pointBenefit(js, ctx.hullLevel(js, 0));
-      if (alt > greedy_benefit) {
-        for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = 0;
-        ctx.chosen[js] = static_cast<uint8_t>(split_step + 1);
-        st.flags |= kFlagSplitFallback;
-      }
+      half_slot = split_slot;
+      half_step = split_step + 1;
     }
     // hull entries are level bytes already (kNotDrawn = -1)
     for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = hull[s * hull_stride + ctx.chosen[s]];
@@ -950,7 +948,10 @@ bool SelectionJob::run() {
   // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
   CostFeatures f;
   double predicted = coef.per_frame_ms, benefit = 0.0;
-  {
+  auto writeOut = [&]() {
+    f = CostFeatures();
+    predicted = coef.per_frame_ms;
+    benefit = 0.0;
     const uint8_t* const chosen = ctx.chosen;
     const float* const rc = ctx.row_cost;
     const float hh = ctx.h1;
@@ -982,6 +983,15 @@ bool SelectionJob::run() {
     }
     st.dropped_count = dropped;
     st.drawn_count = drawn;
+  };
+  writeOut();
+  // the sum of benefits over slots in slot order is what the greedy's choice scores
+  if (half_slot >= 0 && half_alt_benefit > benefit) {
+    const size_t js = static_cast<size_t>(half_slot);
+    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = ctx.hull[s * ctx.hull_stride];
+    ctx.chosen[js] = ctx.hull[js * ctx.hull_stride + half_step];
+    st.flags |= kFlagSplitFallback;
+    writeOut();
   }
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
   if (cost_ms_out.count) {
