@@ -531,9 +531,10 @@ bool SelectionJob::run() {
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, viewport_px);
     const float q = x_cells * pixel / scale_of[i];
-    // the coarsest level of accuracy 1 (level 0, w = 0, always is)
-    int finest = static_cast<int>(level_count) - 1;
-    while (finest > 0 && !(q * row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
+    // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+    // level, so the accurate-enough levels are a prefix and their count is branch-free
+    int finest = 0;
+    for (uint32_t l = 1; l < level_count; ++l) finest += q * row_inv_w[row0 + l] >= 1.0f ? 1 : 0;
     float b = px;
     if (importance_of) b *= importance_of[i];
     if (focus_of) b *= focus_of[i];
