@@ -31,6 +31,10 @@ constexpr uint8_t kNotDrawn = 0xFF;
 constexpr int kHistBinades = 32;
 constexpr int kHistMaxSubBits = 9;
 constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2;
+// predicted bracket (lambda_prev / (1 + w), lambda_prev * (1 + w)]: starting w, and its bounds
+constexpr double kPredictWidthStart = 1.0 / 16.0;
+constexpr double kPredictWidthMin = 1.0 / 4096.0;
+constexpr double kPredictWidthMax = 4.0;
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -122,6 +126,7 @@ class SelectorContext {
   double last_lambda = 0.0;
   bool has_history = false;
   bool last_was_budget = false;
+  double predict_width = 0.0;  // relative half-width of the predicted bracket around last frame's price
   size_t last_slot_count = 0;
 
   // per-frame constants, valid during run() and until the next one
@@ -246,6 +251,7 @@ void resetSelectorHistory(SelectorContext* c) {
   if (!c) return;
   std::memset(c->prev_level, 0xFF, c->max_objects);  // all -1
   c->last_lambda = 0.0;
+  c->predict_width = kPredictWidthStart;
   c->has_history = false;
   c->last_was_budget = false;
   c->last_slot_count = 0;
@@ -623,6 +629,19 @@ bool SelectionJob::run() {
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
+    // Incremental case (Lagrangian, last frame's price known): while the hulls are built, every
+    // object already takes its upgrades above a predicted bracket (plo, phi] around last frame's
+    // price, and the upgrades inside go to the bracket array. When the budget's edge falls inside
+    // (checked exactly below), the collection pass over the objects is not needed.
+    const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
+    const double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
+    const double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
+    size_t pcount = 0;
+    bool poverflow = false;
+    double ptotal = 0.0;
+    uint8_t* const chosen_step = ctx.chosen;
+    BracketEntry* const pbracket = ctx.bracket;
+    const size_t pcapacity = ctx.bracket_capacity;
     for (size_t s = 0; s < slots; ++s) {
       const int level_count = static_cast<int>(slot_levels[s]);
       // pointCost / pointBenefit with the slot's terms in registers
@@ -715,6 +734,20 @@ bool SelectionJob::run() {
           key = key < 0 ? 0 : (key > inner_buckets + 1 ? inner_buckets + 1 : key);
           hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
           hist_count[key] += 1;
+        }
+        if (predict) {
+          // what the collection below does at (plo, phi], on the same float ratios
+          size_t k = 1;
+          while (k < hn && static_cast<double>(hr[k]) > phi) ++k;
+          chosen_step[s] = static_cast<uint8_t>(k - 1);
+          ptotal += hp[k - 1].c;
+          for (; k < hn && static_cast<double>(hr[k]) > plo; ++k) {
+            if (pcount == pcapacity) {
+              poverflow = true;
+              break;
+            }
+            pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+          }
         }
       }
     }
@@ -831,6 +864,31 @@ bool SelectionJob::run() {
       };
       // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
       enum class Collected { kDone, kOverflow, kEdgeOutside };
+      // greedy over the `count` upgrades in the bracket, every upgrade above it taken (cost `total`)
+      auto bracketGreedy = [&](double lo, double hi, size_t count, double total) {
+        lambda = hi;
+        split_slot = -1;
+        // the bracket must hold the budget's edge: the upgrades above it fit, all of them together not
+        if (hi != inf && total > obj_cap) return Collected::kEdgeOutside;
+        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
+        for (size_t e = 0; e < count; ++e) {
+          const BracketEntry& be = ctx.bracket[e];
+          if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
+          const int l0 = ctx.hullLevel(be.slot, be.step), l1 = ctx.hullLevel(be.slot, be.step + 1);
+          const double delta = static_cast<double>(ctx.pointCost(be.slot, l1)) - ctx.pointCost(be.slot, l0);
+          if (total + delta <= obj_cap) {
+            total += delta;
+            ctx.chosen[be.slot] = static_cast<uint8_t>(be.step + 1);
+            lambda = be.ratio;
+          } else {
+            split_slot = be.slot;
+            split_step = be.step;
+            lambda = be.ratio;
+            break;
+          }
+        }
+        return split_slot >= 0 || lo == 0.0 ? Collected::kDone : Collected::kEdgeOutside;
+      };
       auto collect = [&](double lo, double hi) {
         lambda = hi;
         split_slot = -1;
@@ -881,26 +939,7 @@ bool SelectionJob::run() {
           chosen[s] = pick;
           total += chosen_cost;
         }
-        // the bracket must hold the budget's edge: the upgrades above it fit, all of them together not
-        if (hi != inf && total > obj_cap) return Collected::kEdgeOutside;
-        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
-        for (size_t e = 0; e < count; ++e) {
-          const BracketEntry& be = ctx.bracket[e];
-          if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
-          const int l0 = ctx.hullLevel(be.slot, be.step), l1 = ctx.hullLevel(be.slot, be.step + 1);
-          const double delta = static_cast<double>(ctx.pointCost(be.slot, l1)) - ctx.pointCost(be.slot, l0);
-          if (total + delta <= obj_cap) {
-            total += delta;
-            ctx.chosen[be.slot] = static_cast<uint8_t>(be.step + 1);
-            lambda = be.ratio;
-          } else {
-            split_slot = be.slot;
-            split_step = be.step;
-            lambda = be.ratio;
-            break;
-          }
-        }
-        return split_slot >= 0 || lo == 0.0 ? Collected::kDone : Collected::kEdgeOutside;
+        return bracketGreedy(lo, hi, count, total);
       };
       auto heapGreedy = [&]() {
         // ties the bracket cannot separate: the heap greedy gives the same order
@@ -911,7 +950,17 @@ bool SelectionJob::run() {
       };
       // first from the histogram; if its rounded sums put the edge outside the bucket that the exact
       // sums find (the budget within rounding of a bucket edge), again by passes from last frame's price
-      for (int attempt = 0; attempt < 2; ++attempt) {
+      bool from_prediction = false;
+      if (predict) {
+        if (!poverflow && top_cost > obj_cap && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
+          from_prediction = true;
+        } else {
+          // missed: widen the window next frame; overflowed: narrow it
+          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
+                                        : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
+        }
+      }
+      for (int attempt = 0; attempt < 2 && !from_prediction; ++attempt) {
         double lo = 0.0, hi = 0.0;
         bool separated = false;
         search(attempt == 0, &lo, &hi, &separated);

@@ -368,6 +368,36 @@ TEST(Selector, LagrangianMatchesGreedyChoices) {
   EXPECT_GT(with_passes, 0u);
 }
 
+TEST(Selector, LagrangianMatchesGreedyAlongASmoothPath) {
+  // small camera steps: the Lagrangian form starts from last frame's price (its predicted bracket,
+  // the histogram, or passes when a bracket overflows the small capacity); every frame must give the
+  // greedy's choice
+  for (uint32_t seed = 40; seed < 44; ++seed) {
+    SyntheticScene s = makeScene(seed, 1500, 6, 8, 120.0f, true);
+    Owned g(makeContext(1500)), l(makeContext(1500, seed % 2 ? 64 : 8));
+    size_t binding = 0;
+    for (int frame = 0; frame < 40; ++frame) {
+      Camera cam = makeCamera(glm::vec3(0.05f * frame, 1.0f, 20.0f - 0.2f * frame));
+      std::vector<int8_t> a, b;
+      SelectionStats sa, sb;
+      SelectionJob ja = makeJob(s, g.ctx, &cam, a, &sa);
+      SelectionJob jb = makeJob(s, l.ctx, &cam, b, &sb);
+      ja.params.algorithm = BudgetAlgorithm::kGreedy;
+      jb.params.algorithm = BudgetAlgorithm::kLagrangian;
+      ja.params.budget_ms = jb.params.budget_ms = 1.5f;
+      ASSERT_TRUE(ja.run());
+      ASSERT_TRUE(jb.run());
+      size_t differ = 0;
+      for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
+      EXPECT_EQ(differ, 0u) << "seed " << seed << " frame " << frame;
+      EXPECT_EQ(sa.predicted_ms, sb.predicted_ms);
+      EXPECT_EQ(sa.total_benefit, sb.total_benefit);
+      binding += sb.dropped_count > 0;
+    }
+    EXPECT_GT(binding, 30u) << "the budget should bind on most frames";
+  }
+}
+
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
   Owned a(makeContext(2000, 100)), b(makeContext(2000, 100));
