@@ -538,9 +538,15 @@ bool SelectionJob::run() {
     const float px = std::min(kPi * r_px * r_px, viewport_px);
     const float q = x_cells * pixel / scale_of[i];
     // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-    // level, so the accurate-enough levels are a prefix and their count is branch-free
-    int finest = 0;
-    for (uint32_t l = 1; l < level_count; ++l) finest += q * row_inv_w[row0 + l] >= 1.0f ? 1 : 0;
+    // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
+    uint32_t finest = 0;
+    for (uint32_t len = level_count - 1; len > 0;) {
+      const uint32_t half = len / 2;
+      const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
+      // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+      finest += ok * (half + 1);
+      len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+    }
     float b = px;
     if (importance_of) b *= importance_of[i];
     if (focus_of) b *= focus_of[i];
@@ -662,6 +668,7 @@ bool SelectionJob::run() {
           --hn;
         }
         hr[hn] = r_new;
+        h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
         hp[hn++] = p;
       };
       auto pointAt = [&](int l) {
@@ -719,7 +726,6 @@ bool SelectionJob::run() {
           addPoint(pts[a]);
         }
       }
-      for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
       hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
       base_total += hp[0].c;
@@ -988,7 +994,10 @@ bool SelectionJob::run() {
       half_step = split_step + 1;
     }
     // hull entries are level bytes already (kNotDrawn = -1)
-    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = hull[s * hull_stride + ctx.chosen[s]];
+    {
+      uint8_t* const chosen = ctx.chosen;
+      for (size_t s = 0; s < slots; ++s) chosen[s] = hull[s * hull_stride + chosen[s]];
+    }
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
