@@ -648,6 +648,7 @@ bool SelectionJob::run() {
     size_t segments = 0;
     const float* const row_cost = ctx.row_cost;
     const float h1 = ctx.h1;
+    const float h_mult[2] = {1.0f, h1};
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
@@ -689,8 +690,8 @@ bool SelectionJob::run() {
       };
       auto pointAt = [&](int l) {
         const uint32_t row = row0 + static_cast<uint32_t>(l);
-        float acc = std::min(1.0f, sq * row_inv_w[row]);
-        if (l == prev) acc *= h1;
+        // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
+        const float acc = std::min(1.0f, sq * row_inv_w[row]) * h_mult[l == prev];
         return Pt{sa + row_cost[row], sb * acc, l};
       };
       const bool must = slot_must[s] != 0;
@@ -748,7 +749,10 @@ bool SelectionJob::run() {
       base_benefit += hp[0].b;
       segments += hn - 1;
       if (!use_greedy) {
+        uint32_t above = 0, inside = 0;  // segments with ratio > phi, > plo (a prefix: ratios fall)
         for (size_t k = 1; k < hn; ++k) {
+          above += static_cast<double>(hr[k]) > phi ? 1u : 0u;
+          inside += static_cast<double>(hr[k]) > plo ? 1u : 0u;
           uint32_t bits;
           std::memcpy(&bits, &hr[k], sizeof(bits));
           // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
@@ -759,11 +763,9 @@ bool SelectionJob::run() {
         }
         if (predict) {
           // what the collection below does at (plo, phi], on the same float ratios
-          size_t k = 1;
-          while (k < hn && static_cast<double>(hr[k]) > phi) ++k;
-          chosen_step[s] = static_cast<uint8_t>(k - 1);
-          ptotal += hp[k - 1].c;
-          for (; k < hn && static_cast<double>(hr[k]) > plo; ++k) {
+          chosen_step[s] = static_cast<uint8_t>(above);
+          ptotal += hp[above].c;
+          for (size_t k = above + 1; k <= inside; ++k) {
             if (pcount == pcapacity) {
               poverflow = true;
               break;
