@@ -555,8 +555,10 @@ bool SelectionJob::run() {
     const float q = x_cells * pixel / scale_of[i];
     // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
     // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
-    uint32_t finest = 0;
-    for (uint32_t len = level_count - 1; len > 0;) {
+    // (most objects are far: their coarsest level is accurate enough, one predictable test)
+    uint32_t finest = level_count - 1;
+    if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
+    for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
       const uint32_t half = len / 2;
       const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
       // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
