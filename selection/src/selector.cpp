@@ -26,6 +26,15 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr size_t kRingSize = 16;   // frames whose features are kept for late time reports
 constexpr uint8_t kNotDrawn = 0xFF;
+// price histogram: a window of kHistBinades binades (powers of two) of the ratio, each cut into up to
+// 2^kHistMaxSubBits buckets by the top mantissa bits
+constexpr int kHistBinades = 32;
+constexpr int kHistMaxSubBits = 9;
+constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2;
+// predicted bracket (lambda_prev / (1 + w), lambda_prev * (1 + w)]: starting w, and its bounds
+constexpr double kPredictWidthStart = 1.0 / 16.0;
+constexpr double kPredictWidthMin = 1.0 / 4096.0;
+constexpr double kPredictWidthMax = 4.0;
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -100,6 +109,11 @@ class SelectorContext {
   uint8_t* chosen = nullptr;     // index into the slot's hull
   HeapEntry* heap = nullptr;
   BracketEntry* bracket = nullptr;
+  // price histogram of this frame's hull segments (Lagrangian form): per bucket of the ratio's float
+  // bits, the summed cost step (8 bytes) and the segment count (4 bytes); kHistBuckets + 2 entries,
+  // the first and last for ratios below and above the window
+  double* hist_cost = nullptr;
+  uint32_t* hist_count = nullptr;
 
   // cost model and calibration
   CostCalibrator calibrator;
@@ -112,6 +126,7 @@ class SelectorContext {
   double last_lambda = 0.0;
   bool has_history = false;
   bool last_was_budget = false;
+  double predict_width = 0.0;  // relative half-width of the predicted bracket around last frame's price
   size_t last_slot_count = 0;
 
   // per-frame constants, valid during run() and until the next one
@@ -174,15 +189,16 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
   constexpr size_t kPerObjectParts = 15;
-  Part parts[18] = {
+  Part parts[20] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0}};
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0},
+      {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 18; ++i) {
+  for (size_t i = 0; i < 20; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -215,6 +231,8 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
   c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
   c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
+  c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
+  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
   c->max_rows = rows;
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
@@ -233,6 +251,7 @@ void resetSelectorHistory(SelectorContext* c) {
   if (!c) return;
   std::memset(c->prev_level, 0xFF, c->max_objects);  // all -1
   c->last_lambda = 0.0;
+  c->predict_width = kPredictWidthStart;
   c->has_history = false;
   c->last_was_budget = false;
   c->last_slot_count = 0;
@@ -444,22 +463,38 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits,
-  // a loop the compiler vectorises), into chosen[] as scratch (it is written again before it is read)
+  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits),
+  // into chosen[] as scratch (it is written again before it is read). Blocks of 64 objects are first
+  // copied into local columns, so each plane's test is a plain loop over floats that the compiler
+  // vectorises 4 wide with the plane in registers (over the packed centres it managed only 2 wide,
+  // reloading the 24 plane constants).
   uint8_t* const outside = ctx.chosen;
   {
     static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
     const float* xyz = n ? &centers[0].x : nullptr;
     const float* rad = radii.data;
-    float pl[6][4];
-    for (int k = 0; k < 6; ++k)
-      for (int j = 0; j < 4; ++j) pl[k][j] = frustum.planes[k][j];
-    for (size_t i = 0; i < n; ++i) {
-      const float x = xyz[3 * i], y = xyz[3 * i + 1], z = xyz[3 * i + 2], nr = -rad[i];
-      int o = 0;
-      for (int k = 0; k < 6; ++k) o |= pl[k][0] * x + pl[k][1] * y + pl[k][2] * z + pl[k][3] < nr;
-      outside[i] = static_cast<uint8_t>(o);
-    }
+    constexpr size_t kBlock = 64;
+    alignas(16) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
+    alignas(16) uint32_t bo[kBlock];
+    auto testBlock = [&](size_t i0, size_t m) {
+      const float* const p = xyz + 3 * i0;
+      for (size_t j = 0; j < m; ++j) {
+        bx[j] = p[3 * j];
+        by[j] = p[3 * j + 1];
+        bz[j] = p[3 * j + 2];
+        bnr[j] = -rad[i0 + j];
+        bo[j] = 0;
+      }
+      for (int k = 0; k < 6; ++k) {
+        const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
+        for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
+      }
+      for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
+    };
+    // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
+    size_t i0 = 0;
+    for (; i0 + kBlock <= n; i0 += kBlock) testBlock(i0, kBlock);
+    if (i0 < n) testBlock(i0, n - i0);
   }
   // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
   // object's level starts at -1 and the slots' levels are written at the end
@@ -518,9 +553,18 @@ bool SelectionJob::run() {
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, viewport_px);
     const float q = x_cells * pixel / scale_of[i];
-    // the coarsest level of accuracy 1 (level 0, w = 0, always is)
-    int finest = static_cast<int>(level_count) - 1;
-    while (finest > 0 && !(q * row_inv_w[row0 + static_cast<uint32_t>(finest)] >= 1.0f)) --finest;
+    // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+    // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
+    // (most objects are far: their coarsest level is accurate enough, one predictable test)
+    uint32_t finest = level_count - 1;
+    if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
+    for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+      const uint32_t half = len / 2;
+      const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
+      // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+      finest += ok * (half + 1);
+      len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+    }
     float b = px;
     if (importance_of) b *= importance_of[i];
     if (focus_of) b *= focus_of[i];
@@ -548,6 +592,9 @@ bool SelectionJob::run() {
   st.culled_count = culled;
   st.mandatory_ms = budget ? mandatory : 0.0;
   const double cap = static_cast<double>(params.budget_ms);
+  int64_t half_slot = -1;  // the 1/2 guarantee's alternative: this slot at hull step half_step,
+  uint32_t half_step = 0;  // every other slot at its base, with this benefit
+  double half_alt_benefit = 0.0;
 
   if (!budget) {
     for (size_t s = 0; s < slots; ++s) {
@@ -561,56 +608,78 @@ bool SelectionJob::run() {
   } else {
     // pass 2: each slot's upper convex hull over the points that fit alone
     const double avail = cap - mandatory;
+    const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
+    const bool use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
+    // Lagrangian form: every hull segment's ratio goes into a histogram over its float bits (a
+    // positive float's bits are monotone in its value), bucket = exponent and top mantissa bits, over
+    // a window of kHistBinades binades around last frame's price (or a sampled guess). A hull's ratios
+    // fall strictly, so at any price an object takes exactly the segments above it and C(lambda) at a
+    // bucket edge is a suffix sum of the histogram: the bucket holding the budget's edge is found
+    // without a pass over the objects.
+    const int sub_bits = std::min(kHistMaxSubBits, std::max(4, static_cast<int>(std::log2(static_cast<double>(slots + 1))) - 5));
+    const int key_shift = 23 - sub_bits;
+    const int64_t inner_buckets = int64_t(kHistBinades) << sub_bits;  // buckets 1..inner; 0 below, inner + 1 above
+    int64_t key_base = 0;
+    double* const hist_cost = ctx.hist_cost;
+    uint32_t* const hist_count = ctx.hist_count;
+    if (!use_greedy) {
+      double centre = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
+      if (!(centre > 0.0) && slots > 0) {
+        // benefit per ms of the finest candidates of about 256 sampled slots
+        double b = 0.0, c = 0.0;
+        const size_t step = std::max<size_t>(1, slots / 256);
+        for (size_t s = 0; s < slots; s += step) {
+          b += slot_b[s];
+          c += static_cast<double>(slot_a[s]) + ctx.row_cost[slot_row0[s] + slot_finest[s]];
+        }
+        centre = c > 0.0 && b > 0.0 ? b / c : 1.0;
+      }
+      const float centre_f = static_cast<float>(std::min(centre, 1e30));
+      uint32_t centre_bits;
+      std::memcpy(&centre_bits, &centre_f, sizeof(centre_bits));
+      const int e0 = std::min(255 - kHistBinades, std::max(1, static_cast<int>((centre_bits >> 23) & 0xff) - kHistBinades / 2));
+      key_base = int64_t(e0) << sub_bits;
+      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
+      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
+    }
     struct Pt { float c, b; int l; };
     Pt pts[65];
-    double top_cost = 0.0;  // every upgrade taken: what the pass at lambda = 0 would sum
+    double top_cost = 0.0;   // every upgrade taken: what the pass at lambda = 0 would sum
+    double base_total = 0.0; // no upgrade taken
+    double base_benefit = 0.0;  // benefit with no upgrade taken (the 1/2 guarantee's alternative)
     size_t segments = 0;
     const float* const row_cost = ctx.row_cost;
     const float h1 = ctx.h1;
+    const float h_mult[2] = {1.0f, h1};
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
+    // Incremental case (Lagrangian, last frame's price known): while the hulls are built, every
+    // object already takes its upgrades above a predicted bracket (plo, phi] around last frame's
+    // price, and the upgrades inside go to the bracket array. When the budget's edge falls inside
+    // (checked exactly below), the collection pass over the objects is not needed.
+    const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
+    const double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
+    const double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
+    size_t pcount = 0;
+    bool poverflow = false;
+    double ptotal = 0.0;
+    uint8_t* const chosen_step = ctx.chosen;
+    BracketEntry* const pbracket = ctx.bracket;
+    const size_t pcapacity = ctx.bracket_capacity;
     for (size_t s = 0; s < slots; ++s) {
       const int level_count = static_cast<int>(slot_levels[s]);
       // pointCost / pointBenefit with the slot's terms in registers
       const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
       const uint32_t row0 = slot_row0[s];
       const int prev = slot_prev[s];
-      size_t m = 0;
-      if (!slot_must[s]) pts[m++] = {0.0f, 0.0f, -1};
-      // coarsest level first: costs usually fall with the level, so the points arrive nearly in
-      // cost order and the insertion sort below is close to linear (its order is total, so the
-      // sorted result does not depend on the arrival order)
-      for (int l = level_count - 1; l >= static_cast<int>(slot_finest[s]); --l) {
-        const uint32_t row = row0 + static_cast<uint32_t>(l);
-        float acc = std::min(1.0f, sq * row_inv_w[row]);
-        if (l == prev) acc *= h1;
-        pts[m++] = {sa + row_cost[row], sb * acc, l};
-      }
-      // insertion sort: cost ascending, benefit descending, coarser level first
-      for (size_t a = 1; a < m; ++a) {
-        const Pt p = pts[a];
-        size_t j = a;
-        auto before = [](const Pt& x, const Pt& y) {
-          if (x.c != y.c) return x.c < y.c;
-          if (x.b != y.b) return x.b > y.b;
-          return x.l > y.l;
-        };
-        while (j > 0 && before(p, pts[j - 1])) {
-          pts[j] = pts[j - 1];
-          --j;
-        }
-        pts[j] = p;
-      }
-      const float base_cost = pts[0].c;
       uint8_t* h = hull + s * hull_stride;
       Pt hp[65];
       float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
       size_t hn = 0;
-      for (size_t a = 0; a < m; ++a) {
-        const Pt& p = pts[a];
-        if (hn > 0 && static_cast<double>(p.c) - base_cost > avail) break;  // cannot fit even alone
-        if (hn > 0 && !(p.b > hp[hn - 1].b)) continue;
+      // one step of the upper hull over points in sorted order (Andrew's monotone chain)
+      auto addPoint = [&](const Pt& p) {
+        if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
         float r_new = 0.0f;
         while (hn >= 1) {
           r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
@@ -618,18 +687,99 @@ bool SelectionJob::run() {
           --hn;
         }
         hr[hn] = r_new;
+        h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
         hp[hn++] = p;
+      };
+      auto pointAt = [&](int l) {
+        const uint32_t row = row0 + static_cast<uint32_t>(l);
+        // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
+        const float acc = std::min(1.0f, sq * row_inv_w[row]) * h_mult[l == prev];
+        return Pt{sa + row_cost[row], sb * acc, l};
+      };
+      const bool must = slot_must[s] != 0;
+      const int finest = slot_finest[s];
+      // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
+      // cost, which is the sorted order, and all fit alone; then the hull is built as they arrive
+      bool general = false;
+      {
+        float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
+        if (!must) {
+          addPoint(Pt{0.0f, 0.0f, -1});
+          last_c = 0.0f;
+        }
+        for (int l = level_count - 1; l >= finest; --l) {
+          const Pt p = pointAt(l);
+          if (hn == 0) base_cost = p.c;
+          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail) {
+            general = true;
+            break;
+          }
+          last_c = p.c;
+          addPoint(p);
+        }
       }
-      for (size_t k = 0; k < hn; ++k) h[k] = hp[k].l < 0 ? kNotDrawn : static_cast<uint8_t>(hp[k].l);
+      if (general) {
+        size_t m = 0;
+        if (!must) pts[m++] = {0.0f, 0.0f, -1};
+        for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
+        // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
+        // the sorted result does not depend on the arrival order)
+        for (size_t a = 1; a < m; ++a) {
+          const Pt p = pts[a];
+          size_t j = a;
+          auto before = [](const Pt& x, const Pt& y) {
+            if (x.c != y.c) return x.c < y.c;
+            if (x.b != y.b) return x.b > y.b;
+            return x.l > y.l;
+          };
+          while (j > 0 && before(p, pts[j - 1])) {
+            pts[j] = pts[j - 1];
+            --j;
+          }
+          pts[j] = p;
+        }
+        const float base_cost = pts[0].c;
+        hn = 0;
+        for (size_t a = 0; a < m; ++a) {
+          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail) break;  // cannot fit even alone
+          addPoint(pts[a]);
+        }
+      }
       hull_count[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
+      base_total += hp[0].c;
+      base_benefit += hp[0].b;
       segments += hn - 1;
+      if (!use_greedy) {
+        uint32_t above = 0, inside = 0;  // segments with ratio > phi, > plo (a prefix: ratios fall)
+        for (size_t k = 1; k < hn; ++k) {
+          above += static_cast<double>(hr[k]) > phi ? 1u : 0u;
+          inside += static_cast<double>(hr[k]) > plo ? 1u : 0u;
+          uint32_t bits;
+          std::memcpy(&bits, &hr[k], sizeof(bits));
+          // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
+          int64_t key = static_cast<int64_t>(bits >> key_shift) - key_base + 1;
+          key = key < 0 ? 0 : (key > inner_buckets + 1 ? inner_buckets + 1 : key);
+          hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
+          hist_count[key] += 1;
+        }
+        if (predict) {
+          // what the collection below does at (plo, phi], on the same float ratios
+          chosen_step[s] = static_cast<uint8_t>(above);
+          ptotal += hp[above].c;
+          for (size_t k = above + 1; k <= inside; ++k) {
+            if (pcount == pcapacity) {
+              poverflow = true;
+              break;
+            }
+            pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+          }
+        }
+      }
     }
 
     int64_t split_slot = -1;
     uint32_t split_step = 0;
-    const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
-    const bool use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
     uint32_t passes = 0;
     double lambda = 0.0;
     if (use_greedy) {
@@ -638,32 +788,78 @@ bool SelectionJob::run() {
       ctx.greedy(slots, base_total, obj_cap, params.stop_at_first_non_fitting, &split_slot, &split_step);
     } else {
       const double inf = std::numeric_limits<double>::infinity();
-      // the pass at lambda = 0 (every upgrade taken) was summed while building the hulls
-      PassResult all;
-      all.cost = top_cost;
-      all.above = segments;
-      size_t in_bracket = all.above;
-      double lo = 0.0, hi = inf;
-      if (all.cost <= obj_cap) {
-        hi = 0.0;  // everything fits
-        in_bracket = 0;
-      } else {
-        double guess = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
-        if (!(guess > 0.0)) {
-          // a first guess: the mean benefit per ms of the finest fitting points
-          double b = 0.0, c = 0.0;
-          for (size_t s = 0; s < slots; ++s) {
-            const int l = ctx.hullLevel(s, ctx.hull_count[s] - 1u);
-            b += ctx.pointBenefit(s, l);
-            c += ctx.pointCost(s, l);
-          }
-          guess = c > 0.0 && b > 0.0 ? b / c : 1.0;
+      auto float_below = [](int64_t bits) {  // the largest float whose bits are below `bits` (0 for none)
+        if (bits <= 0) return 0.0;
+        const uint32_t b = static_cast<uint32_t>(bits - 1);
+        float f;
+        std::memcpy(&f, &b, sizeof(f));
+        return static_cast<double>(f);
+      };
+      // The price search: a bracket (lo, hi] of the price with C(hi) <= cap < C(lo) holding at most
+      // bracket_capacity upgrades. `from_histogram` starts from the histogram's bucket, otherwise from
+      // last frame's price (the fallback when the histogram's rounded sums disagree with the exact ones).
+      auto search = [&](bool from_histogram, double* lo_out, double* hi_out, bool* separated) {
+        // the pass at lambda = 0 (every upgrade taken) was summed while building the hulls
+        size_t in_bracket = segments;
+        double lo = 0.0, hi = inf;
+        if (top_cost <= obj_cap) {
+          *lo_out = 0.0;
+          *hi_out = 0.0;  // everything fits
+          *separated = true;
+          return;
         }
-        // C(lambda) falls from C(0) = all.cost; find hi with C(hi) <= cap by growing steps from the
+        double cost_lo = top_cost, cost_hi = 0.0, lam = 0.0, step = 1.1;
+        bool have_lam = false;
+        if (from_histogram) {
+          // C at the lower edge of bucket j = base_total + the steps of buckets j and above
+          int64_t j = inner_buckets + 1;
+          double t = base_total;
+          bool found = t > obj_cap;
+          if (!found) {
+            for (;; --j) {
+              const double t_next = t + hist_cost[j];
+              if (t_next > obj_cap) {
+                found = true;
+                cost_hi = t;
+                cost_lo = t_next;
+                break;
+              }
+              t = t_next;
+              if (j == 0) break;
+            }
+          }
+          if (found) {
+            lo = j == 0 ? 0.0 : float_below((j - 1 + key_base) << key_shift);
+            hi = j == inner_buckets + 1 ? inf : float_below((j + key_base) << key_shift);
+            in_bracket = hist_count[j];
+            if (hi == inf) {
+              lam = lo > 0.0 ? lo * step : 0.0;
+              step *= step;
+            } else {
+              double tt = cost_lo > cost_hi ? (cost_lo - obj_cap) / (cost_lo - cost_hi) : 0.5;
+              lam = lo + std::min(0.9, std::max(0.1, tt)) * (hi - lo);
+            }
+            have_lam = lam > lo && lam < hi;
+          }
+        }
+        if (!have_lam && in_bracket > ctx.bracket_capacity) {
+          lam = ctx.has_history && ctx.last_lambda > 0.0 ? ctx.last_lambda : 0.0;
+          if (!(lam > 0.0)) {
+            // a first guess: the mean benefit per ms of the finest fitting points
+            double b = 0.0, c = 0.0;
+            for (size_t s = 0; s < slots; ++s) {
+              const int l = ctx.hullLevel(s, ctx.hull_count[s] - 1u);
+              b += ctx.pointBenefit(s, l);
+              c += ctx.pointCost(s, l);
+            }
+            lam = c > 0.0 && b > 0.0 ? b / c : 1.0;
+          }
+          if (!(lam > lo && lam < hi)) in_bracket = ctx.bracket_capacity + 1;  // forces the greedy below
+        }
+        // C(lambda) falls from C(0) = top_cost; find hi with C(hi) <= cap by growing steps from the
         // guess (last frame's price when the camera moves smoothly), then interpolate C linearly
         // between lo and hi, kept off the ends, until few upgrades remain in (lo, hi]
-        double lam = guess, cost_lo = all.cost, cost_hi = 0.0, step = 1.1;
-        while (in_bracket > ctx.bracket_capacity && passes < 64) {
+        while (in_bracket > ctx.bracket_capacity && passes < 64 && lam > lo && lam < hi) {
           const PassResult pr = ctx.pass(slots, lam, lo, hi);
           ++passes;
           if (pr.cost <= obj_cap) {
@@ -688,19 +884,45 @@ bool SelectionJob::run() {
           if (!(next > lo && next < hi)) break;  // no double strictly inside: all ties
           lam = next;
         }
-      }
-      lambda = hi;
-      if (in_bracket > ctx.bracket_capacity) {
-        // ties the bracket cannot separate: the heap greedy gives the same order
-        double base_total = 0.0;
-        for (size_t s = 0; s < slots; ++s) base_total += ctx.pointCost(s, ctx.hullLevel(s, 0));
-        ctx.greedy(slots, base_total, obj_cap, true, &split_slot, &split_step);
-      } else {
-        // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
+        *lo_out = lo;
+        *hi_out = hi;
+        *separated = in_bracket <= ctx.bracket_capacity;
+      };
+      // take every upgrade above hi, collect those in (lo, hi], then greedy on the bracket
+      enum class Collected { kDone, kOverflow, kEdgeOutside };
+      // greedy over the `count` upgrades in the bracket, every upgrade above it taken (cost `total`)
+      auto bracketGreedy = [&](double lo, double hi, size_t count, double total) {
+        lambda = hi;
+        split_slot = -1;
+        // the bracket must hold the budget's edge: the upgrades above it fit, all of them together not
+        if (hi != inf && total > obj_cap) return Collected::kEdgeOutside;
+        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
+        for (size_t e = 0; e < count; ++e) {
+          const BracketEntry& be = ctx.bracket[e];
+          if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
+          const int l0 = ctx.hullLevel(be.slot, be.step), l1 = ctx.hullLevel(be.slot, be.step + 1);
+          const double delta = static_cast<double>(ctx.pointCost(be.slot, l1)) - ctx.pointCost(be.slot, l0);
+          if (total + delta <= obj_cap) {
+            total += delta;
+            ctx.chosen[be.slot] = static_cast<uint8_t>(be.step + 1);
+            lambda = be.ratio;
+          } else {
+            split_slot = be.slot;
+            split_step = be.step;
+            lambda = be.ratio;
+            break;
+          }
+        }
+        return split_slot >= 0 || lo == 0.0 ? Collected::kDone : Collected::kEdgeOutside;
+      };
+      auto collect = [&](double lo, double hi) {
+        lambda = hi;
+        split_slot = -1;
         double total = 0.0;
         size_t count = 0;
         uint8_t* const chosen = ctx.chosen;
         BracketEntry* const bracket = ctx.bracket;
+        const size_t capacity = ctx.bracket_capacity;
         for (size_t s = 0; s < slots; ++s) {
           const size_t hn = hull_count[s];
           const uint8_t* const h = hull + s * hull_stride;
@@ -732,6 +954,7 @@ bool SelectionJob::run() {
             } else {
               if (taking) pick = static_cast<uint8_t>(k);
               taking = false;
+              if (count == capacity) return Collected::kOverflow;
               bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
             }
             ++k;
@@ -742,43 +965,59 @@ bool SelectionJob::run() {
           chosen[s] = pick;
           total += chosen_cost;
         }
-        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
-        for (size_t e = 0; e < count; ++e) {
-          const BracketEntry& be = ctx.bracket[e];
-          if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
-          const int l0 = ctx.hullLevel(be.slot, be.step), l1 = ctx.hullLevel(be.slot, be.step + 1);
-          const double delta = static_cast<double>(ctx.pointCost(be.slot, l1)) - ctx.pointCost(be.slot, l0);
-          if (total + delta <= obj_cap) {
-            total += delta;
-            ctx.chosen[be.slot] = static_cast<uint8_t>(be.step + 1);
-            lambda = be.ratio;
-          } else {
-            split_slot = be.slot;
-            split_step = be.step;
-            lambda = be.ratio;
-            break;
-          }
+        return bracketGreedy(lo, hi, count, total);
+      };
+      auto heapGreedy = [&]() {
+        // ties the bracket cannot separate: the heap greedy gives the same order
+        double base = 0.0;
+        for (size_t s = 0; s < slots; ++s) base += ctx.pointCost(s, ctx.hullLevel(s, 0));
+        split_slot = -1;
+        ctx.greedy(slots, base, obj_cap, true, &split_slot, &split_step);
+      };
+      // first from the histogram; if its rounded sums put the edge outside the bucket that the exact
+      // sums find (the budget within rounding of a bucket edge), again by passes from last frame's price
+      bool from_prediction = false;
+      if (predict) {
+        if (!poverflow && top_cost > obj_cap && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
+          from_prediction = true;
+        } else {
+          // missed: widen the window next frame; overflowed: narrow it
+          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
+                                        : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
         }
       }
+      for (int attempt = 0; attempt < 2 && !from_prediction; ++attempt) {
+        double lo = 0.0, hi = 0.0;
+        bool separated = false;
+        search(attempt == 0, &lo, &hi, &separated);
+        if (!separated) {
+          lambda = hi;
+          heapGreedy();
+          break;
+        }
+        const Collected result = collect(lo, hi);
+        if (result == Collected::kOverflow) {
+          lambda = hi;
+          heapGreedy();
+          break;
+        }
+        if (result == Collected::kDone || attempt == 1) break;
+      }
     }
-    // the 1/2 guarantee: the first upgrade that did not fit, alone with every other object at its base
+    // the 1/2 guarantee (the first upgrade that did not fit, alone with every other object at its
+    // base) is checked after the write-out below, which sums the greedy's benefit in the same order
     if (params.half_approximation && split_slot >= 0) {
-      double greedy_benefit = 0.0, base_benefit = 0.0;
-      for (size_t s = 0; s < slots; ++s) {
-        greedy_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, ctx.chosen[s]));
-        base_benefit += ctx.pointBenefit(s, ctx.hullLevel(s, 0));
-      }
       const size_t js = static_cast<size_t>(split_slot);
-      const double alt = base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, split_step + 1)) -
+      half_alt_benefit = base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, split_step + 1)) -
                          ctx.pointBenefit(js, ctx.hullLevel(js, 0));
-      if (alt > greedy_benefit) {
-        for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = 0;
-        ctx.chosen[js] = static_cast<uint8_t>(split_step + 1);
-        st.flags |= kFlagSplitFallback;
-      }
+      half_slot = split_slot;
+      half_step = split_step + 1;
     }
     // hull entries are level bytes already (kNotDrawn = -1)
-    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = hull[s * hull_stride + ctx.chosen[s]];
+    {
+      uint8_t* const chosen = ctx.chosen;
+      for (size_t s = 0; s < slots; ++s) chosen[s] = hull[s * hull_stride + chosen[s]];
+    }
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
@@ -788,7 +1027,10 @@ bool SelectionJob::run() {
   // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
   CostFeatures f;
   double predicted = coef.per_frame_ms, benefit = 0.0;
-  {
+  auto writeOut = [&]() {
+    f = CostFeatures();
+    predicted = coef.per_frame_ms;
+    benefit = 0.0;
     const uint8_t* const chosen = ctx.chosen;
     const float* const rc = ctx.row_cost;
     const float hh = ctx.h1;
@@ -820,6 +1062,15 @@ bool SelectionJob::run() {
     }
     st.dropped_count = dropped;
     st.drawn_count = drawn;
+  };
+  writeOut();
+  // the sum of benefits over slots in slot order is what the greedy's choice scores
+  if (half_slot >= 0 && half_alt_benefit > benefit) {
+    const size_t js = static_cast<size_t>(half_slot);
+    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = ctx.hull[s * ctx.hull_stride];
+    ctx.chosen[js] = ctx.hull[js * ctx.hull_stride + half_step];
+    st.flags |= kFlagSplitFallback;
+    writeOut();
   }
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
   if (cost_ms_out.count) {
