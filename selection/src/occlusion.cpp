@@ -3,10 +3,16 @@
 // equal-area rings, facing the camera over the object's bounding-sphere footprint.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
 
 #include "ray_scene_impl.h"
 
@@ -15,6 +21,9 @@ namespace {
 
 constexpr float kGoldenAngle = 2.39996323f;  // pi * (3 - sqrt(5))
 constexpr uint32_t kNever = 0;  // generations of live objects start at 1
+// radix selection of the highest priorities: buckets over the top bits of the (positive) float
+constexpr int kBucketShift = 18;
+constexpr size_t kBuckets = size_t(1) << (32 - kBucketShift);
 
 // Accepted world-space error of an occluder hit at ray parameter t: const + per_t * t, i.e.
 // occluder_error_px pixels at distance t.
@@ -57,22 +66,90 @@ View makeView(const Camera& c) {
   return v;
 }
 
-// Projected radius in pixels when the sphere is (partly) in the view volume and fully beyond the
-// eye's own position; -1 when outside; +inf when the eye is inside the sphere.
-float projectedRadiusPx(const View& v, const glm::vec4& s) {
+// Projected radius in pixels of sphere i when it is live, (partly) in the view volume and fully
+// beyond the eye's own position; -1 otherwise; +inf when the eye is inside the sphere.
+inline float projectRadius(const View& v, const glm::vec4& s, bool live) {
   const glm::vec3 d = glm::vec3(s) - v.eye;
   const float r = s.w;
   const float depth = glm::dot(d, v.forward);
-  if (depth + r <= v.near_plane) return -1.0f;
+  bool in = live && depth + r > v.near_plane;
   if (v.ortho) {
-    if (std::fabs(glm::dot(d, v.right)) > v.half_w + r || std::fabs(glm::dot(d, v.up)) > v.half_h + r) return -1.0f;
-    return r * v.px_per_unit_at_1;
+    in = in && std::fabs(glm::dot(d, v.right)) <= v.half_w + r && std::fabs(glm::dot(d, v.up)) <= v.half_h + r;
+    return in ? r * v.px_per_unit_at_1 : -1.0f;
   }
-  for (const glm::vec3& n : v.side)
-    if (glm::dot(d, n) < -r) return -1.0f;
+  for (const glm::vec3& n : v.side) in = in && glm::dot(d, n) >= -r;
+  if (!in) return -1.0f;
   const float dist2 = glm::dot(d, d);
   if (dist2 <= r * r) return std::numeric_limits<float>::infinity();
   return r * v.px_per_unit_at_1 / std::sqrt(dist2);
+}
+
+// projectRadius of every id into r_px. With SSE2, four spheres at a time without branches (the
+// same operations in the same order, so the results are bit-identical to the scalar path).
+void projectRadii(const View& v, const glm::vec4* spheres, const uint8_t* live, size_t count, float* r_px) {
+  size_t i = 0;
+#if defined(__SSE2__)
+  if (!v.ortho) {
+    const __m128 ex = _mm_set1_ps(v.eye.x), ey = _mm_set1_ps(v.eye.y), ez = _mm_set1_ps(v.eye.z);
+    const __m128 fx = _mm_set1_ps(v.forward.x), fy = _mm_set1_ps(v.forward.y), fz = _mm_set1_ps(v.forward.z);
+    const __m128 near_plane = _mm_set1_ps(v.near_plane), ppu = _mm_set1_ps(v.px_per_unit_at_1);
+    const __m128 minus_one = _mm_set1_ps(-1.0f), inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 zero = _mm_setzero_ps();
+    __m128 nx[4], ny[4], nz[4];
+    for (int k = 0; k < 4; ++k) {
+      nx[k] = _mm_set1_ps(v.side[k].x);
+      ny[k] = _mm_set1_ps(v.side[k].y);
+      nz[k] = _mm_set1_ps(v.side[k].z);
+    }
+    for (; i + 4 <= count; i += 4) {
+      __m128 x = _mm_loadu_ps(&spheres[i].x), y = _mm_loadu_ps(&spheres[i + 1].x);
+      __m128 z = _mm_loadu_ps(&spheres[i + 2].x), r = _mm_loadu_ps(&spheres[i + 3].x);
+      _MM_TRANSPOSE4_PS(x, y, z, r);
+      const __m128 dx = _mm_sub_ps(x, ex), dy = _mm_sub_ps(y, ey), dz = _mm_sub_ps(z, ez);
+      const __m128 depth = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, fx), _mm_mul_ps(dy, fy)), _mm_mul_ps(dz, fz));
+      uint32_t live4;
+      std::memcpy(&live4, live + i, 4);
+      const __m128i live_bytes = _mm_cvtsi32_si128(static_cast<int>(live4));
+      const __m128i live_words = _mm_unpacklo_epi16(_mm_unpacklo_epi8(live_bytes, _mm_setzero_si128()), _mm_setzero_si128());
+      __m128 in = _mm_castsi128_ps(_mm_cmpgt_epi32(live_words, _mm_setzero_si128()));
+      in = _mm_and_ps(in, _mm_cmpgt_ps(_mm_add_ps(depth, r), near_plane));
+      const __m128 minus_r = _mm_sub_ps(zero, r);
+      for (int k = 0; k < 4; ++k) {
+        const __m128 dn = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, nx[k]), _mm_mul_ps(dy, ny[k])), _mm_mul_ps(dz, nz[k]));
+        in = _mm_and_ps(in, _mm_cmpge_ps(dn, minus_r));
+      }
+      const __m128 dist2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128 inside = _mm_cmple_ps(dist2, _mm_mul_ps(r, r));
+      const __m128 px = _mm_div_ps(_mm_mul_ps(r, ppu), _mm_sqrt_ps(dist2));
+      const __m128 value = _mm_or_ps(_mm_and_ps(inside, inf), _mm_andnot_ps(inside, px));
+      _mm_storeu_ps(r_px + i, _mm_or_ps(_mm_and_ps(in, value), _mm_andnot_ps(in, minus_one)));
+    }
+  }
+#endif
+  for (; i < count; ++i) r_px[i] = projectRadius(v, spheres[i], live[i] != 0);
+}
+
+// Moves the `k` largest of keys[0, count) to the front (in no particular order), 0 < k < count: a
+// histogram over the top bits finds the bucket holding the k-th largest key, keys of the buckets
+// above are taken whole, and only that bucket is ordered. Keys are distinct (the low half is the
+// id), so the chosen set is the one a full sort would give. O(count); `histogram` holds kBuckets.
+void selectLargest(uint64_t* keys, size_t count, size_t k, uint32_t* histogram) {
+  std::fill(histogram, histogram + kBuckets, 0u);
+  for (size_t i = 0; i < count; ++i) ++histogram[keys[i] >> (32 + kBucketShift)];
+  size_t above = 0;
+  size_t bucket = kBuckets;
+  while (bucket-- > 0) {
+    if (above + histogram[bucket] >= k) break;
+    above += histogram[bucket];
+  }
+  // partition: keys of higher buckets first, then the boundary bucket's keys
+  size_t front = 0;
+  for (size_t i = 0; i < count; ++i)
+    if ((keys[i] >> (32 + kBucketShift)) > bucket) std::swap(keys[i], keys[front++]);
+  size_t end = front;
+  for (size_t i = front; i < count; ++i)
+    if ((keys[i] >> (32 + kBucketShift)) == bucket) std::swap(keys[i], keys[end++]);
+  std::nth_element(keys + front, keys + (k - 1), keys + end, std::greater<uint64_t>());
 }
 
 }  // namespace
@@ -82,15 +159,18 @@ struct OcclusionEstimator::State {
   size_t max_objects = 0;
   uint64_t frame = 0;
   OcclusionStats stats;
-  // per id
-  std::vector<float> visible;                 // latest estimate
-  std::vector<uint64_t> tested_frame;         // frame of that estimate
-  std::vector<uint32_t> tested_generation;    // object generation it belongs to (kNever = none)
-  std::vector<uint64_t> first_seen_frame;     // first frame this generation was a candidate
-  std::vector<uint32_t> seen_generation;
-  std::vector<float> priority;
-  // scratch
-  std::vector<uint32_t> candidates;
+  // per id, read by the priority pass every frame
+  std::vector<float> r_px;                    // 4 B: projected radius this frame (-1 outside, inf eye inside)
+  std::vector<uint64_t> age_origin;           // 8 B: age = frame - age_origin (the test's frame, or first
+                                              //      seen minus untested_age_frames)
+  std::vector<uint32_t> seen_generation;      // 4 B: object generation age_origin belongs to (kNever = none)
+  // per id, read by the output pass and the queries
+  std::vector<float> visible;                 // 4 B: latest estimate
+  std::vector<uint64_t> tested_frame;         // 8 B: frame of that estimate
+  std::vector<uint32_t> tested_generation;    // 4 B: object generation it belongs to (kNever = none)
+  // scratch: candidates as (priority bits << 32 | ~id), so one integer order is "priority down, id up"
+  std::vector<uint64_t> keys;
+  std::vector<uint32_t> histogram;            // kBuckets counters over the top bits of the priority
 };
 
 OcclusionEstimator::OcclusionEstimator() : state_(new State) {}
@@ -105,13 +185,14 @@ Error OcclusionEstimator::init(size_t max_objects, const OcclusionParams& params
   s = State();
   s.params = params;
   s.max_objects = max_objects;
+  s.r_px.assign(max_objects, -1.0f);
+  s.age_origin.assign(max_objects, 0);
+  s.seen_generation.assign(max_objects, kNever);
   s.visible.assign(max_objects, 1.0f);
   s.tested_frame.assign(max_objects, 0);
   s.tested_generation.assign(max_objects, kNever);
-  s.first_seen_frame.assign(max_objects, 0);
-  s.seen_generation.assign(max_objects, kNever);
-  s.priority.assign(max_objects, 0.0f);
-  s.candidates.assign(max_objects, 0);
+  s.keys.assign(max_objects, 0);
+  s.histogram.assign(kBuckets, 0);
   return {};
 }
 
@@ -131,41 +212,51 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   s.stats = OcclusionStats();
   const View view = makeView(camera);
 
-  // priority pass over every live object
+  // priority pass, part 1: projected radius of every id (branch-free, no state written but r_px)
+  projectRadii(view, m.world_sphere.data(), m.live.data(), cap, s.r_px.data());
+
+  // part 2: candidates with their priority keys (columns through locals: the key stores could
+  // otherwise alias them and force reloads)
   size_t cand_count = 0;
-  for (size_t id = 0; id < cap; ++id) {
-    if (!m.live[id]) continue;
-    const uint32_t gen = m.generation[id];
-    const float r_px = projectedRadiusPx(view, m.world_sphere[id]);
-    if (r_px < 0.0f) continue;
-    if (std::isinf(r_px)) {
-      // the eye is inside the bounding sphere: count the object as visible, as measured now
-      s.visible[id] = 1.0f;
-      s.tested_frame[id] = s.frame;
-      s.tested_generation[id] = gen;
-      continue;
+  {
+    const uint64_t frame = s.frame;
+    const uint64_t untested_origin = frame - s.params.untested_age_frames;  // wraps below 0: fine, ages are differences
+    const float* r_px_col = s.r_px.data();
+    const uint32_t* gen_col = m.generation.data();
+    uint32_t* seen_col = s.seen_generation.data();
+    uint64_t* origin_col = s.age_origin.data();
+    uint64_t* keys = s.keys.data();
+    for (size_t id = 0; id < cap; ++id) {
+      const float r_px = r_px_col[id];
+      if (!(r_px >= 0.0f)) continue;
+      const uint32_t gen = gen_col[id];
+      if (std::isinf(r_px)) {
+        // the eye is inside the bounding sphere: count the object as visible, as measured now
+        s.visible[id] = 1.0f;
+        s.tested_frame[id] = frame;
+        s.tested_generation[id] = gen;
+        origin_col[id] = frame;
+        seen_col[id] = gen;
+        continue;
+      }
+      if (seen_col[id] != gen) {
+        // first frame this object (generation) is a candidate: it counts as tested untested_age_frames
+        // ago; a test sets the origin to the test's frame
+        seen_col[id] = gen;
+        origin_col[id] = untested_origin;
+      }
+      const float age = static_cast<float>(static_cast<int64_t>(frame - origin_col[id]));
+      const float priority = (1.0f + std::min(r_px, kMaxPriorityRadiusPx)) * age;
+      uint32_t bits;
+      std::memcpy(&bits, &priority, sizeof bits);
+      keys[cand_count++] = (uint64_t(bits) << 32) | ~static_cast<uint32_t>(id);
     }
-    if (s.seen_generation[id] != gen) {
-      s.seen_generation[id] = gen;
-      s.first_seen_frame[id] = s.frame;
-    }
-    const uint64_t age = s.tested_generation[id] == gen
-                             ? s.frame - s.tested_frame[id]
-                             : s.frame - s.first_seen_frame[id] + s.params.untested_age_frames;
-    s.priority[id] = (1.0f + std::min(r_px, kMaxPriorityRadiusPx)) * static_cast<float>(age);
-    s.candidates[cand_count++] = static_cast<uint32_t>(id);
   }
   s.stats.candidates = static_cast<uint32_t>(cand_count);
 
   const uint32_t n = s.params.rays_per_test;
   const size_t test_count = std::min<size_t>(cand_count, s.params.ray_budget / n);
-  if (test_count < cand_count) {
-    // highest priority first, ties by id: a strict order, so the chosen set is deterministic
-    const float* prio = s.priority.data();
-    std::nth_element(s.candidates.begin(), s.candidates.begin() + static_cast<std::ptrdiff_t>(test_count),
-                     s.candidates.begin() + static_cast<std::ptrdiff_t>(cand_count),
-                     [prio](uint32_t a, uint32_t b) { return prio[a] > prio[b] || (prio[a] == prio[b] && a < b); });
-  }
+  if (test_count > 0 && test_count < cand_count) selectLargest(s.keys.data(), cand_count, test_count, s.histogram.data());
 
   ErrorLimit limit;
   const float err_px = m.params.occluder_error_px;
@@ -178,7 +269,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
 
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
   for (size_t c = 0; c < test_count; ++c) {
-    const uint32_t id = s.candidates[c];
+    const uint32_t id = ~static_cast<uint32_t>(s.keys[c]);
     const glm::vec4 sph = m.world_sphere[id];
     const glm::vec3 center(sph);
     const float r = sph.w;
@@ -250,11 +341,30 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     s.visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
     s.tested_frame[id] = s.frame;
     s.tested_generation[id] = m.generation[id];
+    s.age_origin[id] = s.frame;
   }
 
   if (visible_fraction.count) {
-    for (size_t id = 0; id < cap; ++id)
-      visible_fraction[id] = (m.live[id] && s.tested_generation[id] == m.generation[id]) ? s.visible[id] : 1.0f;
+    const uint8_t* live = m.live.data();
+    const uint32_t* gen = m.generation.data();
+    const uint32_t* tested_gen = s.tested_generation.data();
+    const float* vis = s.visible.data();
+    float* out = visible_fraction.data;
+    size_t id = 0;
+#if defined(__SSE2__)
+    const __m128 one = _mm_set1_ps(1.0f);
+    for (; id + 4 <= cap; id += 4) {
+      uint32_t live4;
+      std::memcpy(&live4, live + id, 4);
+      const __m128i lb = _mm_cvtsi32_si128(static_cast<int>(live4));
+      const __m128i lw = _mm_unpacklo_epi16(_mm_unpacklo_epi8(lb, _mm_setzero_si128()), _mm_setzero_si128());
+      const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(tested_gen + id)),
+                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(gen + id)));
+      const __m128 keep = _mm_castsi128_ps(_mm_and_si128(same, _mm_cmpgt_epi32(lw, _mm_setzero_si128())));
+      _mm_storeu_ps(out + id, _mm_or_ps(_mm_and_ps(keep, _mm_loadu_ps(vis + id)), _mm_andnot_ps(keep, one)));
+    }
+#endif
+    for (; id < cap; ++id) out[id] = (live[id] != 0) & (tested_gen[id] == gen[id]) ? vis[id] : 1.0f;
   }
   return true;
 }
