@@ -152,6 +152,215 @@ void selectLargest(uint64_t* keys, size_t count, size_t k, uint32_t* histogram) 
   std::nth_element(keys + front, keys + (k - 1), keys + end, std::greater<uint64_t>());
 }
 
+// Interleaves the low 16 bits of x and y (Morton order).
+uint32_t interleave(uint32_t x, uint32_t y) {
+  auto spread = [](uint32_t v) {
+    v &= 0xFFFFu;
+    v = (v | (v << 8)) & 0x00FF00FFu;
+    v = (v | (v << 4)) & 0x0F0F0F0Fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    v = (v | (v << 1)) & 0x55555555u;
+    return v;
+  };
+  return spread(x) | (spread(y) << 1);
+}
+
+// Morton code of where a point lies on the screen (clamped to it; points behind the eye go to an
+// edge): nearby codes mean nearby view directions.
+uint32_t screenCode(const View& v, const glm::vec3& p) {
+  const glm::vec3 d = p - v.eye;
+  float x, y;
+  if (v.ortho) {
+    x = glm::dot(d, v.right) / std::max(v.half_w, 1e-30f);
+    y = glm::dot(d, v.up) / std::max(v.half_h, 1e-30f);
+  } else {
+    const float depth = std::max(glm::dot(d, v.forward), 1e-30f);
+    x = glm::dot(d, v.right) / (depth * v.tan_half_x);
+    y = glm::dot(d, v.up) / (depth * v.tan_half_y);
+  }
+  auto cell = [](float t) {
+    const float c = (std::min(std::max(t, -1.0f), 1.0f) + 1.0f) * 511.5f;  // NaN-free: clamped first
+    return static_cast<uint32_t>(c);
+  };
+  return interleave(cell(x), cell(y));
+}
+
+// The rays of one test (perspective: a cone from the eye around the axis to the object's centre,
+// half-angle asin(r / D); orthographic: a cylinder of radius r along the view direction), as far as
+// t_end (the far side of the object's bounding sphere, beyond which nothing can hide it).
+struct Beam {
+  glm::vec3 apex{0.0f}, axis{0.0f};
+  bool ortho = false;
+  float sin_a = 0.0f, cos_a = 1.0f;  // perspective
+  float radius = 0.0f;               // orthographic
+  float t_near = 0.0f, t_end = 0.0f;
+  // for tree nodes: every beam point lies within `reach` (the beam's radius at t_end) of the axis
+  // segment from the apex to depth t_end, so a node box is met only if the segment crosses the box
+  // grown by `reach`
+  float reach = 0.0f;
+  glm::vec3 inv_axis{0.0f};
+
+  void finish() {
+    reach = ortho ? radius : t_end * sin_a / std::max(cos_a, 1e-6f);
+    inv_axis = glm::vec3(1.0f / axis.x, 1.0f / axis.y, 1.0f / axis.z);
+  }
+  // Conservative: false only when no ray of the beam reaches the box; writes the axis depth where
+  // the segment enters the grown box (for near-first ordering).
+  bool meetsBox(const glm::vec3& lo, const glm::vec3& hi, float& depth) const {
+    float exit;
+    return rayBox(apex, inv_axis, lo - glm::vec3(reach), hi + glm::vec3(reach), 0.0f, t_end, depth, exit);
+  }
+
+  // Conservative: false only when no ray of the beam meets the sphere (p, rho) within
+  // [t_near, t_end]. Perspective: perp * cos(a) - along * sin(a) is at most the distance from p to
+  // the cone (exact where the nearest cone point is on its side, smaller elsewhere).
+  bool meets(const glm::vec3& p, float rho) const {
+    const glm::vec3 q = p - apex;
+    const float along = glm::dot(q, axis);
+    const float q2 = glm::dot(q, q);
+    const float perp = std::sqrt(std::max(q2 - along * along, 0.0f));
+    if (ortho) return along + rho >= t_near && along - rho <= t_end && perp <= radius + rho;
+    const float dist = std::sqrt(q2);
+    return dist + rho >= t_near && dist - rho <= t_end && perp * cos_a - along * sin_a <= rho;
+  }
+};
+
+// Calls visit(id) for the live objects other than `self` whose bounding spheres the beam meets,
+// nearer along the axis roughly first (the tree is walked nearer child first), until visit returns
+// true. Tree nodes are tested as boxes against the beam's axis segment (Beam::meetsBox). No
+// allocation.
+template <class Visit>
+void forEachCandidate(const RayScene::Impl& m, const Beam& beam, uint32_t self, Visit&& visit) {
+  auto take = [&](uint32_t id) {
+    const glm::vec4 sp = m.world_sphere[id];
+    return id != self && m.live[id] && beam.meets(glm::vec3(sp), sp.w) && visit(id);
+  };
+  const TopBvh& bvh = m.bvh;
+  if (!bvh.nodes.empty()) {
+    uint32_t stack[TopBvh::kStackSize];
+    int top = 0;
+    float depth_l, depth_r;
+    // an emptied tree (all objects removed) has an inverted box, which the slab test rejects
+    if (beam.meetsBox(bvh.nodes[0].lo, bvh.nodes[0].hi, depth_l)) stack[top++] = 0;
+    while (top > 0) {
+      const TopBvh::Node& n = bvh.nodes[stack[--top]];
+      if (n.count > 0) {
+        for (uint32_t k = n.first; k < n.first + n.count; ++k)
+          if (take(bvh.items[k])) return;
+        continue;
+      }
+      const TopBvh::Node& l = bvh.nodes[n.first];
+      const TopBvh::Node& r = bvh.nodes[n.first + 1];
+      const bool hit_l = beam.meetsBox(l.lo, l.hi, depth_l);
+      const bool hit_r = beam.meetsBox(r.lo, r.hi, depth_r);
+      if (top + 2 > TopBvh::kStackSize) continue;  // cannot happen: the median split keeps depth ~log2(n)
+      // push the farther child first so the nearer one is popped next
+      if (depth_l <= depth_r) {
+        if (hit_r) stack[top++] = n.first + 1;
+        if (hit_l) stack[top++] = n.first;
+      } else {
+        if (hit_l) stack[top++] = n.first;
+        if (hit_r) stack[top++] = n.first + 1;
+      }
+    }
+  }
+  for (uint32_t id : bvh.pending)
+    if (take(id)) return;
+}
+
+constexpr uint32_t kChunk = 16;  // rays per packet
+
+struct RaysSoA {
+  float ox[kChunk], oy[kChunk], oz[kChunk], dx[kChunk], dy[kChunk], dz[kChunk];
+  void set(uint32_t k, const glm::vec3& o, const glm::vec3& d) {
+    ox[k] = o.x;
+    oy[k] = o.y;
+    oz[k] = o.z;
+    dx[k] = d.x;
+    dy[k] = d.y;
+    dz[k] = d.z;
+  }
+  glm::vec3 origin(uint32_t k) const { return {ox[k], oy[k], oz[k]}; }
+  glm::vec3 direction(uint32_t k) const { return {dx[k], dy[k], dz[k]}; }
+};
+
+// Closest hits of the first `lanes` rays with object `id` drawn as `proto`, from t_near on, as one
+// packet (the rays of one test share the object, so they are coherent). Returns a bit mask of the
+// rays that hit; t_hit[k] is the hit distance of ray k.
+uint32_t intersectPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t lanes,
+                         float t_near, float* t_hit) {
+  const glm::mat4& inv = m.inverse_world[id];
+  alignas(64) int valid[kChunk];
+  alignas(64) RTCRayHit16 rh;
+  for (uint32_t k = 0; k < kChunk; ++k) {
+    valid[k] = k < lanes ? -1 : 0;
+    const uint32_t j = k < lanes ? k : 0;
+    const glm::vec3 o(inv * glm::vec4(rays.ox[j], rays.oy[j], rays.oz[j], 1.0f));
+    const glm::vec3 d(inv * glm::vec4(rays.dx[j], rays.dy[j], rays.dz[j], 0.0f));
+    rh.ray.org_x[k] = o.x;
+    rh.ray.org_y[k] = o.y;
+    rh.ray.org_z[k] = o.z;
+    rh.ray.dir_x[k] = d.x;
+    rh.ray.dir_y[k] = d.y;
+    rh.ray.dir_z[k] = d.z;
+    rh.ray.tnear[k] = t_near;
+    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+    rh.ray.time[k] = 0.0f;
+    rh.ray.mask[k] = 0xFFFFFFFFu;
+    rh.ray.id[k] = k;
+    rh.ray.flags[k] = 0;
+    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect16(valid, proto, &ctx, &rh);
+  uint32_t hits = 0;
+  for (uint32_t k = 0; k < lanes; ++k) {
+    if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+    hits |= 1u << k;
+    t_hit[k] = rh.ray.tfar[k];
+  }
+  return hits;
+}
+
+// Tests the rays in `active` (bit k = ray k) against object `other`'s occluder level, each within
+// [t_near, t_end[k]], first against its bounding sphere; returns `active` without the rays it
+// blocks. A hit blocks only where the level's error allows it (see docs/VISIBILITY.md: the level's
+// world error must project to at most occluder_error_px pixels at the hit).
+template <class Limit>
+uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays, uint32_t active,
+                   const float* t_end, float t_near, const Limit& limit) {
+  const glm::vec4 sp = m.world_sphere[other];
+  const float r2 = sp.w * sp.w;
+  const ChainPrototypes& op = m.chains[m.chain[other]];
+  RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
+  const float e = m.occluder_error_world[other];
+  for (uint32_t left = active; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    const float ocx = sp.x - rays.ox[k], ocy = sp.y - rays.oy[k], ocz = sp.z - rays.oz[k];
+    const float along = ocx * rays.dx[k] + ocy * rays.dy[k] + ocz * rays.dz[k];
+    const float miss2 = ocx * ocx + ocy * ocy + ocz * ocz - along * along;
+    if (miss2 > r2) continue;
+    const float half = std::sqrt(r2 - miss2);
+    const float t_enter = std::max(along - half, t_near), t_exit = std::min(along + half, t_end[k]);
+    if (t_enter > t_exit) continue;
+    bool blocked = false;
+    if (e <= limit(t_enter)) {
+      // every hit in the sphere is trusted
+      blocked = occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k]);
+    } else if (e <= limit(t_exit)) {
+      // trusted only beyond some distance: find the hit and check it
+      float t_hit = t_end[k];
+      blocked = intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit) &&
+                e <= limit(t_hit);
+    }
+    if (blocked) active &= ~(1u << k);
+  }
+  return active;
+}
+
 }  // namespace
 
 struct OcclusionEstimator::State {
@@ -268,8 +477,15 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   const float t_near = view.near_plane;
 
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
+  // test in screen order (a Morton code of the centre's view direction), so consecutive beams cross
+  // the same tree nodes and those stay in cache
   for (size_t c = 0; c < test_count; ++c) {
     const uint32_t id = ~static_cast<uint32_t>(s.keys[c]);
+    s.keys[c] = (uint64_t(screenCode(view, glm::vec3(m.world_sphere[id]))) << 32) | id;
+  }
+  std::sort(s.keys.begin(), s.keys.begin() + static_cast<std::ptrdiff_t>(test_count));
+  for (size_t c = 0; c < test_count; ++c) {
+    const uint32_t id = static_cast<uint32_t>(s.keys[c]);
     const glm::vec4 sph = m.world_sphere[id];
     const glm::vec3 center(sph);
     const float r = sph.w;
@@ -278,62 +494,74 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
 
     glm::vec3 w;
     float disc_r = r;
+    Beam beam;
+    beam.apex = view.eye;
+    beam.ortho = view.ortho;
+    beam.t_near = t_near;
     if (view.ortho) {
       w = view.forward;
+      beam.radius = r;
+      beam.t_end = glm::dot(center - view.eye, w) + r;
     } else {
       const glm::vec3 d = center - view.eye;
       const float dist = glm::length(d);
       w = d / dist;
       // the disc through the centre that fills the sphere's tangent cone
       disc_r = r * dist / std::sqrt(std::max(dist * dist - r * r, 1e-12f));
+      beam.sin_a = std::min(r / dist, 1.0f);
+      beam.cos_a = std::sqrt(std::max(1.0f - beam.sin_a * beam.sin_a, 0.0f));
+      beam.t_end = dist + r;
     }
+    beam.axis = w;
+    beam.finish();
     const glm::vec3 ref = std::fabs(glm::dot(w, view.up)) < 0.9f ? view.up : view.right;
     const glm::vec3 u = glm::normalize(glm::cross(w, ref));
     const glm::vec3 v = glm::cross(u, w);
 
+
     uint32_t counted = 0, hidden = 0;
-    for (uint32_t k = 0; k < n; ++k) {
-      const float rho = disc_r * std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(n));
-      const float th = static_cast<float>(k) * kGoldenAngle + rotation;
-      const glm::vec3 p = center + rho * (std::cos(th) * u + std::sin(th) * v);
-      glm::vec3 o, dir;
-      if (view.ortho) {
-        dir = w;
-        o = p - w * glm::dot(p - view.eye, w);
-      } else {
-        o = view.eye;
-        dir = glm::normalize(p - view.eye);
+    for (uint32_t k0 = 0; k0 < n; k0 += kChunk) {
+      const uint32_t lanes = std::min(kChunk, n - k0);
+      RaysSoA rays;
+      for (uint32_t k = 0; k < lanes; ++k) {
+        const uint32_t sample = k0 + k;
+        const float rho = disc_r * std::sqrt((static_cast<float>(sample) + 0.5f) / static_cast<float>(n));
+        const float th = static_cast<float>(sample) * kGoldenAngle + rotation;
+        const glm::vec3 p = center + rho * (std::cos(th) * u + std::sin(th) * v);
+        glm::vec3 o, dir;
+        if (view.ortho) {
+          dir = w;
+          o = p - w * glm::dot(p - view.eye, w);
+        } else {
+          o = view.eye;
+          dir = glm::normalize(p - view.eye);
+        }
+        rays.set(k, o, dir);
       }
-      // where the ray meets the object itself, at its occluder level
-      float t_self = std::numeric_limits<float>::infinity();
-      if (!intersectObject(m, id, self_scene, o, dir, t_near, t_self)) continue;
-      ++counted;
-      t_self *= 1.0f - 1e-4f;
-      if (t_self <= t_near) continue;
-      ++s.stats.occlusion_rays;
-      bool blocked = false;
-      traverse(m.bvh, m.box_lo, m.box_hi, o, dir, t_near, t_self,
-               [&](uint32_t other, float t_enter, float t_exit, float& t_max) {
-                 if (other == id || !m.live[other]) return false;  // never its own occluder
-                 // cheap reject: the ray (unit direction) passes outside the bounding sphere
-                 const glm::vec4 sp = m.world_sphere[other];
-                 const glm::vec3 oc = glm::vec3(sp) - o;
-                 const float along = glm::dot(oc, dir);
-                 if (glm::dot(oc, oc) - along * along > sp.w * sp.w) return false;
-                 const ChainPrototypes& op = m.chains[m.chain[other]];
-                 RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
-                 const float e = m.occluder_error_world[other];
-                 if (e <= limit(t_enter)) {
-                   // every hit in the box is trusted
-                   blocked = occludedByObject(m, other, occluder, o, dir, t_near, t_max);
-                 } else if (e <= limit(std::min(t_exit, t_max))) {
-                   // trusted only beyond some distance: find the hit and check it
-                   float t_hit = t_max;
-                   blocked = intersectObject(m, other, occluder, o, dir, t_near, t_hit) && e <= limit(t_hit);
-                 }
-                 return blocked;
-               });
-      if (blocked) ++hidden;
+      // where each ray meets the object itself, at its occluder level: one coherent packet
+      float t_self[kChunk];
+      const uint32_t self_hits = intersectPacket(m, id, self_scene, rays, lanes, t_near, t_self);
+      counted += static_cast<uint32_t>(__builtin_popcount(self_hits));
+      // rays outside the object's silhouette are not counted; the others are open until blocked
+      uint32_t active = 0;
+      float t_end[kChunk];
+      for (uint32_t k = 0; k < lanes; ++k) {
+        if (!(self_hits >> k & 1u)) continue;
+        t_end[k] = t_self[k] * (1.0f - 1e-4f);
+        if (t_end[k] <= t_near) continue;
+        active |= 1u << k;
+        ++s.stats.occlusion_rays;
+      }
+      const uint32_t open = active;
+      // objects that can stand between the eye and the object, nearer roughly first, until every
+      // ray is blocked
+      if (active != 0)
+        forEachCandidate(m, beam, id, [&](uint32_t other) {
+          ++s.stats.occluder_candidates;
+          active = blockRays(m, other, rays, active, t_end, t_near, limit);
+          return active == 0;
+        });
+      hidden += static_cast<uint32_t>(__builtin_popcount(open & ~active));
     }
     s.stats.samples += n;
     s.stats.self_hits += counted;

@@ -179,6 +179,7 @@ struct OcclusionStats {
   uint32_t self_hits = 0;        // samples whose ray met the object itself (the estimate's denominator)
   uint32_t occlusion_rays = 0;   // occlusion rays cast (one per self hit)
   uint32_t candidates = 0;       // objects in the view frustum and in front of the eye
+  uint32_t occluder_candidates = 0;  // objects whose bounding spheres a tested object's rays were checked against
 };
 
 // Amortised visible-fraction estimate. Each update() tests the objects of highest priority (screen
