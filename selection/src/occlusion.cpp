@@ -284,31 +284,41 @@ struct RaysSoA {
   glm::vec3 direction(uint32_t k) const { return {dx[k], dy[k], dz[k]}; }
 };
 
-// Closest hits of the first `lanes` rays with object `id` drawn as `proto`, from t_near on, as one
-// packet (the rays of one test share the object, so they are coherent). Returns a bit mask of the
-// rays that hit; t_hit[k] is the hit distance of ray k.
-uint32_t intersectPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t lanes,
-                         float t_near, float* t_hit) {
+// Fills a 16-ray packet with the rays in `mask` taken into object `id`'s space, each over
+// [t_near, t_far[k]] (t_far null: unbounded); the others are invalid.
+void fillPacket(const RayScene::Impl& m, uint32_t id, const RaysSoA& rays, uint32_t mask, float t_near,
+                const float* t_far, int* valid, RTCRay16& ray) {
   const glm::mat4& inv = m.inverse_world[id];
-  alignas(64) int valid[kChunk];
-  alignas(64) RTCRayHit16 rh;
   for (uint32_t k = 0; k < kChunk; ++k) {
-    valid[k] = k < lanes ? -1 : 0;
-    const uint32_t j = k < lanes ? k : 0;
+    const bool on = (mask >> k & 1u) != 0;
+    valid[k] = on ? -1 : 0;
+    const uint32_t j = on ? k : static_cast<uint32_t>(__builtin_ctz(mask));
     const glm::vec3 o(inv * glm::vec4(rays.ox[j], rays.oy[j], rays.oz[j], 1.0f));
     const glm::vec3 d(inv * glm::vec4(rays.dx[j], rays.dy[j], rays.dz[j], 0.0f));
-    rh.ray.org_x[k] = o.x;
-    rh.ray.org_y[k] = o.y;
-    rh.ray.org_z[k] = o.z;
-    rh.ray.dir_x[k] = d.x;
-    rh.ray.dir_y[k] = d.y;
-    rh.ray.dir_z[k] = d.z;
-    rh.ray.tnear[k] = t_near;
-    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
-    rh.ray.time[k] = 0.0f;
-    rh.ray.mask[k] = 0xFFFFFFFFu;
-    rh.ray.id[k] = k;
-    rh.ray.flags[k] = 0;
+    ray.org_x[k] = o.x;
+    ray.org_y[k] = o.y;
+    ray.org_z[k] = o.z;
+    ray.dir_x[k] = d.x;
+    ray.dir_y[k] = d.y;
+    ray.dir_z[k] = d.z;
+    ray.tnear[k] = t_near;
+    ray.tfar[k] = t_far ? t_far[j] : std::numeric_limits<float>::infinity();
+    ray.time[k] = 0.0f;
+    ray.mask[k] = 0xFFFFFFFFu;
+    ray.id[k] = k;
+    ray.flags[k] = 0;
+  }
+}
+
+// Closest hits of the rays in `mask` (not empty) with object `id` drawn as `proto`, over
+// [t_near, t_far[k]] (t_far null: unbounded), as one packet (the rays of one test are coherent).
+// Returns the mask of the rays that hit; t_hit[k] is the hit distance of ray k.
+uint32_t intersectPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t mask,
+                         float t_near, const float* t_far, float* t_hit) {
+  alignas(64) int valid[kChunk];
+  alignas(64) RTCRayHit16 rh;
+  fillPacket(m, id, rays, mask, t_near, t_far, valid, rh.ray);
+  for (uint32_t k = 0; k < kChunk; ++k) {
     rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
   }
@@ -317,11 +327,28 @@ uint32_t intersectPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, c
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   rtcIntersect16(valid, proto, &ctx, &rh);
   uint32_t hits = 0;
-  for (uint32_t k = 0; k < lanes; ++k) {
-    if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+  for (uint32_t k = 0; k < kChunk; ++k) {
+    if (!(mask >> k & 1u) || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
     hits |= 1u << k;
     t_hit[k] = rh.ray.tfar[k];
   }
+  return hits;
+}
+
+// Any hits of the rays in `mask` (not empty) with object `id` drawn as `proto`, each over
+// [t_near, t_far[k]], as one packet. Returns the mask of the rays that hit.
+uint32_t occludedPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t mask,
+                        float t_near, const float* t_far) {
+  alignas(64) int valid[kChunk];
+  alignas(64) RTCRay16 ray;
+  fillPacket(m, id, rays, mask, t_near, t_far, valid, ray);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcOccluded16(valid, proto, &ctx, &ray);
+  uint32_t hits = 0;
+  for (uint32_t k = 0; k < kChunk; ++k)
+    if ((mask >> k & 1u) && ray.tfar[k] < 0.0f && std::isinf(ray.tfar[k])) hits |= 1u << k;
   return hits;
 }
 
@@ -337,6 +364,7 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
   const ChainPrototypes& op = m.chains[m.chain[other]];
   RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
   const float e = m.occluder_error_world[other];
+  uint32_t trusted = 0, checked = 0;  // rays for an any-hit query, rays whose closest hit is checked
   for (uint32_t left = active; left != 0; left &= left - 1) {
     const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
     const float ocx = sp.x - rays.ox[k], ocy = sp.y - rays.oy[k], ocz = sp.z - rays.oz[k];
@@ -346,17 +374,35 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
     const float half = std::sqrt(r2 - miss2);
     const float t_enter = std::max(along - half, t_near), t_exit = std::min(along + half, t_end[k]);
     if (t_enter > t_exit) continue;
-    bool blocked = false;
     if (e <= limit(t_enter)) {
-      // every hit in the sphere is trusted
-      blocked = occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k]);
+      trusted |= 1u << k;  // every hit in the sphere is trusted
     } else if (e <= limit(t_exit)) {
-      // trusted only beyond some distance: find the hit and check it
-      float t_hit = t_end[k];
-      blocked = intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit) &&
-                e <= limit(t_hit);
+      checked |= 1u << k;  // trusted only beyond some distance: find the hit and check it
     }
-    if (blocked) active &= ~(1u << k);
+  }
+  if (trusted != 0) {
+    if ((trusted & (trusted - 1)) == 0) {
+      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(trusted));
+      if (!occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k])) trusted = 0;
+    } else {
+      trusted = occludedPacket(m, other, occluder, rays, trusted, t_near, t_end);
+    }
+    active &= ~trusted;
+  }
+  if (checked != 0) {
+    float t_hit[kChunk];
+    uint32_t hits;
+    if ((checked & (checked - 1)) == 0) {
+      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(checked));
+      t_hit[k] = t_end[k];
+      hits = intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit[k]) ? checked : 0;
+    } else {
+      hits = intersectPacket(m, other, occluder, rays, checked, t_near, t_end, t_hit);
+    }
+    for (uint32_t left = hits; left != 0; left &= left - 1) {
+      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+      if (e <= limit(t_hit[k])) active &= ~(1u << k);
+    }
   }
   return active;
 }
@@ -540,7 +586,8 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
       }
       // where each ray meets the object itself, at its occluder level: one coherent packet
       float t_self[kChunk];
-      const uint32_t self_hits = intersectPacket(m, id, self_scene, rays, lanes, t_near, t_self);
+      const uint32_t self_hits =
+          intersectPacket(m, id, self_scene, rays, (1u << lanes) - 1u, t_near, nullptr, t_self);
       counted += static_cast<uint32_t>(__builtin_popcount(self_hits));
       // rays outside the object's silhouette are not counted; the others are open until blocked
       uint32_t active = 0;
