@@ -413,6 +413,8 @@ struct OcclusionEstimator::State {
   OcclusionParams params;
   size_t max_objects = 0;
   uint64_t frame = 0;
+  // the disc pattern, rays_per_test entries: sqrt((k + 0.5) / n), cos and sin of k * golden angle
+  std::vector<glm::vec3> pattern;
   OcclusionStats stats;
   // per id, read by the priority pass every frame
   std::vector<float> r_px;                    // 4 B: projected radius this frame (-1 outside, inf eye inside)
@@ -440,6 +442,12 @@ Error OcclusionEstimator::init(size_t max_objects, const OcclusionParams& params
   s = State();
   s.params = params;
   s.max_objects = max_objects;
+  s.pattern.resize(params.rays_per_test);
+  for (uint32_t k = 0; k < params.rays_per_test; ++k) {
+    const float th = static_cast<float>(k) * kGoldenAngle;
+    s.pattern[k] = glm::vec3(std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(params.rays_per_test)),
+                             std::cos(th), std::sin(th));
+  }
   s.r_px.assign(max_objects, -1.0f);
   s.age_origin.assign(max_objects, 0);
   s.seen_generation.assign(max_objects, kNever);
@@ -523,6 +531,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   const float t_near = view.near_plane;
 
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
+  const float cos_rot = std::cos(rotation), sin_rot = std::sin(rotation);
   // test in screen order (a Morton code of the centre's view direction), so consecutive beams cross
   // the same tree nodes and those stay in cache
   for (size_t c = 0; c < test_count; ++c) {
@@ -561,8 +570,11 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     beam.axis = w;
     beam.finish();
     const glm::vec3 ref = std::fabs(glm::dot(w, view.up)) < 0.9f ? view.up : view.right;
-    const glm::vec3 u = glm::normalize(glm::cross(w, ref));
-    const glm::vec3 v = glm::cross(u, w);
+    const glm::vec3 u0 = glm::normalize(glm::cross(w, ref));
+    const glm::vec3 v0 = glm::cross(u0, w);
+    // the frame's rotation of the pattern, applied to the disc's axes
+    const glm::vec3 u = cos_rot * u0 + sin_rot * v0;
+    const glm::vec3 v = cos_rot * v0 - sin_rot * u0;
 
 
     uint32_t counted = 0, hidden = 0;
@@ -571,9 +583,8 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
       RaysSoA rays;
       for (uint32_t k = 0; k < lanes; ++k) {
         const uint32_t sample = k0 + k;
-        const float rho = disc_r * std::sqrt((static_cast<float>(sample) + 0.5f) / static_cast<float>(n));
-        const float th = static_cast<float>(sample) * kGoldenAngle + rotation;
-        const glm::vec3 p = center + rho * (std::cos(th) * u + std::sin(th) * v);
+        const glm::vec3 pat = s.pattern[sample];
+        const glm::vec3 p = center + (disc_r * pat.x) * (pat.y * u + pat.z * v);
         glm::vec3 o, dir;
         if (view.ortho) {
           dir = w;
