@@ -268,7 +268,7 @@ void forEachCandidate(const RayScene::Impl& m, const Beam& beam, uint32_t self, 
     if (take(id)) return;
 }
 
-constexpr uint32_t kChunk = 16;  // rays per packet
+constexpr uint32_t kChunk = 16;  // rays handled together (bit masks of 16)
 
 struct RaysSoA {
   float ox[kChunk], oy[kChunk], oz[kChunk], dx[kChunk], dy[kChunk], dz[kChunk];
@@ -283,74 +283,6 @@ struct RaysSoA {
   glm::vec3 origin(uint32_t k) const { return {ox[k], oy[k], oz[k]}; }
   glm::vec3 direction(uint32_t k) const { return {dx[k], dy[k], dz[k]}; }
 };
-
-// Fills a 16-ray packet with the rays in `mask` taken into object `id`'s space, each over
-// [t_near, t_far[k]] (t_far null: unbounded); the others are invalid.
-void fillPacket(const RayScene::Impl& m, uint32_t id, const RaysSoA& rays, uint32_t mask, float t_near,
-                const float* t_far, int* valid, RTCRay16& ray) {
-  const glm::mat4& inv = m.inverse_world[id];
-  for (uint32_t k = 0; k < kChunk; ++k) {
-    const bool on = (mask >> k & 1u) != 0;
-    valid[k] = on ? -1 : 0;
-    const uint32_t j = on ? k : static_cast<uint32_t>(__builtin_ctz(mask));
-    const glm::vec3 o(inv * glm::vec4(rays.ox[j], rays.oy[j], rays.oz[j], 1.0f));
-    const glm::vec3 d(inv * glm::vec4(rays.dx[j], rays.dy[j], rays.dz[j], 0.0f));
-    ray.org_x[k] = o.x;
-    ray.org_y[k] = o.y;
-    ray.org_z[k] = o.z;
-    ray.dir_x[k] = d.x;
-    ray.dir_y[k] = d.y;
-    ray.dir_z[k] = d.z;
-    ray.tnear[k] = t_near;
-    ray.tfar[k] = t_far ? t_far[j] : std::numeric_limits<float>::infinity();
-    ray.time[k] = 0.0f;
-    ray.mask[k] = 0xFFFFFFFFu;
-    ray.id[k] = k;
-    ray.flags[k] = 0;
-  }
-}
-
-// Closest hits of the rays in `mask` (not empty) with object `id` drawn as `proto`, over
-// [t_near, t_far[k]] (t_far null: unbounded), as one packet (the rays of one test are coherent).
-// Returns the mask of the rays that hit; t_hit[k] is the hit distance of ray k.
-uint32_t intersectPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t mask,
-                         float t_near, const float* t_far, float* t_hit) {
-  alignas(64) int valid[kChunk];
-  alignas(64) RTCRayHit16 rh;
-  fillPacket(m, id, rays, mask, t_near, t_far, valid, rh.ray);
-  for (uint32_t k = 0; k < kChunk; ++k) {
-    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-  }
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, proto, &ctx, &rh);
-  uint32_t hits = 0;
-  for (uint32_t k = 0; k < kChunk; ++k) {
-    if (!(mask >> k & 1u) || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-    hits |= 1u << k;
-    t_hit[k] = rh.ray.tfar[k];
-  }
-  return hits;
-}
-
-// Any hits of the rays in `mask` (not empty) with object `id` drawn as `proto`, each over
-// [t_near, t_far[k]], as one packet. Returns the mask of the rays that hit.
-uint32_t occludedPacket(const RayScene::Impl& m, uint32_t id, RTCScene proto, const RaysSoA& rays, uint32_t mask,
-                        float t_near, const float* t_far) {
-  alignas(64) int valid[kChunk];
-  alignas(64) RTCRay16 ray;
-  fillPacket(m, id, rays, mask, t_near, t_far, valid, ray);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcOccluded16(valid, proto, &ctx, &ray);
-  uint32_t hits = 0;
-  for (uint32_t k = 0; k < kChunk; ++k)
-    if ((mask >> k & 1u) && ray.tfar[k] < 0.0f && std::isinf(ray.tfar[k])) hits |= 1u << k;
-  return hits;
-}
 
 // Tests the rays in `active` (bit k = ray k) against object `other`'s occluder level, each within
 // [t_near, t_end[k]], first against its bounding sphere; returns `active` without the rays it
@@ -380,29 +312,17 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
       checked |= 1u << k;  // trusted only beyond some distance: find the hit and check it
     }
   }
-  if (trusted != 0) {
-    if ((trusted & (trusted - 1)) == 0) {
-      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(trusted));
-      if (!occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k])) trusted = 0;
-    } else {
-      trusted = occludedPacket(m, other, occluder, rays, trusted, t_near, t_end);
-    }
-    active &= ~trusted;
+  // one Embree call per ray: 16-ray packets (rtcOccluded16 / rtcIntersect16 with the rays that
+  // reach this object) measured no faster here (docs/bench/visibility.md)
+  for (uint32_t left = trusted; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    if (occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k])) active &= ~(1u << k);
   }
-  if (checked != 0) {
-    float t_hit[kChunk];
-    uint32_t hits;
-    if ((checked & (checked - 1)) == 0) {
-      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(checked));
-      t_hit[k] = t_end[k];
-      hits = intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit[k]) ? checked : 0;
-    } else {
-      hits = intersectPacket(m, other, occluder, rays, checked, t_near, t_end, t_hit);
-    }
-    for (uint32_t left = hits; left != 0; left &= left - 1) {
-      const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
-      if (e <= limit(t_hit[k])) active &= ~(1u << k);
-    }
+  for (uint32_t left = checked; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    float t_hit = t_end[k];
+    if (intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit) && e <= limit(t_hit))
+      active &= ~(1u << k);
   }
   return active;
 }
@@ -595,10 +515,13 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
         }
         rays.set(k, o, dir);
       }
-      // where each ray meets the object itself, at its occluder level: one coherent packet
+      // where each ray meets the object itself, at its occluder level (a 16-ray packet was slower)
       float t_self[kChunk];
-      const uint32_t self_hits =
-          intersectPacket(m, id, self_scene, rays, (1u << lanes) - 1u, t_near, nullptr, t_self);
+      uint32_t self_hits = 0;
+      for (uint32_t k = 0; k < lanes; ++k) {
+        t_self[k] = std::numeric_limits<float>::infinity();
+        if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
+      }
       counted += static_cast<uint32_t>(__builtin_popcount(self_hits));
       // rays outside the object's silhouette are not counted; the others are open until blocked
       uint32_t active = 0;
