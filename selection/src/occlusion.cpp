@@ -23,6 +23,13 @@ constexpr float kGoldenAngle = 2.39996323f;  // pi * (3 - sqrt(5))
 constexpr uint32_t kNever = 0;  // generations of live objects start at 1
 // radix selection of the highest priorities: buckets over the top bits of the (positive) float
 constexpr int kBucketShift = 18;
+
+// Number of set bits (SWAR: no library call on targets without a popcount instruction).
+inline uint32_t bitCount(uint32_t v) {
+  v = v - ((v >> 1) & 0x55555555u);
+  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+  return (((v + (v >> 4)) & 0x0F0F0F0Fu) * 0x01010101u) >> 24;
+}
 constexpr size_t kBuckets = size_t(1) << (32 - kBucketShift);
 
 // Accepted world-space error of an occluder hit at ray parameter t: const + per_t * t, i.e.
@@ -84,16 +91,59 @@ inline float projectRadius(const View& v, const glm::vec4& s, bool live) {
   return r * v.px_per_unit_at_1 / std::sqrt(dist2);
 }
 
-// projectRadius of every id into r_px. With SSE2, four spheres at a time without branches (the
-// same operations in the same order, so the results are bit-identical to the scalar path).
-void projectRadii(const View& v, const glm::vec4* spheres, const uint8_t* live, size_t count, float* r_px) {
-  size_t i = 0;
+// Columns the priority pass reads and writes (object side and estimator side).
+struct PriorityColumns {
+  const glm::vec4* spheres;
+  const uint8_t* live;
+  const uint32_t* generation;
+  uint32_t* seen_generation;
+  uint32_t* age_origin;
+  float* priority;
+  // eye inside the sphere: the object reads as tested now and visible
+  float* visible;
+  uint64_t* tested_frame;
+  uint32_t* tested_generation;
+};
+
+// The per-object rule of the priority pass, given its projected radius (see projectRadius):
+// returns its priority, or -1 when it is not a candidate.
+inline float prioritize(const PriorityColumns& c, size_t id, float r_px, uint64_t frame, uint32_t untested_origin) {
+  if (!(r_px >= 0.0f)) return -1.0f;
+  const uint32_t gen = c.generation[id];
+  const uint32_t frame32 = static_cast<uint32_t>(frame);
+  if (std::isinf(r_px)) {
+    c.visible[id] = 1.0f;
+    c.tested_frame[id] = frame;
+    c.tested_generation[id] = gen;
+    c.age_origin[id] = frame32;
+    c.seen_generation[id] = gen;
+    return -1.0f;
+  }
+  if (c.seen_generation[id] != gen) {
+    // first frame this object (generation) is a candidate: it counts as tested untested_age_frames
+    // ago; a test sets the origin to the test's frame
+    c.seen_generation[id] = gen;
+    c.age_origin[id] = untested_origin;
+  }
+  const float age = static_cast<float>(static_cast<int32_t>(frame32 - c.age_origin[id]));
+  return (1.0f + std::min(r_px, OcclusionEstimator::kMaxPriorityRadiusPx)) * age;
+}
+
+// Writes every id's priority (-1 when not a candidate) and returns the number of candidates. With
+// SSE2 (perspective cameras), four objects at a time without branches except for the rare objects
+// whose eye-inside or first-seen state must be written, which take the scalar rule; the results
+// are the scalar rule's, bit for bit.
+size_t priorityPass(const View& v, const PriorityColumns& c, size_t count, uint64_t frame, uint32_t untested_age) {
+  const uint32_t untested_origin = static_cast<uint32_t>(frame) - untested_age;  // wraps: ages are differences
+  size_t i = 0, candidates = 0;
 #if defined(__SSE2__)
   if (!v.ortho) {
     const __m128 ex = _mm_set1_ps(v.eye.x), ey = _mm_set1_ps(v.eye.y), ez = _mm_set1_ps(v.eye.z);
     const __m128 fx = _mm_set1_ps(v.forward.x), fy = _mm_set1_ps(v.forward.y), fz = _mm_set1_ps(v.forward.z);
     const __m128 near_plane = _mm_set1_ps(v.near_plane), ppu = _mm_set1_ps(v.px_per_unit_at_1);
-    const __m128 minus_one = _mm_set1_ps(-1.0f), inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 minus_one = _mm_set1_ps(-1.0f), one = _mm_set1_ps(1.0f);
+    const __m128 max_r_px = _mm_set1_ps(OcclusionEstimator::kMaxPriorityRadiusPx);
+    const __m128i frame32 = _mm_set1_epi32(static_cast<int>(static_cast<uint32_t>(frame)));
     const __m128 zero = _mm_setzero_ps();
     __m128 nx[4], ny[4], nz[4];
     for (int k = 0; k < 4; ++k) {
@@ -102,13 +152,13 @@ void projectRadii(const View& v, const glm::vec4* spheres, const uint8_t* live, 
       nz[k] = _mm_set1_ps(v.side[k].z);
     }
     for (; i + 4 <= count; i += 4) {
-      __m128 x = _mm_loadu_ps(&spheres[i].x), y = _mm_loadu_ps(&spheres[i + 1].x);
-      __m128 z = _mm_loadu_ps(&spheres[i + 2].x), r = _mm_loadu_ps(&spheres[i + 3].x);
+      __m128 x = _mm_loadu_ps(&c.spheres[i].x), y = _mm_loadu_ps(&c.spheres[i + 1].x);
+      __m128 z = _mm_loadu_ps(&c.spheres[i + 2].x), r = _mm_loadu_ps(&c.spheres[i + 3].x);
       _MM_TRANSPOSE4_PS(x, y, z, r);
       const __m128 dx = _mm_sub_ps(x, ex), dy = _mm_sub_ps(y, ey), dz = _mm_sub_ps(z, ez);
       const __m128 depth = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, fx), _mm_mul_ps(dy, fy)), _mm_mul_ps(dz, fz));
       uint32_t live4;
-      std::memcpy(&live4, live + i, 4);
+      std::memcpy(&live4, c.live + i, 4);
       const __m128i live_bytes = _mm_cvtsi32_si128(static_cast<int>(live4));
       const __m128i live_words = _mm_unpacklo_epi16(_mm_unpacklo_epi8(live_bytes, _mm_setzero_si128()), _mm_setzero_si128());
       __m128 in = _mm_castsi128_ps(_mm_cmpgt_epi32(live_words, _mm_setzero_si128()));
@@ -118,38 +168,100 @@ void projectRadii(const View& v, const glm::vec4* spheres, const uint8_t* live, 
         const __m128 dn = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, nx[k]), _mm_mul_ps(dy, ny[k])), _mm_mul_ps(dz, nz[k]));
         in = _mm_and_ps(in, _mm_cmpge_ps(dn, minus_r));
       }
+      const int in_mask = _mm_movemask_ps(in);
+      if (in_mask == 0) {
+        _mm_storeu_ps(c.priority + i, minus_one);
+        continue;
+      }
       const __m128 dist2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
       const __m128 inside = _mm_cmple_ps(dist2, _mm_mul_ps(r, r));
       const __m128 px = _mm_div_ps(_mm_mul_ps(r, ppu), _mm_sqrt_ps(dist2));
-      const __m128 value = _mm_or_ps(_mm_and_ps(inside, inf), _mm_andnot_ps(inside, px));
-      _mm_storeu_ps(r_px + i, _mm_or_ps(_mm_and_ps(in, value), _mm_andnot_ps(in, minus_one)));
+      const __m128i same_gen = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c.generation + i)),
+                                               _mm_loadu_si128(reinterpret_cast<const __m128i*>(c.seen_generation + i)));
+      const int special = in_mask & (_mm_movemask_ps(inside) | (~_mm_movemask_ps(_mm_castsi128_ps(same_gen)) & 15));
+      if (special != 0) {
+        // eye inside a sphere or a first sighting: the scalar rule writes that object's state
+        float px_lanes[4], prio[4];
+        _mm_storeu_ps(px_lanes, px);
+        const int inside_mask = _mm_movemask_ps(inside);
+        for (int k = 0; k < 4; ++k) {
+          const float r_px = (in_mask >> k & 1) ? ((inside_mask >> k & 1) ? std::numeric_limits<float>::infinity() : px_lanes[k]) : -1.0f;
+          prio[k] = prioritize(c, i + static_cast<size_t>(k), r_px, frame, untested_origin);
+          candidates += prio[k] >= 0.0f ? 1 : 0;
+        }
+        _mm_storeu_ps(c.priority + i, _mm_loadu_ps(prio));
+        continue;
+      }
+      const __m128i origin = _mm_loadu_si128(reinterpret_cast<const __m128i*>(c.age_origin + i));
+      const __m128 age = _mm_cvtepi32_ps(_mm_sub_epi32(frame32, origin));
+      const __m128 prio = _mm_mul_ps(_mm_add_ps(one, _mm_min_ps(px, max_r_px)), age);
+      _mm_storeu_ps(c.priority + i, _mm_or_ps(_mm_and_ps(in, prio), _mm_andnot_ps(in, minus_one)));
+      candidates += bitCount(static_cast<uint32_t>(in_mask));
     }
   }
 #endif
-  for (; i < count; ++i) r_px[i] = projectRadius(v, spheres[i], live[i] != 0);
+  for (; i < count; ++i) {
+    c.priority[i] = prioritize(c, i, projectRadius(v, c.spheres[i], c.live[i] != 0), frame, untested_origin);
+    candidates += c.priority[i] >= 0.0f ? 1 : 0;
+  }
+  return candidates;
 }
 
-// Moves the `k` largest of keys[0, count) to the front (in no particular order), 0 < k < count: a
-// histogram over the top bits finds the bucket holding the k-th largest key, keys of the buckets
-// above are taken whole, and only that bucket is ordered. Keys are distinct (the low half is the
+uint32_t floatBits(float f) {
+  uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  return b;
+}
+
+// Writes to keys[0, k) the k candidates of highest priority (ties: lower id first) as
+// (priority bits << 32 | ~id), in no particular order; 0 < k <= candidate count. A histogram over
+// the top bits of the priorities finds the bucket holding the k-th largest key, the buckets above
+// are taken whole, and only that bucket's keys are ordered. Keys are distinct (the low half is the
 // id), so the chosen set is the one a full sort would give. O(count); `histogram` holds kBuckets.
-void selectLargest(uint64_t* keys, size_t count, size_t k, uint32_t* histogram) {
-  std::fill(histogram, histogram + kBuckets, 0u);
-  for (size_t i = 0; i < count; ++i) ++histogram[keys[i] >> (32 + kBucketShift)];
+void chooseLargest(const float* priority, size_t count, size_t k, size_t candidates, uint32_t* histogram,
+                   uint64_t* keys) {
+  // keys with bits >= take_bits go first; keys with bits in [order_bits, take_bits) are ordered
+  uint32_t take_bits = 0, order_bits = 0;
   size_t above = 0;
-  size_t bucket = kBuckets;
-  while (bucket-- > 0) {
-    if (above + histogram[bucket] >= k) break;
-    above += histogram[bucket];
+  if (k < candidates) {
+    std::fill(histogram, histogram + kBuckets, 0u);
+    for (size_t i = 0; i < count; ++i)
+      if (priority[i] >= 0.0f) ++histogram[floatBits(priority[i]) >> kBucketShift];
+    size_t bucket = kBuckets;
+    while (bucket-- > 0) {
+      if (above + histogram[bucket] >= k) break;
+      above += histogram[bucket];
+    }
+    order_bits = static_cast<uint32_t>(bucket) << kBucketShift;
+    take_bits = bucket + 1 < kBuckets ? static_cast<uint32_t>(bucket + 1) << kBucketShift : 0xFFFFFFFFu;
   }
-  // partition: keys of higher buckets first, then the boundary bucket's keys
-  size_t front = 0;
-  for (size_t i = 0; i < count; ++i)
-    if ((keys[i] >> (32 + kBucketShift)) > bucket) std::swap(keys[i], keys[front++]);
-  size_t end = front;
-  for (size_t i = front; i < count; ++i)
-    if ((keys[i] >> (32 + kBucketShift)) == bucket) std::swap(keys[i], keys[end++]);
-  std::nth_element(keys + front, keys + (k - 1), keys + end, std::greater<uint64_t>());
+  // priorities are >= 0 for candidates, so their bits order like the values; -1 fails both tests
+  const float order_from = [&] {
+    float f;
+    std::memcpy(&f, &order_bits, sizeof f);
+    return f;
+  }();
+  size_t front = 0, back = above;
+  auto place = [&](size_t i) {
+    const uint32_t bits = floatBits(priority[i]);
+    const uint64_t key = (uint64_t(bits) << 32) | ~static_cast<uint32_t>(i);
+    if (bits >= take_bits) {
+      keys[front++] = key;
+    } else {
+      keys[back++] = key;
+    }
+  };
+  size_t i = 0;
+#if defined(__SSE2__)
+  const __m128 from = _mm_set1_ps(order_from);
+  for (; i + 4 <= count; i += 4) {
+    const int mask = _mm_movemask_ps(_mm_cmpge_ps(_mm_loadu_ps(priority + i), from));
+    for (int m = mask; m != 0; m &= m - 1) place(i + static_cast<size_t>(__builtin_ctz(static_cast<unsigned>(m))));
+  }
+#endif
+  for (; i < count; ++i)
+    if (priority[i] >= order_from) place(i);
+  if (k < candidates) std::nth_element(keys + above, keys + (k - 1), keys + back, std::greater<uint64_t>());
 }
 
 // Interleaves the low 16 bits of x and y (Morton order).
@@ -337,16 +449,16 @@ struct OcclusionEstimator::State {
   std::vector<glm::vec3> pattern;
   OcclusionStats stats;
   // per id, read by the priority pass every frame
-  std::vector<float> r_px;                    // 4 B: projected radius this frame (-1 outside, inf eye inside)
-  std::vector<uint64_t> age_origin;           // 8 B: age = frame - age_origin (the test's frame, or first
-                                              //      seen minus untested_age_frames)
+  std::vector<float> priority;                // 4 B: this frame's priority, -1 when not a candidate
+  std::vector<uint32_t> age_origin;           // 4 B: age = frame - age_origin (low 32 bits of the frame
+                                              //      of the test, or of first seen minus untested_age_frames)
   std::vector<uint32_t> seen_generation;      // 4 B: object generation age_origin belongs to (kNever = none)
   // per id, read by the output pass and the queries
   std::vector<float> visible;                 // 4 B: latest estimate
   std::vector<uint64_t> tested_frame;         // 8 B: frame of that estimate
   std::vector<uint32_t> tested_generation;    // 4 B: object generation it belongs to (kNever = none)
   // scratch: candidates as (priority bits << 32 | ~id), so one integer order is "priority down, id up"
-  std::vector<uint64_t> keys;
+  std::vector<uint64_t> keys;                 // the chosen objects, then (screen code << 32 | id)
   std::vector<uint32_t> histogram;            // kBuckets counters over the top bits of the priority
 };
 
@@ -368,7 +480,7 @@ Error OcclusionEstimator::init(size_t max_objects, const OcclusionParams& params
     s.pattern[k] = glm::vec3(std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(params.rays_per_test)),
                              std::cos(th), std::sin(th));
   }
-  s.r_px.assign(max_objects, -1.0f);
+  s.priority.assign(max_objects, -1.0f);
   s.age_origin.assign(max_objects, 0);
   s.seen_generation.assign(max_objects, kNever);
   s.visible.assign(max_objects, 1.0f);
@@ -395,51 +507,23 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   s.stats = OcclusionStats();
   const View view = makeView(camera);
 
-  // priority pass, part 1: projected radius of every id (branch-free, no state written but r_px)
-  projectRadii(view, m.world_sphere.data(), m.live.data(), cap, s.r_px.data());
-
-  // part 2: candidates with their priority keys (columns through locals: the key stores could
-  // otherwise alias them and force reloads)
-  size_t cand_count = 0;
-  {
-    const uint64_t frame = s.frame;
-    const uint64_t untested_origin = frame - s.params.untested_age_frames;  // wraps below 0: fine, ages are differences
-    const float* r_px_col = s.r_px.data();
-    const uint32_t* gen_col = m.generation.data();
-    uint32_t* seen_col = s.seen_generation.data();
-    uint64_t* origin_col = s.age_origin.data();
-    uint64_t* keys = s.keys.data();
-    for (size_t id = 0; id < cap; ++id) {
-      const float r_px = r_px_col[id];
-      if (!(r_px >= 0.0f)) continue;
-      const uint32_t gen = gen_col[id];
-      if (std::isinf(r_px)) {
-        // the eye is inside the bounding sphere: count the object as visible, as measured now
-        s.visible[id] = 1.0f;
-        s.tested_frame[id] = frame;
-        s.tested_generation[id] = gen;
-        origin_col[id] = frame;
-        seen_col[id] = gen;
-        continue;
-      }
-      if (seen_col[id] != gen) {
-        // first frame this object (generation) is a candidate: it counts as tested untested_age_frames
-        // ago; a test sets the origin to the test's frame
-        seen_col[id] = gen;
-        origin_col[id] = untested_origin;
-      }
-      const float age = static_cast<float>(static_cast<int64_t>(frame - origin_col[id]));
-      const float priority = (1.0f + std::min(r_px, kMaxPriorityRadiusPx)) * age;
-      uint32_t bits;
-      std::memcpy(&bits, &priority, sizeof bits);
-      keys[cand_count++] = (uint64_t(bits) << 32) | ~static_cast<uint32_t>(id);
-    }
-  }
+  // priority pass: every id's priority, then the budget's worth of the highest
+  PriorityColumns cols;
+  cols.spheres = m.world_sphere.data();
+  cols.live = m.live.data();
+  cols.generation = m.generation.data();
+  cols.seen_generation = s.seen_generation.data();
+  cols.age_origin = s.age_origin.data();
+  cols.priority = s.priority.data();
+  cols.visible = s.visible.data();
+  cols.tested_frame = s.tested_frame.data();
+  cols.tested_generation = s.tested_generation.data();
+  const size_t cand_count = priorityPass(view, cols, cap, s.frame, s.params.untested_age_frames);
   s.stats.candidates = static_cast<uint32_t>(cand_count);
 
   const uint32_t n = s.params.rays_per_test;
   const size_t test_count = std::min<size_t>(cand_count, s.params.ray_budget / n);
-  if (test_count > 0 && test_count < cand_count) selectLargest(s.keys.data(), cand_count, test_count, s.histogram.data());
+  if (test_count > 0) chooseLargest(s.priority.data(), cap, test_count, cand_count, s.histogram.data(), s.keys.data());
 
   ErrorLimit limit;
   const float err_px = m.params.occluder_error_px;
@@ -522,7 +606,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
         t_self[k] = std::numeric_limits<float>::infinity();
         if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
       }
-      counted += static_cast<uint32_t>(__builtin_popcount(self_hits));
+      counted += bitCount(self_hits);
       // rays outside the object's silhouette are not counted; the others are open until blocked
       uint32_t active = 0;
       float t_end[kChunk];
@@ -542,7 +626,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
           active = blockRays(m, other, rays, active, t_end, t_near, limit);
           return active == 0;
         });
-      hidden += static_cast<uint32_t>(__builtin_popcount(open & ~active));
+      hidden += bitCount(open & ~active);
     }
     s.stats.samples += n;
     s.stats.self_hits += counted;
@@ -550,7 +634,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     s.visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
     s.tested_frame[id] = s.frame;
     s.tested_generation[id] = m.generation[id];
-    s.age_origin[id] = s.frame;
+    s.age_origin[id] = static_cast<uint32_t>(s.frame);
   }
 
   if (visible_fraction.count) {

@@ -207,7 +207,9 @@ class OcclusionEstimator {
   bool validate(const RayScene& scene, Span<float> visible_fraction) const;
   // One frame: tests the highest-priority objects within the budget, then writes every id's estimate
   // (1 for untested and free ids) into visible_fraction (may be empty). Returns false (doing nothing)
-  // when validate() fails. Precondition: scene committed. No allocation; O(objects + budget * log).
+  // when validate() fails. Precondition: scene committed. No allocation; O(objects) for the
+  // priority pass plus, per tested object, one walk of the top-level tree with its beam of sample
+  // rays (stopped once every ray is blocked) and up to 2 Embree calls per sample.
   bool update(const RayScene& scene, const Camera& camera, Span<float> visible_fraction);
 
   // Latest estimate of an id (1 when never tested) and how many update() calls ago it was measured
