@@ -298,8 +298,9 @@ uint32_t screenCode(const View& v, const glm::vec3& p) {
 }
 
 // The rays of one test (perspective: a cone from the eye around the axis to the object's centre,
-// half-angle asin(r / D); orthographic: a cylinder of radius r along the view direction), as far as
-// t_end (the far side of the object's bounding sphere, beyond which nothing can hide it).
+// half-angle asin(r / D); orthographic: a cylinder of radius r along the view direction through the
+// object's centre, from the eye's plane), as far as t_end (the far side of the object's bounding
+// sphere, beyond which nothing can hide it).
 struct Beam {
   glm::vec3 apex{0.0f}, axis{0.0f};
   bool ortho = false;
@@ -558,9 +559,11 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     beam.ortho = view.ortho;
     beam.t_near = t_near;
     if (view.ortho) {
+      // parallel rays from the eye's plane: the beam's axis is the object's own line of sight
       w = view.forward;
+      beam.apex = center - w * glm::dot(center - view.eye, w);
       beam.radius = r;
-      beam.t_end = glm::dot(center - view.eye, w) + r;
+      beam.t_end = glm::dot(center - beam.apex, w) + r;
     } else {
       const glm::vec3 d = center - view.eye;
       const float dist = glm::length(d);
