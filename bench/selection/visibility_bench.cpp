@@ -121,13 +121,14 @@ void BM_OcclusionFrame(benchmark::State& state) {
   p.ray_budget = static_cast<uint32_t>(state.range(1));
   est.init(n, p);
   std::vector<float> vis(n);
-  uint64_t samples = 0, occlusion_rays = 0, self_hits = 0, tested = 0;
+  uint64_t samples = 0, occlusion_rays = 0, self_hits = 0, tested = 0, occluder_candidates = 0;
   for (auto _ : state) {
     est.update(*rs, g.camera, Span<float>(vis));
     samples += est.lastStats().samples;
     occlusion_rays += est.lastStats().occlusion_rays;
     self_hits += est.lastStats().self_hits;
     tested += est.lastStats().objects_tested;
+    occluder_candidates += est.lastStats().occluder_candidates;
     benchmark::DoNotOptimize(vis.data());
   }
   size_t hidden = 0;
@@ -139,6 +140,7 @@ void BM_OcclusionFrame(benchmark::State& state) {
   state.counters["objects_tested/frame"] =
       static_cast<double>(tested) / static_cast<double>(std::max<int64_t>(state.iterations(), 1));
   state.counters["candidates"] = est.lastStats().candidates;
+  state.counters["occluders/test"] = tested ? static_cast<double>(occluder_candidates) / static_cast<double>(tested) : 0.0;
   state.counters["hidden_share_end"] = static_cast<double>(hidden) / static_cast<double>(n);
 }
 BENCHMARK(BM_OcclusionFrame)

@@ -3,10 +3,16 @@
 // equal-area rings, facing the camera over the object's bounding-sphere footprint.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
 
 #include "ray_scene_impl.h"
 
@@ -15,6 +21,16 @@ namespace {
 
 constexpr float kGoldenAngle = 2.39996323f;  // pi * (3 - sqrt(5))
 constexpr uint32_t kNever = 0;  // generations of live objects start at 1
+// radix selection of the highest priorities: buckets over the top bits of the (positive) float
+constexpr int kBucketShift = 18;
+
+// Number of set bits (SWAR: no library call on targets without a popcount instruction).
+inline uint32_t bitCount(uint32_t v) {
+  v = v - ((v >> 1) & 0x55555555u);
+  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+  return (((v + (v >> 4)) & 0x0F0F0F0Fu) * 0x01010101u) >> 24;
+}
+constexpr size_t kBuckets = size_t(1) << (32 - kBucketShift);
 
 // Accepted world-space error of an occluder hit at ray parameter t: const + per_t * t, i.e.
 // occluder_error_px pixels at distance t.
@@ -57,22 +73,371 @@ View makeView(const Camera& c) {
   return v;
 }
 
-// Projected radius in pixels when the sphere is (partly) in the view volume and fully beyond the
-// eye's own position; -1 when outside; +inf when the eye is inside the sphere.
-float projectedRadiusPx(const View& v, const glm::vec4& s) {
+// Projected radius in pixels of sphere i when it is live, (partly) in the view volume and fully
+// beyond the eye's own position; -1 otherwise; +inf when the eye is inside the sphere.
+inline float projectRadius(const View& v, const glm::vec4& s, bool live) {
   const glm::vec3 d = glm::vec3(s) - v.eye;
   const float r = s.w;
   const float depth = glm::dot(d, v.forward);
-  if (depth + r <= v.near_plane) return -1.0f;
+  bool in = live && depth + r > v.near_plane;
   if (v.ortho) {
-    if (std::fabs(glm::dot(d, v.right)) > v.half_w + r || std::fabs(glm::dot(d, v.up)) > v.half_h + r) return -1.0f;
-    return r * v.px_per_unit_at_1;
+    in = in && std::fabs(glm::dot(d, v.right)) <= v.half_w + r && std::fabs(glm::dot(d, v.up)) <= v.half_h + r;
+    return in ? r * v.px_per_unit_at_1 : -1.0f;
   }
-  for (const glm::vec3& n : v.side)
-    if (glm::dot(d, n) < -r) return -1.0f;
+  for (const glm::vec3& n : v.side) in = in && glm::dot(d, n) >= -r;
+  if (!in) return -1.0f;
   const float dist2 = glm::dot(d, d);
   if (dist2 <= r * r) return std::numeric_limits<float>::infinity();
   return r * v.px_per_unit_at_1 / std::sqrt(dist2);
+}
+
+// Columns the priority pass reads and writes (object side and estimator side).
+struct PriorityColumns {
+  const glm::vec4* spheres;
+  const uint8_t* live;
+  const uint32_t* generation;
+  uint32_t* seen_generation;
+  uint32_t* age_origin;
+  float* priority;
+  // eye inside the sphere: the object reads as tested now and visible
+  float* visible;
+  uint64_t* tested_frame;
+  uint32_t* tested_generation;
+};
+
+// The per-object rule of the priority pass, given its projected radius (see projectRadius):
+// returns its priority, or -1 when it is not a candidate.
+inline float prioritize(const PriorityColumns& c, size_t id, float r_px, uint64_t frame, uint32_t untested_origin) {
+  if (!(r_px >= 0.0f)) return -1.0f;
+  const uint32_t gen = c.generation[id];
+  const uint32_t frame32 = static_cast<uint32_t>(frame);
+  if (std::isinf(r_px)) {
+    c.visible[id] = 1.0f;
+    c.tested_frame[id] = frame;
+    c.tested_generation[id] = gen;
+    c.age_origin[id] = frame32;
+    c.seen_generation[id] = gen;
+    return -1.0f;
+  }
+  if (c.seen_generation[id] != gen) {
+    // first frame this object (generation) is a candidate: it counts as tested untested_age_frames
+    // ago; a test sets the origin to the test's frame
+    c.seen_generation[id] = gen;
+    c.age_origin[id] = untested_origin;
+  }
+  const float age = static_cast<float>(static_cast<int32_t>(frame32 - c.age_origin[id]));
+  return (1.0f + std::min(r_px, OcclusionEstimator::kMaxPriorityRadiusPx)) * age;
+}
+
+// Writes every id's priority (-1 when not a candidate) and returns the number of candidates. With
+// SSE2 (perspective cameras), four objects at a time without branches except for the rare objects
+// whose eye-inside or first-seen state must be written, which take the scalar rule; the results
+// are the scalar rule's, bit for bit.
+size_t priorityPass(const View& v, const PriorityColumns& c, size_t count, uint64_t frame, uint32_t untested_age) {
+  const uint32_t untested_origin = static_cast<uint32_t>(frame) - untested_age;  // wraps: ages are differences
+  size_t i = 0, candidates = 0;
+#if defined(__SSE2__)
+  if (!v.ortho) {
+    const __m128 ex = _mm_set1_ps(v.eye.x), ey = _mm_set1_ps(v.eye.y), ez = _mm_set1_ps(v.eye.z);
+    const __m128 fx = _mm_set1_ps(v.forward.x), fy = _mm_set1_ps(v.forward.y), fz = _mm_set1_ps(v.forward.z);
+    const __m128 near_plane = _mm_set1_ps(v.near_plane), ppu = _mm_set1_ps(v.px_per_unit_at_1);
+    const __m128 minus_one = _mm_set1_ps(-1.0f), one = _mm_set1_ps(1.0f);
+    const __m128 max_r_px = _mm_set1_ps(OcclusionEstimator::kMaxPriorityRadiusPx);
+    const __m128i frame32 = _mm_set1_epi32(static_cast<int>(static_cast<uint32_t>(frame)));
+    const __m128 zero = _mm_setzero_ps();
+    __m128 nx[4], ny[4], nz[4];
+    for (int k = 0; k < 4; ++k) {
+      nx[k] = _mm_set1_ps(v.side[k].x);
+      ny[k] = _mm_set1_ps(v.side[k].y);
+      nz[k] = _mm_set1_ps(v.side[k].z);
+    }
+    for (; i + 4 <= count; i += 4) {
+      __m128 x = _mm_loadu_ps(&c.spheres[i].x), y = _mm_loadu_ps(&c.spheres[i + 1].x);
+      __m128 z = _mm_loadu_ps(&c.spheres[i + 2].x), r = _mm_loadu_ps(&c.spheres[i + 3].x);
+      _MM_TRANSPOSE4_PS(x, y, z, r);
+      const __m128 dx = _mm_sub_ps(x, ex), dy = _mm_sub_ps(y, ey), dz = _mm_sub_ps(z, ez);
+      const __m128 depth = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, fx), _mm_mul_ps(dy, fy)), _mm_mul_ps(dz, fz));
+      uint32_t live4;
+      std::memcpy(&live4, c.live + i, 4);
+      const __m128i live_bytes = _mm_cvtsi32_si128(static_cast<int>(live4));
+      const __m128i live_words = _mm_unpacklo_epi16(_mm_unpacklo_epi8(live_bytes, _mm_setzero_si128()), _mm_setzero_si128());
+      __m128 in = _mm_castsi128_ps(_mm_cmpgt_epi32(live_words, _mm_setzero_si128()));
+      in = _mm_and_ps(in, _mm_cmpgt_ps(_mm_add_ps(depth, r), near_plane));
+      const __m128 minus_r = _mm_sub_ps(zero, r);
+      for (int k = 0; k < 4; ++k) {
+        const __m128 dn = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, nx[k]), _mm_mul_ps(dy, ny[k])), _mm_mul_ps(dz, nz[k]));
+        in = _mm_and_ps(in, _mm_cmpge_ps(dn, minus_r));
+      }
+      const int in_mask = _mm_movemask_ps(in);
+      if (in_mask == 0) {
+        _mm_storeu_ps(c.priority + i, minus_one);
+        continue;
+      }
+      const __m128 dist2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128 inside = _mm_cmple_ps(dist2, _mm_mul_ps(r, r));
+      const __m128 px = _mm_div_ps(_mm_mul_ps(r, ppu), _mm_sqrt_ps(dist2));
+      const __m128i same_gen = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c.generation + i)),
+                                               _mm_loadu_si128(reinterpret_cast<const __m128i*>(c.seen_generation + i)));
+      const int special = in_mask & (_mm_movemask_ps(inside) | (~_mm_movemask_ps(_mm_castsi128_ps(same_gen)) & 15));
+      if (special != 0) {
+        // eye inside a sphere or a first sighting: the scalar rule writes that object's state
+        float px_lanes[4], prio[4];
+        _mm_storeu_ps(px_lanes, px);
+        const int inside_mask = _mm_movemask_ps(inside);
+        for (int k = 0; k < 4; ++k) {
+          const float r_px = (in_mask >> k & 1) ? ((inside_mask >> k & 1) ? std::numeric_limits<float>::infinity() : px_lanes[k]) : -1.0f;
+          prio[k] = prioritize(c, i + static_cast<size_t>(k), r_px, frame, untested_origin);
+          candidates += prio[k] >= 0.0f ? 1 : 0;
+        }
+        _mm_storeu_ps(c.priority + i, _mm_loadu_ps(prio));
+        continue;
+      }
+      const __m128i origin = _mm_loadu_si128(reinterpret_cast<const __m128i*>(c.age_origin + i));
+      const __m128 age = _mm_cvtepi32_ps(_mm_sub_epi32(frame32, origin));
+      const __m128 prio = _mm_mul_ps(_mm_add_ps(one, _mm_min_ps(px, max_r_px)), age);
+      _mm_storeu_ps(c.priority + i, _mm_or_ps(_mm_and_ps(in, prio), _mm_andnot_ps(in, minus_one)));
+      candidates += bitCount(static_cast<uint32_t>(in_mask));
+    }
+  }
+#endif
+  for (; i < count; ++i) {
+    c.priority[i] = prioritize(c, i, projectRadius(v, c.spheres[i], c.live[i] != 0), frame, untested_origin);
+    candidates += c.priority[i] >= 0.0f ? 1 : 0;
+  }
+  return candidates;
+}
+
+uint32_t floatBits(float f) {
+  uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  return b;
+}
+
+// Writes to keys[0, k) the k candidates of highest priority (ties: lower id first) as
+// (priority bits << 32 | ~id), in no particular order; 0 < k <= candidate count. A histogram over
+// the top bits of the priorities finds the bucket holding the k-th largest key, the buckets above
+// are taken whole, and only that bucket's keys are ordered. Keys are distinct (the low half is the
+// id), so the chosen set is the one a full sort would give. O(count); `histogram` holds kBuckets.
+void chooseLargest(const float* priority, size_t count, size_t k, size_t candidates, uint32_t* histogram,
+                   uint64_t* keys) {
+  // keys with bits >= take_bits go first; keys with bits in [order_bits, take_bits) are ordered
+  uint32_t take_bits = 0, order_bits = 0;
+  size_t above = 0;
+  if (k < candidates) {
+    std::fill(histogram, histogram + kBuckets, 0u);
+    for (size_t i = 0; i < count; ++i)
+      if (priority[i] >= 0.0f) ++histogram[floatBits(priority[i]) >> kBucketShift];
+    size_t bucket = kBuckets;
+    while (bucket-- > 0) {
+      if (above + histogram[bucket] >= k) break;
+      above += histogram[bucket];
+    }
+    order_bits = static_cast<uint32_t>(bucket) << kBucketShift;
+    take_bits = bucket + 1 < kBuckets ? static_cast<uint32_t>(bucket + 1) << kBucketShift : 0xFFFFFFFFu;
+  }
+  // priorities are >= 0 for candidates, so their bits order like the values; -1 fails both tests
+  const float order_from = [&] {
+    float f;
+    std::memcpy(&f, &order_bits, sizeof f);
+    return f;
+  }();
+  size_t front = 0, back = above;
+  auto place = [&](size_t i) {
+    const uint32_t bits = floatBits(priority[i]);
+    const uint64_t key = (uint64_t(bits) << 32) | ~static_cast<uint32_t>(i);
+    if (bits >= take_bits) {
+      keys[front++] = key;
+    } else {
+      keys[back++] = key;
+    }
+  };
+  size_t i = 0;
+#if defined(__SSE2__)
+  const __m128 from = _mm_set1_ps(order_from);
+  for (; i + 4 <= count; i += 4) {
+    const int mask = _mm_movemask_ps(_mm_cmpge_ps(_mm_loadu_ps(priority + i), from));
+    for (int m = mask; m != 0; m &= m - 1) place(i + static_cast<size_t>(__builtin_ctz(static_cast<unsigned>(m))));
+  }
+#endif
+  for (; i < count; ++i)
+    if (priority[i] >= order_from) place(i);
+  if (k < candidates) std::nth_element(keys + above, keys + (k - 1), keys + back, std::greater<uint64_t>());
+}
+
+// Interleaves the low 16 bits of x and y (Morton order).
+uint32_t interleave(uint32_t x, uint32_t y) {
+  auto spread = [](uint32_t v) {
+    v &= 0xFFFFu;
+    v = (v | (v << 8)) & 0x00FF00FFu;
+    v = (v | (v << 4)) & 0x0F0F0F0Fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    v = (v | (v << 1)) & 0x55555555u;
+    return v;
+  };
+  return spread(x) | (spread(y) << 1);
+}
+
+// Morton code of where a point lies on the screen (clamped to it; points behind the eye go to an
+// edge): nearby codes mean nearby view directions.
+uint32_t screenCode(const View& v, const glm::vec3& p) {
+  const glm::vec3 d = p - v.eye;
+  float x, y;
+  if (v.ortho) {
+    x = glm::dot(d, v.right) / std::max(v.half_w, 1e-30f);
+    y = glm::dot(d, v.up) / std::max(v.half_h, 1e-30f);
+  } else {
+    const float depth = std::max(glm::dot(d, v.forward), 1e-30f);
+    x = glm::dot(d, v.right) / (depth * v.tan_half_x);
+    y = glm::dot(d, v.up) / (depth * v.tan_half_y);
+  }
+  auto cell = [](float t) {
+    const float c = (std::min(std::max(t, -1.0f), 1.0f) + 1.0f) * 511.5f;  // NaN-free: clamped first
+    return static_cast<uint32_t>(c);
+  };
+  return interleave(cell(x), cell(y));
+}
+
+// The rays of one test (perspective: a cone from the eye around the axis to the object's centre,
+// half-angle asin(r / D); orthographic: a cylinder of radius r along the view direction through the
+// object's centre, from the eye's plane), as far as t_end (the far side of the object's bounding
+// sphere, beyond which nothing can hide it).
+struct Beam {
+  glm::vec3 apex{0.0f}, axis{0.0f};
+  bool ortho = false;
+  float sin_a = 0.0f, cos_a = 1.0f;  // perspective
+  float radius = 0.0f;               // orthographic
+  float t_near = 0.0f, t_end = 0.0f;
+  // for tree nodes: every beam point lies within `reach` (the beam's radius at t_end) of the axis
+  // segment from the apex to depth t_end, so a node box is met only if the segment crosses the box
+  // grown by `reach`
+  float reach = 0.0f;
+  glm::vec3 inv_axis{0.0f};
+
+  void finish() {
+    reach = ortho ? radius : t_end * sin_a / std::max(cos_a, 1e-6f);
+    inv_axis = glm::vec3(1.0f / axis.x, 1.0f / axis.y, 1.0f / axis.z);
+  }
+  // Conservative: false only when no ray of the beam reaches the box; writes the axis depth where
+  // the segment enters the grown box (for near-first ordering).
+  bool meetsBox(const glm::vec3& lo, const glm::vec3& hi, float& depth) const {
+    float exit;
+    return rayBox(apex, inv_axis, lo - glm::vec3(reach), hi + glm::vec3(reach), 0.0f, t_end, depth, exit);
+  }
+
+  // Conservative: false only when no ray of the beam meets the sphere (p, rho) within
+  // [t_near, t_end]. Perspective: perp * cos(a) - along * sin(a) is at most the distance from p to
+  // the cone (exact where the nearest cone point is on its side, smaller elsewhere).
+  bool meets(const glm::vec3& p, float rho) const {
+    const glm::vec3 q = p - apex;
+    const float along = glm::dot(q, axis);
+    const float q2 = glm::dot(q, q);
+    const float perp = std::sqrt(std::max(q2 - along * along, 0.0f));
+    if (ortho) return along + rho >= t_near && along - rho <= t_end && perp <= radius + rho;
+    const float dist = std::sqrt(q2);
+    return dist + rho >= t_near && dist - rho <= t_end && perp * cos_a - along * sin_a <= rho;
+  }
+};
+
+// Calls visit(id) for the live objects other than `self` whose bounding spheres the beam meets,
+// nearer along the axis roughly first (the tree is walked nearer child first), until visit returns
+// true. Tree nodes are tested as boxes against the beam's axis segment (Beam::meetsBox). No
+// allocation.
+template <class Visit>
+void forEachCandidate(const RayScene::Impl& m, const Beam& beam, uint32_t self, Visit&& visit) {
+  auto take = [&](uint32_t id) {
+    const glm::vec4 sp = m.world_sphere[id];
+    return id != self && m.live[id] && beam.meets(glm::vec3(sp), sp.w) && visit(id);
+  };
+  const TopBvh& bvh = m.bvh;
+  if (!bvh.nodes.empty()) {
+    uint32_t stack[TopBvh::kStackSize];
+    int top = 0;
+    float depth_l, depth_r;
+    // an emptied tree (all objects removed) has an inverted box, which the slab test rejects
+    if (beam.meetsBox(bvh.nodes[0].lo, bvh.nodes[0].hi, depth_l)) stack[top++] = 0;
+    while (top > 0) {
+      const TopBvh::Node& n = bvh.nodes[stack[--top]];
+      if (n.count > 0) {
+        for (uint32_t k = n.first; k < n.first + n.count; ++k)
+          if (take(bvh.items[k])) return;
+        continue;
+      }
+      const TopBvh::Node& l = bvh.nodes[n.first];
+      const TopBvh::Node& r = bvh.nodes[n.first + 1];
+      const bool hit_l = beam.meetsBox(l.lo, l.hi, depth_l);
+      const bool hit_r = beam.meetsBox(r.lo, r.hi, depth_r);
+      if (top + 2 > TopBvh::kStackSize) continue;  // cannot happen: the median split keeps depth ~log2(n)
+      // push the farther child first so the nearer one is popped next
+      if (depth_l <= depth_r) {
+        if (hit_r) stack[top++] = n.first + 1;
+        if (hit_l) stack[top++] = n.first;
+      } else {
+        if (hit_l) stack[top++] = n.first;
+        if (hit_r) stack[top++] = n.first + 1;
+      }
+    }
+  }
+  for (uint32_t id : bvh.pending)
+    if (take(id)) return;
+}
+
+constexpr uint32_t kChunk = 16;  // rays handled together (bit masks of 16)
+
+struct RaysSoA {
+  float ox[kChunk], oy[kChunk], oz[kChunk], dx[kChunk], dy[kChunk], dz[kChunk];
+  void set(uint32_t k, const glm::vec3& o, const glm::vec3& d) {
+    ox[k] = o.x;
+    oy[k] = o.y;
+    oz[k] = o.z;
+    dx[k] = d.x;
+    dy[k] = d.y;
+    dz[k] = d.z;
+  }
+  glm::vec3 origin(uint32_t k) const { return {ox[k], oy[k], oz[k]}; }
+  glm::vec3 direction(uint32_t k) const { return {dx[k], dy[k], dz[k]}; }
+};
+
+// Tests the rays in `active` (bit k = ray k) against object `other`'s occluder level, each within
+// [t_near, t_end[k]], first against its bounding sphere; returns `active` without the rays it
+// blocks. A hit blocks only where the level's error allows it (see docs/VISIBILITY.md: the level's
+// world error must project to at most occluder_error_px pixels at the hit).
+template <class Limit>
+uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays, uint32_t active,
+                   const float* t_end, float t_near, const Limit& limit) {
+  const glm::vec4 sp = m.world_sphere[other];
+  const float r2 = sp.w * sp.w;
+  const ChainPrototypes& op = m.chains[m.chain[other]];
+  RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
+  const float e = m.occluder_error_world[other];
+  uint32_t trusted = 0, checked = 0;  // rays for an any-hit query, rays whose closest hit is checked
+  for (uint32_t left = active; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    const float ocx = sp.x - rays.ox[k], ocy = sp.y - rays.oy[k], ocz = sp.z - rays.oz[k];
+    const float along = ocx * rays.dx[k] + ocy * rays.dy[k] + ocz * rays.dz[k];
+    const float miss2 = ocx * ocx + ocy * ocy + ocz * ocz - along * along;
+    if (miss2 > r2) continue;
+    const float half = std::sqrt(r2 - miss2);
+    const float t_enter = std::max(along - half, t_near), t_exit = std::min(along + half, t_end[k]);
+    if (t_enter > t_exit) continue;
+    if (e <= limit(t_enter)) {
+      trusted |= 1u << k;  // every hit in the sphere is trusted
+    } else if (e <= limit(t_exit)) {
+      checked |= 1u << k;  // trusted only beyond some distance: find the hit and check it
+    }
+  }
+  // one Embree call per ray: 16-ray packets (rtcOccluded16 / rtcIntersect16 with the rays that
+  // reach this object) measured no faster here (docs/bench/visibility.md)
+  for (uint32_t left = trusted; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    if (occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k])) active &= ~(1u << k);
+  }
+  for (uint32_t left = checked; left != 0; left &= left - 1) {
+    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
+    float t_hit = t_end[k];
+    if (intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit) && e <= limit(t_hit))
+      active &= ~(1u << k);
+  }
+  return active;
 }
 
 }  // namespace
@@ -81,16 +446,21 @@ struct OcclusionEstimator::State {
   OcclusionParams params;
   size_t max_objects = 0;
   uint64_t frame = 0;
+  // the disc pattern, rays_per_test entries: sqrt((k + 0.5) / n), cos and sin of k * golden angle
+  std::vector<glm::vec3> pattern;
   OcclusionStats stats;
-  // per id
-  std::vector<float> visible;                 // latest estimate
-  std::vector<uint64_t> tested_frame;         // frame of that estimate
-  std::vector<uint32_t> tested_generation;    // object generation it belongs to (kNever = none)
-  std::vector<uint64_t> first_seen_frame;     // first frame this generation was a candidate
-  std::vector<uint32_t> seen_generation;
-  std::vector<float> priority;
-  // scratch
-  std::vector<uint32_t> candidates;
+  // per id, read by the priority pass every frame
+  std::vector<float> priority;                // 4 B: this frame's priority, -1 when not a candidate
+  std::vector<uint32_t> age_origin;           // 4 B: age = frame - age_origin (low 32 bits of the frame
+                                              //      of the test, or of first seen minus untested_age_frames)
+  std::vector<uint32_t> seen_generation;      // 4 B: object generation age_origin belongs to (kNever = none)
+  // per id, read by the output pass and the queries
+  std::vector<float> visible;                 // 4 B: latest estimate
+  std::vector<uint64_t> tested_frame;         // 8 B: frame of that estimate
+  std::vector<uint32_t> tested_generation;    // 4 B: object generation it belongs to (kNever = none)
+  // scratch: candidates as (priority bits << 32 | ~id), so one integer order is "priority down, id up"
+  std::vector<uint64_t> keys;                 // the chosen objects, then (screen code << 32 | id)
+  std::vector<uint32_t> histogram;            // kBuckets counters over the top bits of the priority
 };
 
 OcclusionEstimator::OcclusionEstimator() : state_(new State) {}
@@ -105,13 +475,20 @@ Error OcclusionEstimator::init(size_t max_objects, const OcclusionParams& params
   s = State();
   s.params = params;
   s.max_objects = max_objects;
+  s.pattern.resize(params.rays_per_test);
+  for (uint32_t k = 0; k < params.rays_per_test; ++k) {
+    const float th = static_cast<float>(k) * kGoldenAngle;
+    s.pattern[k] = glm::vec3(std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(params.rays_per_test)),
+                             std::cos(th), std::sin(th));
+  }
+  s.priority.assign(max_objects, -1.0f);
+  s.age_origin.assign(max_objects, 0);
+  s.seen_generation.assign(max_objects, kNever);
   s.visible.assign(max_objects, 1.0f);
   s.tested_frame.assign(max_objects, 0);
   s.tested_generation.assign(max_objects, kNever);
-  s.first_seen_frame.assign(max_objects, 0);
-  s.seen_generation.assign(max_objects, kNever);
-  s.priority.assign(max_objects, 0.0f);
-  s.candidates.assign(max_objects, 0);
+  s.keys.assign(max_objects, 0);
+  s.histogram.assign(kBuckets, 0);
   return {};
 }
 
@@ -131,41 +508,23 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   s.stats = OcclusionStats();
   const View view = makeView(camera);
 
-  // priority pass over every live object
-  size_t cand_count = 0;
-  for (size_t id = 0; id < cap; ++id) {
-    if (!m.live[id]) continue;
-    const uint32_t gen = m.generation[id];
-    const float r_px = projectedRadiusPx(view, m.world_sphere[id]);
-    if (r_px < 0.0f) continue;
-    if (std::isinf(r_px)) {
-      // the eye is inside the bounding sphere: count the object as visible, as measured now
-      s.visible[id] = 1.0f;
-      s.tested_frame[id] = s.frame;
-      s.tested_generation[id] = gen;
-      continue;
-    }
-    if (s.seen_generation[id] != gen) {
-      s.seen_generation[id] = gen;
-      s.first_seen_frame[id] = s.frame;
-    }
-    const uint64_t age = s.tested_generation[id] == gen
-                             ? s.frame - s.tested_frame[id]
-                             : s.frame - s.first_seen_frame[id] + s.params.untested_age_frames;
-    s.priority[id] = (1.0f + std::min(r_px, kMaxPriorityRadiusPx)) * static_cast<float>(age);
-    s.candidates[cand_count++] = static_cast<uint32_t>(id);
-  }
+  // priority pass: every id's priority, then the budget's worth of the highest
+  PriorityColumns cols;
+  cols.spheres = m.world_sphere.data();
+  cols.live = m.live.data();
+  cols.generation = m.generation.data();
+  cols.seen_generation = s.seen_generation.data();
+  cols.age_origin = s.age_origin.data();
+  cols.priority = s.priority.data();
+  cols.visible = s.visible.data();
+  cols.tested_frame = s.tested_frame.data();
+  cols.tested_generation = s.tested_generation.data();
+  const size_t cand_count = priorityPass(view, cols, cap, s.frame, s.params.untested_age_frames);
   s.stats.candidates = static_cast<uint32_t>(cand_count);
 
   const uint32_t n = s.params.rays_per_test;
   const size_t test_count = std::min<size_t>(cand_count, s.params.ray_budget / n);
-  if (test_count < cand_count) {
-    // highest priority first, ties by id: a strict order, so the chosen set is deterministic
-    const float* prio = s.priority.data();
-    std::nth_element(s.candidates.begin(), s.candidates.begin() + static_cast<std::ptrdiff_t>(test_count),
-                     s.candidates.begin() + static_cast<std::ptrdiff_t>(cand_count),
-                     [prio](uint32_t a, uint32_t b) { return prio[a] > prio[b] || (prio[a] == prio[b] && a < b); });
-  }
+  if (test_count > 0) chooseLargest(s.priority.data(), cap, test_count, cand_count, s.histogram.data(), s.keys.data());
 
   ErrorLimit limit;
   const float err_px = m.params.occluder_error_px;
@@ -177,8 +536,16 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   const float t_near = view.near_plane;
 
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
+  const float cos_rot = std::cos(rotation), sin_rot = std::sin(rotation);
+  // test in screen order (a Morton code of the centre's view direction), so consecutive beams cross
+  // the same tree nodes and those stay in cache
   for (size_t c = 0; c < test_count; ++c) {
-    const uint32_t id = s.candidates[c];
+    const uint32_t id = ~static_cast<uint32_t>(s.keys[c]);
+    s.keys[c] = (uint64_t(screenCode(view, glm::vec3(m.world_sphere[id]))) << 32) | id;
+  }
+  std::sort(s.keys.begin(), s.keys.begin() + static_cast<std::ptrdiff_t>(test_count));
+  for (size_t c = 0; c < test_count; ++c) {
+    const uint32_t id = static_cast<uint32_t>(s.keys[c]);
     const glm::vec4 sph = m.world_sphere[id];
     const glm::vec3 center(sph);
     const float r = sph.w;
@@ -187,62 +554,82 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
 
     glm::vec3 w;
     float disc_r = r;
+    Beam beam;
+    beam.apex = view.eye;
+    beam.ortho = view.ortho;
+    beam.t_near = t_near;
     if (view.ortho) {
+      // parallel rays from the eye's plane: the beam's axis is the object's own line of sight
       w = view.forward;
+      beam.apex = center - w * glm::dot(center - view.eye, w);
+      beam.radius = r;
+      beam.t_end = glm::dot(center - beam.apex, w) + r;
     } else {
       const glm::vec3 d = center - view.eye;
       const float dist = glm::length(d);
       w = d / dist;
       // the disc through the centre that fills the sphere's tangent cone
       disc_r = r * dist / std::sqrt(std::max(dist * dist - r * r, 1e-12f));
+      beam.sin_a = std::min(r / dist, 1.0f);
+      beam.cos_a = std::sqrt(std::max(1.0f - beam.sin_a * beam.sin_a, 0.0f));
+      beam.t_end = dist + r;
     }
+    beam.axis = w;
+    beam.finish();
     const glm::vec3 ref = std::fabs(glm::dot(w, view.up)) < 0.9f ? view.up : view.right;
-    const glm::vec3 u = glm::normalize(glm::cross(w, ref));
-    const glm::vec3 v = glm::cross(u, w);
+    const glm::vec3 u0 = glm::normalize(glm::cross(w, ref));
+    const glm::vec3 v0 = glm::cross(u0, w);
+    // the frame's rotation of the pattern, applied to the disc's axes
+    const glm::vec3 u = cos_rot * u0 + sin_rot * v0;
+    const glm::vec3 v = cos_rot * v0 - sin_rot * u0;
+
 
     uint32_t counted = 0, hidden = 0;
-    for (uint32_t k = 0; k < n; ++k) {
-      const float rho = disc_r * std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(n));
-      const float th = static_cast<float>(k) * kGoldenAngle + rotation;
-      const glm::vec3 p = center + rho * (std::cos(th) * u + std::sin(th) * v);
-      glm::vec3 o, dir;
-      if (view.ortho) {
-        dir = w;
-        o = p - w * glm::dot(p - view.eye, w);
-      } else {
-        o = view.eye;
-        dir = glm::normalize(p - view.eye);
+    for (uint32_t k0 = 0; k0 < n; k0 += kChunk) {
+      const uint32_t lanes = std::min(kChunk, n - k0);
+      RaysSoA rays;
+      for (uint32_t k = 0; k < lanes; ++k) {
+        const uint32_t sample = k0 + k;
+        const glm::vec3 pat = s.pattern[sample];
+        const glm::vec3 p = center + (disc_r * pat.x) * (pat.y * u + pat.z * v);
+        glm::vec3 o, dir;
+        if (view.ortho) {
+          dir = w;
+          o = p - w * glm::dot(p - view.eye, w);
+        } else {
+          o = view.eye;
+          dir = glm::normalize(p - view.eye);
+        }
+        rays.set(k, o, dir);
       }
-      // where the ray meets the object itself, at its occluder level
-      float t_self = std::numeric_limits<float>::infinity();
-      if (!intersectObject(m, id, self_scene, o, dir, t_near, t_self)) continue;
-      ++counted;
-      t_self *= 1.0f - 1e-4f;
-      if (t_self <= t_near) continue;
-      ++s.stats.occlusion_rays;
-      bool blocked = false;
-      traverse(m.bvh, m.box_lo, m.box_hi, o, dir, t_near, t_self,
-               [&](uint32_t other, float t_enter, float t_exit, float& t_max) {
-                 if (other == id || !m.live[other]) return false;  // never its own occluder
-                 // cheap reject: the ray (unit direction) passes outside the bounding sphere
-                 const glm::vec4 sp = m.world_sphere[other];
-                 const glm::vec3 oc = glm::vec3(sp) - o;
-                 const float along = glm::dot(oc, dir);
-                 if (glm::dot(oc, oc) - along * along > sp.w * sp.w) return false;
-                 const ChainPrototypes& op = m.chains[m.chain[other]];
-                 RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
-                 const float e = m.occluder_error_world[other];
-                 if (e <= limit(t_enter)) {
-                   // every hit in the box is trusted
-                   blocked = occludedByObject(m, other, occluder, o, dir, t_near, t_max);
-                 } else if (e <= limit(std::min(t_exit, t_max))) {
-                   // trusted only beyond some distance: find the hit and check it
-                   float t_hit = t_max;
-                   blocked = intersectObject(m, other, occluder, o, dir, t_near, t_hit) && e <= limit(t_hit);
-                 }
-                 return blocked;
-               });
-      if (blocked) ++hidden;
+      // where each ray meets the object itself, at its occluder level (a 16-ray packet was slower)
+      float t_self[kChunk];
+      uint32_t self_hits = 0;
+      for (uint32_t k = 0; k < lanes; ++k) {
+        t_self[k] = std::numeric_limits<float>::infinity();
+        if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
+      }
+      counted += bitCount(self_hits);
+      // rays outside the object's silhouette are not counted; the others are open until blocked
+      uint32_t active = 0;
+      float t_end[kChunk];
+      for (uint32_t k = 0; k < lanes; ++k) {
+        if (!(self_hits >> k & 1u)) continue;
+        t_end[k] = t_self[k] * (1.0f - 1e-4f);
+        if (t_end[k] <= t_near) continue;
+        active |= 1u << k;
+        ++s.stats.occlusion_rays;
+      }
+      const uint32_t open = active;
+      // objects that can stand between the eye and the object, nearer roughly first, until every
+      // ray is blocked
+      if (active != 0)
+        forEachCandidate(m, beam, id, [&](uint32_t other) {
+          ++s.stats.occluder_candidates;
+          active = blockRays(m, other, rays, active, t_end, t_near, limit);
+          return active == 0;
+        });
+      hidden += bitCount(open & ~active);
     }
     s.stats.samples += n;
     s.stats.self_hits += counted;
@@ -250,11 +637,30 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     s.visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
     s.tested_frame[id] = s.frame;
     s.tested_generation[id] = m.generation[id];
+    s.age_origin[id] = static_cast<uint32_t>(s.frame);
   }
 
   if (visible_fraction.count) {
-    for (size_t id = 0; id < cap; ++id)
-      visible_fraction[id] = (m.live[id] && s.tested_generation[id] == m.generation[id]) ? s.visible[id] : 1.0f;
+    const uint8_t* live = m.live.data();
+    const uint32_t* gen = m.generation.data();
+    const uint32_t* tested_gen = s.tested_generation.data();
+    const float* vis = s.visible.data();
+    float* out = visible_fraction.data;
+    size_t id = 0;
+#if defined(__SSE2__)
+    const __m128 one = _mm_set1_ps(1.0f);
+    for (; id + 4 <= cap; id += 4) {
+      uint32_t live4;
+      std::memcpy(&live4, live + id, 4);
+      const __m128i lb = _mm_cvtsi32_si128(static_cast<int>(live4));
+      const __m128i lw = _mm_unpacklo_epi16(_mm_unpacklo_epi8(lb, _mm_setzero_si128()), _mm_setzero_si128());
+      const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(tested_gen + id)),
+                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(gen + id)));
+      const __m128 keep = _mm_castsi128_ps(_mm_and_si128(same, _mm_cmpgt_epi32(lw, _mm_setzero_si128())));
+      _mm_storeu_ps(out + id, _mm_or_ps(_mm_and_ps(keep, _mm_loadu_ps(vis + id)), _mm_andnot_ps(keep, one)));
+    }
+#endif
+    for (; id < cap; ++id) out[id] = (live[id] != 0) & (tested_gen[id] == gen[id]) ? vis[id] : 1.0f;
   }
   return true;
 }

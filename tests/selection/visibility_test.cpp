@@ -774,6 +774,38 @@ TEST(Visibility, OrthographicCameraPicksAndFindsTheHiddenCube) {
   EXPECT_EQ(est.visibleFraction(rs, 0), 1.0f);
 }
 
+TEST(Visibility, OffCentreObjectIsHiddenByASmallOccluderInBothProjections) {
+  // parallel rays: the occluders of an object are searched along its own line of sight (through its
+  // centre), not along the view axis through the eye
+  WallScene s;
+  s.add(0, at({3.0f, 2.0f, 0.0f}));
+  s.add(0, glm::scale(at({3.0f, 2.0f, 3.0f}), glm::vec3(1.5f)));  // covers the first cube's silhouette
+  s.add(2, at({-3.0f, -2.0f, 0.0f}));                              // nothing in front of it
+  RayScene rs;
+  ASSERT_TRUE(s.build(rs).ok());
+  Camera cam = frontCamera();
+  cam.projection = Projection::kOrthographic;
+  cam.ortho_height = 10.0f;
+  OcclusionEstimator est;
+  ASSERT_TRUE(est.init(8).ok());
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  ASSERT_EQ(est.ageFrames(rs, 0), 0u);
+  EXPECT_EQ(est.visibleFraction(rs, 0), 0.0f);
+  EXPECT_EQ(est.visibleFraction(rs, 1), 1.0f);
+  EXPECT_EQ(est.visibleFraction(rs, 2), 1.0f);
+
+  // perspective: the same off the view axis, the occluder on the line from the eye to the cube
+  // (at 0.7 of the way its inscribed sphere, radius 0.75, holds the cube's cone of radius <= 0.61)
+  cam.projection = Projection::kPerspective;
+  const glm::vec3 on_line = cam.eye + 0.7f * (glm::vec3(3.0f, 2.0f, 0.0f) - cam.eye);
+  rs.setTransform(1, glm::scale(at(on_line), glm::vec3(1.5f)));
+  rs.commit();
+  ASSERT_TRUE(est.update(rs, cam, {}));
+  ASSERT_EQ(est.ageFrames(rs, 0), 0u);
+  EXPECT_EQ(est.visibleFraction(rs, 0), 0.0f);
+  EXPECT_EQ(est.visibleFraction(rs, 2), 1.0f);
+}
+
 TEST(Visibility, ConcurrentQueriesAfterCommitMatchSerialOnes) {
   WallScene s = occludedScene();
   RayScene rs;

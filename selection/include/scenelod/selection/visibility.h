@@ -179,6 +179,7 @@ struct OcclusionStats {
   uint32_t self_hits = 0;        // samples whose ray met the object itself (the estimate's denominator)
   uint32_t occlusion_rays = 0;   // occlusion rays cast (one per self hit)
   uint32_t candidates = 0;       // objects in the view frustum and in front of the eye
+  uint32_t occluder_candidates = 0;  // objects whose bounding spheres a tested object's rays were checked against
 };
 
 // Amortised visible-fraction estimate. Each update() tests the objects of highest priority (screen
@@ -206,7 +207,9 @@ class OcclusionEstimator {
   bool validate(const RayScene& scene, Span<float> visible_fraction) const;
   // One frame: tests the highest-priority objects within the budget, then writes every id's estimate
   // (1 for untested and free ids) into visible_fraction (may be empty). Returns false (doing nothing)
-  // when validate() fails. Precondition: scene committed. No allocation; O(objects + budget * log).
+  // when validate() fails. Precondition: scene committed. No allocation; O(objects) for the
+  // priority pass plus, per tested object, one walk of the top-level tree with its beam of sample
+  // rays (stopped once every ray is blocked) and up to 2 Embree calls per sample.
   bool update(const RayScene& scene, const Camera& camera, Span<float> visible_fraction);
 
   // Latest estimate of an id (1 when never tested) and how many update() calls ago it was measured
