@@ -27,80 +27,85 @@ using zhang_detail::kNone;
 using zhang_detail::StarPair;
 using zhang_detail::StarScratch;
 
-// indexed binary min-heap over ids 0..n-1, ordered by (key, id) so ties are deterministic
+// indexed binary min-heap over ids 0..n-1, ordered by (key, id) so ties are deterministic; the keys
+// sit in the heap array beside the ids, so a sift reads one array, not one key per visited id
 class IndexedHeap {
  public:
   void reset(size_t n) {
     heap_.clear();
     heap_.reserve(n);
     pos_.assign(n, kNone);
-    key_.assign(n, 0.0f);
   }
   bool contains(uint32_t id) const { return pos_[id] != kNone; }
   bool empty() const { return heap_.empty(); }
-  uint32_t top() const { return heap_[0]; }
+  uint32_t top() const { return heap_[0].id; }
   void set(uint32_t id, float key) {  // insert or update
-    if (pos_[id] == kNone) {
-      key_[id] = key;
+    const uint32_t p = pos_[id];
+    if (p == kNone) {
       pos_[id] = static_cast<uint32_t>(heap_.size());
-      heap_.push_back(id);
+      heap_.push_back({key, id});
       up(pos_[id]);
       return;
     }
-    const float old = key_[id];
-    key_[id] = key;
-    if (key < old) up(pos_[id]); else down(pos_[id]);
+    const float old = heap_[p].key;
+    if (key == old) return;  // a sift would not move it
+    heap_[p].key = key;
+    if (key < old) up(p); else down(p);
   }
   void remove(uint32_t id) {
     const uint32_t p = pos_[id];
     if (p == kNone) return;
-    const uint32_t last = heap_.back();
+    const Entry last = heap_.back();
     heap_.pop_back();
     pos_[id] = kNone;
     if (p < heap_.size()) {
       heap_[p] = last;
-      pos_[last] = p;
+      pos_[last.id] = p;
       up(p);
-      down(pos_[last]);
+      down(pos_[last.id]);
     }
   }
   uint32_t pop() {
-    const uint32_t id = heap_[0];
+    const uint32_t id = heap_[0].id;
     remove(id);
     return id;
   }
 
  private:
-  bool less(uint32_t a, uint32_t b) const { return key_[a] < key_[b] || (key_[a] == key_[b] && a < b); }
+  struct Entry {
+    float key;
+    uint32_t id;
+  };
+  static bool less(const Entry& a, const Entry& b) { return a.key < b.key || (a.key == b.key && a.id < b.id); }
   void up(uint32_t p) {
-    const uint32_t id = heap_[p];
+    const Entry e = heap_[p];
     while (p > 0) {
       const uint32_t parent = (p - 1) / 2;
-      if (!less(id, heap_[parent])) break;
+      if (!less(e, heap_[parent])) break;
       heap_[p] = heap_[parent];
-      pos_[heap_[p]] = p;
+      pos_[heap_[p].id] = p;
       p = parent;
     }
-    heap_[p] = id;
-    pos_[id] = p;
+    heap_[p] = e;
+    pos_[e.id] = p;
   }
   void down(uint32_t p) {
-    const uint32_t id = heap_[p], n = static_cast<uint32_t>(heap_.size());
+    const Entry e = heap_[p];
+    const uint32_t n = static_cast<uint32_t>(heap_.size());
     for (;;) {
       uint32_t c = 2 * p + 1;
       if (c >= n) break;
       if (c + 1 < n && less(heap_[c + 1], heap_[c])) ++c;
-      if (!less(heap_[c], id)) break;
+      if (!less(heap_[c], e)) break;
       heap_[p] = heap_[c];
-      pos_[heap_[p]] = p;
+      pos_[heap_[p].id] = p;
       p = c;
     }
-    heap_[p] = id;
-    pos_[id] = p;
+    heap_[p] = e;
+    pos_[e.id] = p;
   }
-  std::vector<uint32_t> heap_;
+  std::vector<Entry> heap_;
   std::vector<uint32_t> pos_;
-  std::vector<float> key_;
 };
 
 // acos to within 7e-5 rad (Abramowitz & Stegun 4.4.45); CA only ranks collapses, and libm's acosf
@@ -170,7 +175,9 @@ class ZhangEngine {
   void updateTriangle(uint32_t t);
   float visionOf(uint32_t v);
   float superHeightOf(uint32_t v);
-  void refreshVertex(uint32_t v);
+  void updateKey(uint32_t v);
+  // after a collapse into k: CA of k and of its ring (the fan of k is in fan_, marked in tri_mark_)
+  void refreshAround(uint32_t k);
 
   // contraction of the set S (2 or 3 vertices) into survivor k at (p, n): checks, new CA(k)
   // a triangle that survives a contraction: its id and the two vertices after the merged one
@@ -188,6 +195,8 @@ class ZhangEngine {
                      float& new_ca);
   // the link-condition part of evaluate
   bool checkTopology(const StarEntry* entries, size_t count, bool any_removed);
+  static constexpr size_t kLocalStar = 32;
+  bool checkTopologyLocal(const StarEntry* entries, size_t count);
   void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
   void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
 
@@ -203,16 +212,20 @@ class ZhangEngine {
   std::vector<glm::vec3> pos_, nrm_;
   std::vector<float> ca_;
   std::vector<uint32_t> vhead_;
+  // per vertex: the triangle that gives CA (its max), kNone when CA is 0; while that triangle is
+  // alive and unchanged, a collapse next to the vertex can only raise CA through the changed ones
+  std::vector<uint32_t> ca_arg_;
   // per vertex, cold: attributes blended on collapse with the area weight, union-find parent
   std::vector<glm::vec3> attr_nrm_, col_;
   std::vector<glm::vec2> uv_;
   std::vector<float> weight_;
   std::vector<uint32_t> parent_;
   std::vector<uint8_t> kept_, alive_v_;
-  // per triangle, one record so that walking a fan touches one cache line per triangle (52 B):
+  // per triangle, one record aligned to a cache line so that walking a fan touches exactly one line per
+  // triangle (44 B used of 64; unaligned 44 B records straddled two lines on most steps):
   // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
   // alive flag (4 B); corner c is vertex c % 3 of triangle c / 3
-  struct Face {
+  struct alignas(64) Face {
     uint32_t v[3] = {kNone, kNone, kNone};
     uint32_t next[3] = {kNone, kNone, kNone};
     glm::vec3 n{0.0f};
@@ -230,8 +243,8 @@ class ZhangEngine {
   // scratch reused by every evaluation
   StarScratch star_;
   std::vector<StarPair> pairs_;
-  std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
-  std::vector<StarEntry> star_i_, star_j_, union_;
+  std::vector<uint32_t> tris_, neighbours_, mark_, removed_, tri_mark_;
+  std::vector<StarEntry> star_i_, star_j_, union_, fan_;
   uint32_t mark_gen_ = 0;
 };
 
@@ -272,8 +285,13 @@ void ZhangEngine::updateTriangle(uint32_t t) {
 
 float ZhangEngine::visionOf(uint32_t v) {
   float ca = 0.0f;
+  uint32_t arg = kNone;
   const glm::vec3 nv = nrm_[v];
-  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, faces_[t].n) * faces_[t].area); });
+  forStar(v, [&](uint32_t t, uint32_t) {
+    const float c = fastAngle(nv, faces_[t].n) * faces_[t].area;
+    if (c > ca) ca = c, arg = t;
+  });
+  ca_arg_[v] = arg;
   return ca;
 }
 
@@ -283,11 +301,38 @@ float ZhangEngine::superHeightOf(uint32_t v) {
   return zhang_detail::superHeightOfStar(pos_[v], pairs_.data(), pairs_.size(), pos_.data(), star_);
 }
 
-void ZhangEngine::refreshVertex(uint32_t v) {
-  ca_[v] = visionOf(v);
+void ZhangEngine::updateKey(uint32_t v) {
   if (params_.mode != ZhangMode::kEdgeCollapse || kept_[v] || !alive_v_[v]) return;
   const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : ca_[v];
   heap_.set(v, key);
+}
+
+void ZhangEngine::refreshAround(uint32_t k) {
+  float ca_k = 0.0f;
+  uint32_t arg_k = kNone;
+  for (const StarEntry& e : fan_) {
+    const float c = fastAngle(nrm_[k], faces_[e.t].n) * faces_[e.t].area;
+    if (c > ca_k) ca_k = c, arg_k = e.t;
+  }
+  ca_[k] = ca_k;
+  ca_arg_[k] = arg_k;
+  updateKey(k);
+  // a ring vertex whose max triangle died or changed is walked again (unmarked); the others keep
+  // their max and only meet the changed triangles, all of which are in k's fan
+  for (uint32_t u : neighbours_) {
+    const uint32_t arg = ca_arg_[u];
+    if (arg != kNone && (!faces_[arg].alive || tri_mark_[arg] == mark_gen_)) {
+      ca_[u] = visionOf(u);
+      mark_[u] = 0;
+    }
+  }
+  for (const StarEntry& e : fan_)
+    for (uint32_t u : {e.u, e.w}) {
+      if (mark_[u] != mark_gen_) continue;
+      const float c = fastAngle(nrm_[u], faces_[e.t].n) * faces_[e.t].area;
+      if (c > ca_[u]) ca_[u] = c, ca_arg_[u] = e.t;
+    }
+  for (uint32_t u : neighbours_) updateKey(u);
 }
 
 Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
@@ -304,6 +349,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   pos_ = in.positions;
   nrm_.assign(vn, glm::vec3(0.0f));
   ca_.assign(vn, 0.0f);
+  ca_arg_.assign(vn, kNone);
   vhead_.assign(vn, kNone);
   attr_nrm_ = in.normals;
   col_ = in.colors;
@@ -317,6 +363,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   faces_.reserve(tn);
   star_.resize(vn);
   mark_.assign(std::max(vn, tn), 0);
+  tri_mark_.assign(tn, 0);
   mark_gen_ = 0;
 
   // welding: vertices at exactly the same position become one (the lowest id) for the topology
@@ -387,12 +434,14 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     if (!alive_v_[v]) continue;
     pairs.clear();
     float max_angle = 0.0f, ca = 0.0f;
+    uint32_t ca_arg = kNone;
     forStar(v, [&](uint32_t t, uint32_t k) {
       pairs.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]});
       const float angle = fastAngle(nrm_[v], faces_[t].n);
       max_angle = std::max(max_angle, angle);
-      ca = std::max(ca, angle * faces_[t].area);
+      if (angle * faces_[t].area > ca) ca = angle * faces_[t].area, ca_arg = t;
     });
+    ca_arg_[v] = ca_arg;
     zhang_detail::StarMeasure m;
     zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
                               params_.influence == ZhangInfluence::kSuperHeight);
@@ -484,6 +533,11 @@ bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const gl
 }
 
 bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any_removed) {
+  if (count == 0 || !any_removed) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  if (count <= kLocalStar) return checkTopologyLocal(entries, count);
   star_.reset();
   for (size_t e = 0; e < count; ++e) {
     const uint32_t u = entries[e].u, w = entries[e].w;
@@ -495,10 +549,6 @@ bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any
   }
   // link condition: the surviving fan around the merged vertex is one cycle or one chain
   const size_t pc = count;
-  if (pc == 0 || !any_removed) {
-    ++stats_.rejected_topology;
-    return false;
-  }
   size_t chain_starts = 0;
   uint32_t start = entries[0].u;
   for (uint32_t v : star_.touched) {
@@ -524,6 +574,56 @@ bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any
     ++steps;
   } while (v != start && steps <= pc);
   if (steps != pc || (chain_starts == 0 && (v != start || pc < 3))) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  return true;
+}
+
+// the same test as checkTopology on a small star, with the ring vertices in a local table found by a
+// linear scan instead of the per-vertex scratch arrays (which cost a cache miss per ring vertex)
+bool ZhangEngine::checkTopologyLocal(const StarEntry* entries, size_t count) {
+  uint32_t ids[2 * kLocalStar], next[2 * kLocalStar];
+  uint8_t first[2 * kLocalStar], second[2 * kLocalStar];
+  uint32_t n = 0;
+  auto slot = [&](uint32_t v) {
+    for (uint32_t i = 0; i < n; ++i)
+      if (ids[i] == v) return i;
+    ids[n] = v;
+    first[n] = second[n] = 0;
+    next[n] = kNone;
+    return n++;
+  };
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t a = slot(entries[e].u), b = slot(entries[e].w);
+    ++first[a];
+    ++second[b];
+    next[a] = b;
+  }
+  size_t chain_starts = 0;
+  uint32_t start = 0;  // the slot of entries[0].u
+  for (uint32_t i = 0; i < n; ++i) {
+    if (first[i] > 1 || second[i] > 1) {
+      ++stats_.rejected_topology;
+      return false;
+    }
+    if (second[i] == 0) {
+      ++chain_starts;
+      start = i;
+    }
+  }
+  if (chain_starts > 1 || n != count + chain_starts) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  size_t steps = 0;
+  uint32_t v = start;
+  do {
+    if (first[v] == 0) break;  // end of the chain
+    v = next[v];
+    ++steps;
+  } while (v != start && steps <= count);
+  if (steps != count || (chain_starts == 0 && (v != start || count < 3))) {
     ++stats_.rejected_topology;
     return false;
   }
@@ -588,9 +688,12 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
   }
   // new normals and areas around k, then the CA (and queue key) of k and of its ring
   neighbours_.clear();
+  fan_.clear();
   ++mark_gen_;
   forStar(k, [&](uint32_t t, uint32_t corner) {
     updateTriangle(t);
+    tri_mark_[t] = mark_gen_;
+    fan_.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
     for (uint32_t c = 1; c < 3; ++c) {
       const uint32_t u = faces_[t].v[(corner + c) % 3];
       if (mark_[u] != mark_gen_) {
@@ -599,8 +702,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
       }
     }
   });
-  refreshVertex(k);
-  for (uint32_t u : neighbours_) refreshVertex(u);
+  refreshAround(k);
   ++stats_.collapses;
 }
 
