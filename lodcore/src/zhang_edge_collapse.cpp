@@ -190,8 +190,9 @@ class ZhangEngine {
   // stop early (they cannot win) and return false
   bool evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p, const glm::vec3& n,
                 float bound, float& new_ca);
-  // the fold-over part of evaluate, raising new_ca (which the caller initialises)
-  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound,
+  // the fold-over part of evaluate, raising new_ca (which the caller initialises); `ring`: the
+  // triangles changed shape, so their ring vertices' CA counts too (ZhangParams::ring_vision)
+  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound, bool ring,
                      float& new_ca);
   // the link-condition part of evaluate
   bool checkTopology(const StarEntry* entries, size_t count, bool any_removed);
@@ -503,11 +504,11 @@ void ZhangEngine::gatherStar(uint32_t v, std::vector<StarEntry>& out) {
 bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p,
                            const glm::vec3& n, float bound, float& new_ca) {
   new_ca = 0.0f;
-  return checkGeometry(entries, count, p, n, bound, new_ca) && checkTopology(entries, count, any_removed);
+  return checkGeometry(entries, count, p, n, bound, true, new_ca) && checkTopology(entries, count, any_removed);
 }
 
 bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n,
-                                float bound, float& new_ca) {
+                                float bound, bool ring, float& new_ca) {
   for (size_t e = 0; e < count; ++e) {
     const uint32_t t = entries[e].t;
     const glm::vec3 &pu = pos_[entries[e].u], &pw = pos_[entries[e].w];
@@ -526,7 +527,11 @@ bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const gl
       ++stats_.rejected_fold;
       return false;
     }
-    new_ca = std::max(new_ca, fastAngle(n, nt) * 0.5f * len);
+    float angle = fastAngle(n, nt);
+    // the ring vertices' CA over the triangle that changed (paper Fig. 6: a fold raises CA(V_2))
+    if (ring && params_.ring_vision)
+      angle = std::max({angle, fastAngle(nrm_[entries[e].u], nt), fastAngle(nrm_[entries[e].w], nt)});
+    new_ca = std::max(new_ca, angle * 0.5f * len);
     if (new_ca >= bound) return false;  // cannot beat the best candidate so far
   }
   return true;
@@ -738,12 +743,12 @@ bool ZhangEngine::stepEdge() {
     }
     // V_i's side first: most candidates lose there, before V_j's fan is walked
     float ca = 0.0f;
-    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, ca)) continue;
+    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, true, ca)) continue;
     const size_t i_part = union_.size();
     gatherStar(j, star_j_);
     for (const StarEntry& e : star_j_)
       if (e.u != i && e.w != i) union_.push_back(e);
-    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, ca)) continue;
+    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, p != pos_[j], ca)) continue;
     if (!checkTopology(union_.data(), union_.size(), any_removed)) continue;
     if (ca < best_ca) {
       best_ca = ca;

@@ -271,6 +271,22 @@ TEST(ZhangEdgeCollapse, SphereReachesTargetClosedAndOutward) {
   }
 }
 
+TEST(ZhangEdgeCollapse, MergedVertexOnlyScoringAlsoKeepsSphereClosed) {
+  const Mesh in = icosphere(4);
+  ZhangParams narrow;
+  narrow.ring_vision = false;
+  Mesh with_ring, merged_only;
+  ASSERT_TRUE(simplifyZhang(in, 512, ZhangParams{}, with_ring).ok());
+  ASSERT_TRUE(simplifyZhang(in, 512, narrow, merged_only).ok());
+  EXPECT_LE(merged_only.triangleCount(), 512u);
+  EXPECT_GE(merged_only.triangleCount(), 510u);
+  expectValid(merged_only);
+  expectClosedManifold(merged_only);
+  EXPECT_EQ(eulerCharacteristic(merged_only), 2);
+  // the ring vertices' CA changes which neighbour wins, so the two scorings give different meshes
+  EXPECT_NE(with_ring.positions, merged_only.positions);
+}
+
 TEST(ZhangEdgeCollapse, TorusKeepsItsGenus) {
   const Mesh in = torus(48, 24);  // 2304 triangles
   Mesh out;
