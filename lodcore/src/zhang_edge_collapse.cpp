@@ -449,6 +449,9 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     ca_[v] = ca;
     kept_[v] = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
                (params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle);
+    stats_.kept_edge_vertices += m.vertex_class == ZhangVertexClass::kEdge;
+    stats_.kept_complex_vertices += m.vertex_class == ZhangVertexClass::kComplex;
+    stats_.kept_angle_vertices += params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle;
     if (params_.mode == ZhangMode::kEdgeCollapse && !kept_[v])
       heap_.set(v, params_.influence == ZhangInfluence::kSuperHeight ? m.super_height : ca);
   }
@@ -923,6 +926,8 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   }
   stats_.max_surface_distance = std::sqrt(max_s2);
   stats_.output_triangles = alive_tris_;
+  stats_.free_vertices_left = 0;
+  for (size_t v = 0; v < vn; ++v) stats_.free_vertices_left += alive_v_[v] && !kept_[v];
   stats_.stop_reason = alive_tris_ > current_target_ && stopped_ ? ZhangStopReason::kNoValidCollapse
                                                                  : ZhangStopReason::kTargetReached;
   stats = stats_;

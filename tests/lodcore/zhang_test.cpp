@@ -339,6 +339,11 @@ TEST(ZhangEdgeCollapse, BoundaryIsKeptAndStopIsReported) {
   for (size_t t = 0; t < out.triangleCount(); ++t) EXPECT_GT(faceNormal(out, t).z, 0.0f);
   // a triangulated 32-gon: 30 triangles
   EXPECT_EQ(out.triangleCount(), 30u);
+  // the stop is explained by the counts: 32 kept border vertices, none movable left
+  EXPECT_EQ(st.kept_edge_vertices, 32u);
+  EXPECT_EQ(st.kept_complex_vertices, 0u);
+  EXPECT_EQ(st.kept_angle_vertices, 0u);
+  EXPECT_EQ(st.free_vertices_left, 0u);
 }
 
 TEST(ZhangEdgeCollapse, ColoursAreConvexCombinations) {

@@ -108,6 +108,12 @@ struct ZhangStats {
   size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
+  // vertices that never move, by their class on the (welded) input: edge (borders and attribute
+  // seams), complex (non-manifold), angle (only with keep_angle_vertices)
+  size_t kept_edge_vertices = 0;
+  size_t kept_complex_vertices = 0;
+  size_t kept_angle_vertices = 0;
+  size_t free_vertices_left = 0;  // vertices of the result that are not kept (could still collapse)
   float max_displacement = 0.0f;  // largest distance an input vertex moved to its representative
   // upper bound of the largest distance from an input vertex to the result's surface: each input
   // vertex measured against the triangles around its representative
