@@ -27,8 +27,10 @@ using zhang_detail::kNone;
 using zhang_detail::StarPair;
 using zhang_detail::StarScratch;
 
-// indexed binary min-heap over ids 0..n-1, ordered by (key, id) so ties are deterministic; the keys
-// sit in the heap array beside the ids, so a sift reads one array, not one key per visited id
+// indexed 4-ary min-heap over ids 0..n-1, ordered by (key, id): a strict total order, so the popped id
+// does not depend on the heap's shape and runs are deterministic. The keys sit in the heap array beside
+// the ids, and the four children of a node are 32 contiguous bytes, so a sift down reads one or two
+// lines per level over half the levels of a binary heap
 class IndexedHeap {
  public:
   void reset(size_t n) {
@@ -80,7 +82,7 @@ class IndexedHeap {
   void up(uint32_t p) {
     const Entry e = heap_[p];
     while (p > 0) {
-      const uint32_t parent = (p - 1) / 2;
+      const uint32_t parent = (p - 1) / 4;
       if (!less(e, heap_[parent])) break;
       heap_[p] = heap_[parent];
       pos_[heap_[p].id] = p;
@@ -93,9 +95,12 @@ class IndexedHeap {
     const Entry e = heap_[p];
     const uint32_t n = static_cast<uint32_t>(heap_.size());
     for (;;) {
-      uint32_t c = 2 * p + 1;
-      if (c >= n) break;
-      if (c + 1 < n && less(heap_[c + 1], heap_[c])) ++c;
+      const uint32_t first = 4 * p + 1;
+      if (first >= n) break;
+      uint32_t c = first;
+      const uint32_t last = std::min(first + 4, n);
+      for (uint32_t o = first + 1; o < last; ++o)
+        if (less(heap_[o], heap_[c])) c = o;
       if (!less(heap_[c], e)) break;
       heap_[p] = heap_[c];
       pos_[heap_[p].id] = p;
@@ -176,7 +181,7 @@ class ZhangEngine {
   float visionOf(uint32_t v);
   float superHeightOf(uint32_t v);
   void updateKey(uint32_t v);
-  // after a collapse into k: CA of k and of its ring (the fan of k is in fan_, marked in tri_mark_)
+  // after a collapse into k: CA of k and of its ring (the fan of k is in fan_, its faces marked)
   void refreshAround(uint32_t k);
 
   // contraction of the set S (2 or 3 vertices) into survivor k at (p, n): checks, new CA(k)
@@ -223,15 +228,16 @@ class ZhangEngine {
   std::vector<uint32_t> parent_;
   std::vector<uint8_t> kept_, alive_v_;
   // per triangle, one record aligned to a cache line so that walking a fan touches exactly one line per
-  // triangle (44 B used of 64; unaligned 44 B records straddled two lines on most steps):
+  // triangle (48 B used of 64; unaligned records straddled two lines on most steps):
   // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
-  // alive flag (4 B); corner c is vertex c % 3 of triangle c / 3
+  // alive flag (4 B), mark (4 B); corner c is vertex c % 3 of triangle c / 3
   struct alignas(64) Face {
     uint32_t v[3] = {kNone, kNone, kNone};
     uint32_t next[3] = {kNone, kNone, kNone};
     glm::vec3 n{0.0f};
     float area = 0.0f;
     uint32_t alive = 1;
+    uint32_t mark = 0;  // generation of the last collapse whose fan held this triangle
   };
   std::vector<Face> faces_;
   uint32_t& cornerNext(uint32_t c) { return faces_[c / 3].next[c % 3]; }
@@ -244,7 +250,7 @@ class ZhangEngine {
   // scratch reused by every evaluation
   StarScratch star_;
   std::vector<StarPair> pairs_;
-  std::vector<uint32_t> tris_, neighbours_, mark_, removed_, tri_mark_;
+  std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
   std::vector<StarEntry> star_i_, star_j_, union_, fan_;
   uint32_t mark_gen_ = 0;
 };
@@ -322,7 +328,7 @@ void ZhangEngine::refreshAround(uint32_t k) {
   // their max and only meet the changed triangles, all of which are in k's fan
   for (uint32_t u : neighbours_) {
     const uint32_t arg = ca_arg_[u];
-    if (arg != kNone && (!faces_[arg].alive || tri_mark_[arg] == mark_gen_)) {
+    if (arg != kNone && (!faces_[arg].alive || faces_[arg].mark == mark_gen_)) {
       ca_[u] = visionOf(u);
       mark_[u] = 0;
     }
@@ -364,7 +370,6 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   faces_.reserve(tn);
   star_.resize(vn);
   mark_.assign(std::max(vn, tn), 0);
-  tri_mark_.assign(tn, 0);
   mark_gen_ = 0;
 
   // welding: vertices at exactly the same position become one (the lowest id) for the topology
@@ -700,7 +705,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
   ++mark_gen_;
   forStar(k, [&](uint32_t t, uint32_t corner) {
     updateTriangle(t);
-    tri_mark_[t] = mark_gen_;
+    faces_[t].mark = mark_gen_;
     fan_.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
     for (uint32_t c = 1; c < 3; ++c) {
       const uint32_t u = faces_[t].v[(corner + c) % 3];
