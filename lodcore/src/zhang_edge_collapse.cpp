@@ -214,19 +214,26 @@ class ZhangEngine {
   const Mesh* in_ = nullptr;
   ZhangParams params_;
   float cos_max_turn_ = 0.5f;
-  // per vertex, hot: position (12 B), carried geometric normal (12 B), CA (4 B), corner list head (4 B)
+  // per vertex, hot: position (12 B), carried geometric normal (12 B), corner list head (4 B)
   std::vector<glm::vec3> pos_, nrm_;
-  std::vector<float> ca_;
   std::vector<uint32_t> vhead_;
-  // per vertex: the triangle that gives CA (its max), kNone when CA is 0; while that triangle is
-  // alive and unchanged, a collapse next to the vertex can only raise CA through the changed ones
-  std::vector<uint32_t> ca_arg_;
+  // per vertex, the state read together on every collapse around it, one 16 B record (one line miss
+  // instead of one per array)
+  struct VertexState {
+    float ca = 0.0f;         // CA(V), definition 9
+    uint32_t ca_arg = kNone;  // the triangle giving CA (its max), kNone when CA is 0; while it is alive
+                              // and unchanged, a collapse next to the vertex only raises CA through
+                              // the changed triangles
+    uint32_t mark = 0;       // generation mark of the per-collapse vertex sets
+    uint8_t kept = 0;        // edge, complex (or angle on request): never moves
+    uint8_t alive = 0;       // in at least one live triangle and not merged away
+  };
+  std::vector<VertexState> vs_;
   // per vertex, cold: attributes blended on collapse with the area weight, union-find parent
   std::vector<glm::vec3> attr_nrm_, col_;
   std::vector<glm::vec2> uv_;
   std::vector<float> weight_;
   std::vector<uint32_t> parent_;
-  std::vector<uint8_t> kept_, alive_v_;
   // per triangle, one record aligned to a cache line so that walking a fan touches exactly one line per
   // triangle (48 B used of 64; unaligned records straddled two lines on most steps):
   // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
@@ -250,7 +257,7 @@ class ZhangEngine {
   // scratch reused by every evaluation
   StarScratch star_;
   std::vector<StarPair> pairs_;
-  std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
+  std::vector<uint32_t> tris_, neighbours_, removed_;
   std::vector<StarEntry> star_i_, star_j_, union_, fan_;
   uint32_t mark_gen_ = 0;
 };
@@ -298,7 +305,7 @@ float ZhangEngine::visionOf(uint32_t v) {
     const float c = fastAngle(nv, faces_[t].n) * faces_[t].area;
     if (c > ca) ca = c, arg = t;
   });
-  ca_arg_[v] = arg;
+  vs_[v].ca_arg = arg;
   return ca;
 }
 
@@ -309,8 +316,8 @@ float ZhangEngine::superHeightOf(uint32_t v) {
 }
 
 void ZhangEngine::updateKey(uint32_t v) {
-  if (params_.mode != ZhangMode::kEdgeCollapse || kept_[v] || !alive_v_[v]) return;
-  const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : ca_[v];
+  if (params_.mode != ZhangMode::kEdgeCollapse || vs_[v].kept || !vs_[v].alive) return;
+  const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : vs_[v].ca;
   heap_.set(v, key);
 }
 
@@ -321,23 +328,23 @@ void ZhangEngine::refreshAround(uint32_t k) {
     const float c = fastAngle(nrm_[k], faces_[e.t].n) * faces_[e.t].area;
     if (c > ca_k) ca_k = c, arg_k = e.t;
   }
-  ca_[k] = ca_k;
-  ca_arg_[k] = arg_k;
+  vs_[k].ca = ca_k;
+  vs_[k].ca_arg = arg_k;
   updateKey(k);
   // a ring vertex whose max triangle died or changed is walked again (unmarked); the others keep
   // their max and only meet the changed triangles, all of which are in k's fan
   for (uint32_t u : neighbours_) {
-    const uint32_t arg = ca_arg_[u];
+    const uint32_t arg = vs_[u].ca_arg;
     if (arg != kNone && (!faces_[arg].alive || faces_[arg].mark == mark_gen_)) {
-      ca_[u] = visionOf(u);
-      mark_[u] = 0;
+      vs_[u].ca = visionOf(u);
+      vs_[u].mark = 0;
     }
   }
   for (const StarEntry& e : fan_)
     for (uint32_t u : {e.u, e.w}) {
-      if (mark_[u] != mark_gen_) continue;
+      if (vs_[u].mark != mark_gen_) continue;
       const float c = fastAngle(nrm_[u], faces_[e.t].n) * faces_[e.t].area;
-      if (c > ca_[u]) ca_[u] = c, ca_arg_[u] = e.t;
+      if (c > vs_[u].ca) vs_[u].ca = c, vs_[u].ca_arg = e.t;
     }
   for (uint32_t u : neighbours_) updateKey(u);
 }
@@ -355,8 +362,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   stats_ = ZhangStats{};
   pos_ = in.positions;
   nrm_.assign(vn, glm::vec3(0.0f));
-  ca_.assign(vn, 0.0f);
-  ca_arg_.assign(vn, kNone);
+  vs_.assign(vn, VertexState{});
   vhead_.assign(vn, kNone);
   attr_nrm_ = in.normals;
   col_ = in.colors;
@@ -364,12 +370,9 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   weight_.assign(vn, 0.0f);
   parent_.resize(vn);
   for (size_t v = 0; v < vn; ++v) parent_[v] = static_cast<uint32_t>(v);
-  kept_.assign(vn, 0);
-  alive_v_.assign(vn, 0);
   faces_.clear();
   faces_.reserve(tn);
   star_.resize(vn);
-  mark_.assign(std::max(vn, tn), 0);
   mark_gen_ = 0;
 
   // welding: vertices at exactly the same position become one (the lowest id) for the topology
@@ -428,7 +431,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
       const uint32_t v = faces_[t].v[k];
       nrm_[v] += faces_[t].n * faces_[t].area;
       weight_[v] += faces_[t].area / 3.0f;
-      alive_v_[v] = 1;
+      vs_[v].alive = 1;
     }
   }
   for (glm::vec3& n : nrm_) n = safeNormalize(n);
@@ -437,7 +440,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   heap_.reset(params_.mode == ZhangMode::kEdgeCollapse ? vn : live);
   std::vector<StarPair> pairs;
   for (uint32_t v = 0; v < vn; ++v) {
-    if (!alive_v_[v]) continue;
+    if (!vs_[v].alive) continue;
     pairs.clear();
     float max_angle = 0.0f, ca = 0.0f;
     uint32_t ca_arg = kNone;
@@ -447,17 +450,17 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
       max_angle = std::max(max_angle, angle);
       if (angle * faces_[t].area > ca) ca = angle * faces_[t].area, ca_arg = t;
     });
-    ca_arg_[v] = ca_arg;
+    vs_[v].ca_arg = ca_arg;
     zhang_detail::StarMeasure m;
     zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
                               params_.influence == ZhangInfluence::kSuperHeight);
-    ca_[v] = ca;
-    kept_[v] = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
+    vs_[v].ca = ca;
+    vs_[v].kept = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
                (params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle);
     stats_.kept_edge_vertices += m.vertex_class == ZhangVertexClass::kEdge;
     stats_.kept_complex_vertices += m.vertex_class == ZhangVertexClass::kComplex;
     stats_.kept_angle_vertices += params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle;
-    if (params_.mode == ZhangMode::kEdgeCollapse && !kept_[v])
+    if (params_.mode == ZhangMode::kEdgeCollapse && !vs_[v].kept)
       heap_.set(v, params_.influence == ZhangInfluence::kSuperHeight ? m.super_height : ca);
   }
   if (params_.mode == ZhangMode::kTriangleDecimation)
@@ -472,7 +475,7 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
   int kept_count = 0;
   k = s[0];
   for (int i = 0; i < s_count; ++i)
-    if (kept_[s[i]]) {
+    if (vs_[s[i]].kept) {
       ++kept_count;
       k = s[i];
     }
@@ -490,11 +493,11 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
     return;
   }
   float sum = 0.0f;
-  for (int i = 0; i < s_count; ++i) sum += ca_[s[i]];
+  for (int i = 0; i < s_count; ++i) sum += vs_[s[i]].ca;
   p = glm::vec3(0.0f);
   glm::vec3 nn(0.0f);
   for (int i = 0; i < s_count; ++i) {
-    const float w = sum > 0.0f ? ca_[s[i]] / sum : 1.0f / static_cast<float>(s_count);
+    const float w = sum > 0.0f ? vs_[s[i]].ca / sum : 1.0f / static_cast<float>(s_count);
     p += w * pos_[s[i]];
     nn += w * nrm_[s[i]];
   }
@@ -669,7 +672,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     for (int i = 0; i < s_count; ++i) acc += (wsum > 0.0f ? weight_[s[i]] / wsum : 1.0f / s_count) * a[s[i]];
     a[k] = acc;
   };
-  if (!kept_[k]) {
+  if (!vs_[k].kept) {
     blend3(attr_nrm_);
     blend3(col_);
     if (!uv_.empty()) {
@@ -696,7 +699,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     }
     vhead_[v] = kNone;
     parent_[v] = k;
-    alive_v_[v] = 0;
+    vs_[v].alive = 0;
     if (params_.mode == ZhangMode::kEdgeCollapse) heap_.remove(v);
   }
   // new normals and areas around k, then the CA (and queue key) of k and of its ring
@@ -709,8 +712,8 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     fan_.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
     for (uint32_t c = 1; c < 3; ++c) {
       const uint32_t u = faces_[t].v[(corner + c) % 3];
-      if (mark_[u] != mark_gen_) {
-        mark_[u] = mark_gen_;
+      if (vs_[u].mark != mark_gen_) {
+        vs_[u].mark = mark_gen_;
         neighbours_.push_back(u);
       }
     }
@@ -728,8 +731,8 @@ bool ZhangEngine::stepEdge() {
   ++mark_gen_;
   for (const StarEntry& e : star_i_)
     for (uint32_t u : {e.u, e.w})
-      if (mark_[u] != mark_gen_) {
-        mark_[u] = mark_gen_;
+      if (vs_[u].mark != mark_gen_) {
+        vs_[u].mark = mark_gen_;
         tris_.push_back(u);
       }
   float best_ca = INFINITY;
@@ -790,8 +793,8 @@ void ZhangEngine::refreshTrianglesAround(uint32_t k) {
   // triangles whose NT(T) holds a triangle of k's fan: those touching k or its ring
   ++mark_gen_;
   auto touch = [&](uint32_t t, uint32_t) {
-    if (mark_[t] == mark_gen_) return;
-    mark_[t] = mark_gen_;
+    if (faces_[t].mark == mark_gen_) return;
+    faces_[t].mark = mark_gen_;
     heap_.set(t, triangleVision(t));
   };
   forStar(k, touch);
@@ -804,12 +807,12 @@ bool ZhangEngine::stepTriangle() {
   uint32_t s[3] = {faces_[t].v[0], faces_[t].v[1], faces_[t].v[2]};
   // the vertex with the largest CA last: with ZhangPlacement::kNeighbour the triangle goes onto it
   for (int a = 0; a < 2; ++a)
-    if (ca_[s[a]] > ca_[s[2]] || (ca_[s[a]] == ca_[s[2]] && s[a] < s[2])) std::swap(s[a], s[2]);
+    if (vs_[s[a]].ca > vs_[s[2]].ca || (vs_[s[a]].ca == vs_[s[2]].ca && s[a] < s[2])) std::swap(s[a], s[2]);
   uint32_t k;
   glm::vec3 p, n;
   bool ok;
   interpolate(s, 3, k, p, n, ok);
-  if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
+  if (ok && !vs_[k].kept) k = s[2];  // survivor: the vertex with the largest CA
   if (!ok) {  // re-queued when its neighbourhood changes
     ++stats_.blocked;
     return true;
@@ -932,7 +935,7 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   stats_.max_surface_distance = std::sqrt(max_s2);
   stats_.output_triangles = alive_tris_;
   stats_.free_vertices_left = 0;
-  for (size_t v = 0; v < vn; ++v) stats_.free_vertices_left += alive_v_[v] && !kept_[v];
+  for (size_t v = 0; v < vn; ++v) stats_.free_vertices_left += vs_[v].alive && !vs_[v].kept;
   stats_.stop_reason = alive_tris_ > current_target_ && stopped_ ? ZhangStopReason::kNoValidCollapse
                                                                  : ZhangStopReason::kTargetReached;
   stats = stats_;
