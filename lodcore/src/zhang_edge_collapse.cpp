@@ -332,7 +332,7 @@ void ZhangEngine::refreshAround(uint32_t k) {
   vs_[k].ca_arg = arg_k;
   updateKey(k);
   // a ring vertex whose max triangle died or changed is walked again (unmarked); the others keep
-  // their max and only meet the changed triangles, all of which are in k's fan
+  // their max and only meet the changed triangles (marked), all of which are in k's fan
   for (uint32_t u : neighbours_) {
     const uint32_t arg = vs_[u].ca_arg;
     if (arg != kNone && (!faces_[arg].alive || faces_[arg].mark == mark_gen_)) {
@@ -340,12 +340,14 @@ void ZhangEngine::refreshAround(uint32_t k) {
       vs_[u].mark = 0;
     }
   }
-  for (const StarEntry& e : fan_)
+  for (const StarEntry& e : fan_) {
+    if (faces_[e.t].mark != mark_gen_) continue;  // unchanged: already within the ring's CA
     for (uint32_t u : {e.u, e.w}) {
       if (vs_[u].mark != mark_gen_) continue;
       const float c = fastAngle(nrm_[u], faces_[e.t].n) * faces_[e.t].area;
       if (c > vs_[u].ca) vs_[u].ca = c, vs_[u].ca_arg = e.t;
     }
+  }
   for (uint32_t u : neighbours_) updateKey(u);
 }
 
@@ -534,14 +536,21 @@ bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const gl
     const glm::vec3 nt = x / len;
     // against the triangle's current normal (a flip) and against the merged vertex's carried
     // normal, interpolated from the original's (drift from the original orientation)
-    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
+    const float dot_n = glm::dot(nt, n);
+    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || dot_n < cos_max_turn_) {
       ++stats_.rejected_fold;
       return false;
     }
-    float angle = fastAngle(n, nt);
-    // the ring vertices' CA over the triangle that changed (paper Fig. 6: a fold raises CA(V_2))
+    // the largest angle is the one of the smallest dot (acos decreases); a zero normal gives angle 0.
+    // The ring vertices count too over a triangle that changed (paper Fig. 6: a fold raises CA(V_2))
+    float min_dot = 2.0f;
+    if (glm::dot(n, n) != 0.0f) min_dot = dot_n;
     if (ring && params_.ring_vision)
-      angle = std::max({angle, fastAngle(nrm_[entries[e].u], nt), fastAngle(nrm_[entries[e].w], nt)});
+      for (uint32_t r : {entries[e].u, entries[e].w}) {
+        const glm::vec3& nr = nrm_[r];
+        if (glm::dot(nr, nr) != 0.0f) min_dot = std::min(min_dot, glm::dot(nr, nt));
+      }
+    const float angle = min_dot > 1.5f ? 0.0f : fastAcos(min_dot);
     new_ca = std::max(new_ca, angle * 0.5f * len);
     if (new_ca >= bound) return false;  // cannot beat the best candidate so far
   }
@@ -682,8 +691,12 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     }
   }
   weight_[k] = wsum;
+  const bool k_moved = pos_[k] != p;
   pos_[k] = p;
   nrm_[k] = n;
+  // the triangles that change shape get this collapse's mark: the relabelled ones, and all of k's fan
+  // when k moved
+  ++mark_gen_;
   for (int i = 0; i < s_count; ++i) {
     const uint32_t v = s[i];
     if (v == k) continue;
@@ -691,6 +704,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     uint32_t last = kNone;
     forStar(v, [&](uint32_t t, uint32_t corner) {
       faces_[t].v[corner] = k;
+      faces_[t].mark = mark_gen_;
       last = 3 * t + corner;
     });
     if (last != kNone) {
@@ -702,13 +716,14 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     vs_[v].alive = 0;
     if (params_.mode == ZhangMode::kEdgeCollapse) heap_.remove(v);
   }
-  // new normals and areas around k, then the CA (and queue key) of k and of its ring
+  // new normals and areas of the changed triangles, then the CA (and queue key) of k and of its ring
   neighbours_.clear();
   fan_.clear();
-  ++mark_gen_;
   forStar(k, [&](uint32_t t, uint32_t corner) {
-    updateTriangle(t);
-    faces_[t].mark = mark_gen_;
+    if (k_moved || faces_[t].mark == mark_gen_) {
+      updateTriangle(t);
+      faces_[t].mark = mark_gen_;
+    }
     fan_.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
     for (uint32_t c = 1; c < 3; ++c) {
       const uint32_t u = faces_[t].v[(corner + c) % 3];
