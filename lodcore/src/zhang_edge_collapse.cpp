@@ -931,7 +931,8 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
     if (remap[c] == kNone) continue;
     const glm::vec3& q = in.positions[v];
     float best = glm::dot(q - pos_[c], q - pos_[c]);
-    for (int step = 0; step < 16; ++step) {
+    // best only falls during the walk, so a vertex already within the running max cannot raise it
+    for (int step = 0; step < 16 && best > max_s2; ++step) {
       uint32_t next = c;
       float next_d2 = glm::dot(q - pos_[c], q - pos_[c]);
       forStar(c, [&](uint32_t t, uint32_t) {
