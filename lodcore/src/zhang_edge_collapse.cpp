@@ -27,80 +27,90 @@ using zhang_detail::kNone;
 using zhang_detail::StarPair;
 using zhang_detail::StarScratch;
 
-// indexed binary min-heap over ids 0..n-1, ordered by (key, id) so ties are deterministic
+// indexed 4-ary min-heap over ids 0..n-1, ordered by (key, id): a strict total order, so the popped id
+// does not depend on the heap's shape and runs are deterministic. The keys sit in the heap array beside
+// the ids, and the four children of a node are 32 contiguous bytes, so a sift down reads one or two
+// lines per level over half the levels of a binary heap
 class IndexedHeap {
  public:
   void reset(size_t n) {
     heap_.clear();
     heap_.reserve(n);
     pos_.assign(n, kNone);
-    key_.assign(n, 0.0f);
   }
   bool contains(uint32_t id) const { return pos_[id] != kNone; }
   bool empty() const { return heap_.empty(); }
-  uint32_t top() const { return heap_[0]; }
+  uint32_t top() const { return heap_[0].id; }
   void set(uint32_t id, float key) {  // insert or update
-    if (pos_[id] == kNone) {
-      key_[id] = key;
+    const uint32_t p = pos_[id];
+    if (p == kNone) {
       pos_[id] = static_cast<uint32_t>(heap_.size());
-      heap_.push_back(id);
+      heap_.push_back({key, id});
       up(pos_[id]);
       return;
     }
-    const float old = key_[id];
-    key_[id] = key;
-    if (key < old) up(pos_[id]); else down(pos_[id]);
+    const float old = heap_[p].key;
+    if (key == old) return;  // a sift would not move it
+    heap_[p].key = key;
+    if (key < old) up(p); else down(p);
   }
   void remove(uint32_t id) {
     const uint32_t p = pos_[id];
     if (p == kNone) return;
-    const uint32_t last = heap_.back();
+    const Entry last = heap_.back();
     heap_.pop_back();
     pos_[id] = kNone;
     if (p < heap_.size()) {
       heap_[p] = last;
-      pos_[last] = p;
+      pos_[last.id] = p;
       up(p);
-      down(pos_[last]);
+      down(pos_[last.id]);
     }
   }
   uint32_t pop() {
-    const uint32_t id = heap_[0];
+    const uint32_t id = heap_[0].id;
     remove(id);
     return id;
   }
 
  private:
-  bool less(uint32_t a, uint32_t b) const { return key_[a] < key_[b] || (key_[a] == key_[b] && a < b); }
+  struct Entry {
+    float key;
+    uint32_t id;
+  };
+  static bool less(const Entry& a, const Entry& b) { return a.key < b.key || (a.key == b.key && a.id < b.id); }
   void up(uint32_t p) {
-    const uint32_t id = heap_[p];
+    const Entry e = heap_[p];
     while (p > 0) {
-      const uint32_t parent = (p - 1) / 2;
-      if (!less(id, heap_[parent])) break;
+      const uint32_t parent = (p - 1) / 4;
+      if (!less(e, heap_[parent])) break;
       heap_[p] = heap_[parent];
-      pos_[heap_[p]] = p;
+      pos_[heap_[p].id] = p;
       p = parent;
     }
-    heap_[p] = id;
-    pos_[id] = p;
+    heap_[p] = e;
+    pos_[e.id] = p;
   }
   void down(uint32_t p) {
-    const uint32_t id = heap_[p], n = static_cast<uint32_t>(heap_.size());
+    const Entry e = heap_[p];
+    const uint32_t n = static_cast<uint32_t>(heap_.size());
     for (;;) {
-      uint32_t c = 2 * p + 1;
-      if (c >= n) break;
-      if (c + 1 < n && less(heap_[c + 1], heap_[c])) ++c;
-      if (!less(heap_[c], id)) break;
+      const uint32_t first = 4 * p + 1;
+      if (first >= n) break;
+      uint32_t c = first;
+      const uint32_t last = std::min(first + 4, n);
+      for (uint32_t o = first + 1; o < last; ++o)
+        if (less(heap_[o], heap_[c])) c = o;
+      if (!less(heap_[c], e)) break;
       heap_[p] = heap_[c];
-      pos_[heap_[p]] = p;
+      pos_[heap_[p].id] = p;
       p = c;
     }
-    heap_[p] = id;
-    pos_[id] = p;
+    heap_[p] = e;
+    pos_[e.id] = p;
   }
-  std::vector<uint32_t> heap_;
+  std::vector<Entry> heap_;
   std::vector<uint32_t> pos_;
-  std::vector<float> key_;
 };
 
 // acos to within 7e-5 rad (Abramowitz & Stegun 4.4.45); CA only ranks collapses, and libm's acosf
@@ -170,7 +180,9 @@ class ZhangEngine {
   void updateTriangle(uint32_t t);
   float visionOf(uint32_t v);
   float superHeightOf(uint32_t v);
-  void refreshVertex(uint32_t v);
+  void updateKey(uint32_t v);
+  // after a collapse into k: CA of k and of its ring (the fan of k is in fan_, its faces marked)
+  void refreshAround(uint32_t k);
 
   // contraction of the set S (2 or 3 vertices) into survivor k at (p, n): checks, new CA(k)
   // a triangle that survives a contraction: its id and the two vertices after the merged one
@@ -183,11 +195,14 @@ class ZhangEngine {
   // stop early (they cannot win) and return false
   bool evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p, const glm::vec3& n,
                 float bound, float& new_ca);
-  // the fold-over part of evaluate, raising new_ca (which the caller initialises)
-  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound,
+  // the fold-over part of evaluate, raising new_ca (which the caller initialises); `ring`: the
+  // triangles changed shape, so their ring vertices' CA counts too (ZhangParams::ring_vision)
+  bool checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n, float bound, bool ring,
                      float& new_ca);
   // the link-condition part of evaluate
   bool checkTopology(const StarEntry* entries, size_t count, bool any_removed);
+  static constexpr size_t kLocalStar = 32;
+  bool checkTopologyLocal(const StarEntry* entries, size_t count);
   void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
   void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
 
@@ -199,25 +214,37 @@ class ZhangEngine {
   const Mesh* in_ = nullptr;
   ZhangParams params_;
   float cos_max_turn_ = 0.5f;
-  // per vertex, hot: position (12 B), carried geometric normal (12 B), CA (4 B), corner list head (4 B)
+  // per vertex, hot: position (12 B), carried geometric normal (12 B), corner list head (4 B)
   std::vector<glm::vec3> pos_, nrm_;
-  std::vector<float> ca_;
   std::vector<uint32_t> vhead_;
+  // per vertex, the state read together on every collapse around it, one 16 B record (one line miss
+  // instead of one per array)
+  struct VertexState {
+    float ca = 0.0f;         // CA(V), definition 9
+    uint32_t ca_arg = kNone;  // the triangle giving CA (its max), kNone when CA is 0; while it is alive
+                              // and unchanged, a collapse next to the vertex only raises CA through
+                              // the changed triangles
+    uint32_t mark = 0;       // generation mark of the per-collapse vertex sets
+    uint8_t kept = 0;        // edge, complex (or angle on request): never moves
+    uint8_t alive = 0;       // in at least one live triangle and not merged away
+  };
+  std::vector<VertexState> vs_;
   // per vertex, cold: attributes blended on collapse with the area weight, union-find parent
   std::vector<glm::vec3> attr_nrm_, col_;
   std::vector<glm::vec2> uv_;
   std::vector<float> weight_;
   std::vector<uint32_t> parent_;
-  std::vector<uint8_t> kept_, alive_v_;
-  // per triangle, one record so that walking a fan touches one cache line per triangle (52 B):
+  // per triangle, one record aligned to a cache line so that walking a fan touches exactly one line per
+  // triangle (48 B used of 64; unaligned records straddled two lines on most steps):
   // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
-  // alive flag (4 B); corner c is vertex c % 3 of triangle c / 3
-  struct Face {
+  // alive flag (4 B), mark (4 B); corner c is vertex c % 3 of triangle c / 3
+  struct alignas(64) Face {
     uint32_t v[3] = {kNone, kNone, kNone};
     uint32_t next[3] = {kNone, kNone, kNone};
     glm::vec3 n{0.0f};
     float area = 0.0f;
     uint32_t alive = 1;
+    uint32_t mark = 0;  // generation of the last collapse whose fan held this triangle
   };
   std::vector<Face> faces_;
   uint32_t& cornerNext(uint32_t c) { return faces_[c / 3].next[c % 3]; }
@@ -230,8 +257,8 @@ class ZhangEngine {
   // scratch reused by every evaluation
   StarScratch star_;
   std::vector<StarPair> pairs_;
-  std::vector<uint32_t> tris_, neighbours_, mark_, removed_;
-  std::vector<StarEntry> star_i_, star_j_, union_;
+  std::vector<uint32_t> tris_, neighbours_, removed_;
+  std::vector<StarEntry> star_i_, star_j_, union_, fan_;
   uint32_t mark_gen_ = 0;
 };
 
@@ -272,8 +299,13 @@ void ZhangEngine::updateTriangle(uint32_t t) {
 
 float ZhangEngine::visionOf(uint32_t v) {
   float ca = 0.0f;
+  uint32_t arg = kNone;
   const glm::vec3 nv = nrm_[v];
-  forStar(v, [&](uint32_t t, uint32_t) { ca = std::max(ca, fastAngle(nv, faces_[t].n) * faces_[t].area); });
+  forStar(v, [&](uint32_t t, uint32_t) {
+    const float c = fastAngle(nv, faces_[t].n) * faces_[t].area;
+    if (c > ca) ca = c, arg = t;
+  });
+  vs_[v].ca_arg = arg;
   return ca;
 }
 
@@ -283,11 +315,40 @@ float ZhangEngine::superHeightOf(uint32_t v) {
   return zhang_detail::superHeightOfStar(pos_[v], pairs_.data(), pairs_.size(), pos_.data(), star_);
 }
 
-void ZhangEngine::refreshVertex(uint32_t v) {
-  ca_[v] = visionOf(v);
-  if (params_.mode != ZhangMode::kEdgeCollapse || kept_[v] || !alive_v_[v]) return;
-  const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : ca_[v];
+void ZhangEngine::updateKey(uint32_t v) {
+  if (params_.mode != ZhangMode::kEdgeCollapse || vs_[v].kept || !vs_[v].alive) return;
+  const float key = params_.influence == ZhangInfluence::kSuperHeight ? superHeightOf(v) : vs_[v].ca;
   heap_.set(v, key);
+}
+
+void ZhangEngine::refreshAround(uint32_t k) {
+  float ca_k = 0.0f;
+  uint32_t arg_k = kNone;
+  for (const StarEntry& e : fan_) {
+    const float c = fastAngle(nrm_[k], faces_[e.t].n) * faces_[e.t].area;
+    if (c > ca_k) ca_k = c, arg_k = e.t;
+  }
+  vs_[k].ca = ca_k;
+  vs_[k].ca_arg = arg_k;
+  updateKey(k);
+  // a ring vertex whose max triangle died or changed is walked again (unmarked); the others keep
+  // their max and only meet the changed triangles (marked), all of which are in k's fan
+  for (uint32_t u : neighbours_) {
+    const uint32_t arg = vs_[u].ca_arg;
+    if (arg != kNone && (!faces_[arg].alive || faces_[arg].mark == mark_gen_)) {
+      vs_[u].ca = visionOf(u);
+      vs_[u].mark = 0;
+    }
+  }
+  for (const StarEntry& e : fan_) {
+    if (faces_[e.t].mark != mark_gen_) continue;  // unchanged: already within the ring's CA
+    for (uint32_t u : {e.u, e.w}) {
+      if (vs_[u].mark != mark_gen_) continue;
+      const float c = fastAngle(nrm_[u], faces_[e.t].n) * faces_[e.t].area;
+      if (c > vs_[u].ca) vs_[u].ca = c, vs_[u].ca_arg = e.t;
+    }
+  }
+  for (uint32_t u : neighbours_) updateKey(u);
 }
 
 Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
@@ -303,7 +364,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   stats_ = ZhangStats{};
   pos_ = in.positions;
   nrm_.assign(vn, glm::vec3(0.0f));
-  ca_.assign(vn, 0.0f);
+  vs_.assign(vn, VertexState{});
   vhead_.assign(vn, kNone);
   attr_nrm_ = in.normals;
   col_ = in.colors;
@@ -311,12 +372,9 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   weight_.assign(vn, 0.0f);
   parent_.resize(vn);
   for (size_t v = 0; v < vn; ++v) parent_[v] = static_cast<uint32_t>(v);
-  kept_.assign(vn, 0);
-  alive_v_.assign(vn, 0);
   faces_.clear();
   faces_.reserve(tn);
   star_.resize(vn);
-  mark_.assign(std::max(vn, tn), 0);
   mark_gen_ = 0;
 
   // welding: vertices at exactly the same position become one (the lowest id) for the topology
@@ -375,7 +433,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
       const uint32_t v = faces_[t].v[k];
       nrm_[v] += faces_[t].n * faces_[t].area;
       weight_[v] += faces_[t].area / 3.0f;
-      alive_v_[v] = 1;
+      vs_[v].alive = 1;
     }
   }
   for (glm::vec3& n : nrm_) n = safeNormalize(n);
@@ -384,22 +442,27 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   heap_.reset(params_.mode == ZhangMode::kEdgeCollapse ? vn : live);
   std::vector<StarPair> pairs;
   for (uint32_t v = 0; v < vn; ++v) {
-    if (!alive_v_[v]) continue;
+    if (!vs_[v].alive) continue;
     pairs.clear();
     float max_angle = 0.0f, ca = 0.0f;
+    uint32_t ca_arg = kNone;
     forStar(v, [&](uint32_t t, uint32_t k) {
       pairs.push_back({faces_[t].v[(k + 1) % 3], faces_[t].v[(k + 2) % 3]});
       const float angle = fastAngle(nrm_[v], faces_[t].n);
       max_angle = std::max(max_angle, angle);
-      ca = std::max(ca, angle * faces_[t].area);
+      if (angle * faces_[t].area > ca) ca = angle * faces_[t].area, ca_arg = t;
     });
+    vs_[v].ca_arg = ca_arg;
     zhang_detail::StarMeasure m;
     zhang_detail::measureStar(pos_[v], pairs.data(), pairs.size(), pos_.data(), max_angle, params_, star_, m,
                               params_.influence == ZhangInfluence::kSuperHeight);
-    ca_[v] = ca;
-    kept_[v] = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
+    vs_[v].ca = ca;
+    vs_[v].kept = m.vertex_class == ZhangVertexClass::kComplex || m.vertex_class == ZhangVertexClass::kEdge ||
                (params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle);
-    if (params_.mode == ZhangMode::kEdgeCollapse && !kept_[v])
+    stats_.kept_edge_vertices += m.vertex_class == ZhangVertexClass::kEdge;
+    stats_.kept_complex_vertices += m.vertex_class == ZhangVertexClass::kComplex;
+    stats_.kept_angle_vertices += params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle;
+    if (params_.mode == ZhangMode::kEdgeCollapse && !vs_[v].kept)
       heap_.set(v, params_.influence == ZhangInfluence::kSuperHeight ? m.super_height : ca);
   }
   if (params_.mode == ZhangMode::kTriangleDecimation)
@@ -414,7 +477,7 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
   int kept_count = 0;
   k = s[0];
   for (int i = 0; i < s_count; ++i)
-    if (kept_[s[i]]) {
+    if (vs_[s[i]].kept) {
       ++kept_count;
       k = s[i];
     }
@@ -432,11 +495,11 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
     return;
   }
   float sum = 0.0f;
-  for (int i = 0; i < s_count; ++i) sum += ca_[s[i]];
+  for (int i = 0; i < s_count; ++i) sum += vs_[s[i]].ca;
   p = glm::vec3(0.0f);
   glm::vec3 nn(0.0f);
   for (int i = 0; i < s_count; ++i) {
-    const float w = sum > 0.0f ? ca_[s[i]] / sum : 1.0f / static_cast<float>(s_count);
+    const float w = sum > 0.0f ? vs_[s[i]].ca / sum : 1.0f / static_cast<float>(s_count);
     p += w * pos_[s[i]];
     nn += w * nrm_[s[i]];
   }
@@ -454,11 +517,11 @@ void ZhangEngine::gatherStar(uint32_t v, std::vector<StarEntry>& out) {
 bool ZhangEngine::evaluate(const StarEntry* entries, size_t count, bool any_removed, const glm::vec3& p,
                            const glm::vec3& n, float bound, float& new_ca) {
   new_ca = 0.0f;
-  return checkGeometry(entries, count, p, n, bound, new_ca) && checkTopology(entries, count, any_removed);
+  return checkGeometry(entries, count, p, n, bound, true, new_ca) && checkTopology(entries, count, any_removed);
 }
 
 bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const glm::vec3& p, const glm::vec3& n,
-                                float bound, float& new_ca) {
+                                float bound, bool ring, float& new_ca) {
   for (size_t e = 0; e < count; ++e) {
     const uint32_t t = entries[e].t;
     const glm::vec3 &pu = pos_[entries[e].u], &pw = pos_[entries[e].w];
@@ -473,17 +536,33 @@ bool ZhangEngine::checkGeometry(const StarEntry* entries, size_t count, const gl
     const glm::vec3 nt = x / len;
     // against the triangle's current normal (a flip) and against the merged vertex's carried
     // normal, interpolated from the original's (drift from the original orientation)
-    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || glm::dot(nt, n) < cos_max_turn_) {
+    const float dot_n = glm::dot(nt, n);
+    if (glm::dot(nt, faces_[t].n) < cos_max_turn_ || dot_n < cos_max_turn_) {
       ++stats_.rejected_fold;
       return false;
     }
-    new_ca = std::max(new_ca, fastAngle(n, nt) * 0.5f * len);
+    // the largest angle is the one of the smallest dot (acos decreases); a zero normal gives angle 0.
+    // The ring vertices count too over a triangle that changed (paper Fig. 6: a fold raises CA(V_2))
+    float min_dot = 2.0f;
+    if (glm::dot(n, n) != 0.0f) min_dot = dot_n;
+    if (ring && params_.ring_vision)
+      for (uint32_t r : {entries[e].u, entries[e].w}) {
+        const glm::vec3& nr = nrm_[r];
+        if (glm::dot(nr, nr) != 0.0f) min_dot = std::min(min_dot, glm::dot(nr, nt));
+      }
+    const float angle = min_dot > 1.5f ? 0.0f : fastAcos(min_dot);
+    new_ca = std::max(new_ca, angle * 0.5f * len);
     if (new_ca >= bound) return false;  // cannot beat the best candidate so far
   }
   return true;
 }
 
 bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any_removed) {
+  if (count == 0 || !any_removed) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  if (count <= kLocalStar) return checkTopologyLocal(entries, count);
   star_.reset();
   for (size_t e = 0; e < count; ++e) {
     const uint32_t u = entries[e].u, w = entries[e].w;
@@ -495,10 +574,6 @@ bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any
   }
   // link condition: the surviving fan around the merged vertex is one cycle or one chain
   const size_t pc = count;
-  if (pc == 0 || !any_removed) {
-    ++stats_.rejected_topology;
-    return false;
-  }
   size_t chain_starts = 0;
   uint32_t start = entries[0].u;
   for (uint32_t v : star_.touched) {
@@ -524,6 +599,56 @@ bool ZhangEngine::checkTopology(const StarEntry* entries, size_t count, bool any
     ++steps;
   } while (v != start && steps <= pc);
   if (steps != pc || (chain_starts == 0 && (v != start || pc < 3))) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  return true;
+}
+
+// the same test as checkTopology on a small star, with the ring vertices in a local table found by a
+// linear scan instead of the per-vertex scratch arrays (which cost a cache miss per ring vertex)
+bool ZhangEngine::checkTopologyLocal(const StarEntry* entries, size_t count) {
+  uint32_t ids[2 * kLocalStar], next[2 * kLocalStar];
+  uint8_t first[2 * kLocalStar], second[2 * kLocalStar];
+  uint32_t n = 0;
+  auto slot = [&](uint32_t v) {
+    for (uint32_t i = 0; i < n; ++i)
+      if (ids[i] == v) return i;
+    ids[n] = v;
+    first[n] = second[n] = 0;
+    next[n] = kNone;
+    return n++;
+  };
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t a = slot(entries[e].u), b = slot(entries[e].w);
+    ++first[a];
+    ++second[b];
+    next[a] = b;
+  }
+  size_t chain_starts = 0;
+  uint32_t start = 0;  // the slot of entries[0].u
+  for (uint32_t i = 0; i < n; ++i) {
+    if (first[i] > 1 || second[i] > 1) {
+      ++stats_.rejected_topology;
+      return false;
+    }
+    if (second[i] == 0) {
+      ++chain_starts;
+      start = i;
+    }
+  }
+  if (chain_starts > 1 || n != count + chain_starts) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  size_t steps = 0;
+  uint32_t v = start;
+  do {
+    if (first[v] == 0) break;  // end of the chain
+    v = next[v];
+    ++steps;
+  } while (v != start && steps <= count);
+  if (steps != count || (chain_starts == 0 && (v != start || count < 3))) {
     ++stats_.rejected_topology;
     return false;
   }
@@ -556,7 +681,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     for (int i = 0; i < s_count; ++i) acc += (wsum > 0.0f ? weight_[s[i]] / wsum : 1.0f / s_count) * a[s[i]];
     a[k] = acc;
   };
-  if (!kept_[k]) {
+  if (!vs_[k].kept) {
     blend3(attr_nrm_);
     blend3(col_);
     if (!uv_.empty()) {
@@ -566,8 +691,12 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     }
   }
   weight_[k] = wsum;
+  const bool k_moved = pos_[k] != p;
   pos_[k] = p;
   nrm_[k] = n;
+  // the triangles that change shape get this collapse's mark: the relabelled ones, and all of k's fan
+  // when k moved
+  ++mark_gen_;
   for (int i = 0; i < s_count; ++i) {
     const uint32_t v = s[i];
     if (v == k) continue;
@@ -575,6 +704,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     uint32_t last = kNone;
     forStar(v, [&](uint32_t t, uint32_t corner) {
       faces_[t].v[corner] = k;
+      faces_[t].mark = mark_gen_;
       last = 3 * t + corner;
     });
     if (last != kNone) {
@@ -583,24 +713,27 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     }
     vhead_[v] = kNone;
     parent_[v] = k;
-    alive_v_[v] = 0;
+    vs_[v].alive = 0;
     if (params_.mode == ZhangMode::kEdgeCollapse) heap_.remove(v);
   }
-  // new normals and areas around k, then the CA (and queue key) of k and of its ring
+  // new normals and areas of the changed triangles, then the CA (and queue key) of k and of its ring
   neighbours_.clear();
-  ++mark_gen_;
+  fan_.clear();
   forStar(k, [&](uint32_t t, uint32_t corner) {
-    updateTriangle(t);
+    if (k_moved || faces_[t].mark == mark_gen_) {
+      updateTriangle(t);
+      faces_[t].mark = mark_gen_;
+    }
+    fan_.push_back({t, faces_[t].v[(corner + 1) % 3], faces_[t].v[(corner + 2) % 3]});
     for (uint32_t c = 1; c < 3; ++c) {
       const uint32_t u = faces_[t].v[(corner + c) % 3];
-      if (mark_[u] != mark_gen_) {
-        mark_[u] = mark_gen_;
+      if (vs_[u].mark != mark_gen_) {
+        vs_[u].mark = mark_gen_;
         neighbours_.push_back(u);
       }
     }
   });
-  refreshVertex(k);
-  for (uint32_t u : neighbours_) refreshVertex(u);
+  refreshAround(k);
   ++stats_.collapses;
 }
 
@@ -613,8 +746,8 @@ bool ZhangEngine::stepEdge() {
   ++mark_gen_;
   for (const StarEntry& e : star_i_)
     for (uint32_t u : {e.u, e.w})
-      if (mark_[u] != mark_gen_) {
-        mark_[u] = mark_gen_;
+      if (vs_[u].mark != mark_gen_) {
+        vs_[u].mark = mark_gen_;
         tris_.push_back(u);
       }
   float best_ca = INFINITY;
@@ -636,12 +769,12 @@ bool ZhangEngine::stepEdge() {
     }
     // V_i's side first: most candidates lose there, before V_j's fan is walked
     float ca = 0.0f;
-    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, ca)) continue;
+    if (!checkGeometry(union_.data(), union_.size(), p, n, best_ca, true, ca)) continue;
     const size_t i_part = union_.size();
     gatherStar(j, star_j_);
     for (const StarEntry& e : star_j_)
       if (e.u != i && e.w != i) union_.push_back(e);
-    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, ca)) continue;
+    if (!checkGeometry(union_.data() + i_part, union_.size() - i_part, p, n, best_ca, p != pos_[j], ca)) continue;
     if (!checkTopology(union_.data(), union_.size(), any_removed)) continue;
     if (ca < best_ca) {
       best_ca = ca;
@@ -675,8 +808,8 @@ void ZhangEngine::refreshTrianglesAround(uint32_t k) {
   // triangles whose NT(T) holds a triangle of k's fan: those touching k or its ring
   ++mark_gen_;
   auto touch = [&](uint32_t t, uint32_t) {
-    if (mark_[t] == mark_gen_) return;
-    mark_[t] = mark_gen_;
+    if (faces_[t].mark == mark_gen_) return;
+    faces_[t].mark = mark_gen_;
     heap_.set(t, triangleVision(t));
   };
   forStar(k, touch);
@@ -689,12 +822,12 @@ bool ZhangEngine::stepTriangle() {
   uint32_t s[3] = {faces_[t].v[0], faces_[t].v[1], faces_[t].v[2]};
   // the vertex with the largest CA last: with ZhangPlacement::kNeighbour the triangle goes onto it
   for (int a = 0; a < 2; ++a)
-    if (ca_[s[a]] > ca_[s[2]] || (ca_[s[a]] == ca_[s[2]] && s[a] < s[2])) std::swap(s[a], s[2]);
+    if (vs_[s[a]].ca > vs_[s[2]].ca || (vs_[s[a]].ca == vs_[s[2]].ca && s[a] < s[2])) std::swap(s[a], s[2]);
   uint32_t k;
   glm::vec3 p, n;
   bool ok;
   interpolate(s, 3, k, p, n, ok);
-  if (ok && !kept_[k]) k = s[2];  // survivor: the vertex with the largest CA
+  if (ok && !vs_[k].kept) k = s[2];  // survivor: the vertex with the largest CA
   if (!ok) {  // re-queued when its neighbourhood changes
     ++stats_.blocked;
     return true;
@@ -798,7 +931,8 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
     if (remap[c] == kNone) continue;
     const glm::vec3& q = in.positions[v];
     float best = glm::dot(q - pos_[c], q - pos_[c]);
-    for (int step = 0; step < 16; ++step) {
+    // best only falls during the walk, so a vertex already within the running max cannot raise it
+    for (int step = 0; step < 16 && best > max_s2; ++step) {
       uint32_t next = c;
       float next_d2 = glm::dot(q - pos_[c], q - pos_[c]);
       forStar(c, [&](uint32_t t, uint32_t) {
@@ -816,6 +950,8 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   }
   stats_.max_surface_distance = std::sqrt(max_s2);
   stats_.output_triangles = alive_tris_;
+  stats_.free_vertices_left = 0;
+  for (size_t v = 0; v < vn; ++v) stats_.free_vertices_left += vs_[v].alive && !vs_[v].kept;
   stats_.stop_reason = alive_tris_ > current_target_ && stopped_ ? ZhangStopReason::kNoValidCollapse
                                                                  : ZhangStopReason::kTargetReached;
   stats = stats_;

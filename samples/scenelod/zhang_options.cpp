@@ -9,6 +9,8 @@ const char kZhangOptionsHelp[] =
     "  --zhang-mode M       edge (edge collapse, default) or triangle (the triangle-decimation extension)\n"
     "  --zhang-influence I  ca (vision characteristic, default) or sh (super height) orders the queue\n"
     "  --keep-corners B     yes keeps angle vertices (corners) fixed; no (default) processes them\n"
+    "  --zhang-ring B       yes (default) scores a candidate collapse by the CA it gives the merged vertex\n"
+    "                       and the ring vertices of the changed triangles (Fig. 6); no: the merged one only\n"
     "  --weld B             yes joins vertices at the same position first, so that glTF attribute seams\n"
     "                       are simplified too (texture seams are not kept); no (default) keeps seams\n";
 
@@ -40,6 +42,13 @@ bool parseZhangOptions(const Args& args, ZhangParams& p, std::string& error) {
   else if (corners == "no") p.keep_angle_vertices = false;
   else {
     error = "--keep-corners takes yes or no, not '" + corners + "'";
+    return false;
+  }
+  const std::string ring = args.get("--zhang-ring", "yes");
+  if (ring == "yes") p.ring_vision = true;
+  else if (ring == "no") p.ring_vision = false;
+  else {
+    error = "--zhang-ring takes yes or no, not '" + ring + "'";
     return false;
   }
   const std::string weld = args.get("--weld", "no");

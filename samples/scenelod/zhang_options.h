@@ -9,12 +9,12 @@
 
 namespace scenelod::tool {
 
-// help text for --zhang-placement, --zhang-mode, --zhang-influence, --keep-corners, --weld
+// help text for --zhang-placement, --zhang-mode, --zhang-influence, --keep-corners, --zhang-ring, --weld
 extern const char kZhangOptionsHelp[];
 
 // the options parseZhangOptions reads (all take a value)
 inline std::vector<std::string> zhangOptionNames() {
-  return {"--zhang-placement", "--zhang-mode", "--zhang-influence", "--keep-corners", "--weld"};
+  return {"--zhang-placement", "--zhang-mode", "--zhang-influence", "--keep-corners", "--zhang-ring", "--weld"};
 }
 
 // Fills `p` from the options (defaults: ZhangParams()). Returns false with `error` set on an unknown

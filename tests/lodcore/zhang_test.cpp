@@ -271,6 +271,22 @@ TEST(ZhangEdgeCollapse, SphereReachesTargetClosedAndOutward) {
   }
 }
 
+TEST(ZhangEdgeCollapse, MergedVertexOnlyScoringAlsoKeepsSphereClosed) {
+  const Mesh in = icosphere(4);
+  ZhangParams narrow;
+  narrow.ring_vision = false;
+  Mesh with_ring, merged_only;
+  ASSERT_TRUE(simplifyZhang(in, 512, ZhangParams{}, with_ring).ok());
+  ASSERT_TRUE(simplifyZhang(in, 512, narrow, merged_only).ok());
+  EXPECT_LE(merged_only.triangleCount(), 512u);
+  EXPECT_GE(merged_only.triangleCount(), 510u);
+  expectValid(merged_only);
+  expectClosedManifold(merged_only);
+  EXPECT_EQ(eulerCharacteristic(merged_only), 2);
+  // the ring vertices' CA changes which neighbour wins, so the two scorings give different meshes
+  EXPECT_NE(with_ring.positions, merged_only.positions);
+}
+
 TEST(ZhangEdgeCollapse, TorusKeepsItsGenus) {
   const Mesh in = torus(48, 24);  // 2304 triangles
   Mesh out;
@@ -323,6 +339,11 @@ TEST(ZhangEdgeCollapse, BoundaryIsKeptAndStopIsReported) {
   for (size_t t = 0; t < out.triangleCount(); ++t) EXPECT_GT(faceNormal(out, t).z, 0.0f);
   // a triangulated 32-gon: 30 triangles
   EXPECT_EQ(out.triangleCount(), 30u);
+  // the stop is explained by the counts: 32 kept border vertices, none movable left
+  EXPECT_EQ(st.kept_edge_vertices, 32u);
+  EXPECT_EQ(st.kept_complex_vertices, 0u);
+  EXPECT_EQ(st.kept_angle_vertices, 0u);
+  EXPECT_EQ(st.free_vertices_left, 0u);
 }
 
 TEST(ZhangEdgeCollapse, ColoursAreConvexCombinations) {

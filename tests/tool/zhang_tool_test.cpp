@@ -78,6 +78,9 @@ TEST(ZhangTool, RefusesBadOptions) {
   ToolRun r = runTool("simplify " + in + " -o x.obj --method zhang --zhang-placement sideways");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("unknown --zhang-placement 'sideways'"), std::string::npos) << r.output;
+  r = runTool("simplify " + in + " -o x.obj --method zhang --zhang-ring maybe");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--zhang-ring takes yes or no, not 'maybe'"), std::string::npos) << r.output;
   r = runTool("simplify " + in + " -o x.obj --method zhang --cell 0.1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("--method zhang takes --target-triangles"), std::string::npos) << r.output;

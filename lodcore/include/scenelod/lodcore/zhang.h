@@ -61,6 +61,12 @@ struct ZhangParams {
   // fold-over check: a collapse is rejected when it turns any remaining triangle's normal by more
   // than this angle, or leaves it with (near) zero area
   float max_normal_turn_deg = 60.0f;
+  // how a candidate collapse is scored (§3 step 4, "the least characteristic vision value of changed
+  // vertex"): true, the largest CA term, angle x area, over the triangles whose shape changes, taken
+  // against the carried normal of the merged vertex and against the normals of the triangle's two
+  // other vertices (the ring vertices whose CA the collapse raises, as Fig. 6 argues for CA(V_2));
+  // false, against the merged vertex's normal only (the narrower reading; higher error, bench/zhang.md)
+  bool ring_vision = true;
   // the paper processes angle vertices; set to keep them fixed (cube corners stay exact)
   bool keep_angle_vertices = false;
   // treat vertices at exactly the same position as one vertex, so that attribute seams (glTF splits a
@@ -102,6 +108,12 @@ struct ZhangStats {
   size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
+  // vertices that never move, by their class on the (welded) input: edge (borders and attribute
+  // seams), complex (non-manifold), angle (only with keep_angle_vertices)
+  size_t kept_edge_vertices = 0;
+  size_t kept_complex_vertices = 0;
+  size_t kept_angle_vertices = 0;
+  size_t free_vertices_left = 0;  // vertices of the result that are not kept (could still collapse)
   float max_displacement = 0.0f;  // largest distance an input vertex moved to its representative
   // upper bound of the largest distance from an input vertex to the result's surface: each input
   // vertex measured against the triangles around its representative
