@@ -41,10 +41,11 @@ struct alignas(64) CubeSlot {
 };
 static_assert(sizeof(CubeSlot) == 64, "one cache line per grid cube");
 
+// Linear in the coordinates, so the hashes of a cube's neighbours are one addition away; the table
+// index is taken from the top bits (a Kronecker sequence over the lattice, well spread).
+constexpr uint64_t kHashX = 0x9E3779B97F4A7C15ull, kHashY = 0xC2B2AE3D27D4EB4Full, kHashZ = 0x165667B19E3779F9ull;
 uint64_t cubeHash(int32_t x, int32_t y, int32_t z) {
-  const uint64_t h = (uint64_t(uint32_t(x)) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(uint32_t(y)) * 0xC2B2AE3D27D4EB4Full) ^
-                     (uint64_t(uint32_t(z)) * 0x165667B19E3779F9ull);
-  return (h ^ (h >> 29)) * 0xff51afd7ed558ccdull;  // the top bits index the table
+  return uint64_t(int64_t(x)) * kHashX + uint64_t(int64_t(y)) * kHashY + uint64_t(int64_t(z)) * kHashZ;
 }
 
 // Open-addressing hash from grid cube to its listed cells; grows by doubling at half load.
@@ -56,12 +57,22 @@ class CellGrid {
     while (cap < expected_cubes * 2) cap <<= 1, ++bits;
     slots_.assign(cap, CubeSlot{0, 0, 0, 0, {}, {}, {}, {}});
     overflow_head_.assign(cap, kNone);
+    filter_.assign(cap / 8, 0);  // 8 bits per slot
     shift_ = 64 - bits;
   }
   size_t home(uint64_t h) const { return static_cast<size_t>(h >> shift_); }
-  void prefetch(uint64_t h) const { __builtin_prefetch(&slots_[home(h)]); }
+  // false: the cube certainly lists no cell (one bit per hash, at most 1/16 of them set), so most
+  // empty cubes cost one access to this small array instead of probing the slots
+  bool mayHold(uint64_t h) const {
+    const size_t b = static_cast<size_t>(h >> 16) & (filter_.size() * 64 - 1);
+    return (filter_[b >> 6] >> (b & 63)) & 1u;
+  }
+  void prefetch(uint64_t h) const {
+    if (mayHold(h)) __builtin_prefetch(&slots_[home(h)]);
+  }
 
   const CubeSlot* find(int32_t x, int32_t y, int32_t z, uint64_t h) const {
+    if (!mayHold(h)) return nullptr;
     const size_t mask = slots_.size() - 1;
     for (size_t i = home(h);; i = (i + 1) & mask) {
       const CubeSlot& s = slots_[i];
@@ -84,6 +95,7 @@ class CellGrid {
     if (s.n == 0) {
       s.x = x, s.y = y, s.z = z;
       ++size_;
+      setFilter(cubeHash(x, y, z));
     }
     if (s.n < 3) {
       s.cx[s.n] = c.x, s.cy[s.n] = c.y, s.cz[s.n] = c.z, s.id[s.n] = id;
@@ -108,6 +120,7 @@ class CellGrid {
     old_head.swap(overflow_head_);
     slots_.assign(old.size() * 2, CubeSlot{0, 0, 0, 0, {}, {}, {}, {}});
     overflow_head_.assign(slots_.size(), kNone);
+    filter_.assign(slots_.size() / 8, 0);
     --shift_;
     const size_t mask = slots_.size() - 1;
     for (size_t k = 0; k < old.size(); ++k) {
@@ -116,11 +129,17 @@ class CellGrid {
       while (slots_[i].n != 0) i = (i + 1) & mask;
       slots_[i] = old[k];
       overflow_head_[i] = old_head[k];
+      setFilter(cubeHash(old[k].x, old[k].y, old[k].z));
     }
+  }
+  void setFilter(uint64_t h) {
+    const size_t b = static_cast<size_t>(h >> 16) & (filter_.size() * 64 - 1);
+    filter_[b >> 6] |= uint64_t(1) << (b & 63);
   }
 
   std::vector<CubeSlot> slots_;
   std::vector<uint32_t> overflow_head_;  // per slot: first overflow cell, kNone
+  std::vector<uint64_t> filter_;         // 8 bits per slot, set for the hashes of occupied cubes
   size_t size_ = 0;
   int shift_ = 58;
 };
@@ -151,9 +170,11 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   // the 2 x 2 x 2 grid cubes a vertex searches (all but a rare few need no third along an axis)
   struct Search {
     int32_t lo[3];
-    bool wide;  // some axis needs 3 cubes (the vertex is within the slack of a cube face)
-    uint64_t h[8];
+    bool wide;   // some axis needs 3 cubes (the vertex is within the slack of a cube face)
+    uint64_t h;  // hash of the cube lo; the others add kHashX, kHashY, kHashZ
   };
+  const uint64_t step[8] = {0, kHashX, kHashY, kHashX + kHashY, kHashZ, kHashX + kHashZ, kHashY + kHashZ,
+                            kHashX + kHashY + kHashZ};
   Search ring[kPrefetchDistance];
   auto plan = [&](size_t i, Search& s) {
     const glm::vec3 q = sorted[i] * inv;
@@ -162,16 +183,17 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       s.lo[a] = floorToInt(q[a] - 0.5f - kSearchSlack);
       s.wide |= floorToInt(q[a] + 0.5f + kSearchSlack) != s.lo[a] + 1;
     }
-    for (int k = 0; k < 8; ++k) {
-      s.h[k] = cubeHash(s.lo[0] + (k & 1), s.lo[1] + ((k >> 1) & 1), s.lo[2] + (k >> 2));
-      grid.prefetch(s.h[k]);
-    }
+    s.h = cubeHash(s.lo[0], s.lo[1], s.lo[2]);
+    for (int k = 0; k < 8; ++k) grid.prefetch(s.h + step[k]);
   };
   for (size_t i = 0; i < std::min(n, kPrefetchDistance); ++i) plan(i, ring[i]);
 
   for (size_t i = 0; i < n; ++i) {
-    const Search s = ring[i % kPrefetchDistance];
-    if (i + kPrefetchDistance < n) plan(i + kPrefetchDistance, ring[i % kPrefetchDistance]);
+    Search& s = ring[i % kPrefetchDistance];
+    const int32_t lx = s.lo[0], ly = s.lo[1], lz = s.lo[2];
+    const uint64_t h0 = s.h;
+    const bool wide = s.wide;
+    if (i + kPrefetchDistance < n) plan(i + kPrefetchDistance, s);
     const uint32_t v = p.order[i];
     const glm::vec3 pv = sorted[i];
     uint32_t best = kNone;
@@ -179,7 +201,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     auto test = [&](float cx, float cy, float cz, uint32_t c) {
       const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
       const float d2 = dx * dx + dy * dy + dz * dz;
-      const bool inside = cube ? (std::fabs(dx) <= half && std::fabs(dy) <= half && std::fabs(dz) <= half) : d2 <= half2;
+      const bool inside = cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= half) : d2 <= half2;
       // cells are numbered in creation order, which is the order of their centres' weights
       const bool better = nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
       if (inside && better) {
@@ -197,16 +219,16 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
           test(c.x, c.y, c.z, grid.overflow_id[o]);
         }
     };
-    if (!s.wide) {
+    if (!wide) {
       for (int k = 0; k < 8; ++k)
-        scan(grid.find(s.lo[0] + (k & 1), s.lo[1] + ((k >> 1) & 1), s.lo[2] + (k >> 2), s.h[k]));
+        scan(grid.find(lx + (k & 1), ly + ((k >> 1) & 1), lz + (k >> 2), h0 + step[k]));
     } else {
       const glm::vec3 q = pv * inv;
       int32_t hi[3];
       for (int a = 0; a < 3; ++a) hi[a] = floorToInt(q[a] + 0.5f + kSearchSlack);
-      for (int32_t x = s.lo[0]; x <= hi[0]; ++x)
-        for (int32_t y = s.lo[1]; y <= hi[1]; ++y)
-          for (int32_t z = s.lo[2]; z <= hi[2]; ++z) scan(grid.find(x, y, z, cubeHash(x, y, z)));
+      for (int32_t x = lx; x <= hi[0]; ++x)
+        for (int32_t y = ly; y <= hi[1]; ++y)
+          for (int32_t z = lz; z <= hi[2]; ++z) scan(grid.find(x, y, z, cubeHash(x, y, z)));
     }
     if (best == kNone) {
       best = out.cluster_count++;
