@@ -158,8 +158,12 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
         i = j;
       }
       // distinct neighbours: repeated directions change neither the widest pair nor the longest edge
-      all_nb.insert(all_nb.end(), tri_nb.begin(), tri_nb.end());
-      sortSmall(all_nb.data(), all_nb.size());
+      if (all_nb.empty()) {
+        all_nb.assign(tri_nb.begin(), tri_nb.end());  // already sorted
+      } else {
+        all_nb.insert(all_nb.end(), tri_nb.begin(), tri_nb.end());
+        sortSmall(all_nb.data(), all_nb.size());
+      }
       all_nb.erase(std::unique(all_nb.begin(), all_nb.end()), all_nb.end());
       dirs.clear();
       float longest_v = 0.0f;

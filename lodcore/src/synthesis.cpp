@@ -89,6 +89,8 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
   const double r[3] = {-(a[0][0] * x0.x + a[0][1] * x0.y + a[0][2] * x0.z + q.b0),
                        -(a[1][0] * x0.x + a[1][1] * x0.y + a[1][2] * x0.z + q.b1),
                        -(a[2][0] * x0.x + a[2][1] * x0.y + a[2][2] * x0.z + q.b2)};
+  // a zero residual (one-vertex clusters: every plane passes through x0) leaves x0 unchanged
+  if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0) return x0;
   double w[3], v[3][3];
   symmetricEigen(a, w, v);
   const double wmax = std::max({std::fabs(w[0]), std::fabs(w[1]), std::fabs(w[2])});
