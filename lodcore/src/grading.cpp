@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -70,8 +71,8 @@ void sortSmall(uint32_t* a, size_t n) {
 
 struct GradeOutput {
   float* raw;                    // per vertex: angular x longest incident edge
-  float* angular;                // per vertex
-  float* longest;                // per vertex: longest incident edge
+  float* angular;                // per vertex, may be null
+  float* longest_edge;           // the longest edge of the mesh
   VertexFaceSums* sums;          // per vertex, may be null
   glm::vec4* color_sums;         // per vertex, may be null
 };
@@ -92,7 +93,10 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
   for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
   std::vector<Incidence> incidence(offsets[vn]);
   {
-    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
+    // the end of row v again, so no separate cursor array is needed
+    uint32_t* fill = offsets.data() + 1;
+    for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
     const uint32_t* tri = mesh.triangles.data();
     for (size_t t = 0; t < tn; ++t) {
       const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
@@ -105,16 +109,21 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       incidence[fill[x]++] = {y, detail::kNone};
       incidence[fill[y]++] = {x, detail::kNone};
     }
+    offsets[0] = 0;
   }
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
+  std::mutex longest_mutex;
+  float longest_edge = 0.0f;  // a max: the same whatever the split between threads
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<glm::vec3> dirs, normals;
     std::vector<uint32_t> tri_nb, all_nb;
+    float range_longest = 0.0f;
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
-      out.raw[v] = out.angular[v] = out.longest[v] = 0.0f;
+      out.raw[v] = 0.0f;
+      if (out.angular) out.angular[v] = 0.0f;
       if (out.sums) out.sums[v] = VertexFaceSums();
       if (colors) out.color_sums[v] = glm::vec4(0.0f);
       if (b == e) continue;
@@ -175,7 +184,7 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
           longest_v = std::max(longest_v, len);
         }
       }
-      out.longest[v] = longest_v;
+      range_longest = std::max(range_longest, longest_v);
       if (dirs.empty()) continue;  // only zero-length edges: no direction, weight 0
       const float cos_theta = std::clamp(minPairDot(dirs.data(), dirs.size()), -1.0f, 1.0f);
       float a;
@@ -189,10 +198,13 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       } else {
         a = kPi / std::max(std::acos(cos_theta), kMinTheta);
       }
-      out.angular[v] = a;
+      if (out.angular) out.angular[v] = a;
       out.raw[v] = longest_v * a;
     }
+    std::lock_guard<std::mutex> lock(longest_mutex);
+    longest_edge = std::max(longest_edge, range_longest);
   });
+  *out.longest_edge = longest_edge;
 }
 
 // Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
@@ -244,10 +256,9 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
     if (longest_edge_out) *longest_edge_out = 0.0f;
     return;
   }
-  std::vector<float> raw(vn), angular(vn), longest(vn);
-  gradeAndSum(mesh, grading, boost_features, {raw.data(), angular.data(), longest.data(), nullptr, nullptr});
+  std::vector<float> raw(vn), angular(vn);
   float longest_edge = 0.0f;
-  for (float l : longest) longest_edge = std::max(longest_edge, l);
+  gradeAndSum(mesh, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   // weights = raw * inv: rounding is monotone, so the normalised weights keep the raw order
   for (size_t v = 0; v < vn; ++v) weights[v] = raw[v] * inv;
@@ -268,16 +279,13 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   // the sort uses the unnormalised product: normalising a factor by a constant cannot change the
   // order, and this way the order does not depend on other parts of the mesh (whose longest edge
   // would be the normaliser) even by rounding
-  std::vector<float> raw(vn), angular(vn), longest(vn);
+  std::vector<float> raw(vn);
   out.face_sums.resize(vn);
   if (!in.colors.empty()) out.face_colors.resize(vn);
-  gradeAndSum(in, params.grading, params.boost_features,
-              {raw.data(), angular.data(), longest.data(), out.face_sums.data(),
-               in.colors.empty() ? nullptr : out.face_colors.data()});
-  std::vector<float>().swap(angular);
   float longest_edge = 0.0f;
-  for (float l : longest) longest_edge = std::max(longest_edge, l);
-  std::vector<float>().swap(longest);
+  gradeAndSum(in, params.grading, params.boost_features,
+              {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
+               in.colors.empty() ? nullptr : out.face_colors.data()});
   out.longest_edge = longest_edge;
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
