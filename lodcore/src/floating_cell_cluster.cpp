@@ -48,24 +48,17 @@ uint64_t cubeHash(int32_t x, int32_t y, int32_t z) {
   return uint64_t(int64_t(x)) * kHashX + uint64_t(int64_t(y)) * kHashY + uint64_t(int64_t(z)) * kHashZ;
 }
 
-// Open-addressing hash from grid cube to its listed cells; grows by doubling at 3/4 load (64-byte
-// slots: at that load the table takes about as much memory as 16-byte slots at half load did).
+// Open-addressing hash from grid cube to its listed cells, of any capacity (the home slot is the
+// hash's top 32 bits scaled to the capacity), so that it is sized to the expected cube count rather
+// than the next power of two; grows by doubling at 3/4 load.
 class CellGrid {
  public:
-  explicit CellGrid(size_t expected_cubes) {
-    size_t cap = 64;
-    int bits = 6;
-    while (cap * 3 < expected_cubes * 4) cap <<= 1, ++bits;
-    slots_.assign(cap, CubeSlot{0, 0, 0, 0, {}, {}, {}, {}});
-    overflow_head_.assign(cap, kNone);
-    filter_.assign(cap / 8, 0);  // 8 bits per slot
-    shift_ = 64 - bits;
-  }
-  size_t home(uint64_t h) const { return static_cast<size_t>(h >> shift_); }
-  // false: the cube certainly lists no cell (8 bits per slot, at most 3/32 of them set), so most
-  // empty cubes cost one access to this small array instead of probing the slots
+  explicit CellGrid(size_t expected_cubes) { reset(std::max<size_t>(64, expected_cubes * 4 / 3 + 1)); }
+  size_t home(uint64_t h) const { return static_cast<size_t>(((h >> 32) * uint64_t(slots_.size())) >> 32); }
+  // false: the cube certainly lists no cell (at least 8 bits per slot, at most 3/32 of them set), so
+  // most empty cubes cost one access to this small array instead of probing the slots
   bool mayHold(uint64_t h) const {
-    const size_t b = static_cast<size_t>(h >> 16) & (filter_.size() * 64 - 1);
+    const size_t b = static_cast<size_t>(h >> 8) & filter_mask_;
     return (filter_[b >> 6] >> (b & 63)) & 1u;
   }
   void prefetch(uint64_t h) const {
@@ -74,8 +67,8 @@ class CellGrid {
 
   const CubeSlot* find(int32_t x, int32_t y, int32_t z, uint64_t h) const {
     if (!mayHold(h)) return nullptr;
-    const size_t mask = slots_.size() - 1;
-    for (size_t i = home(h);; i = (i + 1) & mask) {
+    const size_t cap = slots_.size();
+    for (size_t i = home(h);; i = i + 1 == cap ? 0 : i + 1) {
       const CubeSlot& s = slots_[i];
       if (s.n == 0) return nullptr;
       if (s.x == x && s.y == y && s.z == z) return &s;
@@ -86,17 +79,13 @@ class CellGrid {
   // lists cell `id` centred at `c` in cube (x, y, z)
   void add(int32_t x, int32_t y, int32_t z, const glm::vec3& c, uint32_t id) {
     if ((size_ + 1) * 4 > slots_.size() * 3) grow();  // load <= 3/4: the filter keeps misses short
-    const size_t mask = slots_.size() - 1;
-    size_t i = home(cubeHash(x, y, z));
-    for (;; i = (i + 1) & mask) {
-      const CubeSlot& s = slots_[i];
-      if (s.n == 0 || (s.x == x && s.y == y && s.z == z)) break;
-    }
+    const uint64_t h = cubeHash(x, y, z);
+    const size_t i = slotFor(x, y, z, h);
     CubeSlot& s = slots_[i];
     if (s.n == 0) {
       s.x = x, s.y = y, s.z = z;
       ++size_;
-      setFilter(cubeHash(x, y, z));
+      setFilter(h);
     }
     if (s.n < 3) {
       s.cx[s.n] = c.x, s.cy[s.n] = c.y, s.cz[s.n] = c.z, s.id[s.n] = id;
@@ -114,35 +103,49 @@ class CellGrid {
   std::vector<uint32_t> overflow_id, overflow_next;
 
  private:
+  void reset(size_t cap) {
+    slots_.assign(cap, CubeSlot{0, 0, 0, 0, {}, {}, {}, {}});
+    overflow_head_.assign(cap, kNone);
+    size_t bits = 64;
+    while (bits < cap * 8) bits <<= 1;
+    filter_.assign(bits / 64, 0);
+    filter_mask_ = bits - 1;
+    size_ = 0;
+  }
+  // the slot holding cube (x, y, z), or the empty slot where it goes
+  size_t slotFor(int32_t x, int32_t y, int32_t z, uint64_t h) const {
+    const size_t cap = slots_.size();
+    for (size_t i = home(h);; i = i + 1 == cap ? 0 : i + 1) {
+      const CubeSlot& s = slots_[i];
+      if (s.n == 0 || (s.x == x && s.y == y && s.z == z)) return i;
+    }
+  }
   void grow() {
     std::vector<CubeSlot> old;
     std::vector<uint32_t> old_head;
     old.swap(slots_);
     old_head.swap(overflow_head_);
-    slots_.assign(old.size() * 2, CubeSlot{0, 0, 0, 0, {}, {}, {}, {}});
-    overflow_head_.assign(slots_.size(), kNone);
-    filter_.assign(slots_.size() / 8, 0);
-    --shift_;
-    const size_t mask = slots_.size() - 1;
+    reset(old.size() * 2);
     for (size_t k = 0; k < old.size(); ++k) {
       if (old[k].n == 0) continue;
-      size_t i = home(cubeHash(old[k].x, old[k].y, old[k].z));
-      while (slots_[i].n != 0) i = (i + 1) & mask;
+      const uint64_t h = cubeHash(old[k].x, old[k].y, old[k].z);
+      const size_t i = slotFor(old[k].x, old[k].y, old[k].z, h);
       slots_[i] = old[k];
       overflow_head_[i] = old_head[k];
-      setFilter(cubeHash(old[k].x, old[k].y, old[k].z));
+      setFilter(h);
+      ++size_;
     }
   }
   void setFilter(uint64_t h) {
-    const size_t b = static_cast<size_t>(h >> 16) & (filter_.size() * 64 - 1);
+    const size_t b = static_cast<size_t>(h >> 8) & filter_mask_;
     filter_[b >> 6] |= uint64_t(1) << (b & 63);
   }
 
   std::vector<CubeSlot> slots_;
   std::vector<uint32_t> overflow_head_;  // per slot: first overflow cell, kNone
-  std::vector<uint64_t> filter_;         // 8 bits per slot, set for the hashes of occupied cubes
+  std::vector<uint64_t> filter_;         // bits set for the hashes of occupied cubes
+  size_t filter_mask_ = 63;
   size_t size_ = 0;
-  int shift_ = 58;
 };
 
 }  // namespace
