@@ -65,6 +65,15 @@ class CellGrid {
     if (mayHold(h)) __builtin_prefetch(&slots_[home(h)]);
   }
 
+  // the slot of cube (x, y, z) or null; call only when mayHold(h)
+  const CubeSlot* findHeld(int32_t x, int32_t y, int32_t z, uint64_t h) const {
+    const size_t cap = slots_.size();
+    for (size_t i = home(h);; i = i + 1 == cap ? 0 : i + 1) {
+      const CubeSlot& s = slots_[i];
+      if (s.n == 0) return nullptr;
+      if (s.x == x && s.y == y && s.z == z) return &s;
+    }
+  }
   const CubeSlot* find(int32_t x, int32_t y, int32_t z, uint64_t h) const {
     if (!mayHold(h)) return nullptr;
     const size_t cap = slots_.size();
@@ -224,8 +233,14 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
         }
     };
     if (!wide) {
-      for (int k = 0; k < 8; ++k)
-        scan(grid.find(lx + (k & 1), ly + ((k >> 1) & 1), lz + (k >> 2), h0 + step[k]));
+      // the filter first, so that the loop below visits only cubes that may hold cells
+      uint32_t held = 0;
+      for (int k = 0; k < 8; ++k) held |= uint32_t(grid.mayHold(h0 + step[k])) << k;
+      while (held) {
+        const int k = __builtin_ctz(held);
+        held &= held - 1;
+        scan(grid.findHeld(lx + (k & 1), ly + ((k >> 1) & 1), lz + (k >> 2), h0 + step[k]));
+      }
     } else {
       const glm::vec3 q = pv * inv;
       int32_t hi[3];
