@@ -123,7 +123,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
-  struct Sums {          // 96 bytes per cluster
+  struct Sums {          // 92 bytes per cluster
     glm::vec3 centre;    // the heaviest vertex, the local origin
     float w = 0.0f;      // sum of weights
     glm::vec3 wsum{0.0f};  // sum of weight x offset

@@ -72,6 +72,8 @@ struct PreparedMesh {
   float longest_edge = 0.0f;     // longest edge of the mesh (the length normaliser)
   float mean_edge_length = 0.0f;
   double surface_area = 0.0;     // of all triangles (sizes the per-level grid hash)
+  // filled by prepareMesh; a hand-made PreparedMesh without them clusters with the weighted mean in
+  // place of the quadric minimiser and +z as the normal of edge and point vertices
   std::vector<VertexFaceSums> face_sums;  // one per vertex (36 bytes): incident-face quadric and normal
   std::vector<glm::vec4> face_colors;     // one per vertex when the mesh has colours: sum of area x face
                                           // colour (xyz) and of area (w); empty otherwise
