@@ -2,12 +2,11 @@
 // error). Both calls include building their two BVHs; the *Setup benchmarks measure that part alone
 // (1 sample, 1-pixel views), so queries/s = items / (time - setup time) when setup matters.
 #include <cmath>
-#include <map>
-#include <utility>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
 
+#include "eval/test_meshes.h"  // tests/: the generated meshes the eval tests use
 #include "scenelod/eval/metrics.h"
 #include "scenelod/eval/render.h"
 
@@ -15,44 +14,14 @@ namespace {
 
 using scenelod::Mesh;
 
-// icosahedron subdivided `levels` times onto the unit sphere: 20 * 4^levels triangles
-Mesh makeIcosphere(int levels) {
-  const float t = (1.0f + std::sqrt(5.0f)) * 0.5f;
-  std::vector<glm::vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (auto& p : v) p = glm::normalize(p);
-  std::vector<uint32_t> f = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
-                             7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7,
-                             9, 8, 1};
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
-    auto middle = [&](uint32_t a, uint32_t b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back(glm::normalize(v[a] + v[b]));
-      return mid[key] = static_cast<uint32_t>(v.size() - 1);
-    };
-    std::vector<uint32_t> g;
-    for (size_t i = 0; i < f.size(); i += 3) {
-      const uint32_t a = f[i], b = f[i + 1], c = f[i + 2];
-      const uint32_t ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
-      g.insert(g.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
-    }
-    f.swap(g);
-  }
-  Mesh m;
-  m.positions = v;
-  m.triangles = f;
-  return m;
-}
+using scenelod::test::makeIcosphere;
 
 const Mesh& fine() {
-  static const Mesh m = makeIcosphere(6);  // 81,920 triangles, about the bunny's size
+  static const Mesh m = makeIcosphere(6, 1.0f);  // 81,920 triangles, about the bunny's size
   return m;
 }
 const Mesh& coarse() {
-  static const Mesh m = makeIcosphere(3);  // 1,280 triangles
+  static const Mesh m = makeIcosphere(3, 1.0f);  // 1,280 triangles
   return m;
 }
 

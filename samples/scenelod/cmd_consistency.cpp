@@ -6,11 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+
+#include "scenelod/eval/consistency.h"
 
 #include "args.h"
 #include "cluster_options.h"
@@ -31,65 +32,6 @@ const std::string kUsage =
     "\n"
     "  --cell-rel F  cell width as F x the model's bounding-box diagonal (default 0.01)\n"
     "  --far D       distance of the added box, in diagonals (default 0.7)";
-
-struct Tri {
-  glm::vec3 c[3];
-};
-
-bool lessVec(const glm::vec3& a, const glm::vec3& b) {
-  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
-}
-
-std::vector<Tri> trianglesInside(const Mesh& m, const Aabb& region) {
-  std::vector<Tri> out;
-  for (size_t t = 0; t < m.triangleCount(); ++t) {
-    Tri tr;
-    bool in = true;
-    for (int k = 0; k < 3; ++k) {
-      tr.c[k] = m.positions[m.triangles[3 * t + k]];
-      in = in && glm::all(glm::greaterThanEqual(tr.c[k], region.min)) && glm::all(glm::lessThanEqual(tr.c[k], region.max));
-    }
-    if (!in) continue;
-    int first = 0;
-    for (int k = 1; k < 3; ++k)
-      if (lessVec(tr.c[k], tr.c[first])) first = k;
-    std::rotate(tr.c, tr.c + first, tr.c + 3);
-    out.push_back(tr);
-  }
-  return out;
-}
-
-// triangles of `a` with no match in `b` (corners within eps), found through a grid of centroids
-size_t countChanged(const std::vector<Tri>& a, const std::vector<Tri>& b, float cell, float eps) {
-  auto key = [&](const glm::vec3& p) {
-    const glm::ivec3 q = glm::ivec3(glm::floor(p / cell));
-    return (uint64_t(uint32_t(q.x) & 0x1fffff) << 42) | (uint64_t(uint32_t(q.y) & 0x1fffff) << 21) |
-           uint64_t(uint32_t(q.z) & 0x1fffff);
-  };
-  std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
-  for (size_t i = 0; i < b.size(); ++i) grid[key((b[i].c[0] + b[i].c[1] + b[i].c[2]) / 3.0f)].push_back(uint32_t(i));
-  size_t changed = 0;
-  for (const Tri& x : a) {
-    const glm::vec3 centroid = (x.c[0] + x.c[1] + x.c[2]) / 3.0f;
-    bool found = false;
-    for (int dx = -1; dx <= 1 && !found; ++dx)
-      for (int dy = -1; dy <= 1 && !found; ++dy)
-        for (int dz = -1; dz <= 1 && !found; ++dz) {
-          auto it = grid.find(key(centroid + glm::vec3(float(dx), float(dy), float(dz)) * cell));
-          if (it == grid.end()) continue;
-          for (uint32_t j : it->second) {
-            const Tri& y = b[j];
-            if (glm::length(x.c[0] - y.c[0]) <= eps && glm::length(x.c[1] - y.c[1]) <= eps &&
-                glm::length(x.c[2] - y.c[2]) <= eps) {
-              found = true;
-              break;
-            }
-          }
-        }
-    if (!found) ++changed;
-  }
-  return changed;
-}
 
 int runConsistency(const std::vector<std::string>& argv) {
   Args args(argv, {}, {"--cell-rel", "--far"});
@@ -142,10 +84,9 @@ int runConsistency(const std::vector<std::string>& argv) {
     Mesh a, b;
     if (Error e = clusterMesh(model, p, a)) return runError("consistency", in + ": " + e.message);
     if (Error e = clusterMesh(scene, p, b)) return runError("consistency", in + ": " + e.message);
-    const std::vector<Tri> ta = trianglesInside(a, region), tb = trianglesInside(b, region);
-    const size_t changed = countChanged(ta, tb, cell, 1e-5f * diag);
-    std::printf("%-18s %12zu %12zu %9.2f%%\n", lodMethodName(method), ta.size(), changed,
-                ta.empty() ? 0.0 : 100.0 * double(changed) / double(ta.size()));
+    const eval::TriangleChangeCount count = eval::countChangedTriangles(a, b, region, 1e-5f * diag);
+    std::printf("%-18s %12zu %12zu %9.2f%%\n", lodMethodName(method), count.compared, count.changed,
+                count.compared == 0 ? 0.0 : 100.0 * double(count.changed) / double(count.compared));
   }
   return 0;
 }

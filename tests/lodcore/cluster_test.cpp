@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "lodcore/generated_meshes.h"
+#include "scenelod/eval/consistency.h"
 #include "scenelod/lodcore/cluster.h"
 
 using namespace scenelod;
@@ -27,46 +28,6 @@ void expectValidOutput(const Mesh& in, const Mesh& out) {
   for (const glm::vec3& n : out.normals) ASSERT_NEAR(glm::length(n), 1.0f, 1e-3f);
   EXPECT_EQ(out.edge_thickness.size(), out.edgeCount());
   EXPECT_TRUE(out.uvs.empty());
-}
-
-// canonical triangle as positions, rotated to start at the lexicographically smallest corner
-struct Tri {
-  glm::vec3 c[3];
-};
-bool lessVec(const glm::vec3& a, const glm::vec3& b) {
-  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
-}
-std::vector<Tri> trianglesIn(const Mesh& m, const Aabb& region) {
-  std::vector<Tri> out;
-  for (size_t t = 0; t < m.triangleCount(); ++t) {
-    Tri tr;
-    bool in = true;
-    for (int k = 0; k < 3; ++k) {
-      tr.c[k] = m.positions[m.triangles[3 * t + k]];
-      in = in && glm::all(glm::greaterThanEqual(tr.c[k], region.min)) && glm::all(glm::lessThanEqual(tr.c[k], region.max));
-    }
-    if (!in) continue;
-    int first = 0;
-    for (int k = 1; k < 3; ++k)
-      if (lessVec(tr.c[k], tr.c[first])) first = k;
-    std::rotate(tr.c, tr.c + first, tr.c + 3);
-    out.push_back(tr);
-  }
-  return out;
-}
-// triangles of `a` with no triangle of `b` within `eps` at every corner
-size_t changedTriangles(const std::vector<Tri>& a, const std::vector<Tri>& b, float eps) {
-  size_t changed = 0;
-  for (const Tri& x : a) {
-    bool found = false;
-    for (const Tri& y : b)
-      if (glm::length(x.c[0] - y.c[0]) <= eps && glm::length(x.c[1] - y.c[1]) <= eps && glm::length(x.c[2] - y.c[2]) <= eps) {
-        found = true;
-        break;
-      }
-    if (!found) ++changed;
-  }
-  return changed;
 }
 
 }  // namespace
@@ -155,12 +116,11 @@ TEST(ClusterMesh, FarAwayObjectChangesUniformButNotFloatingCells) {
     Mesh a, b;
     ASSERT_TRUE(clusterMesh(part, p, a).ok());
     ASSERT_TRUE(clusterMesh(scene, p, b).ok());
-    const std::vector<Tri> ta = trianglesIn(a, region), tb = trianglesIn(b, region);
-    const size_t changed = changedTriangles(ta, tb, 1e-5f);
+    const eval::TriangleChangeCount count = eval::countChangedTriangles(a, b, region, 1e-5f);
     SCOPED_TRACE(lodMethodName(method));
-    ASSERT_GT(ta.size(), 100u);
-    if (method == LodMethod::kUniform) EXPECT_GT(changed, ta.size() / 5);
-    else EXPECT_LE(changed, ta.size() / 100);
+    ASSERT_GT(count.compared, 100u);
+    if (method == LodMethod::kUniform) EXPECT_GT(count.changed, count.compared / 5);
+    else EXPECT_LE(count.changed, count.compared / 100);
   }
 }
 
