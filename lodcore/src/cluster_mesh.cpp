@@ -44,7 +44,8 @@ Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params,
     stats->cluster_count = a.cluster_count;
     stats->collapsed_triangles = el.collapsed_triangles;
     float max_d2 = 0.0f;
-    for (uint32_t v : prepared.order) {
+    for (size_t v = 0; v < a.cluster_of.size(); ++v) {
+      if (a.cluster_of[v] == detail::kNone) continue;
       const glm::vec3 d = m.positions[v] - r.positions[a.cluster_of[v]];
       max_d2 = std::max(max_d2, glm::dot(d, d));
     }

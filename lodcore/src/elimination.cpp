@@ -82,11 +82,20 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   out.collapsed_triangles = 0;
 
   const size_t tn = m.triangleCount();
-  // triangles: a table of output triangle indices keyed by the rotation starting at the smallest id
+  // triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
+  // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
+  // input count) rather than the input, so that it stays in cache; grows at half load
   size_t cap = 64;
-  while (cap * 3 < tn * 4) cap <<= 1;
+  const size_t expected = std::min(tn, size_t(2) * a.cluster_count);
+  while (cap < expected * 2) cap <<= 1;
   std::vector<uint32_t> table(cap, kNone);
-  const size_t mask = cap - 1;
+  size_t mask = cap - 1;
+  auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
+    const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
+                       (uint64_t(c2) * 0x165667B19E3779F9ull);
+    return static_cast<size_t>(h ^ (h >> 31));
+  };
+  out.triangles.reserve(3 * expected);
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
   std::vector<float> input_thickness;   // per candidate edge: largest thickness of an input edge on it
   U64Map edge_index(64);
@@ -109,12 +118,23 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       // rotate (keeping orientation) so the smallest id comes first
       if (c1 < c0 && c1 < c2) { const uint32_t t0 = c0; c0 = c1; c1 = c2; c2 = t0; }
       else if (c2 < c0 && c2 < c1) { const uint32_t t0 = c0; c0 = c2; c2 = c1; c1 = t0; }
-      const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
-                         (uint64_t(c2) * 0x165667B19E3779F9ull);
-      for (size_t i = (h ^ (h >> 31)) & mask;; i = (i + 1) & mask) {
+      for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
         const uint32_t o = table[i];
         if (o == kNone) {
           table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
+          if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
+            cap <<= 1;
+            mask = cap - 1;
+            table.assign(cap, kNone);
+            for (size_t k = 0; k < out.triangles.size(); k += 3) {
+              size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
+              while (table[j] != kNone) j = (j + 1) & mask;
+              table[j] = static_cast<uint32_t>(k / 3);
+            }
+            size_t j = triangleHash(c0, c1, c2) & mask;
+            while (table[j] != kNone) j = (j + 1) & mask;
+            table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
+          }
           out.triangles.push_back(c0);
           out.triangles.push_back(c1);
           out.triangles.push_back(c2);

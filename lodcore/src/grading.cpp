@@ -1,12 +1,15 @@
-// Grading of vertices by visual importance, and the once-per-mesh sort by weight.
+// Grading of vertices by visual importance, the once-per-mesh sort by weight, and the per-vertex
+// face sums every level's synthesis reads.
 // Low & Tan 1997 §3.1: weight = cos(theta/2) x longest incident edge, theta the largest angle
 // between two incident edges (cos(theta/2) is the probability that the vertex lies on the silhouette
 // from a random view direction). Rossignac & Borrel 1993: 1/theta in place of cos(theta/2).
-// §4: the sort by weight happens once per mesh for all levels.
+// §4: the sort by weight happens once per mesh for all levels. Lindstrom 2000: a cluster's quadric is
+// the sum of its faces' plane quadrics; summing per vertex first (once per mesh) gives the same sum.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -30,7 +33,7 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr float kMinTheta = 1e-3f;        // rossignac: 1/theta is capped at 1/kMinTheta
 constexpr float kBoundaryFactor = 0.5f;   // boost: a boundary vertex is on the silhouette at least half the time
-constexpr size_t kExactPairLimit = 64;    // above this degree, the widest pair is found by two sweeps
+constexpr size_t kExactPairLimit = 64;    // above this many directions, the widest pair is found by two sweeps
 
 // smallest dot product over pairs of unit vectors (cos of the largest angle between them)
 float minPairDot(const glm::vec3* d, size_t n) {
@@ -56,89 +59,138 @@ float minPairDot(const glm::vec3* d, size_t n) {
   return best;
 }
 
-}  // namespace
-
-void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::vector<float>& weights,
-                   std::vector<float>* angular_out, float* longest_edge_out, std::vector<float>* raw_out) {
-  const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount(), en = mesh.edgeCount();
-  weights.assign(vn, 0.0f);
-  if (angular_out) angular_out->assign(vn, 0.0f);
-  if (vn == 0) {
-    if (longest_edge_out) *longest_edge_out = 0.0f;
-    return;
+// insertion sort: neighbour lists are short (twice the degree)
+void sortSmall(uint32_t* a, size_t n) {
+  for (size_t i = 1; i < n; ++i) {
+    const uint32_t x = a[i];
+    size_t j = i;
+    for (; j > 0 && a[j - 1] > x; --j) a[j] = a[j - 1];
+    a[j] = x;
   }
-  // vertex -> incidences (triangle corners 3t+k, then edge ends 3T+2e+k), compressed rows
+}
+
+struct GradeOutput {
+  float* raw;                    // per vertex: angular x longest incident edge
+  float* angular;                // per vertex, may be null
+  float* longest_edge;           // the longest edge of the mesh
+  VertexFaceSums* sums;          // per vertex, may be null
+  glm::vec4* color_sums;         // per vertex, may be null
+};
+
+// Grades every vertex and, when asked, sums its incident faces. One counting sort builds the
+// vertex -> incidence rows, each holding the two other corners of the triangle in winding order (or
+// the other end of an input edge), so the per-vertex pass reads its rows contiguously, recomputes
+// the face normal from the corner positions it reads anyway, and writes only its own vertex: no
+// scattered writes, parallel over vertices.
+void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOutput out) {
+  const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
+  struct Incidence {
+    uint32_t a, b;  // triangle corner: the next two corners (winding order); edge end: other end, kNone
+  };
   std::vector<uint32_t> offsets(vn + 1, 0);
   for (uint32_t v : mesh.triangles) ++offsets[v + 1];
   for (uint32_t v : mesh.edges) ++offsets[v + 1];
   for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
-  std::vector<uint32_t> incidence(offsets[vn]);
+  std::vector<Incidence> incidence(offsets[vn]);
   {
-    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < mesh.triangles.size(); ++i) incidence[fill[mesh.triangles[i]]++] = static_cast<uint32_t>(i);
-    const uint32_t base = static_cast<uint32_t>(3 * tn);
-    for (size_t i = 0; i < mesh.edges.size(); ++i) incidence[fill[mesh.edges[i]]++] = base + static_cast<uint32_t>(i);
+    // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
+    // the end of row v again, so no separate cursor array is needed
+    uint32_t* fill = offsets.data() + 1;
+    for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
+    const uint32_t* tri = mesh.triangles.data();
+    for (size_t t = 0; t < tn; ++t) {
+      const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+      incidence[fill[i0]++] = {i1, i2};
+      incidence[fill[i1]++] = {i2, i0};
+      incidence[fill[i2]++] = {i0, i1};
+    }
+    for (size_t e = 0; e < mesh.edgeCount(); ++e) {
+      const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
+      incidence[fill[x]++] = {y, detail::kNone};
+      incidence[fill[y]++] = {x, detail::kNone};
+    }
+    offsets[0] = 0;
   }
-  (void)en;
   const glm::vec3* pos = mesh.positions.data();
-  const uint32_t* tri = mesh.triangles.data();
-  const uint32_t tri_corners = static_cast<uint32_t>(3 * tn);
-  std::vector<float> longest(vn, 0.0f);
-  std::vector<float> angular(vn, 0.0f);
+  const bool colors = out.color_sums && !mesh.colors.empty();
 
+  std::mutex longest_mutex;
+  float longest_edge = 0.0f;  // a max: the same whatever the split between threads
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<glm::vec3> dirs, normals;
-    std::vector<uint32_t> neighbours;
+    std::vector<uint32_t> tri_nb, all_nb;
+    float range_longest = 0.0f;
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
+      out.raw[v] = 0.0f;
+      if (out.angular) out.angular[v] = 0.0f;
+      if (out.sums) out.sums[v] = VertexFaceSums();
+      if (colors) out.color_sums[v] = glm::vec4(0.0f);
       if (b == e) continue;
-      dirs.clear();
+      tri_nb.clear();
+      all_nb.clear();
       normals.clear();
-      neighbours.clear();
+      VertexFaceSums s;
+      glm::vec4 cs(0.0f);
+      const glm::vec3 pv = pos[v];
+      for (uint32_t i = b; i < e; ++i) {
+        const Incidence inc = incidence[i];
+        if (inc.b == detail::kNone) {
+          all_nb.push_back(inc.a);
+          continue;
+        }
+        tri_nb.push_back(inc.a);
+        tri_nb.push_back(inc.b);
+        const glm::vec3 cr = glm::cross(pos[inc.a] - pv, pos[inc.b] - pv);
+        const float nl = glm::length(cr);
+        if (!(nl > 0.0f)) continue;
+        const glm::vec3 n = cr / nl;
+        if (boost_features) normals.push_back(n);
+        const float area = 0.5f * nl;
+        s.a[0] += area * n.x * n.x; s.a[1] += area * n.x * n.y; s.a[2] += area * n.x * n.z;
+        s.a[3] += area * n.y * n.y; s.a[4] += area * n.y * n.z; s.a[5] += area * n.z * n.z;
+        s.normal[0] += area * n.x; s.normal[1] += area * n.y; s.normal[2] += area * n.z;
+        if (colors) {
+          const glm::vec3 fc = (mesh.colors[v] + mesh.colors[inc.a] + mesh.colors[inc.b]) * (1.0f / 3.0f);
+          cs += glm::vec4(fc * area, area);
+        }
+      }
+      if (out.sums) out.sums[v] = s;
+      if (colors) out.color_sums[v] = cs;
+      // boundary: some neighbour is shared by only one incident triangle (appears once in tri_nb)
+      sortSmall(tri_nb.data(), tri_nb.size());
+      bool boundary = false;
+      for (size_t i = 0; i < tri_nb.size();) {
+        size_t j = i + 1;
+        while (j < tri_nb.size() && tri_nb[j] == tri_nb[i]) ++j;
+        if (j - i == 1) boundary = true;
+        i = j;
+      }
+      // distinct neighbours: repeated directions change neither the widest pair nor the longest edge
+      if (all_nb.empty()) {
+        all_nb.assign(tri_nb.begin(), tri_nb.end());  // already sorted
+      } else {
+        all_nb.insert(all_nb.end(), tri_nb.begin(), tri_nb.end());
+        sortSmall(all_nb.data(), all_nb.size());
+      }
+      all_nb.erase(std::unique(all_nb.begin(), all_nb.end()), all_nb.end());
+      dirs.clear();
       float longest_v = 0.0f;
-      auto addNeighbour = [&](uint32_t u) {
+      for (uint32_t u : all_nb) {
         const glm::vec3 d = pos[u] - pos[v];
         const float len = glm::length(d);
         if (len > 0.0f) {
           dirs.push_back(d / len);
           longest_v = std::max(longest_v, len);
         }
-      };
-      for (uint32_t i = b; i < e; ++i) {
-        const uint32_t inc = incidence[i];
-        if (inc < tri_corners) {
-          const uint32_t t = inc / 3, k = inc % 3;
-          const uint32_t u1 = tri[3 * t + (k + 1) % 3], u2 = tri[3 * t + (k + 2) % 3];
-          addNeighbour(u1);
-          addNeighbour(u2);
-          if (boost_features) {
-            neighbours.push_back(u1);
-            neighbours.push_back(u2);
-            const glm::vec3 n = glm::cross(pos[tri[3 * t + 1]] - pos[tri[3 * t]], pos[tri[3 * t + 2]] - pos[tri[3 * t]]);
-            const float nl = glm::length(n);
-            if (nl > 0.0f) normals.push_back(n / nl);
-          }
-        } else {
-          const uint32_t c = inc - tri_corners;
-          addNeighbour(mesh.edges[c ^ 1u]);
-        }
       }
-      longest[v] = longest_v;
+      range_longest = std::max(range_longest, longest_v);
       if (dirs.empty()) continue;  // only zero-length edges: no direction, weight 0
       const float cos_theta = std::clamp(minPairDot(dirs.data(), dirs.size()), -1.0f, 1.0f);
       float a;
       if (grading == Grading::kLowTan) {
         a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
         if (boost_features) {
-          // boundary: some neighbour is shared by only one incident triangle
-          std::sort(neighbours.begin(), neighbours.end());
-          bool boundary = false;
-          for (size_t i = 0; i < neighbours.size() && !boundary;) {
-            size_t j = i;
-            while (j < neighbours.size() && neighbours[j] == neighbours[i]) ++j;
-            if (j - i == 1) boundary = true;
-            i = j;
-          }
           if (boundary) a = std::max(a, kBoundaryFactor);
           const float crease = (1.0f - std::clamp(minPairDot(normals.data(), normals.size()), -1.0f, 1.0f)) * 0.5f;
           a = std::max(a, crease);
@@ -146,17 +198,71 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
       } else {
         a = kPi / std::max(std::acos(cos_theta), kMinTheta);
       }
-      angular[v] = a;
+      if (out.angular) out.angular[v] = a;
+      out.raw[v] = longest_v * a;
     }
+    std::lock_guard<std::mutex> lock(longest_mutex);
+    longest_edge = std::max(longest_edge, range_longest);
   });
+  *out.longest_edge = longest_edge;
+}
 
+// Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
+// floats, whose bit patterns sort like the values); stability keeps ties in vertex-index order.
+void sortByWeight(const std::vector<float>& raw, const std::vector<uint8_t>& referenced, size_t count,
+                  std::vector<uint32_t>& order) {
+  std::vector<uint32_t> keys(count), keys2(count), idx2(count);
+  order.resize(count);
+  size_t n = 0;
+  for (size_t v = 0; v < raw.size(); ++v) {
+    if (!referenced[v]) continue;
+    uint32_t bits;
+    std::memcpy(&bits, &raw[v], sizeof bits);
+    keys[n] = ~bits;
+    order[n] = static_cast<uint32_t>(v);
+    ++n;
+  }
+  constexpr int kBits = 11, kBuckets = 1 << kBits;
+  std::vector<uint32_t> hist(3 * kBuckets, 0);
+  for (uint32_t k : keys)
+    for (int pass = 0; pass < 3; ++pass) ++hist[pass * kBuckets + ((k >> (pass * kBits)) & (kBuckets - 1))];
+  for (int pass = 0; pass < 3; ++pass) {
+    uint32_t* h = hist.data() + pass * kBuckets;
+    if (h[(keys.empty() ? 0 : (keys[0] >> (pass * kBits))) & (kBuckets - 1)] == count) continue;  // one bucket: skip
+    uint32_t sum = 0;
+    for (int b = 0; b < kBuckets; ++b) {
+      const uint32_t c = h[b];
+      h[b] = sum;
+      sum += c;
+    }
+    for (size_t i = 0; i < count; ++i) {
+      const uint32_t slot = h[(keys[i] >> (pass * kBits)) & (kBuckets - 1)]++;
+      keys2[slot] = keys[i];
+      idx2[slot] = order[i];
+    }
+    keys.swap(keys2);
+    order.swap(idx2);
+  }
+}
+
+}  // namespace
+
+void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::vector<float>& weights,
+                   std::vector<float>* angular_out, float* longest_edge_out, std::vector<float>* raw_out) {
+  const size_t vn = mesh.vertexCount();
+  weights.assign(vn, 0.0f);
+  if (angular_out) angular_out->assign(vn, 0.0f);
+  if (vn == 0) {
+    if (longest_edge_out) *longest_edge_out = 0.0f;
+    return;
+  }
+  std::vector<float> raw(vn), angular(vn);
   float longest_edge = 0.0f;
-  for (float l : longest) longest_edge = std::max(longest_edge, l);
+  gradeAndSum(mesh, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   // weights = raw * inv: rounding is monotone, so the normalised weights keep the raw order
-  for (size_t v = 0; v < vn; ++v) longest[v] *= angular[v];
-  for (size_t v = 0; v < vn; ++v) weights[v] = longest[v] * inv;
-  if (raw_out) raw_out->swap(longest);
+  for (size_t v = 0; v < vn; ++v) weights[v] = raw[v] * inv;
+  if (raw_out) raw_out->swap(raw);
   if (angular_out) angular_out->swap(angular);
   if (longest_edge_out) *longest_edge_out = longest_edge;
 }
@@ -167,39 +273,40 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   out.mesh = &in;
   out.grading = params.grading;
   out.boost_features = params.boost_features;
+  const size_t vn = in.vertexCount();
+  out.weights.assign(vn, 0.0f);
+  if (vn == 0) return {};
   // the sort uses the unnormalised product: normalising a factor by a constant cannot change the
   // order, and this way the order does not depend on other parts of the mesh (whose longest edge
   // would be the normaliser) even by rounding
-  std::vector<float> raw;
-  gradeVertices(in, params.grading, params.boost_features, out.weights, nullptr, &out.longest_edge, &raw);
+  std::vector<float> raw(vn);
+  out.face_sums.resize(vn);
+  if (!in.colors.empty()) out.face_colors.resize(vn);
+  float longest_edge = 0.0f;
+  gradeAndSum(in, params.grading, params.boost_features,
+              {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
+               in.colors.empty() ? nullptr : out.face_colors.data()});
+  out.longest_edge = longest_edge;
+  const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
+  for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
 
-  const size_t vn = in.vertexCount();
   std::vector<uint8_t> referenced(vn, 0);
   for (uint32_t v : in.triangles) referenced[v] = 1;
   for (uint32_t v : in.edges) referenced[v] = 1;
   for (uint32_t v : in.points) referenced[v] = 1;
-
-  // weights are >= 0 floats, whose bit patterns sort like the values: heaviest first, then by index
-  std::vector<uint64_t> keys;
-  keys.reserve(vn);
+  size_t count = 0;
   bool first = true;
   for (size_t v = 0; v < vn; ++v) {
     if (!referenced[v]) continue;
-    uint32_t bits;
-    std::memcpy(&bits, &raw[v], sizeof bits);
-    keys.push_back((uint64_t(~bits) << 32) | uint64_t(v));
+    ++count;
     const glm::vec3& p = in.positions[v];
     if (first) out.bounds.min = out.bounds.max = p, first = false;
     out.bounds.min = glm::min(out.bounds.min, p);
     out.bounds.max = glm::max(out.bounds.max, p);
   }
-  std::sort(keys.begin(), keys.end());
-  out.order.resize(keys.size());
-  out.sorted_positions.resize(keys.size());
-  for (size_t i = 0; i < keys.size(); ++i) {
-    out.order[i] = static_cast<uint32_t>(keys[i] & 0xffffffffu);
-    out.sorted_positions[i] = in.positions[out.order[i]];
-  }
+  sortByWeight(raw, referenced, count, out.order);
+  out.sorted_positions.resize(count);
+  for (size_t i = 0; i < count; ++i) out.sorted_positions[i] = in.positions[out.order[i]];
 
   double sum = 0.0, area = 0.0;
   const size_t tn = in.triangleCount();
@@ -212,8 +319,8 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);
-  const size_t count = 3 * tn + in.edgeCount();
-  out.mean_edge_length = count ? static_cast<float>(sum / double(count)) : 0.0f;
+  const size_t count_e = 3 * tn + in.edgeCount();
+  out.mean_edge_length = count_e ? static_cast<float>(sum / double(count_e)) : 0.0f;
   return {};
 }
 

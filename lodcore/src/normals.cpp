@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 #include "cluster_internal.h"
 
@@ -18,13 +19,12 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
   const bool colors = !r.colors.empty();
   const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
 
-  std::vector<glm::vec3> face(tn);  // unnormalised (area-weighted) face normals
-  std::vector<glm::vec3> unit(tn);
+  std::vector<glm::vec4> face(tn);  // xyz: unit face normal (0 when degenerate), w: twice the area
   for (size_t t = 0; t < tn; ++t) {
     const glm::vec3& a = r.positions[e.triangles[3 * t]];
-    face[t] = glm::cross(r.positions[e.triangles[3 * t + 1]] - a, r.positions[e.triangles[3 * t + 2]] - a);
-    const float l = glm::length(face[t]);
-    unit[t] = l > 0.0f ? face[t] / l : glm::vec3(0.0f);
+    const glm::vec3 n = glm::cross(r.positions[e.triangles[3 * t + 1]] - a, r.positions[e.triangles[3 * t + 2]] - a);
+    const float l = glm::length(n);
+    face[t] = l > 0.0f ? glm::vec4(n / l, l) : glm::vec4(0.0f);
   }
   // cluster -> incident triangle corners
   std::vector<uint32_t> offsets(nc + 1, 0);
@@ -54,10 +54,12 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
     const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
     for (uint32_t i = b; i < en; ++i) {
       const uint32_t t = corners[i] / 3;
+      const glm::vec3 ut(face[t]);
       glm::vec3 n(0.0f);
       for (uint32_t j = b; j < en; ++j) {
         const uint32_t u = corners[j] / 3;
-        if (u == t || glm::dot(unit[t], unit[u]) >= cos_crease) n += face[u];
+        const glm::vec3 uu(face[u]);
+        if (u == t || glm::dot(ut, uu) >= cos_crease) n += uu * face[u].w;
       }
       const float l = glm::length(n);
       n = l > 0.0f ? n / l : r.normals[c];
@@ -73,6 +75,12 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
     if (b != en) base_vertex[c] = first_vertex;
     else if (needs_vertex[c]) base_vertex[c] = addVertex(c, r.normals[c]);
   }
+  std::vector<glm::vec4>().swap(face);
+  // split vertices may have grown the arrays past the reserve: the chain keeps every level, so
+  // give back the slack
+  out.positions.shrink_to_fit();
+  out.normals.shrink_to_fit();
+  out.colors.shrink_to_fit();
   out.triangles = std::move(corner_vertex);
   out.edges.resize(e.edges.size());
   for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];

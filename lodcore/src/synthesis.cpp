@@ -89,6 +89,8 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
   const double r[3] = {-(a[0][0] * x0.x + a[0][1] * x0.y + a[0][2] * x0.z + q.b0),
                        -(a[1][0] * x0.x + a[1][1] * x0.y + a[1][2] * x0.z + q.b1),
                        -(a[2][0] * x0.x + a[2][1] * x0.y + a[2][2] * x0.z + q.b2)};
+  // a zero residual (one-vertex clusters: every plane passes through x0) leaves x0 unchanged
+  if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0) return x0;
   double w[3], v[3][3];
   symmetricEigen(a, w, v);
   const double wmax = std::max({std::fabs(w[0]), std::fabs(w[1]), std::fabs(w[2])});
@@ -109,83 +111,94 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const uint32_t nc = a.cluster_count;
   const glm::vec3* pos = m.positions.data();
   out.positions.resize(nc);
-  out.normals.assign(nc, glm::vec3(0.0f));
-  const bool colors = !m.colors.empty();
+  out.normals.resize(nc);
+  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
   if (colors) out.colors.assign(nc, glm::vec3(0.0f)); else out.colors.clear();
 
-  // weighted mean, relative to each cluster's heaviest vertex for precision; each vertex weighs its
-  // grade plus kMeanWeightFloor x the cluster's heaviest grade (scale-free, so the result does not
-  // depend on the weights' normaliser), and a cluster of weight-0 vertices takes the plain mean
-  std::vector<glm::vec4> wsum(nc, glm::vec4(0.0f));  // xyz: sum of w * offset, w: sum of w
-  std::vector<glm::vec4> sum(nc, glm::vec4(0.0f));   // xyz: sum of offsets, w: vertex count
+  // One pass over the vertices in index order (every per-vertex array streams; only the per-cluster
+  // sums are scattered). The face sums were made per vertex once per mesh (PreparedMesh::face_sums):
+  // summing them over a cluster's vertices is the sum over its faces, each counted once per corner
+  // in the cluster, as Lindstrom's per-face accumulation does. Offsets are relative to each cluster's
+  // heaviest vertex, so float sums keep their precision.
+  // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
+  // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
+  // vertices takes the plain mean.
+  struct Sums {          // 92 bytes per cluster
+    glm::vec3 centre;    // the heaviest vertex, the local origin
+    float w = 0.0f;      // sum of weights
+    glm::vec3 wsum{0.0f};  // sum of weight x offset
+    float count = 0.0f;
+    glm::vec3 sum{0.0f};   // sum of offsets
+    float a[6] = {0, 0, 0, 0, 0, 0};  // quadric: sum of area n n^T
+    float b[3] = {0, 0, 0};           // quadric: sum of area n d, planes relative to the centre
+    glm::vec3 normal{0.0f};           // sum of area n
+  };
+  std::vector<Sums> sums(nc);
+  for (uint32_t c = 0; c < nc; ++c) sums[c].centre = pos[a.heaviest[c]];
+  std::vector<glm::vec4> face_color;    // xyz: sum of area x face colour, w: sum of area
   std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
-  if (colors) vertex_color.assign(nc, glm::vec4(0.0f));
-  std::vector<glm::vec3> centre(nc);  // the heaviest vertex of each cluster, the local origin
-  for (uint32_t c = 0; c < nc; ++c) centre[c] = pos[a.heaviest[c]];
-  for (size_t i = 0; i < p.order.size(); ++i) {
-    const uint32_t v = p.order[i];
-    const uint32_t c = a.cluster_of[v];
-    const float w = p.weights[v];
-    const glm::vec3 d = p.sorted_positions[i] - centre[c];
-    wsum[c] += glm::vec4(d * w, w);
-    sum[c] += glm::vec4(d, 1.0f);
-    if (colors) vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
+  if (colors) {
+    face_color.assign(nc, glm::vec4(0.0f));
+    vertex_color.assign(nc, glm::vec4(0.0f));
   }
-
   const bool quadric = synthesis == Synthesis::kQuadric;
-  std::vector<Quadric> quadrics(quadric ? nc : 0);
-  std::vector<float> color_area(colors ? nc : 0, 0.0f);
-  const size_t tn = m.triangleCount();
-  for (size_t t = 0; t < tn; ++t) {
-    const uint32_t i0 = m.triangles[3 * t], i1 = m.triangles[3 * t + 1], i2 = m.triangles[3 * t + 2];
-    const glm::vec3 cr = glm::cross(pos[i1] - pos[i0], pos[i2] - pos[i0]);
-    const float len = glm::length(cr);
-    if (!(len > 0.0f)) continue;
-    const float area = 0.5f * len;
-    const glm::vec3 n = cr / len;
-    const glm::vec3 face_color = colors ? (m.colors[i0] + m.colors[i1] + m.colors[i2]) * (1.0f / 3.0f) : glm::vec3(0.0f);
-    const uint32_t corners[3] = {i0, i1, i2};
-    for (uint32_t i : corners) {
-      const uint32_t c = a.cluster_of[i];
-      out.normals[c] += n * area;
-      if (colors) {
-        out.colors[c] += face_color * area;
-        color_area[c] += area;
-      }
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  const size_t vn = m.vertexCount();
+  const uint32_t* cluster_of = a.cluster_of.data();
+  for (size_t v = 0; v < vn; ++v) {
+    const uint32_t c = cluster_of[v];
+    if (c == kNone) continue;
+    Sums& s = sums[c];
+    const float w = p.weights[v];
+    const glm::vec3 d = pos[v] - s.centre;
+    s.wsum += d * w;
+    s.w += w;
+    s.sum += d;
+    s.count += 1.0f;
+    if (have_face_sums) {
+      const VertexFaceSums& f = p.face_sums[v];
+      s.normal += glm::vec3(f.normal[0], f.normal[1], f.normal[2]);
       if (quadric) {
-        Quadric& q = quadrics[c];
-        const float d = -glm::dot(n, pos[i0] - centre[c]);
-        q.a00 += area * n.x * n.x; q.a01 += area * n.x * n.y; q.a02 += area * n.x * n.z;
-        q.a11 += area * n.y * n.y; q.a12 += area * n.y * n.z; q.a22 += area * n.z * n.z;
-        q.b0 += area * n.x * d; q.b1 += area * n.y * d; q.b2 += area * n.z * d;
+        for (int k = 0; k < 6; ++k) s.a[k] += f.a[k];
+        // the vertex lies on all its faces' planes: relative to the centre, b = -A d
+        s.b[0] -= f.a[0] * d.x + f.a[1] * d.y + f.a[2] * d.z;
+        s.b[1] -= f.a[1] * d.x + f.a[3] * d.y + f.a[4] * d.z;
+        s.b[2] -= f.a[2] * d.x + f.a[4] * d.y + f.a[5] * d.z;
       }
+    }
+    if (colors) {
+      face_color[c] += p.face_colors[v];
+      vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
     }
   }
 
   const float half = 0.5f * a.cell_width;
   for (uint32_t c = 0; c < nc; ++c) {
-    const glm::vec3 cc = centre[c];
+    const Sums& s = sums[c];
     glm::vec3 x(0.0f);  // relative to centre
     if (synthesis != Synthesis::kHeaviest) {
       const float floor_w = kMeanWeightFloor * p.weights[a.heaviest[c]];
-      const float total = wsum[c].w + floor_w * sum[c].w;
-      x = total > 0.0f ? (glm::vec3(wsum[c]) + floor_w * glm::vec3(sum[c])) / total : glm::vec3(sum[c]) / sum[c].w;
+      const float total = s.w + floor_w * s.count;
+      x = total > 0.0f ? (s.wsum + floor_w * s.sum) / total : s.sum / s.count;
     }
     if (quadric) {
-      x = solveQuadric(quadrics[c], x);
+      Quadric q;
+      q.a00 = s.a[0], q.a01 = s.a[1], q.a02 = s.a[2], q.a11 = s.a[3], q.a12 = s.a[4], q.a22 = s.a[5];
+      q.b0 = s.b[0], q.b1 = s.b[1], q.b2 = s.b[2];
+      x = solveQuadric(q, x);
       glm::vec3 lo, hi;
       a.cellBox(m, c, lo, hi);
-      x = glm::clamp(x, lo - cc, hi - cc);
+      x = glm::clamp(x, lo - s.centre, hi - s.centre);
       if (!a.uniform && a.shape == CellShape::kSphere) {
         const float l = glm::length(x);
         if (l > half) x *= half / l;
       }
     }
-    out.positions[c] = cc + x;
-    const float nl = glm::length(out.normals[c]);
-    out.normals[c] = nl > 0.0f ? out.normals[c] / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+    out.positions[c] = s.centre + x;
+    const float nl = glm::length(s.normal);
+    out.normals[c] = nl > 0.0f ? s.normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
     if (colors) {
-      if (color_area[c] > 0.0f) out.colors[c] /= color_area[c];
+      if (face_color[c].w > 0.0f) out.colors[c] = glm::vec3(face_color[c]) / face_color[c].w;
       else if (vertex_color[c].w > 0.0f) out.colors[c] = glm::vec3(vertex_color[c]) / vertex_color[c].w;
     }
   }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/mesh.h"
@@ -48,6 +49,16 @@ struct ClusterParams {
   float crease_angle_deg = 60.0f;  // output normals: faces meeting at a larger angle do not share normals
 };
 
+// Sums over the triangles incident on one vertex (each triangle counted once per corner, as in
+// Lindstrom's per-cluster accumulation), made once per mesh so that a level's synthesis is a pass
+// over vertices. 36 bytes.
+struct VertexFaceSums {
+  float a[6] = {0, 0, 0, 0, 0, 0};  // sum of area * n n^T: xx, xy, xz, yy, yz, zz (n the unit face normal)
+  float normal[3] = {0, 0, 0};      // sum of area * n
+  // every incident plane passes through the vertex, so the quadric's linear part relative to the
+  // vertex is 0 and needs no storage: relative to a point c it is -A (v - c)
+};
+
 // A mesh graded and sorted by weight once, so that every level of a chain reuses the sort (§4).
 // Holds a pointer to the mesh it was made from: that mesh must outlive it and stay unchanged.
 struct PreparedMesh {
@@ -61,6 +72,11 @@ struct PreparedMesh {
   float longest_edge = 0.0f;     // longest edge of the mesh (the length normaliser)
   float mean_edge_length = 0.0f;
   double surface_area = 0.0;     // of all triangles (sizes the per-level grid hash)
+  // filled by prepareMesh; a hand-made PreparedMesh without them clusters with the weighted mean in
+  // place of the quadric minimiser and +z as the normal of edge and point vertices
+  std::vector<VertexFaceSums> face_sums;  // one per vertex (36 bytes): incident-face quadric and normal
+  std::vector<glm::vec4> face_colors;     // one per vertex when the mesh has colours: sum of area x face
+                                          // colour (xyz) and of area (w); empty otherwise
 
   size_t referencedVertexCount() const { return order.size(); }
 };
@@ -71,7 +87,7 @@ struct PreparedMesh {
 // `weights` gets angular x (longest incident edge / longest edge of the mesh); `raw` (optional) the
 // unnormalised angular x longest incident edge, which orders vertices the same way. A vertex with no
 // incident edge of non-zero length weighs 0. Precondition: `mesh` is valid (validateMesh).
-// Cost: O(sum of vertex degrees^2) time (degrees above 64 use an O(degree) estimate of theta),
+// Cost: O(sum of vertex degrees^2) time (more than 64 distinct neighbours: an O(degree) estimate of theta),
 // O(V + T) temporary memory; parallel over vertices with TBB.
 void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::vector<float>& weights,
                    std::vector<float>* angular = nullptr, float* longest_edge = nullptr,
@@ -79,7 +95,9 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
 
 // Validates `in`, grades its vertices and sorts the referenced ones by weight. `what` names the mesh
 // in error messages. Errors: invalid mesh (NaN, index out of range, size mismatch).
-// Cost: O(V log V) for the sort; allocates weights, order and sorted positions (20 bytes per vertex).
+// Cost: O(V + T) (grading over a vertex -> incidence table built by counting sort, radix sort by
+// weight); keeps weights, order and sorted positions (20 bytes per vertex) and the per-vertex face
+// sums (36 bytes per vertex, 16 more with colours); parallel over vertices with TBB.
 Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out,
                   const std::string& what = "mesh");
 
