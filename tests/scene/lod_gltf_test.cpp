@@ -142,7 +142,9 @@ TEST(LodGltf, BuiltChainsSurviveTheMsftLodRoundTrip) {
       EXPECT_EQ(corners(b.mesh, b.mesh.triangles), corners(a.mesh, a.mesh.triangles));
       EXPECT_EQ(corners(b.mesh, b.mesh.edges), corners(a.mesh, a.mesh.edges));
       EXPECT_EQ(corners(b.mesh, b.mesh.points), corners(a.mesh, a.mesh.points));
-      if (a.mesh.edgeCount() > 0) EXPECT_EQ(b.mesh.edge_thickness, a.mesh.edge_thickness);
+      if (a.mesh.edgeCount() > 0) {
+        EXPECT_EQ(b.mesh.edge_thickness, a.mesh.edge_thickness);
+      }
       EXPECT_EQ(b.cell_width, a.cell_width);
       EXPECT_EQ(b.max_error, a.max_error);
       EXPECT_EQ(b.method, a.method);
