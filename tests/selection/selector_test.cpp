@@ -550,6 +550,7 @@ TEST(Selector, ReportFrameTimeFromAnotherThread) {
   SyntheticScene s = makeScene(12, 1000, 6, 8, 100.0f);
   Owned o(makeContext(1000, 64));
   std::atomic<uint64_t> published{0};
+  std::atomic<uint64_t> acknowledged{0};
   std::atomic<bool> done{false};
   std::thread render([&] {
     uint64_t seen = 0;
@@ -558,6 +559,9 @@ TEST(Selector, ReportFrameTimeFromAnotherThread) {
       if (f != seen) {
         seen = f;
         reportFrameTime(o.ctx, f - 1, 2.0f + 0.001f * static_cast<float>(f % 7));
+        acknowledged.store(f, std::memory_order_release);
+      } else {
+        std::this_thread::yield();
       }
     }
   });
@@ -570,6 +574,18 @@ TEST(Selector, ReportFrameTimeFromAnotherThread) {
     ASSERT_TRUE(job.run());
     EXPECT_LE(st.predicted_ms, 4.0 * (1 + 1e-9));
     published.store(st.frame + 1, std::memory_order_release);
+  }
+  // however the threads were scheduled, the last frame's report reaches the context before one
+  // more selection reads the mailbox (on a loaded machine the render thread may not have run at all
+  // during the loop)
+  const uint64_t last = published.load(std::memory_order_relaxed);
+  while (acknowledged.load(std::memory_order_acquire) != last) std::this_thread::yield();
+  {
+    Camera cam = makeCamera(glm::vec3(0.0f, 0.0f, -10.0f));
+    std::vector<int8_t> levels;
+    SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
+    job.params.budget_ms = 4.0f;
+    ASSERT_TRUE(job.run());
   }
   done.store(true, std::memory_order_release);
   render.join();
