@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "args.h"
+#include "demo_scene_options.h"
 #include "command.h"
 #include "progress.h"
 #include "replay_demo.h"
@@ -19,8 +20,8 @@
 namespace scenelod::tool {
 namespace {
 
-const char kUsage[] =
-    "usage: scenelod demo [-o DIR] [--frames N] [--table-only] [scene options]\n"
+const std::string kUsage =
+    std::string("usage: scenelod demo [-o DIR] [--frames N] [--table-only] [scene options]\n"
     "\n"
     "Builds the built-in scene (CAD-like parts and bunnies), precomputes every mesh's LOD chain,\n"
     "records a fly-through, replays it in distance mode and under a budget (synthetic renderer),\n"
@@ -30,11 +31,8 @@ const char kUsage[] =
     "options:\n"
     "  -o, --out DIR       output folder (default scenelod-demo)\n"
     "  --frames N          frames of the fly-through (default 600)\n"
-    "  --table-only        stop after the object table (no fly-through, no report)\n"
-    "  --bunny PATH        the bunny OBJ (default /usr/share/glmark2/models/bunny.obj)\n"
-    "  --gearboxes N       gearbox sub-assemblies (default 4)\n"
-    "  --bunnies N         bunny instances (default 4)\n"
-    "  --segments N        tessellation of round parts (default 48, >= 3)";
+    "  --table-only        stop after the object table (no fly-through, no report)\n") +
+    kDemoSceneOptionsHelp;
 
 // At most this many mesh rows are printed; the rest are counted in a "folded" line (the CSV has all).
 constexpr size_t kMaxMeshRows = 30;
@@ -175,23 +173,17 @@ void appendScreenshots(const std::string& out, const std::string& report_path) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  Args args(argv, {"--table-only"}, {"--out", "--frames", "--bunny", "--gearboxes", "--bunnies", "--segments"});
+  std::vector<std::string> options = demoSceneOptionNames();
+  options.insert(options.end(), {"--out", "--frames"});
+  Args args(argv, {"--table-only"}, options);
   if (!args.ok()) return usageError("demo", args.error());
   if (!args.positional().empty()) return usageError("demo", "unexpected argument '" + args.positional()[0] + "'");
   long frames = 600;
-  scene::DemoSceneParams p;
-  long gearboxes = long(p.gearbox_count), bunnies = long(p.bunny_count), segments = long(p.segments);
-  if (!args.getInt("--frames", frames) || !args.getInt("--gearboxes", gearboxes) || !args.getInt("--bunnies", bunnies) ||
-      !args.getInt("--segments", segments))
-    return usageError("demo", args.error());
+  if (!args.getInt("--frames", frames)) return usageError("demo", args.error());
   if (frames < 31 || frames > 100000) return usageError("demo", "--frames must be in 31..100000");
-  if (gearboxes < 1 || gearboxes > 1000) return usageError("demo", "--gearboxes must be in 1..1000");
-  if (bunnies < 0 || bunnies > 1000) return usageError("demo", "--bunnies must be in 0..1000");
-  if (segments < 3 || segments > 4096) return usageError("demo", "--segments must be in 3..4096");
-  p.gearbox_count = size_t(gearboxes);
-  p.bunny_count = size_t(bunnies);
-  p.segments = size_t(segments);
-  if (args.has("--bunny")) p.bunny_path = args.get("--bunny");
+  scene::DemoSceneParams p;
+  std::string option_error;
+  if (!readDemoSceneOptions(args, p, option_error)) return usageError("demo", option_error);
   const std::string out = args.get("--out", "scenelod-demo");
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
@@ -236,7 +228,7 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const CommandRegistration kRegistration({"demo", "the main job end to end on the built-in scene, with a report", kUsage, run});
+const CommandRegistration kRegistration({"demo", "the main job end to end on the built-in scene, with a report", kUsage.c_str(), run});
 
 }  // namespace
 }  // namespace scenelod::tool

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "args.h"
+#include "demo_scene_options.h"
 #include "command.h"
 #include "scenelod/scene/demo_scene.h"
 #include "scenelod/scene/gltf_io.h"
@@ -12,39 +13,28 @@ namespace scenelod::tool {
 
 namespace {
 
-const char kUsage[] =
-    "usage: scenelod demo-scene -o FILE.glb [options]\n"
+const std::string kUsage =
+    std::string("usage: scenelod demo-scene -o FILE.glb [options]\n"
     "\n"
     "Writes the built-in default scene: a CAD-like assembly of simple polyhedra (gears, shafts, bolts,\n"
     "brackets, pipes, prisms, a base plate, thin fins and rods that collapse into thick edges) and\n"
     "instances of the Stanford bunny, with meshes shared between instances. Deterministic.\n"
     "\n"
-    "  -o, --out FILE.glb  the output file\n"
-    "  --bunny PATH        the bunny OBJ (default /usr/share/glmark2/models/bunny.obj; when it cannot\n"
-    "                      be read a generated organic blob stands in, and the tool says so)\n"
-    "  --gearboxes N       gear sub-assemblies (default 4)\n"
-    "  --bunnies N         bunny instances (default 4)\n"
-    "  --segments N        tessellation of round parts (default 48, >= 3)";
+    "  -o, --out FILE.glb  the output file\n") +
+    kDemoSceneOptionsHelp;
 
 int runDemoScene(const std::vector<std::string>& argv) {
-  Args args(argv, {}, {"--out", "--bunny", "--gearboxes", "--bunnies", "--segments"});
-  scene::DemoSceneParams p;
-  long gearboxes = long(p.gearbox_count), bunnies = long(p.bunny_count), segments = long(p.segments);
-  args.getInt("--gearboxes", gearboxes);
-  args.getInt("--bunnies", bunnies);
-  args.getInt("--segments", segments);
+  std::vector<std::string> options = demoSceneOptionNames();
+  options.push_back("--out");
+  Args args(argv, {}, options);
   if (!args.ok()) return usageError("demo-scene", args.error());
   if (!args.positional().empty()) return usageError("demo-scene", "unexpected argument '" + args.positional()[0] + "'");
+  scene::DemoSceneParams p;
+  std::string option_error;
+  if (!readDemoSceneOptions(args, p, option_error)) return usageError("demo-scene", option_error);
   const std::string out = args.get("--out");
   if (out.empty()) return usageError("demo-scene", "missing -o FILE.glb");
   if (out.size() < 4 || out.substr(out.size() - 4) != ".glb") return usageError("demo-scene", "the output must end in .glb");
-  if (gearboxes < 1 || gearboxes > 1000) return usageError("demo-scene", "--gearboxes must be in 1..1000");
-  if (bunnies < 0 || bunnies > 1000) return usageError("demo-scene", "--bunnies must be in 0..1000");
-  if (segments < 3 || segments > 4096) return usageError("demo-scene", "--segments must be in 3..4096");
-  p.gearbox_count = size_t(gearboxes);
-  p.bunny_count = size_t(bunnies);
-  p.segments = size_t(segments);
-  if (args.has("--bunny")) p.bunny_path = args.get("--bunny");
 
   scene::SceneData s;
   scene::DemoSceneInfo info;
@@ -59,7 +49,7 @@ int runDemoScene(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const CommandRegistration kRegister({"demo-scene", "write the built-in demo scene (CAD parts + bunnies) as GLB", kUsage,
+const CommandRegistration kRegister({"demo-scene", "write the built-in demo scene (CAD parts + bunnies) as GLB", kUsage.c_str(),
                                      &runDemoScene});
 
 }  // namespace
