@@ -20,8 +20,13 @@ if(NOT EXISTS "${prefix}/lib/cmake/scenelod/scenelodConfig.cmake" AND NOT EXISTS
   endif()
 endif()
 
+# a sanitizer build installs static libraries that call the sanitizer runtimes: the consumer links them too
+set(consumer_flags "")
+if(SANITIZE)
+  set(consumer_flags "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined")
+endif()
 run_step("configure consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE_DIR}" -B "${WORK_DIR}/build" -G "${GENERATOR}"
-         -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${prefix})
+         -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${prefix} ${consumer_flags})
 run_step("build consumer" ${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 
 # a unit quad made of two triangles, plus one edge and one point
