@@ -332,6 +332,28 @@ TEST(Selector, TinyBudgetDropsObjectsButKeepsMustDrawAndFlags) {
   EXPECT_EQ(st.drawn_count, 2u);
 }
 
+// The heap greedy on `greedy` and the Lagrangian form on `lagrangian`, one frame each from the same
+// camera and budget: the levels that differ, and both frames' stats.
+struct GreedyVsLagrangian {
+  size_t differ = 0;
+  SelectionStats greedy, lagrangian;
+};
+GreedyVsLagrangian runGreedyAndLagrangian(const SyntheticScene& s, Owned& greedy, Owned& lagrangian, const Camera& cam,
+                                          float budget_ms) {
+  GreedyVsLagrangian r;
+  std::vector<int8_t> a, b;
+  SelectionJob ja = makeJob(s, greedy.ctx, &cam, a, &r.greedy);
+  SelectionJob jb = makeJob(s, lagrangian.ctx, &cam, b, &r.lagrangian);
+  ja.params.algorithm = BudgetAlgorithm::kGreedy;
+  jb.params.algorithm = BudgetAlgorithm::kLagrangian;
+  ja.params.budget_ms = jb.params.budget_ms = budget_ms;
+  const bool ran = ja.run() && jb.run();
+  EXPECT_TRUE(ran);
+  if (!ran) r.differ = a.size();
+  for (size_t i = 0; ran && i < a.size(); ++i) r.differ += a[i] != b[i];
+  return r;
+}
+
 TEST(Selector, LagrangianMatchesGreedyChoices) {
   // the bracket capacity (2 or 16..31) is small: some frames find the budget's edge from the price
   // histogram alone, others need passes over the objects; both must match the greedy
@@ -340,28 +362,16 @@ TEST(Selector, LagrangianMatchesGreedyChoices) {
     SyntheticScene s = makeScene(seed, 1500, 6, 8, 120.0f, true);
     Owned g(makeContext(1500)), l(makeContext(1500, seed % 2 ? 16 + seed : 2));
     std::mt19937 rng(seed);
-    double lambda_prev = 0.0;
     for (int frame = 0; frame < 6; ++frame) {
-      Camera cam = makeCamera(glm::vec3(0.0f, 1.0f, 20.0f - 4.0f * frame));
-      std::vector<int8_t> a, b;
-      SelectionStats sa, sb;
-      SelectionJob ja = makeJob(s, g.ctx, &cam, a, &sa);
-      SelectionJob jb = makeJob(s, l.ctx, &cam, b, &sb);
-      ja.params.algorithm = BudgetAlgorithm::kGreedy;
-      jb.params.algorithm = BudgetAlgorithm::kLagrangian;
-      ja.params.budget_ms = jb.params.budget_ms = 1.0f + static_cast<float>(rng() % 4000) / 100.0f;
-      ASSERT_TRUE(ja.run());
-      ASSERT_TRUE(jb.run());
-      size_t differ = 0;
-      for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
-      EXPECT_EQ(differ, 0u) << "seed " << seed << " frame " << frame;
-      EXPECT_EQ(sa.predicted_ms, sb.predicted_ms);
-      if (sb.lambda > 0.0) {  // the budget binds
-        if (sb.search_passes > 0) ++with_passes; else ++histogram_only;
+      const Camera cam = makeCamera(glm::vec3(0.0f, 1.0f, 20.0f - 4.0f * frame));
+      const float budget_ms = 1.0f + static_cast<float>(rng() % 4000) / 100.0f;
+      const GreedyVsLagrangian r = runGreedyAndLagrangian(s, g, l, cam, budget_ms);
+      EXPECT_EQ(r.differ, 0u) << "seed " << seed << " frame " << frame;
+      EXPECT_EQ(r.greedy.predicted_ms, r.lagrangian.predicted_ms);
+      if (r.lagrangian.lambda > 0.0) {  // the budget binds
+        if (r.lagrangian.search_passes > 0) ++with_passes; else ++histogram_only;
       }
-      lambda_prev = sb.lambda;
     }
-    (void)lambda_prev;
   }
   std::printf("binding frames: %zu from the histogram alone, %zu with passes\n", histogram_only, with_passes);
   EXPECT_GT(histogram_only, 0u);
@@ -377,22 +387,12 @@ TEST(Selector, LagrangianMatchesGreedyAlongASmoothPath) {
     Owned g(makeContext(1500)), l(makeContext(1500, seed % 2 ? 64 : 8));
     size_t binding = 0;
     for (int frame = 0; frame < 40; ++frame) {
-      Camera cam = makeCamera(glm::vec3(0.05f * frame, 1.0f, 20.0f - 0.2f * frame));
-      std::vector<int8_t> a, b;
-      SelectionStats sa, sb;
-      SelectionJob ja = makeJob(s, g.ctx, &cam, a, &sa);
-      SelectionJob jb = makeJob(s, l.ctx, &cam, b, &sb);
-      ja.params.algorithm = BudgetAlgorithm::kGreedy;
-      jb.params.algorithm = BudgetAlgorithm::kLagrangian;
-      ja.params.budget_ms = jb.params.budget_ms = 1.5f;
-      ASSERT_TRUE(ja.run());
-      ASSERT_TRUE(jb.run());
-      size_t differ = 0;
-      for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
-      EXPECT_EQ(differ, 0u) << "seed " << seed << " frame " << frame;
-      EXPECT_EQ(sa.predicted_ms, sb.predicted_ms);
-      EXPECT_EQ(sa.total_benefit, sb.total_benefit);
-      binding += sb.dropped_count > 0;
+      const Camera cam = makeCamera(glm::vec3(0.05f * frame, 1.0f, 20.0f - 0.2f * frame));
+      const GreedyVsLagrangian r = runGreedyAndLagrangian(s, g, l, cam, 1.5f);
+      EXPECT_EQ(r.differ, 0u) << "seed " << seed << " frame " << frame;
+      EXPECT_EQ(r.greedy.predicted_ms, r.lagrangian.predicted_ms);
+      EXPECT_EQ(r.greedy.total_benefit, r.lagrangian.total_benefit);
+      binding += r.lagrangian.dropped_count > 0;
     }
     EXPECT_GT(binding, 30u) << "the budget should bind on most frames";
   }
