@@ -96,6 +96,40 @@ void BM_SetLocalAll(benchmark::State& state) {
 }
 BENCHMARK(BM_SetLocalAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
+// the frame through the batch call: one setLocals for every node (the engine hands over its
+// poses as an array), then update()
+void BM_SetLocalsAndUpdate(benchmark::State& state) {
+  Fixture f;
+  const size_t n = static_cast<size_t>(state.range(0));
+  build(f, n);
+  int frame = 0;
+  const Span<const NodeHandle> nodes(f.nodes.data(), n);
+  for (auto _ : state) {
+    const auto& pose = f.poses[frame++ & 1];
+    benchmark::DoNotOptimize(f.scene.setLocals(nodes, Span<const glm::mat4>(pose.data(), n)).ok());
+    benchmark::DoNotOptimize(f.scene.update());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
+}
+BENCHMARK(BM_SetLocalsAndUpdate)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
+// and the batch call alone
+void BM_SetLocalsAll(benchmark::State& state) {
+  Fixture f;
+  const size_t n = static_cast<size_t>(state.range(0));
+  build(f, n);
+  int frame = 0;
+  const Span<const NodeHandle> nodes(f.nodes.data(), n);
+  for (auto _ : state) {
+    const auto& pose = f.poses[frame++ & 1];
+    benchmark::DoNotOptimize(f.scene.setLocals(nodes, Span<const glm::mat4>(pose.data(), n)).ok());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
+}
+BENCHMARK(BM_SetLocalsAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
 // the sphere part alone: chain spheres change (every object dirty) but no node moved
 void BM_WorldSpheresOnly(benchmark::State& state) {
   Fixture f;

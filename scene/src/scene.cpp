@@ -609,6 +609,32 @@ Error Scene::setLocal(NodeHandle node, const glm::mat4& local) {
 
 Error Scene::setLocal(NodeHandle node, const Trs& trs) { return setLocal(node, composeTrs(trs)); }
 
+Error Scene::setLocals(Span<const NodeHandle> nodes, StridedSpan<const glm::mat4> locals) {
+  if (nodes.count != locals.count)
+    return {Status::kInvalidArgument, "setLocals got " + std::to_string(nodes.count) + " nodes and " +
+                                          std::to_string(locals.count) + " local transforms"};
+  const uint32_t* generation = node_generation_.data();
+  const uint32_t* dense = node_dense_.data();
+  const size_t slots = node_generation_.size();
+  Affine* local = local_.data();
+  uint8_t* dirty = node_dirty_.data();
+  size_t first = dirty_from_;
+  for (size_t k = 0; k < nodes.count; ++k) {
+    const NodeHandle h = nodes[k];
+    // nodeLive, with the arrays in registers
+    if (h.slot >= slots || generation[h.slot] != h.generation || dense[h.slot] == kInvalidSlot) {
+      dirty_from_ = first;
+      return stale(("node (setLocals, node " + std::to_string(k) + ")").c_str());
+    }
+    const uint32_t i = dense[h.slot];
+    local[i] = toAffine<Affine>(locals[k]);
+    dirty[i] = 1;
+    if (i < first) first = i;
+  }
+  dirty_from_ = first;
+  return {};
+}
+
 Error Scene::getLocal(NodeHandle node, glm::mat4& out) const {
   if (!nodeLive(node)) return stale("node");
   out = toMat4(local_[node_dense_[node.slot]]);

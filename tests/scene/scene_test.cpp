@@ -562,3 +562,57 @@ TEST(Scene, GetWorldOfADeepPathWithChangedAncestors) {
   ASSERT_TRUE(s.getWorld(chain.back(), w).ok());
   EXPECT_EQ(std::memcmp(&w, &pending, sizeof w), 0);
 }
+
+TEST(Scene, SetLocalsMatchesSetLocalAndNamesAStaleHandle) {
+  std::mt19937 rng(47);
+  MixedScene a, b;
+  std::mt19937 rng_a(53), rng_b(53);
+  buildMixed(a, rng_a, 120);
+  buildMixed(b, rng_b, 120);
+  a.s.update();
+  b.s.update();
+  std::vector<NodeHandle> picked;
+  std::vector<glm::mat4> locals;
+  for (int k = 0; k < 50; ++k) {
+    picked.push_back(a.nodes[rng() % a.nodes.size()]);  // same slots in both scenes
+    locals.push_back(randomAffine(rng, k % 4 == 0));
+  }
+  ASSERT_TRUE(a.s.setLocals(Span<const NodeHandle>(picked.data(), picked.size()),
+                            Span<const glm::mat4>(locals.data(), locals.size())).ok());
+  for (size_t k = 0; k < picked.size(); ++k) ASSERT_TRUE(b.s.setLocal(picked[k], locals[k]).ok());
+  EXPECT_EQ(a.s.update(), b.s.update());
+  expectSameBits(sphereBits(a.s), sphereBits(b.s));
+  // strided: the matrices inside the caller's own structs
+  struct Pose {
+    int id;
+    glm::mat4 local;
+  };
+  std::vector<Pose> poses;
+  for (size_t k = 0; k < 3; ++k) poses.push_back(Pose{int(k), randomAffine(rng, false)});
+  ASSERT_TRUE(a.s.setLocals(Span<const NodeHandle>(picked.data(), 3),
+                            StridedSpan<const glm::mat4>(&poses[0].local, 3, sizeof(Pose))).ok());
+  glm::mat4 got;
+  ASSERT_TRUE(a.s.getLocal(picked[2], got).ok());
+  expectMatNear(got, poses[2].local, 0.0f);
+  // errors: counts differ (nothing set); a stale handle (the ones before it are set)
+  EXPECT_EQ(a.s.setLocals(Span<const NodeHandle>(picked.data(), 2), Span<const glm::mat4>(locals.data(), 3)).status,
+            Status::kInvalidArgument);
+  NodeHandle doomed;
+  ASSERT_TRUE(a.s.addNode({}, glm::mat4(1.0f), doomed).ok());
+  ASSERT_TRUE(a.s.removeNode(doomed).ok());
+  std::vector<NodeHandle> with_stale = {a.nodes[0], doomed, a.nodes[1]};
+  const glm::mat4 moved = glm::translate(glm::mat4(1.0f), glm::vec3(7.0f, 8.0f, 9.0f));
+  std::vector<glm::mat4> three(3, moved);
+  glm::mat4 before1;
+  ASSERT_TRUE(a.s.getLocal(a.nodes[1], before1).ok());
+  const Error e = a.s.setLocals(Span<const NodeHandle>(with_stale.data(), 3), Span<const glm::mat4>(three.data(), 3));
+  EXPECT_EQ(e.status, Status::kNotFound);
+  EXPECT_NE(e.message.find("node 1"), std::string::npos) << e.message;
+  ASSERT_TRUE(a.s.getLocal(a.nodes[0], got).ok());
+  expectMatNear(got, moved, 0.0f);
+  ASSERT_TRUE(a.s.getLocal(a.nodes[1], got).ok());
+  expectMatNear(got, before1, 0.0f);
+  a.s.update();
+  ASSERT_TRUE(a.s.getWorld(a.nodes[0], got).ok());
+  expectMatNear(got, bruteWorld(a.s, a.nodes[0]), 1e-4f);
+}

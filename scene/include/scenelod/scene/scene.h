@@ -103,6 +103,12 @@ class Scene {
   // last row reads back as (0, 0, 0, 1).
   Error setLocal(NodeHandle node, const glm::mat4& local);
   Error setLocal(NodeHandle node, const Trs& trs);
+  // Sets the local transforms of many nodes in one call: nodes[i] gets locals[i], as setLocal would
+  // (an engine handing over a frame's poses). `locals` may be strided (e.g. a member of the engine's
+  // own per-node structs).
+  // Errors: the counts differ (nothing set); a stale handle nodes[i] (the nodes before i are set, the
+  // rest are not; the message names i). O(count), no allocation.
+  Error setLocals(Span<const NodeHandle> nodes, StridedSpan<const glm::mat4> locals);
   Error getLocal(NodeHandle node, glm::mat4& out) const;
   // World transform from the current local transforms (affine, last row (0, 0, 0, 1)); the same bits
   // update() uses for the node's spheres. Nodes without children keep no world transform: theirs is
