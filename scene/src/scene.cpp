@@ -369,7 +369,7 @@ glm::mat4 toMat4(const A& a) {
 }
 }  // namespace
 
-bool Scene::nodeLive(NodeHandle h) const {
+inline bool Scene::nodeLive(NodeHandle h) const {
   return h.slot < node_generation_.size() && node_generation_[h.slot] == h.generation &&
          node_dense_[h.slot] != kInvalidSlot;
 }
@@ -810,7 +810,7 @@ __attribute__((target_clones("avx", "default")))
 #endif
 size_t Scene::update() {
   const size_t n = order_.size();
-  const bool all = all_objects_dirty_;
+  const bool all = all_objects_dirty_, edited = some_objects_dirty_;
   uint8_t* object_dirty = object_dirty_.data();
   const int32_t* parent = parent_dense_.data();
   const uint32_t* children = child_count_.data();
@@ -844,13 +844,13 @@ size_t Scene::update() {
       if (all) continue;
       for (int32_t k = first_object[i]; k >= 0; k = next_object[k]) {
         batch.add(static_cast<uint32_t>(k), a, b);
-        object_dirty[k] = 0;
+        if (edited) object_dirty[k] = 0;  // else every flag is clear already
       }
     }
     std::fill(node_dirty_.begin() + static_cast<std::ptrdiff_t>(dirty_from_), node_dirty_.end(), uint8_t(0));
     dirty_from_ = kNoneDirty;
   }
-  if (all || some_objects_dirty_) {
+  if (all || edited) {
     // objects edited themselves (chain, node, chain sphere, new): one pass over the flags
     const size_t m = object_chain_.size();
     const uint32_t* node_of = object_node_dense_.data();
