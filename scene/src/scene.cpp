@@ -811,6 +811,7 @@ __attribute__((target_clones("avx", "default")))
 size_t Scene::update() {
   const size_t n = order_.size();
   const bool all = all_objects_dirty_, edited = some_objects_dirty_;
+  if (dirty_from_ >= n && !all && !edited) return 0;
   uint8_t* object_dirty = object_dirty_.data();
   const int32_t* parent = parent_dense_.data();
   const uint32_t* children = child_count_.data();
