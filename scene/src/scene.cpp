@@ -280,22 +280,24 @@ __attribute__((target("avx2"))) void spheresWide(const SphereJobs& j, size_t cou
 
 using SpheresFn = void (*)(const SphereJobs&, size_t, const SphereOut&);
 
-SpheresFn pickSpheres(bool wide) {
+// picked on first use (a static initialiser elsewhere may already update a scene); thread-safe
+SpheresFn bestSpheres() {
+  static const SpheresFn fn = [] {
 #if defined(SCENELOD_SCENE_AVX2)
-  __builtin_cpu_init();
-  if (wide && __builtin_cpu_supports("avx2")) return &spheresWide;
+    __builtin_cpu_init();  // this may run before the CPU model is initialised
+    if (__builtin_cpu_supports("avx2")) return &spheresWide;
 #endif
-  (void)wide;
-  return &spheresNarrow;
+    return &spheresNarrow;
+  }();
+  return fn;
 }
-
-SpheresFn g_spheres = pickSpheres(true);
+SpheresFn g_forced_spheres = nullptr;  // detail::useWideSpheres(false), for tests
 
 // collects due objects and computes their spheres a batch at a time
 struct SphereBatcher {
   explicit SphereBatcher(const SphereOut& o) : out(o) {}
   const SphereOut& out;
-  SpheresFn fn = g_spheres;
+  SpheresFn fn = g_forced_spheres ? g_forced_spheres : bestSpheres();
   size_t count = 0, done = 0;
   SphereJobs jobs;
 
@@ -325,8 +327,8 @@ struct SphereBatcher {
 
 namespace detail {
 bool useWideSpheres(bool on) {
-  const bool was = g_spheres != &spheresNarrow;
-  g_spheres = pickSpheres(on);
+  const bool was = (g_forced_spheres ? g_forced_spheres : bestSpheres()) != &spheresNarrow;
+  g_forced_spheres = on ? nullptr : &spheresNarrow;
   return was;
 }
 }  // namespace detail
