@@ -168,8 +168,8 @@ void spheresNarrow(const SphereJobs& j, size_t count, const SphereOut& out) {
 }
 
 #if defined(SCENELOD_SCENE_AVX2)
-// four 16-byte rows p[0..7] + offset as four 8-lane vectors: element c of lane l's row in lane l of
-// out[c] (per 128-bit half a 4x4 transpose; lanes 0-3 low, 4-7 high)
+// the eight 16-byte rows at p[0..7] + offset as four 8-lane vectors: element c of lane l's row in
+// lane l of out[c] (per 128-bit half a 4x4 transpose; lanes 0-3 low, 4-7 high)
 __attribute__((target("avx2"))) inline void transposeWide(const float* const* p, size_t offset, __m256* out) {
   __m256 v[4];
   for (int l = 0; l < 4; ++l)
@@ -819,8 +819,9 @@ size_t Scene::update() {
   const uint32_t* children = child_count_.data();
   const Affine* local = local_.data();
   Affine* world = world_.data();
-  const SphereOut out{chain_spheres_.data(), object_chain_.data(), &world_center_.data()->x, world_radius_.data(),
-                      max_scale_.data()};
+  // (a vec3 is three floats; data() is null while there are no objects)
+  const SphereOut out{chain_spheres_.data(), object_chain_.data(), reinterpret_cast<float*>(world_center_.data()),
+                      world_radius_.data(), max_scale_.data()};
   SphereBatcher batch(out);
   if (dirty_from_ < n) {
     uint8_t* dirty = node_dirty_.data();
