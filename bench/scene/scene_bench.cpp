@@ -46,20 +46,30 @@ void build(Fixture& f, size_t n) {
   f.scene.update();
 }
 
-// every object's node gets a new local transform, then one update(): transforms + spheres
-void BM_MoveAllAndUpdate(benchmark::State& state) {
+enum class Moves { kSetLocal, kSetLocals };
+
+// one frame per iteration: every object's node gets a new local transform (one setLocal call per
+// node, or one setLocals call for all), then, when asked, one update(): transforms + spheres
+void moveFrames(benchmark::State& state, Moves moves, bool update) {
   Fixture f;
   const size_t n = static_cast<size_t>(state.range(0));
   build(f, n);
   int frame = 0;
+  const Span<const NodeHandle> nodes(f.nodes.data(), n);
   for (auto _ : state) {
     const auto& pose = f.poses[frame++ & 1];
-    for (size_t i = 0; i < n; ++i) f.scene.setLocal(f.nodes[i], pose[i]);
-    benchmark::DoNotOptimize(f.scene.update());
+    if (moves == Moves::kSetLocals) {
+      benchmark::DoNotOptimize(f.scene.setLocals(nodes, Span<const glm::mat4>(pose.data(), n)).ok());
+    } else {
+      for (size_t i = 0; i < n; ++i) f.scene.setLocal(f.nodes[i], pose[i]);
+    }
+    if (update) benchmark::DoNotOptimize(f.scene.update());
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
 }
+
+void BM_MoveAllAndUpdate(benchmark::State& state) { moveFrames(state, Moves::kSetLocal, true); }
 BENCHMARK(BM_MoveAllAndUpdate)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
 // the split of the above: update() alone after every node got a new local transform (the
@@ -82,19 +92,15 @@ void BM_UpdateAfterMoveAll(benchmark::State& state) {
 BENCHMARK(BM_UpdateAfterMoveAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
 // and the setLocal calls alone (no update: the nodes just stay dirty)
-void BM_SetLocalAll(benchmark::State& state) {
-  Fixture f;
-  const size_t n = static_cast<size_t>(state.range(0));
-  build(f, n);
-  int frame = 0;
-  for (auto _ : state) {
-    const auto& pose = f.poses[frame++ & 1];
-    for (size_t i = 0; i < n; ++i) f.scene.setLocal(f.nodes[i], pose[i]);
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(n));
-}
+void BM_SetLocalAll(benchmark::State& state) { moveFrames(state, Moves::kSetLocal, false); }
 BENCHMARK(BM_SetLocalAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
+// the frame through the batch call (the engine hands over its poses as an array), with update()
+// and alone
+void BM_SetLocalsAndUpdate(benchmark::State& state) { moveFrames(state, Moves::kSetLocals, true); }
+BENCHMARK(BM_SetLocalsAndUpdate)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+void BM_SetLocalsAll(benchmark::State& state) { moveFrames(state, Moves::kSetLocals, false); }
+BENCHMARK(BM_SetLocalsAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 
 // the sphere part alone: chain spheres change (every object dirty) but no node moved
 void BM_WorldSpheresOnly(benchmark::State& state) {

@@ -12,8 +12,13 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__SSE2__)
+#include <immintrin.h>
+#define SCENELOD_SCENE_AVX2 1
+#endif
 
 #include "scenelod/scene/bounding_sphere.h"
+#include "scene_wide.h"
 
 namespace scenelod::scene {
 
@@ -128,7 +133,205 @@ inline void objectSphere(const NodeSphereXform& x, const Sphere& s, float* cente
 }
 #endif
 
+// objects whose world spheres are due, a batch at a time: object l's world transform is
+// b[l] * a[l] (both 3x4 rows), or a[l] alone when b[l] is null (a root, or a node that stores its
+// world). A short batch repeats its last job in the unused slots
+constexpr size_t kSphereBatch = 8;
+struct alignas(32) SphereJobs {
+  const float* a[kSphereBatch];
+  const float* b[kSphereBatch];
+  uint32_t object[kSphereBatch];
+};
+
+struct SphereOut {
+  const Sphere* chains;
+  const uint32_t* chain_of;
+  float* centers;  // 3 floats per object
+  float* radii;
+  float* scales;
+};
+
+// one object at a time with the helpers above; the reference for the wide version's bits
+void spheresNarrow(const SphereJobs& j, size_t count, const SphereOut& out) {
+  for (size_t l = 0; l < count; ++l) {
+    alignas(16) float w[12];
+    const float* world = j.a[l];
+    if (j.b[l]) {
+      mulAffine(j.b[l], j.a[l], w);
+      world = w;
+    }
+    const size_t k = j.object[l];
+    const NodeSphereXform x = prepareXform(world);
+    objectSphere(x, out.chains[out.chain_of[k]], out.centers + 3 * k, out.radii[k]);
+    out.scales[k] = x.scale;
+  }
+}
+
+#if defined(SCENELOD_SCENE_AVX2)
+// the eight 16-byte rows at p[0..7] + offset as four 8-lane vectors: element c of lane l's row in
+// lane l of out[c] (per 128-bit half a 4x4 transpose; lanes 0-3 low, 4-7 high)
+__attribute__((target("avx2"))) inline void transposeWide(const float* const* p, size_t offset, __m256* out) {
+  __m256 v[4];
+  for (int l = 0; l < 4; ++l)
+    v[l] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p[l] + offset)), _mm_loadu_ps(p[l + 4] + offset), 1);
+  const __m256 t0 = _mm256_unpacklo_ps(v[0], v[1]), t1 = _mm256_unpacklo_ps(v[2], v[3]);
+  const __m256 t2 = _mm256_unpackhi_ps(v[0], v[1]), t3 = _mm256_unpackhi_ps(v[2], v[3]);
+  out[0] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+  out[1] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+  out[2] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  out[3] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+__attribute__((target("avx2"))) inline __m256 dotColumnsWide(const __m256 (*w)[4], int u, int v) {
+  return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w[0][u], w[0][v]), _mm256_mul_ps(w[1][u], w[1][v])),
+                       _mm256_mul_ps(w[2][u], w[2][v]));
+}
+
+// eight objects per call, structure of arrays across the lanes. Every lane evaluates exactly the
+// expressions of mulAffine, prepareXform and objectSphere, in their order and without FMA, so the
+// bits are spheresNarrow's
+__attribute__((target("avx2"))) void spheresWide(const SphereJobs& j, size_t count, const SphereOut& out) {
+  const __m256i b_lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(j.b)),
+                b_hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(j.b + 4));
+  const __m256i null = _mm256_setzero_si256();
+  const int no_product = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(b_lo, null))) |
+                         _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(b_hi, null))) << 4;
+  const __m256i b0 = _mm256_set1_epi64x(reinterpret_cast<long long>(j.b[0]));
+  const bool shared_b = (_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(b_lo, b0))) &
+                         _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(b_hi, b0)))) == 0xf;
+  __m256 A[3][4], W[3][4];
+  for (int r = 0; r < 3; ++r) transposeWide(j.a, 4 * r, A[r]);
+  if (no_product == 0xff) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) W[r][c] = A[r][c];
+  } else {
+    __m256 B[3][4];
+    if (shared_b) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) B[r][c] = _mm256_broadcast_ss(j.b[0] + 4 * r + c);
+    } else {
+      const float* b[kSphereBatch];
+      for (size_t l = 0; l < kSphereBatch; ++l) b[l] = j.b[l] ? j.b[l] : j.a[l];  // any readable rows; the lane keeps a
+      for (int r = 0; r < 3; ++r) transposeWide(b, 4 * r, B[r]);
+    }
+    const __m256 zero = _mm256_setzero_ps();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        W[r][c] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(B[r][0], A[0][c]), _mm256_mul_ps(B[r][1], A[1][c])),
+                                _mm256_add_ps(_mm256_mul_ps(B[r][2], A[2][c]), c == 3 ? B[r][3] : zero));
+    if (no_product != 0) {
+      const __m256 keep_a = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+          _mm256_and_si256(_mm256_set1_epi32(no_product), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)), null));
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) W[r][c] = _mm256_blendv_ps(W[r][c], A[r][c], keep_a);
+    }
+  }
+  // the gram matrix of the columns (prepareXform's lanes become separate vectors)
+  const __m256 sign = _mm256_set1_ps(-0.0f);
+  const __m256 aa = dotColumnsWide(W, 0, 0), bb = dotColumnsWide(W, 1, 1), cc = dotColumnsWide(W, 2, 2);
+  const __m256 ab = _mm256_andnot_ps(sign, dotColumnsWide(W, 0, 1)), bc = _mm256_andnot_ps(sign, dotColumnsWide(W, 1, 2)),
+               ca = _mm256_andnot_ps(sign, dotColumnsWide(W, 2, 0));
+  const __m256 ra = _mm256_add_ps(_mm256_add_ps(aa, ab), ca), rb = _mm256_add_ps(_mm256_add_ps(bb, bc), ab),
+               rc = _mm256_add_ps(_mm256_add_ps(cc, ca), bc);
+  const __m256 scale = _mm256_mul_ps(_mm256_sqrt_ps(_mm256_max_ps(_mm256_max_ps(ra, rb), rc)),
+                                     _mm256_set1_ps(1.0f + 4.0f * 1.1920929e-7f));
+  // the chain spheres, transposed like the rows
+  const float* s[kSphereBatch];
+  for (size_t l = 0; l < kSphereBatch; ++l) s[l] = &out.chains[out.chain_of[j.object[l]]].center.x;
+  __m256 S[4];
+  transposeWide(s, 0, S);
+  __m256 C[3];
+  for (int r = 0; r < 3; ++r)
+    C[r] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(W[r][0], S[0]), _mm256_mul_ps(W[r][1], S[1])),
+                         _mm256_add_ps(_mm256_mul_ps(W[r][2], S[2]), W[r][3]));
+  const __m256 radius = _mm256_mul_ps(S[3], scale);
+  const __m256i k = _mm256_load_si256(reinterpret_cast<const __m256i*>(j.object));
+  const __m256i run = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(j.object[0])), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  if (count == kSphereBatch && _mm256_movemask_epi8(_mm256_cmpeq_epi32(k, run)) == -1) {
+    const size_t k0 = j.object[0];
+    _mm256_storeu_ps(out.radii + k0, radius);
+    _mm256_storeu_ps(out.scales + k0, scale);
+    // (x, y, z, radius) per lane; ascending 16-byte stores, each lane's fourth float is overwritten by
+    // the next lane's x, the last lane stores 12 bytes
+    const __m256 t0 = _mm256_unpacklo_ps(C[0], C[1]), t1 = _mm256_unpacklo_ps(C[2], radius);
+    const __m256 t2 = _mm256_unpackhi_ps(C[0], C[1]), t3 = _mm256_unpackhi_ps(C[2], radius);
+    const __m256 q[4] = {_mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
+                         _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+    float* c = out.centers + 3 * k0;
+    for (int l = 0; l < 4; ++l) _mm_storeu_ps(c + 3 * l, _mm256_castps256_ps128(q[l]));
+    for (int l = 4; l < 7; ++l) _mm_storeu_ps(c + 3 * l, _mm256_extractf128_ps(q[l - 4], 1));
+    const __m128 last = _mm256_extractf128_ps(q[3], 1);
+    _mm_storel_pi(reinterpret_cast<__m64*>(c + 21), last);
+    _mm_store_ss(c + 23, _mm_movehl_ps(last, last));
+    return;
+  }
+  alignas(32) float lanes[5][kSphereBatch];
+  for (int r = 0; r < 3; ++r) _mm256_store_ps(lanes[r], C[r]);
+  _mm256_store_ps(lanes[3], radius);
+  _mm256_store_ps(lanes[4], scale);
+  for (size_t l = 0; l < count; ++l) {
+    const size_t o = j.object[l];
+    for (int r = 0; r < 3; ++r) out.centers[3 * o + r] = lanes[r][l];
+    out.radii[o] = lanes[3][l];
+    out.scales[o] = lanes[4][l];
+  }
+}
+#endif
+
+using SpheresFn = void (*)(const SphereJobs&, size_t, const SphereOut&);
+
+// picked on first use (a static initialiser elsewhere may already update a scene); thread-safe
+SpheresFn bestSpheres() {
+  static const SpheresFn fn = [] {
+#if defined(SCENELOD_SCENE_AVX2)
+    __builtin_cpu_init();  // this may run before the CPU model is initialised
+    if (__builtin_cpu_supports("avx2")) return &spheresWide;
+#endif
+    return &spheresNarrow;
+  }();
+  return fn;
+}
+SpheresFn g_forced_spheres = nullptr;  // detail::useWideSpheres(false), for tests
+
+// collects due objects and computes their spheres a batch at a time
+struct SphereBatcher {
+  explicit SphereBatcher(const SphereOut& o) : out(o) {}
+  const SphereOut& out;
+  SpheresFn fn = g_forced_spheres ? g_forced_spheres : bestSpheres();
+  size_t count = 0, done = 0;
+  SphereJobs jobs;
+
+  void add(uint32_t object, const float* a, const float* b) {
+    jobs.a[count] = a;
+    jobs.b[count] = b;
+    jobs.object[count] = object;
+    if (++count == kSphereBatch) {
+      fn(jobs, kSphereBatch, out);
+      done += kSphereBatch;
+      count = 0;
+    }
+  }
+  size_t finish() {
+    if (count == 0) return done;
+    for (size_t l = count; l < kSphereBatch; ++l) {
+      jobs.a[l] = jobs.a[count - 1];
+      jobs.b[l] = jobs.b[count - 1];
+      jobs.object[l] = jobs.object[count - 1];
+    }
+    fn(jobs, count, out);
+    return done + count;
+  }
+};
+
 }  // namespace
+
+namespace detail {
+bool useWideSpheres(bool on) {
+  const bool was = (g_forced_spheres ? g_forced_spheres : bestSpheres()) != &spheresNarrow;
+  g_forced_spheres = on ? nullptr : &spheresNarrow;
+  return was;
+}
+}  // namespace detail
 
 float maxScaleBound(const glm::mat4& m) { return scaleBound(&m[0][0]); }
 
@@ -168,7 +371,7 @@ glm::mat4 toMat4(const A& a) {
 }
 }  // namespace
 
-bool Scene::nodeLive(NodeHandle h) const {
+inline bool Scene::nodeLive(NodeHandle h) const {
   return h.slot < node_generation_.size() && node_generation_[h.slot] == h.generation &&
          node_dense_[h.slot] != kInvalidSlot;
 }
@@ -230,8 +433,10 @@ Error Scene::addNode(NodeHandle parent, const glm::mat4& local, NodeHandle& out)
   node_dirty_.push_back(0);
   local_.push_back(toAffine<Affine>(local));
   world_.push_back(local_.back());
+  child_count_.push_back(0);
   node_first_object_.push_back(-1);
   markNodeDirty(order_.size() - 1);
+  if (parent_dense >= 0) addChild(static_cast<size_t>(parent_dense));
   out = NodeHandle{slot, node_generation_[slot]};
   return {};
 }
@@ -242,6 +447,56 @@ void Scene::rebuildParentIndices() {
   for (size_t i = 0; i < order_.size(); ++i)
     if (parent_dense_[i] >= 0) parent_dense_[i] = static_cast<int32_t>(node_dense_[parent_dense_[i]]);
   for (size_t k = 0; k < object_node_slot_.size(); ++k) object_node_dense_[k] = node_dense_[object_node_slot_[k]];
+  countChildren();
+}
+
+void Scene::countChildren() {
+  child_count_.assign(order_.size(), 0);
+  for (int32_t p : parent_dense_)
+    if (p >= 0) ++child_count_[static_cast<size_t>(p)];
+}
+
+void Scene::addChild(size_t p) {
+  // a leaf's world row is stale; from its first child on it must be current
+  if (child_count_[p] == 0) world_[p] = currentWorld(p);
+  ++child_count_[p];
+}
+
+Scene::Affine Scene::currentWorld(size_t i) const {
+  // before dirty_from_ every stored world of a node with children is current. Otherwise the product
+  // runs down from the nearest such ancestor (or from a root's local) in update()'s order, so the
+  // bits are update()'s. The path is kept in chunks of kChunk nodes, taken from the top: no
+  // allocation, O(depth^2 / kChunk) for very deep paths
+  constexpr size_t kChunk = 32;
+  auto stored = [&](size_t a) { return a < dirty_from_ && child_count_[a] > 0; };
+  if (stored(i)) return world_[i];
+  Affine w{};
+  size_t done = kInvalidSlot;  // the lowest node of the path already in w
+  for (;;) {
+    uint32_t ring[kChunk];  // the last kChunk nodes seen walking up: the top of what is left
+    size_t len = 0;
+    int32_t a = static_cast<int32_t>(i);
+    for (; a >= 0 && static_cast<size_t>(a) != done && !stored(static_cast<size_t>(a)); a = parent_dense_[a])
+      ring[len++ % kChunk] = static_cast<uint32_t>(a);
+    size_t avail = len < kChunk ? len : kChunk;
+    if (done == kInvalidSlot) {
+      if (a >= 0) {
+        w = world_[static_cast<size_t>(a)];
+      } else {
+        done = ring[(len - 1) % kChunk];  // a root: its world is its local
+        w = local_[done];
+        --len;
+        --avail;
+      }
+    }
+    for (size_t t = 0; t < avail; ++t) {
+      done = ring[(len - 1 - t) % kChunk];
+      Affine next;
+      mulAffine(&w.row[0][0], &local_[done].row[0][0], &next.row[0][0]);
+      w = next;
+    }
+    if (done == i) return w;
+  }
 }
 
 Error Scene::removeNode(NodeHandle node) {
@@ -302,9 +557,12 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
   }
   markNodeDirty(i);  // the subtree's rows stay at positions >= i
   if (to_root || p < i) {
+    if (parent_dense_[i] >= 0) --child_count_[static_cast<size_t>(parent_dense_[i])];
     parent_dense_[i] = to_root ? -1 : static_cast<int32_t>(p);
+    if (!to_root) addChild(p);
     return {};
   }
+  const bool parent_was_leaf = child_count_[p] == 0;
   // the parent comes later: move the subtree (marked in one forward pass over [i, p]) to just after
   // p, keeping relative order on both sides; nodes outside [i, p] keep their positions
   for (size_t k = 0; k < n; ++k)
@@ -336,6 +594,10 @@ Error Scene::reparent(NodeHandle node, NodeHandle new_parent) {
       ++w;
     }
   rebuildParentIndices();
+  if (parent_was_leaf) {
+    const size_t q = node_dense_[new_parent.slot];
+    world_[q] = currentWorld(q);
+  }
   return {};
 }
 
@@ -349,6 +611,32 @@ Error Scene::setLocal(NodeHandle node, const glm::mat4& local) {
 
 Error Scene::setLocal(NodeHandle node, const Trs& trs) { return setLocal(node, composeTrs(trs)); }
 
+Error Scene::setLocals(Span<const NodeHandle> nodes, StridedSpan<const glm::mat4> locals) {
+  if (nodes.count != locals.count)
+    return {Status::kInvalidArgument, "setLocals got " + std::to_string(nodes.count) + " nodes and " +
+                                          std::to_string(locals.count) + " local transforms"};
+  const uint32_t* generation = node_generation_.data();
+  const uint32_t* dense = node_dense_.data();
+  const size_t slots = node_generation_.size();
+  Affine* local = local_.data();
+  uint8_t* dirty = node_dirty_.data();
+  size_t first = dirty_from_;
+  for (size_t k = 0; k < nodes.count; ++k) {
+    const NodeHandle h = nodes[k];
+    // nodeLive, with the arrays in registers
+    if (h.slot >= slots || generation[h.slot] != h.generation || dense[h.slot] == kInvalidSlot) {
+      dirty_from_ = first;
+      return stale(("node (setLocals, node " + std::to_string(k) + ")").c_str());
+    }
+    const uint32_t i = dense[h.slot];
+    local[i] = toAffine<Affine>(locals[k]);
+    dirty[i] = 1;
+    if (i < first) first = i;
+  }
+  dirty_from_ = first;
+  return {};
+}
+
 Error Scene::getLocal(NodeHandle node, glm::mat4& out) const {
   if (!nodeLive(node)) return stale("node");
   out = toMat4(local_[node_dense_[node.slot]]);
@@ -357,7 +645,7 @@ Error Scene::getLocal(NodeHandle node, glm::mat4& out) const {
 
 Error Scene::getWorld(NodeHandle node, glm::mat4& out) const {
   if (!nodeLive(node)) return stale("node");
-  out = toMat4(world_[node_dense_[node.slot]]);
+  out = toMat4(currentWorld(node_dense_[node.slot]));
   return {};
 }
 
@@ -524,62 +812,67 @@ __attribute__((target_clones("avx", "default")))
 #endif
 size_t Scene::update() {
   const size_t n = order_.size();
-  size_t recomputed = 0;
-  const bool all = all_objects_dirty_;
-  const uint32_t* chain_of = object_chain_.data();
-  const Sphere* chains = chain_spheres_.data();
+  const bool all = all_objects_dirty_, edited = some_objects_dirty_;
+  if (dirty_from_ >= n && !all && !edited) return 0;
   uint8_t* object_dirty = object_dirty_.data();
-  glm::vec3* centers = world_center_.data();
-  float* radii = world_radius_.data();
-  float* scales = max_scale_.data();
+  const int32_t* parent = parent_dense_.data();
+  const uint32_t* children = child_count_.data();
+  const Affine* local = local_.data();
+  Affine* world = world_.data();
+  // (a vec3 is three floats; data() is null while there are no objects)
+  const SphereOut out{chain_spheres_.data(), object_chain_.data(), reinterpret_cast<float*>(world_center_.data()),
+                      world_radius_.data(), max_scale_.data()};
+  SphereBatcher batch(out);
   if (dirty_from_ < n) {
     uint8_t* dirty = node_dirty_.data();
-    const int32_t* parent = parent_dense_.data();
     const int32_t* first_object = node_first_object_.data();
     const int32_t* next_object = object_next_.data();
-    const Affine* local = local_.data();
-    Affine* world = world_.data();
     // parents come first, so a parent's flag is final when its children are visited; nothing
     // before dirty_from_ is dirty
     for (size_t i = dirty_from_; i < n; ++i) {
       const int32_t p = parent[i];
       if (p >= 0 && dirty[p]) dirty[i] = 1;
       if (!dirty[i]) continue;
-      if (p >= 0) {
-        mulAffine(&world[p].row[0][0], &local[i].row[0][0], &world[i].row[0][0]);
-      } else {
-        world[i] = local[i];
+      const float* a = &local[i].row[0][0];
+      const float* b = p >= 0 ? &world[p].row[0][0] : nullptr;
+      if (children[i]) {
+        // children read it later in this pass, getWorld after it
+        if (b) {
+          mulAffine(b, a, &world[i].row[0][0]);
+        } else {
+          world[i] = local[i];
+        }
+        a = &world[i].row[0][0];
+        b = nullptr;
       }
-      // the objects on this node, while its world transform is in registers
-      int32_t k = first_object[i];
-      if (all || k < 0) continue;
-      const NodeSphereXform x = prepareXform(&world[i].row[0][0]);
-      for (; k >= 0; k = next_object[k]) {
-        objectSphere(x, chains[chain_of[k]], &centers[k].x, radii[k]);
-        scales[k] = x.scale;
-        object_dirty[k] = 0;
-        ++recomputed;
+      if (all) continue;
+      for (int32_t k = first_object[i]; k >= 0; k = next_object[k]) {
+        batch.add(static_cast<uint32_t>(k), a, b);
+        if (edited) object_dirty[k] = 0;  // else every flag is clear already
       }
     }
     std::fill(node_dirty_.begin() + static_cast<std::ptrdiff_t>(dirty_from_), node_dirty_.end(), uint8_t(0));
     dirty_from_ = kNoneDirty;
   }
-  if (all || some_objects_dirty_) {
+  if (all || edited) {
     // objects edited themselves (chain, node, chain sphere, new): one pass over the flags
     const size_t m = object_chain_.size();
     const uint32_t* node_of = object_node_dense_.data();
     for (size_t k = 0; k < m; ++k) {
       if (!(all | object_dirty[k])) continue;
-      const NodeSphereXform x = prepareXform(&world_[node_of[k]].row[0][0]);
-      objectSphere(x, chains[chain_of[k]], &centers[k].x, radii[k]);
-      scales[k] = x.scale;
+      const uint32_t i = node_of[k];
+      const int32_t p = parent[i];
+      if (children[i] || p < 0) {
+        batch.add(static_cast<uint32_t>(k), children[i] ? &world[i].row[0][0] : &local[i].row[0][0], nullptr);
+      } else {
+        batch.add(static_cast<uint32_t>(k), &local[i].row[0][0], &world[p].row[0][0]);
+      }
       object_dirty[k] = 0;
-      ++recomputed;
     }
   }
   all_objects_dirty_ = false;
   some_objects_dirty_ = false;
-  return recomputed;
+  return batch.finish();
 }
 
 Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string& what) {
@@ -626,6 +919,7 @@ Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string&
     out.world_.push_back(out.local_.back());
     out.node_first_object_.push_back(-1);
   }
+  out.countChildren();
   out.dirty_from_ = 0;
   out.setChainCount(data.meshes.size());
   for (size_t m = 0; m < data.meshes.size(); ++m) {

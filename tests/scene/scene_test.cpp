@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/scene/bounding_sphere.h"
+#include "../../scene/src/scene_wide.h"
 
 using namespace scenelod;
 using namespace scenelod::scene;
@@ -377,4 +378,241 @@ TEST(Scene, UpdateCountsFollowEditsAndBothSpherePassesGiveTheSameBits) {
     EXPECT_EQ(std::memcmp(&radii[k], &s.worldRadii()[k], sizeof(float)), 0) << k;
     EXPECT_EQ(std::memcmp(&scales[k], &s.maxScales()[k], sizeof(float)), 0) << k;
   }
+}
+
+namespace {
+
+// a scene with every shape the sphere batches meet: roots and inner nodes with objects (stored
+// worlds), leaves under shared and under different parents, several objects per node, and object
+// indices out of node order after swap-removes
+struct MixedScene {
+  Scene s;
+  std::vector<NodeHandle> nodes;
+  std::vector<ObjectHandle> objects;
+};
+
+void buildMixed(MixedScene& m, std::mt19937& rng, int node_count) {
+  m.s.setChainCount(3);
+  for (uint32_t c = 0; c < 3; ++c) ASSERT_TRUE(m.s.setChainSphere(c, Sphere{{0.3f * c, -0.1f, 0.2f * c}, 0.5f + c}).ok());
+  for (int i = 0; i < node_count; ++i) {
+    NodeHandle parent;
+    if (!m.nodes.empty() && rng() % 4 != 0) parent = m.nodes[rng() % m.nodes.size()];
+    NodeHandle h;
+    ASSERT_TRUE(m.s.addNode(parent, randomAffine(rng, i % 5 == 0), h).ok());
+    m.nodes.push_back(h);
+    for (int k = int(rng() % 3); k > 0; --k) {
+      ObjectHandle o;
+      ASSERT_TRUE(m.s.addObject(ObjectDesc{h, uint32_t(rng() % 3)}, o).ok());
+      m.objects.push_back(o);
+    }
+  }
+  for (int k = 0; k < 10; ++k) {
+    const size_t i = rng() % m.objects.size();
+    ASSERT_TRUE(m.s.removeObject(m.objects[i]).ok());
+    m.objects.erase(m.objects.begin() + static_cast<std::ptrdiff_t>(i));
+  }
+}
+
+struct SphereBits {
+  std::vector<glm::vec3> centres;
+  std::vector<float> radii, scales;
+};
+
+SphereBits sphereBits(const Scene& s) {
+  return {std::vector<glm::vec3>(s.worldCenters().begin(), s.worldCenters().end()),
+          std::vector<float>(s.worldRadii().begin(), s.worldRadii().end()),
+          std::vector<float>(s.maxScales().begin(), s.maxScales().end())};
+}
+
+void expectSameBits(const SphereBits& a, const SphereBits& b) {
+  ASSERT_EQ(a.centres.size(), b.centres.size());
+  for (size_t k = 0; k < a.centres.size(); ++k) {
+    EXPECT_EQ(std::memcmp(&a.centres[k], &b.centres[k], sizeof(glm::vec3)), 0) << k;
+    EXPECT_EQ(std::memcmp(&a.radii[k], &b.radii[k], sizeof(float)), 0) << k;
+    EXPECT_EQ(std::memcmp(&a.scales[k], &b.scales[k], sizeof(float)), 0) << k;
+  }
+}
+
+}  // namespace
+
+TEST(Scene, WideAndNarrowSphereCodeGiveTheSameBits) {
+  // the same scene and edits twice, once per sphere code; the node pass and the object pass both
+  std::mt19937 rng_a(31), rng_b(31);
+  MixedScene a, b;
+  buildMixed(a, rng_a, 300);
+  const bool was_wide = detail::useWideSpheres(false);
+  buildMixed(b, rng_b, 300);
+  b.s.update();
+  detail::useWideSpheres(true);
+  a.s.update();
+  expectSameBits(sphereBits(a.s), sphereBits(b.s));
+  for (int round = 0; round < 4; ++round) {
+    for (int k = 0; k < 60; ++k) {
+      const size_t i = rng_a() % a.nodes.size();
+      rng_b();
+      const glm::mat4 local = randomAffine(rng_a, k % 3 == 0);
+      randomAffine(rng_b, k % 3 == 0);
+      ASSERT_TRUE(a.s.setLocal(a.nodes[i], local).ok());
+      ASSERT_TRUE(b.s.setLocal(b.nodes[i], local).ok());
+    }
+    if (round == 2) {
+      a.s.setChainCount(3);
+      b.s.setChainCount(3);
+    }
+    detail::useWideSpheres(false);
+    const size_t nb = b.s.update();
+    detail::useWideSpheres(true);
+    EXPECT_EQ(a.s.update(), nb);
+    expectSameBits(sphereBits(a.s), sphereBits(b.s));
+  }
+  detail::useWideSpheres(was_wide);
+}
+
+TEST(Scene, LeafWorldsAreRightOnRequestAndWhenALeafGetsChildren) {
+  std::mt19937 rng(41);
+  Scene s;
+  s.setChainCount(1);
+  NodeHandle root, leaf, other, deep;
+  ASSERT_TRUE(s.addNode({}, randomAffine(rng, false), root).ok());
+  ASSERT_TRUE(s.addNode(root, randomAffine(rng, true), leaf).ok());
+  ASSERT_TRUE(s.addNode({}, randomAffine(rng, false), other).ok());
+  ObjectHandle on_leaf;
+  ASSERT_TRUE(s.addObject(ObjectDesc{leaf, 0}, on_leaf).ok());
+  s.update();
+  glm::mat4 w;
+  ASSERT_TRUE(s.getWorld(leaf, w).ok());
+  expectMatNear(w, bruteWorld(s, leaf), 1e-5f);
+  // getWorld follows the current locals, before update() too
+  ASSERT_TRUE(s.setLocal(root, randomAffine(rng, false)).ok());
+  ASSERT_TRUE(s.getWorld(leaf, w).ok());
+  expectMatNear(w, bruteWorld(s, leaf), 1e-5f);
+  s.update();
+  glm::mat4 after;
+  ASSERT_TRUE(s.getWorld(leaf, after).ok());
+  EXPECT_EQ(std::memcmp(&w, &after, sizeof w), 0);  // the same bits update() used
+  // a child under the former leaf (added later in the order): the leaf's world must now be kept
+  ASSERT_TRUE(s.addNode(leaf, randomAffine(rng, false), deep).ok());
+  ObjectHandle on_deep;
+  ASSERT_TRUE(s.addObject(ObjectDesc{deep, 0}, on_deep).ok());
+  s.update();
+  for (NodeHandle h : {root, leaf, other, deep}) {
+    ASSERT_TRUE(s.getWorld(h, w).ok());
+    expectMatNear(w, bruteWorld(s, h), 1e-5f);
+  }
+  // reparent a node that comes earlier under a later leaf (the subtree moves after it), then a node
+  // under an earlier leaf (nothing moves); both were leaves with a parent
+  NodeHandle late;
+  ASSERT_TRUE(s.addNode(other, randomAffine(rng, true), late).ok());
+  s.update();
+  ASSERT_TRUE(s.reparent(deep, late).ok());
+  s.update();
+  ASSERT_TRUE(s.getWorld(deep, w).ok());
+  expectMatNear(w, bruteWorld(s, deep), 1e-5f);
+  ASSERT_TRUE(s.setLocal(root, randomAffine(rng, false)).ok());  // leaf lost deep: its world row goes stale
+  s.update();
+  ASSERT_TRUE(s.reparent(late, leaf).ok());
+  s.update();
+  for (NodeHandle h : {root, leaf, other, deep, late}) {
+    ASSERT_TRUE(s.getWorld(h, w).ok());
+    expectMatNear(w, bruteWorld(s, h), 1e-5f);
+  }
+  for (ObjectHandle o : {on_leaf, on_deep}) {
+    ObjectDesc d;
+    ASSERT_TRUE(s.getObject(o, d).ok());
+    size_t k;
+    ASSERT_TRUE(s.objectIndex(o, k).ok());
+    const Sphere expect = transformSphere(s.chainSpheres()[0], bruteWorld(s, d.node));
+    EXPECT_NEAR(glm::length(s.worldCenters()[k] - expect.center), 0.0f, 1e-4f * (1.0f + glm::length(expect.center)));
+    EXPECT_NEAR(s.worldRadii()[k], expect.radius, 1e-4f * expect.radius);
+  }
+  // a parent that lost its children is a leaf again; a new child brings its world back
+  ASSERT_TRUE(s.removeNode(deep).ok());
+  ASSERT_TRUE(s.setLocal(late, randomAffine(rng, false)).ok());
+  s.update();
+  ASSERT_TRUE(s.addNode(late, randomAffine(rng, false), deep).ok());
+  s.update();
+  ASSERT_TRUE(s.getWorld(deep, w).ok());
+  expectMatNear(w, bruteWorld(s, deep), 1e-5f);
+}
+
+TEST(Scene, GetWorldOfADeepPathWithChangedAncestors) {
+  // a chain longer than getWorld's 32-node chunks, with changed locals above the queried node
+  std::mt19937 rng(43);
+  Scene s;
+  std::vector<NodeHandle> chain;
+  for (int i = 0; i < 100; ++i) {
+    NodeHandle h;
+    Trs t;
+    t.translation = {0.1f, 0.0f, 0.05f};
+    t.rotation = glm::angleAxis(0.05f * float(i % 7), glm::vec3(0.0f, 1.0f, 0.0f));
+    ASSERT_TRUE(s.addNode(chain.empty() ? NodeHandle{} : chain.back(), composeTrs(t), h).ok());
+    chain.push_back(h);
+  }
+  glm::mat4 before_update;
+  ASSERT_TRUE(s.getWorld(chain.back(), before_update).ok());  // nothing updated yet: the whole path
+  s.update();
+  glm::mat4 w;
+  ASSERT_TRUE(s.getWorld(chain.back(), w).ok());
+  EXPECT_EQ(std::memcmp(&w, &before_update, sizeof w), 0);
+  ASSERT_TRUE(s.setLocal(chain[3], randomAffine(rng, false)).ok());
+  glm::mat4 pending;
+  ASSERT_TRUE(s.getWorld(chain.back(), pending).ok());
+  expectMatNear(pending, bruteWorld(s, chain.back()), 1e-3f);
+  s.update();
+  ASSERT_TRUE(s.getWorld(chain.back(), w).ok());
+  EXPECT_EQ(std::memcmp(&w, &pending, sizeof w), 0);
+}
+
+TEST(Scene, SetLocalsMatchesSetLocalAndNamesAStaleHandle) {
+  std::mt19937 rng(47);
+  MixedScene a, b;
+  std::mt19937 rng_a(53), rng_b(53);
+  buildMixed(a, rng_a, 120);
+  buildMixed(b, rng_b, 120);
+  a.s.update();
+  b.s.update();
+  std::vector<NodeHandle> picked;
+  std::vector<glm::mat4> locals;
+  for (int k = 0; k < 50; ++k) {
+    picked.push_back(a.nodes[rng() % a.nodes.size()]);  // same slots in both scenes
+    locals.push_back(randomAffine(rng, k % 4 == 0));
+  }
+  ASSERT_TRUE(a.s.setLocals(Span<const NodeHandle>(picked.data(), picked.size()),
+                            Span<const glm::mat4>(locals.data(), locals.size())).ok());
+  for (size_t k = 0; k < picked.size(); ++k) ASSERT_TRUE(b.s.setLocal(picked[k], locals[k]).ok());
+  EXPECT_EQ(a.s.update(), b.s.update());
+  expectSameBits(sphereBits(a.s), sphereBits(b.s));
+  // strided: the matrices inside the caller's own structs
+  struct Pose {
+    int id;
+    glm::mat4 local;
+  };
+  std::vector<Pose> poses;
+  for (size_t k = 0; k < 3; ++k) poses.push_back(Pose{int(k), randomAffine(rng, false)});
+  ASSERT_TRUE(a.s.setLocals(Span<const NodeHandle>(picked.data(), 3),
+                            StridedSpan<const glm::mat4>(&poses[0].local, 3, sizeof(Pose))).ok());
+  glm::mat4 got;
+  ASSERT_TRUE(a.s.getLocal(picked[2], got).ok());
+  expectMatNear(got, poses[2].local, 0.0f);
+  // errors: counts differ (nothing set); a stale handle (the ones before it are set)
+  EXPECT_EQ(a.s.setLocals(Span<const NodeHandle>(picked.data(), 2), Span<const glm::mat4>(locals.data(), 3)).status,
+            Status::kInvalidArgument);
+  NodeHandle doomed;
+  ASSERT_TRUE(a.s.addNode({}, glm::mat4(1.0f), doomed).ok());
+  ASSERT_TRUE(a.s.removeNode(doomed).ok());
+  std::vector<NodeHandle> with_stale = {a.nodes[0], doomed, a.nodes[1]};
+  const glm::mat4 moved = glm::translate(glm::mat4(1.0f), glm::vec3(7.0f, 8.0f, 9.0f));
+  std::vector<glm::mat4> three(3, moved);
+  glm::mat4 before1;
+  ASSERT_TRUE(a.s.getLocal(a.nodes[1], before1).ok());
+  const Error e = a.s.setLocals(Span<const NodeHandle>(with_stale.data(), 3), Span<const glm::mat4>(three.data(), 3));
+  EXPECT_EQ(e.status, Status::kNotFound);
+  EXPECT_NE(e.message.find("node 1"), std::string::npos) << e.message;
+  ASSERT_TRUE(a.s.getLocal(a.nodes[0], got).ok());
+  expectMatNear(got, moved, 0.0f);
+  ASSERT_TRUE(a.s.getLocal(a.nodes[1], got).ok());
+  expectMatNear(got, before1, 0.0f);
+  a.s.update();
+  ASSERT_TRUE(a.s.getWorld(a.nodes[0], got).ok());
+  expectMatNear(got, bruteWorld(a.s, a.nodes[0]), 1e-4f);
 }

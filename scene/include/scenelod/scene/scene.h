@@ -103,8 +103,18 @@ class Scene {
   // last row reads back as (0, 0, 0, 1).
   Error setLocal(NodeHandle node, const glm::mat4& local);
   Error setLocal(NodeHandle node, const Trs& trs);
+  // Sets the local transforms of many nodes in one call: nodes[i] gets locals[i], as setLocal would
+  // (an engine handing over a frame's poses). `locals` may be strided (e.g. a member of the engine's
+  // own per-node structs).
+  // Errors: the counts differ (nothing set); a stale handle nodes[i] (the nodes before i are set, the
+  // rest are not; the message names i). O(count), no allocation.
+  Error setLocals(Span<const NodeHandle> nodes, StridedSpan<const glm::mat4> locals);
   Error getLocal(NodeHandle node, glm::mat4& out) const;
-  // World transform as of the last update() (affine, last row (0, 0, 0, 1)). Errors: stale handle.
+  // World transform from the current local transforms (affine, last row (0, 0, 0, 1)); the same bits
+  // update() uses for the node's spheres. Nodes without children keep no world transform: theirs is
+  // their parent's times their local, computed here. Errors: stale handle.
+  // Cost: O(1) when no node before this one in the update order changed since the last update(),
+  // else one product per ancestor down from the nearest unchanged one.
   Error getWorld(NodeHandle node, glm::mat4& out) const;
   Error getParent(NodeHandle node, NodeHandle& out) const;  // null handle for a root
   bool isValid(NodeHandle node) const;
@@ -132,12 +142,13 @@ class Scene {
   size_t objectCount() const { return object_chain_.size(); }
 
   // Recomputes world transforms of dirty nodes and their descendants in one linear pass in
-  // parent-before-child order, with the world spheres of the objects on each recomputed node; then
-  // the spheres of objects whose chain, chain sphere or node changed. Returns the number of objects
-  // whose sphere was recomputed.
+  // parent-before-child order (stored only for nodes with children), with the world spheres of the
+  // objects on each recomputed node; then the spheres of objects whose chain, chain sphere or node
+  // changed. Returns the number of objects whose sphere was recomputed.
   // Cost: O(nodes after the first dirty one + objects on moved nodes), plus O(objects) when an
-  // object itself was edited since the last update; O(1) when nothing changed. No allocation, no
-  // locks; single-threaded.
+  // object itself was edited since the last update; O(1) when nothing changed. Spheres are computed
+  // eight at a time (AVX2 when the CPU has it, chosen at load time; same bits either way). No
+  // allocation, no locks; single-threaded.
   size_t update();
 
   // ---- hot per-object data, dense arrays indexed by object dense index (valid after update()) ----
@@ -166,6 +177,9 @@ class Scene {
     node_dirty_[i] = 1;
     if (i < dirty_from_) dirty_from_ = i;
   }
+  Affine currentWorld(size_t i) const;  // from the current locals, update()'s bits
+  void addChild(size_t parent);          // a node that gets its first child stores its world from now on
+  void countChildren();
 
   // node slots (stable, indexed by handle slot)
   std::vector<uint32_t> node_generation_;  // 4 B: bumped on removal
@@ -176,7 +190,10 @@ class Scene {
   std::vector<int32_t> parent_dense_;      // 4 B: parent's position, -1 for a root (hot: update pass)
   std::vector<uint8_t> node_dirty_;        // 1 B: local changed since the last update (hot)
   std::vector<Affine> local_;              // 48 B (hot: update pass)
-  std::vector<Affine> world_;              // 48 B (hot: update pass and its sphere step)
+  // 48 B, kept current only for nodes with children (their children's products read it); a leaf's
+  // row is stale, its world is made in registers when its spheres are (update pass)
+  std::vector<Affine> world_;
+  std::vector<uint32_t> child_count_;      // 4 B: children of the node (update pass: store world or not)
   std::vector<int32_t> node_first_object_; // 4 B: first object on the node, -1 none (update pass)
   size_t dirty_from_ = kNoneDirty;         // no node before this position is dirty
 
