@@ -68,6 +68,145 @@ struct BracketOrder {
   }
 };
 
+// levels of one chain side by side, kLanes = two SSE2 vectors of four floats (GCC vector
+// extensions; only IEEE adds, multiplies, compares and selects, so the bits do not depend on how
+// the compiler lowers them)
+constexpr int kLanes = 8;
+typedef float V4f __attribute__((vector_size(16)));
+typedef int32_t V4i __attribute__((vector_size(16)));
+// a settled object's choice is the unique maximiser of benefit - lambda cost on the predicted bracket
+// widened by this factor at both ends; far above the float ratios' rounding (about 2^-22 relative)
+constexpr double kSettleMargin = 1.0 / 4096.0;
+
+inline V4f load4(const float* p) {
+  V4f v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+inline bool anyLane(V4i m) {
+  uint64_t w[2];
+  std::memcpy(w, &m, sizeof(w));
+  return (w[0] | w[1]) != 0;
+}
+// lane masks (all bits set = true): range[f][n] holds lanes f..n-1, other[a + 1] every lane but a
+struct LaneMasks {
+  int32_t range[kLanes + 1][kLanes + 1][kLanes];
+  int32_t other[kLanes + 1][kLanes];
+};
+constexpr LaneMasks makeLaneMasks() {
+  LaneMasks m{};
+  for (int f = 0; f <= kLanes; ++f)
+    for (int n = 0; n <= kLanes; ++n)
+      for (int l = 0; l < kLanes; ++l) m.range[f][n][l] = l >= f && l < n ? -1 : 0;
+  for (int a = -1; a < kLanes; ++a)
+    for (int l = 0; l < kLanes; ++l) m.other[a + 1][l] = l != a ? -1 : 0;
+  return m;
+}
+constexpr LaneMasks kLaneMasks = makeLaneMasks();
+inline V4i load4(const int32_t* p) {
+  V4i v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+
+// the largest float at most v
+float floatAtMost(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
+// What settleSlots reads: the slot columns of pass 1c, this frame's row terms and the widened
+// bracket ends.
+struct SettleInput {
+  const uint8_t* level_count;
+  const uint8_t* finest;
+  const int8_t* prev;
+  const uint32_t* row0;
+  const float* a;
+  const float* b;
+  const float* q;
+  const float* row_cost;   // kLanes readable past the last row
+  const float* row_inv_w;
+  float h1;
+  float avail;             // largest float <= the budget left after the mandatory part
+  float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
+};
+
+// Settled objects (incremental case, Lagrangian form): an object whose hull point is the unique
+// maximiser of benefit - lambda cost for every price in the predicted bracket, widened by
+// kSettleMargin at both ends, has no upgrade inside the bracket and takes that point in the exact
+// hull walk too, so it needs no hull. The candidate is last frame's level (on a smooth camera most
+// objects keep theirs); the test holds whatever the candidate: it must beat every cheaper point
+// by a ratio above the top end and every costlier point by a ratio below the bottom end (float
+// differences, exact to about 2^-22 relative, far inside the margin). Writes a two-point hull (not
+// drawn, the level) and the chosen step for a settled slot; the others go, in slot order, to
+// `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
+// Must-draw slots and chains of more than kLanes levels are never settled.
+size_t settleSlots(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* hull, size_t hull_stride,
+                   uint8_t* hull_count, uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
+  size_t unsettled_count = 0;
+  double total = 0.0;
+  const V4f ones = {1, 1, 1, 1};
+  // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
+  alignas(16) float hyst[kLanes + 1][kLanes];
+  for (int r = 0; r <= kLanes; ++r)
+    for (int l = 0; l < kLanes; ++l) hyst[r][l] = l == r - 1 ? in.h1 : 1.0f;
+  const float h1 = in.h1, avail = in.avail, lo = in.lo, hi = in.hi;
+  const float* const row_cost = in.row_cost;
+  const float* const row_inv_w = in.row_inv_w;
+  for (size_t s = 0; s < slot_count; ++s) {
+    // provisionally unsettled: the index is kept only if the slot is not settled below
+    unsettled[unsettled_count] = static_cast<uint32_t>(s);
+    ++unsettled_count;
+    const int level_count = in.level_count[s];
+    const int finest = in.finest[s];
+    const int cand = in.prev[s];
+    const float sa = in.a[s], sb = in.b[s], sq = in.q[s];
+    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point
+    if (must[s] || level_count > kLanes || !(sa > 0.0f) || cand >= level_count || (cand >= 0 && cand < finest))
+      continue;
+    const uint32_t row0 = in.row0[s];
+    float cb = 0.0f, cc = 0.0f;
+    if (cand >= 0) {
+      // pointAt(cand)
+      const uint32_t row = row0 + static_cast<uint32_t>(cand);
+      cc = sa + row_cost[row];
+      cb = sb * (std::min(1.0f, sq * row_inv_w[row]) * h1);
+      if (!(cc <= avail) || !(cb > hi * cc)) continue;  // fits alone; beats "not drawn"
+    }
+    // the points as pointAt computes them, lanes 0-3 and 4-7
+    const V4f c0 = sa + load4(row_cost + row0), c1 = sa + load4(row_cost + row0 + 4);
+    const V4f t0 = sq * load4(row_inv_w + row0), t1 = sq * load4(row_inv_w + row0 + 4);
+    const V4f b0 = sb * ((t0 < ones ? t0 : ones) * load4(hyst[cand + 1]));
+    const V4f b1 = sb * ((t1 < ones ? t1 : ones) * load4(hyst[cand + 1] + 4));
+    const int32_t* const range = kLaneMasks.range[finest][level_count];
+    const int32_t* const other = kLaneMasks.other[cand + 1];
+    const V4i v0 = load4(range) & load4(other) & (c0 <= avail);  // the other points that fit alone
+    const V4i v1 = load4(range + 4) & load4(other + 4) & (c1 <= avail);
+    // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
+    const V4f d0 = cc - c0, d1 = cc - c1;
+    const V4f p0 = hi * d0, q0 = lo * d0, p1 = hi * d1, q1 = lo * d1;
+    const V4i beaten0 = cb - b0 > (p0 > q0 ? p0 : q0), beaten1 = cb - b1 > (p1 > q1 ? p1 : q1);
+    if (anyLane((v0 & ~beaten0) | (v1 & ~beaten1))) continue;
+    uint8_t* const h = hull + s * hull_stride;
+    h[0] = kNotDrawn;
+    h[1] = static_cast<uint8_t>(cand);
+    hull_count[s] = cand >= 0 ? 2 : 1;
+    chosen_step[s] = cand >= 0 ? 1 : 0;
+    total += cc;  // 0 for "not drawn"
+    --unsettled_count;
+  }
+  *settled_cost = total;
+  return unsettled_count;
+}
+
+struct HullSums {
+  double top_cost, base_total, base_benefit, ptotal;
+  size_t segments, pcount;
+  bool poverflow;
+};
+
 struct PassResult {
   double cost = 0.0;        // total object cost with every upgrade of ratio > lambda taken
   size_t below = 0;         // upgrades with ratio in (lo, lambda]
@@ -195,7 +334,8 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0},
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
+      {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0}};
   size_t per_object = 0;
   for (size_t i = 0; i < 20; ++i) {
@@ -452,6 +592,11 @@ bool SelectionJob::run() {
       const float w = levels.cell_width[r];
       ctx.row_inv_w[r] = w > 0.0f ? 1.0f / w : std::numeric_limits<float>::infinity();
     }
+    // a chain's kLanes rows are read side by side, past the last row too
+    for (size_t r = levels.cell_width.count; r < levels.cell_width.count + kLanes; ++r) {
+      ctx.row_cost[r] = 0.0f;
+      ctx.row_inv_w[r] = 0.0f;
+    }
   }
   const float c_obj = static_cast<float>(coef.per_object_ms), c_px = static_cast<float>(coef.per_pixel_ms);
   ctx.h1 = 1.0f + params.hysteresis;
@@ -639,8 +784,6 @@ bool SelectionJob::run() {
       std::memcpy(&centre_bits, &centre_f, sizeof(centre_bits));
       const int e0 = std::min(255 - kHistBinades, std::max(1, static_cast<int>((centre_bits >> 23) & 0xff) - kHistBinades / 2));
       key_base = int64_t(e0) << sub_bits;
-      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
-      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
     }
     struct Pt { float c, b; int l; };
     Pt pts[65];
@@ -654,10 +797,12 @@ bool SelectionJob::run() {
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
-    // Incremental case (Lagrangian, last frame's price known): while the hulls are built, every
-    // object already takes its upgrades above a predicted bracket (plo, phi] around last frame's
-    // price, and the upgrades inside go to the bracket array. When the budget's edge falls inside
-    // (checked exactly below), the collection pass over the objects is not needed.
+    // Incremental case (Lagrangian, last frame's price known): first settleSlots finds the objects
+    // whose choice cannot change inside a predicted bracket (plo, phi] around last frame's price
+    // (on a smooth camera about 97 % of them); only the others get their hull, take their upgrades
+    // above phi and put those inside into the bracket array. When the budget's edge falls inside
+    // (checked exactly below), no other pass over the objects is needed; otherwise every hull is
+    // built (with the price histogram) and the search runs as in the cold case.
     const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
     const double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
     const double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
@@ -667,7 +812,34 @@ bool SelectionJob::run() {
     uint8_t* const chosen_step = ctx.chosen;
     BracketEntry* const pbracket = ctx.bracket;
     const size_t pcapacity = ctx.bracket_capacity;
-    for (size_t s = 0; s < slots; ++s) {
+    // every row's geometry cost >= 0 (not NaN), which settleSlots relies on
+    bool rows_nonnegative = true;
+    for (size_t r = 0; r < levels.cell_width.count; ++r) rows_nonnegative &= row_cost[r] >= 0.0f;
+    // the sums in locals (shadowing the outer ones until the end): through the captured references
+    // every += would be a store and a reload
+    auto buildHulls = [&](bool settle) {
+    double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
+    size_t segments = 0, pcount = 0;
+    bool poverflow = false;
+    if (!settle && !use_greedy) {
+      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
+      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
+    }
+    // settled slots first, then the hulls of the others (all slots when not settling)
+    uint32_t* const unsettled = reinterpret_cast<uint32_t*>(ctx.heap);  // the heap is free until the greedy
+    size_t build_count = slots;
+    if (settle) {
+      const SettleInput in{slot_levels, slot_finest, slot_prev, slot_row0, slot_a, slot_b, slot_q, row_cost, row_inv_w,
+                           h1, floatAtMost(avail), static_cast<float>(plo / (1.0 + kSettleMargin)),
+                           static_cast<float>(phi * (1.0 + kSettleMargin))};
+      if (rows_nonnegative) {
+        build_count = settleSlots(in, slots, slot_must, hull, hull_stride, hull_count, chosen_step, unsettled, &ptotal);
+      } else {
+        for (size_t s = 0; s < slots; ++s) unsettled[s] = static_cast<uint32_t>(s);
+      }
+    }
+    for (size_t u = 0; u < build_count; ++u) {
+      const size_t s = settle ? unsettled[u] : u;
       const int level_count = static_cast<int>(slot_levels[s]);
       // pointCost / pointBenefit with the slot's terms in registers
       const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
@@ -750,11 +922,24 @@ bool SelectionJob::run() {
       base_total += hp[0].c;
       base_benefit += hp[0].b;
       segments += hn - 1;
-      if (!use_greedy) {
+      if (settle) {
         uint32_t above = 0, inside = 0;  // segments with ratio > phi, > plo (a prefix: ratios fall)
         for (size_t k = 1; k < hn; ++k) {
           above += static_cast<double>(hr[k]) > phi ? 1u : 0u;
           inside += static_cast<double>(hr[k]) > plo ? 1u : 0u;
+        }
+        // what the collection below does at (plo, phi], on the same float ratios
+        chosen_step[s] = static_cast<uint8_t>(above);
+        ptotal += hp[above].c;
+        for (size_t k = above + 1; k <= inside; ++k) {
+          if (pcount == pcapacity) {
+            poverflow = true;
+            break;
+          }
+          pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+        }
+      } else if (!use_greedy) {
+        for (size_t k = 1; k < hn; ++k) {
           uint32_t bits;
           std::memcpy(&bits, &hr[k], sizeof(bits));
           // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
@@ -763,20 +948,20 @@ bool SelectionJob::run() {
           hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
           hist_count[key] += 1;
         }
-        if (predict) {
-          // what the collection below does at (plo, phi], on the same float ratios
-          chosen_step[s] = static_cast<uint8_t>(above);
-          ptotal += hp[above].c;
-          for (size_t k = above + 1; k <= inside; ++k) {
-            if (pcount == pcapacity) {
-              poverflow = true;
-              break;
-            }
-            pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
-          }
-        }
       }
     }
+    return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, poverflow};
+    };
+    auto storeSums = [&](const HullSums& h) {
+      top_cost = h.top_cost;
+      base_total = h.base_total;
+      base_benefit = h.base_benefit;
+      ptotal = h.ptotal;
+      segments = h.segments;
+      pcount = h.pcount;
+      poverflow = h.poverflow;
+    };
+    storeSums(buildHulls(predict));
 
     int64_t split_slot = -1;
     uint32_t split_step = 0;
@@ -978,12 +1163,16 @@ bool SelectionJob::run() {
       // sums find (the budget within rounding of a bucket edge), again by passes from last frame's price
       bool from_prediction = false;
       if (predict) {
-        if (!poverflow && top_cost > obj_cap && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
+        // (no top_cost > obj_cap test: settled objects do not sum it, and when everything fits the
+        // bracket's greedy finds no split, which is a miss for a bracket above 0)
+        if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
           from_prediction = true;
         } else {
           // missed: widen the window next frame; overflowed: narrow it
           ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
                                         : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
+          // settled objects have no full hull, and the search needs the histogram
+          storeSums(buildHulls(false));
         }
       }
       for (int attempt = 0; attempt < 2 && !from_prediction; ++attempt) {
