@@ -682,22 +682,58 @@ bool SelectionJob::run() {
   const float* const visible_of = visible_fraction.count ? visible_fraction.data : nullptr;
   const uint8_t* const must_of = must_draw.count ? must_draw.data : nullptr;
   const float near_plane = cam.near_plane;
-  for (size_t s = 0; s < slots; ++s) {
+  // in blocks: the inputs of a block's objects are gathered into local columns, then the float
+  // terms run as plain loops over them that the compiler vectorises (sqrt and divisions 4 wide;
+  // the same IEEE operations in the same order as one object at a time, so the same bits), then
+  // the finest level and the byte columns per slot
+  constexpr size_t kSlotBlock = 64;
+  alignas(16) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
+  alignas(16) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock], gq[kSlotBlock];
+  for (size_t s0 = 0; s0 < slots; s0 += kSlotBlock) {
+    const size_t m = std::min(kSlotBlock, slots - s0);
+    for (size_t j = 0; j < m; ++j) {
+      const size_t i = slot_object[s0 + j];
+      gx[j] = center_of[i].x;
+      gy[j] = center_of[i].y;
+      gz[j] = center_of[i].z;
+      gr[j] = radius_of[i];
+      gs[j] = scale_of[i];
+    }
+    // missing factors are 1 (b * 1.0f == b)
+    for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gm[j] = motion_of ? motion_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gv[j] = visible_of ? visible_of[slot_object[s0 + j]] : 1.0f;
+    float* const sa = slot_a + s0;
+    float* const sb = slot_b + s0;
+    float* const spx = slot_px + s0;
+    // gx becomes the pixel size R
+    if (ortho) {
+      for (size_t j = 0; j < m; ++j) gx[j] = ortho_pixel;
+    } else {
+      for (size_t j = 0; j < m; ++j) {
+        const float dx = gx[j] - eye.x, dy = gy[j] - eye.y, dz = gz[j] - eye.z;
+        const float dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+        gx[j] = std::max(dist - gr[j], near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+      }
+    }
+    for (size_t j = 0; j < m; ++j) {
+      const float pixel = gx[j];
+      const float r_px = gr[j] / pixel;
+      const float px = std::min(kPi * r_px * r_px, viewport_px);
+      gq[j] = x_cells * pixel / gs[j];
+      sa[j] = c_obj + c_px * px;
+      sb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
+      spx[j] = px;
+    }
+    std::memcpy(slot_q + s0, gq, m * sizeof(float));
+    for (size_t j = 0; j < m; ++j) {
+    const size_t s = s0 + j;
     const size_t i = slot_object[s];
-    const glm::vec3 c = center_of[i];
-    const float r = radius_of[i];
     const uint32_t chain = chain_of[i];
     const uint32_t row0 = chain_offset[chain];
     const uint32_t level_count = chain_offset[chain + 1] - row0;
-    float pixel = ortho_pixel;
-    if (!ortho) {
-      const glm::vec3 d = c - eye;
-      const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-      pixel = std::max(dist - r, near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
-    }
-    const float r_px = r / pixel;
-    const float px = std::min(kPi * r_px * r_px, viewport_px);
-    const float q = x_cells * pixel / scale_of[i];
+    const float q = gq[j];
     // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
     // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
     // (most objects are far: their coarsest level is accurate enough, one predictable test)
@@ -710,15 +746,6 @@ bool SelectionJob::run() {
       finest += ok * (half + 1);
       len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
     }
-    float b = px;
-    if (importance_of) b *= importance_of[i];
-    if (focus_of) b *= focus_of[i];
-    if (motion_of) b *= motion_of[i];
-    if (visible_of) b *= visible_of[i];
-    slot_a[s] = c_obj + c_px * px;
-    slot_b[s] = b;
-    slot_q[s] = q;
-    slot_px[s] = px;
     slot_finest[s] = static_cast<uint8_t>(finest);
     slot_row0[s] = row0;
     slot_prev[s] = prev_level[i];
@@ -729,6 +756,7 @@ bool SelectionJob::run() {
       float cheapest = std::numeric_limits<float>::infinity();
       for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
       mandatory += cheapest;
+    }
     }
   }
 
@@ -786,7 +814,6 @@ bool SelectionJob::run() {
       key_base = int64_t(e0) << sub_bits;
     }
     struct Pt { float c, b; int l; };
-    Pt pts[65];
     double top_cost = 0.0;   // every upgrade taken: what the pass at lambda = 0 would sum
     double base_total = 0.0; // no upgrade taken
     double base_benefit = 0.0;  // benefit with no upgrade taken (the 1/2 guarantee's alternative)
@@ -818,38 +845,71 @@ bool SelectionJob::run() {
     // the sums in locals (shadowing the outer ones until the end): through the captured references
     // every += would be a store and a reload
     auto buildHulls = [&](bool settle) {
+    // local copies: the byte stores below may alias anything reached through the closure, so
+    // captured values would be reloaded after each of them
+    const auto slot_levels_ = slot_levels;
+    const auto slot_a_ = slot_a;
+    const auto slot_b_ = slot_b;
+    const auto slot_q_ = slot_q;
+    const auto slot_row0_ = slot_row0;
+    const auto slot_prev_ = slot_prev;
+    const auto slot_must_ = slot_must;
+    const auto slot_finest_ = slot_finest;
+    const auto row_cost_ = row_cost;
+    const auto row_inv_w_ = row_inv_w;
+    const auto hull_ = hull;
+    const auto hull_count_ = hull_count;
+    const auto hull_stride_ = hull_stride;
+    const auto avail_ = avail;
+    const auto hist_cost_ = hist_cost;
+    const auto hist_count_ = hist_count;
+    const auto key_shift_ = key_shift;
+    const auto key_base_ = key_base;
+    const auto inner_buckets_ = inner_buckets;
+    const auto use_greedy_ = use_greedy;
+    const auto phi_ = phi;
+    const auto plo_ = plo;
+    const auto pbracket_ = pbracket;
+    const auto pcapacity_ = pcapacity;
+    const auto chosen_step_ = chosen_step;
+    const float h_mult_[2] = {h_mult[0], h_mult[1]};
+    const auto h1_ = h1;
+    const auto rows_nonnegative_ = rows_nonnegative;
+    const size_t slots_ = slots;
+    uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
+    Pt pts[65];
     double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
     size_t segments = 0, pcount = 0;
     bool poverflow = false;
-    if (!settle && !use_greedy) {
-      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
-      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
+    if (!settle && !use_greedy_) {
+      std::memset(hist_cost_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(double));
+      std::memset(hist_count_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(uint32_t));
     }
-    // settled slots first, then the hulls of the others (all slots when not settling)
-    uint32_t* const unsettled = reinterpret_cast<uint32_t*>(ctx.heap);  // the heap is free until the greedy
-    size_t build_count = slots;
+    // settled slots_ first, then the hulls of the others (all slots_ when not settling)
+    uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
+    size_t build_count = slots_;
     if (settle) {
-      const SettleInput in{slot_levels, slot_finest, slot_prev, slot_row0, slot_a, slot_b, slot_q, row_cost, row_inv_w,
-                           h1, floatAtMost(avail), static_cast<float>(plo / (1.0 + kSettleMargin)),
-                           static_cast<float>(phi * (1.0 + kSettleMargin))};
-      if (rows_nonnegative) {
-        build_count = settleSlots(in, slots, slot_must, hull, hull_stride, hull_count, chosen_step, unsettled, &ptotal);
+      const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_, row_cost_, row_inv_w_,
+                           h1_, floatAtMost(avail_), static_cast<float>(plo_ / (1.0 + kSettleMargin)),
+                           static_cast<float>(phi_ * (1.0 + kSettleMargin))};
+      if (rows_nonnegative_) {
+        build_count = settleSlots(in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
       } else {
-        for (size_t s = 0; s < slots; ++s) unsettled[s] = static_cast<uint32_t>(s);
+        for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
       }
     }
     for (size_t u = 0; u < build_count; ++u) {
       const size_t s = settle ? unsettled[u] : u;
-      const int level_count = static_cast<int>(slot_levels[s]);
+      const int level_count = static_cast<int>(slot_levels_[s]);
       // pointCost / pointBenefit with the slot's terms in registers
-      const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
-      const uint32_t row0 = slot_row0[s];
-      const int prev = slot_prev[s];
-      uint8_t* h = hull + s * hull_stride;
+      const float sa = slot_a_[s], sb = slot_b_[s], sq = slot_q_[s];
+      const uint32_t row0 = slot_row0_[s];
+      const int prev = slot_prev_[s];
+      uint8_t* h = hull_ + s * hull_stride_;
       Pt hp[65];
       float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
       size_t hn = 0;
-      // one step of the upper hull over points in sorted order (Andrew's monotone chain)
+      // one step of the upper hull_ over points in sorted order (Andrew's monotone chain)
       auto addPoint = [&](const Pt& p) {
         if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
         float r_new = 0.0f;
@@ -865,13 +925,13 @@ bool SelectionJob::run() {
       auto pointAt = [&](int l) {
         const uint32_t row = row0 + static_cast<uint32_t>(l);
         // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
-        const float acc = std::min(1.0f, sq * row_inv_w[row]) * h_mult[l == prev];
-        return Pt{sa + row_cost[row], sb * acc, l};
+        const float acc = std::min(1.0f, sq * row_inv_w_[row]) * h_mult_[l == prev];
+        return Pt{sa + row_cost_[row], sb * acc, l};
       };
-      const bool must = slot_must[s] != 0;
-      const int finest = slot_finest[s];
+      const bool must = slot_must_[s] != 0;
+      const int finest = slot_finest_[s];
       // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
-      // cost, which is the sorted order, and all fit alone; then the hull is built as they arrive
+      // cost, which is the sorted order, and all fit alone; then the hull_ is built as they arrive
       bool general = false;
       {
         float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
@@ -882,7 +942,7 @@ bool SelectionJob::run() {
         for (int l = level_count - 1; l >= finest; --l) {
           const Pt p = pointAt(l);
           if (hn == 0) base_cost = p.c;
-          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail) {
+          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail_) {
             general = true;
             break;
           }
@@ -913,40 +973,40 @@ bool SelectionJob::run() {
         const float base_cost = pts[0].c;
         hn = 0;
         for (size_t a = 0; a < m; ++a) {
-          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail) break;  // cannot fit even alone
+          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail_) break;  // cannot fit even alone
           addPoint(pts[a]);
         }
       }
-      hull_count[s] = static_cast<uint8_t>(hn);
+      hull_count_[s] = static_cast<uint8_t>(hn);
       top_cost += hp[hn - 1].c;
       base_total += hp[0].c;
       base_benefit += hp[0].b;
       segments += hn - 1;
       if (settle) {
-        uint32_t above = 0, inside = 0;  // segments with ratio > phi, > plo (a prefix: ratios fall)
+        uint32_t above = 0, inside = 0;  // segments with ratio > phi_, > plo_ (a prefix: ratios fall)
         for (size_t k = 1; k < hn; ++k) {
-          above += static_cast<double>(hr[k]) > phi ? 1u : 0u;
-          inside += static_cast<double>(hr[k]) > plo ? 1u : 0u;
+          above += static_cast<double>(hr[k]) > phi_ ? 1u : 0u;
+          inside += static_cast<double>(hr[k]) > plo_ ? 1u : 0u;
         }
-        // what the collection below does at (plo, phi], on the same float ratios
-        chosen_step[s] = static_cast<uint8_t>(above);
+        // what the collection below does at (plo_, phi_], on the same float ratios
+        chosen_step_[s] = static_cast<uint8_t>(above);
         ptotal += hp[above].c;
         for (size_t k = above + 1; k <= inside; ++k) {
-          if (pcount == pcapacity) {
+          if (pcount == pcapacity_) {
             poverflow = true;
             break;
           }
-          pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+          pbracket_[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
         }
-      } else if (!use_greedy) {
+      } else if (!use_greedy_) {
         for (size_t k = 1; k < hn; ++k) {
           uint32_t bits;
           std::memcpy(&bits, &hr[k], sizeof(bits));
           // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
-          int64_t key = static_cast<int64_t>(bits >> key_shift) - key_base + 1;
-          key = key < 0 ? 0 : (key > inner_buckets + 1 ? inner_buckets + 1 : key);
-          hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
-          hist_count[key] += 1;
+          int64_t key = static_cast<int64_t>(bits >> key_shift_) - key_base_ + 1;
+          key = key < 0 ? 0 : (key > inner_buckets_ + 1 ? inner_buckets_ + 1 : key);
+          hist_cost_[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
+          hist_count_[key] += 1;
         }
       }
     }
@@ -1226,28 +1286,28 @@ bool SelectionJob::run() {
     const uint32_t* const tri = levels.triangle_count.data;
     const uint32_t* const vert = levels.vertex_count.data;
     const uint32_t* const lines = levels.line_point_count.data;
+    const float h_mult[2] = {1.0f, hh};
     uint32_t dropped = 0, drawn = 0;
+    // without branches: about half of the slots are drawn, in no predictable order; a slot not
+    // drawn reads its level-0 row and adds zeros (x + 0.0 == x, so the sums are the same)
     for (size_t s = 0; s < slots; ++s) {
       const size_t i = slot_object[s];
-      const int level = chosen[s] == kNotDrawn ? -1 : static_cast<int>(chosen[s]);
+      const bool is_drawn = chosen[s] != kNotDrawn;
+      const int level = is_drawn ? static_cast<int>(chosen[s]) : -1;
       level_of[i] = static_cast<int8_t>(level);
-      if (level < 0) {
-        if (slot_b[s] > 0.0f) ++dropped;
-        continue;
-      }
-      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(level);
+      dropped += !is_drawn && slot_b[s] > 0.0f ? 1u : 0u;
+      drawn += is_drawn ? 1u : 0u;
+      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(is_drawn ? level : 0);
       // ctx.pointCost / ctx.pointBenefit at a drawn level
       const float cost = slot_a[s] + rc[row];
-      float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]);
-      if (level == slot_prev[s]) acc *= hh;
-      predicted += cost;
-      benefit += slot_b[s] * acc;
-      f.objects += 1.0;
-      f.triangles += tri[row];
-      f.vertices += vert[row];
-      f.line_points += lines[row];
-      f.pixels += slot_px[s];
-      ++drawn;
+      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[level == slot_prev[s]];
+      predicted += is_drawn ? cost : 0.0f;
+      benefit += is_drawn ? slot_b[s] * acc : 0.0f;
+      f.objects += is_drawn ? 1.0 : 0.0;
+      f.triangles += is_drawn ? tri[row] : 0u;
+      f.vertices += is_drawn ? vert[row] : 0u;
+      f.line_points += is_drawn ? lines[row] : 0u;
+      f.pixels += is_drawn ? slot_px[s] : 0.0f;
     }
     st.dropped_count = dropped;
     st.drawn_count = drawn;
