@@ -35,6 +35,7 @@ constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2
 constexpr double kPredictWidthStart = 1.0 / 16.0;
 constexpr double kPredictWidthMin = 1.0 / 4096.0;
 constexpr double kPredictWidthMax = 4.0;
+constexpr int kPredictRetries = 2;  // wider brackets tried after a miss before the full search
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -201,6 +202,50 @@ size_t settleSlots(const SettleInput& in, size_t slot_count, const uint8_t* must
   return unsettled_count;
 }
 
+// Pass 1a of run(): outside[i] = 1 when sphere i is outside one of the frustum's planes
+// (sphereInFrustum's six tests without early exits). Blocks of 64 objects are first copied into
+// local columns, so each plane's test is a plain loop over floats that the compiler vectorises
+// with the plane in registers (over the packed centres it managed only 2 wide, reloading the 24
+// plane constants). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
+// products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
+// give the same bits (Selector.AvxAndSse2PathsGiveTheSameBits).
+inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
+                                                              const float* rad, size_t n, uint8_t* outside) {
+  constexpr size_t kBlock = 64;
+  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
+  alignas(32) uint32_t bo[kBlock];
+  auto testBlock = [&](size_t i0, size_t m) {
+    const float* const p = xyz + 3 * i0;
+    for (size_t j = 0; j < m; ++j) {
+      bx[j] = p[3 * j];
+      by[j] = p[3 * j + 1];
+      bz[j] = p[3 * j + 2];
+      bnr[j] = -rad[i0 + j];
+      bo[j] = 0;
+    }
+    for (int k = 0; k < 6; ++k) {
+      const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
+      for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
+    }
+    for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
+  };
+  // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
+  size_t i0 = 0;
+  for (; i0 + kBlock <= n; i0 += kBlock) testBlock(i0, kBlock);
+  if (i0 < n) testBlock(i0, n - i0);
+}
+void frustumOutsideSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint8_t* outside) {
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+}
+__attribute__((target("avx2"))) void frustumOutsideAvx2(const Frustum& frustum, const float* xyz, const float* rad,
+                                                       size_t n, uint8_t* outside) {
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+}
+bool cpuHasAvx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+}
+
 struct HullSums {
   double top_cost, base_total, base_benefit, ptotal;
   size_t segments, pcount;
@@ -224,6 +269,7 @@ class SelectorContext {
   size_t bracket_capacity = 0;
   size_t total_bytes = 0;
   size_t per_object_bytes = 0;
+  bool use_avx2 = false;   // the AVX2 code paths (the CPU has it and the config allows it)
 
   // persistent per-object state
   int8_t* prev_level = nullptr;  // level chosen last frame, -1 = not drawn
@@ -374,6 +420,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
   c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
   c->max_rows = rows;
+  c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
   resetSelectorHistory(c);
@@ -463,9 +510,25 @@ bool SelectionJob::validate() const {
       if (r > b && w < levels.cell_width[r - 1]) return false;
     }
   }
-  for (size_t i = 0; i < n; ++i)
-    if (chains[i] >= chain_count) return false;
-  return true;
+  // no early exit: an OR over the whole column vectorises (the valid case reads it all anyway)
+  if (n > 0 && chain_count == 0) return false;
+  uint32_t bad = 0;
+  const uint32_t* const chain_of = chains.data;
+  const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
+  // four at a time; unsigned order as signed order after flipping the sign bit (SSE2 has no
+  // unsigned compare)
+  constexpr int32_t kSign = std::numeric_limits<int32_t>::min();
+  const V4i flip = {kSign, kSign, kSign, kSign};
+  const V4i last4 = flip ^ static_cast<int32_t>(last_chain);
+  V4i bad4 = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    V4i v;
+    std::memcpy(&v, chain_of + i, sizeof(v));
+    bad4 |= (v ^ flip) > last4;
+  }
+  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
+  return bad == 0 && !anyLane(bad4);
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
@@ -608,39 +671,11 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits),
-  // into chosen[] as scratch (it is written again before it is read). Blocks of 64 objects are first
-  // copied into local columns, so each plane's test is a plain loop over floats that the compiler
-  // vectorises 4 wide with the plane in registers (over the packed centres it managed only 2 wide,
-  // reloading the 24 plane constants).
+  // pass 1a: the frustum test of every object, into chosen[] as scratch (it is written again
+  // before it is read)
   uint8_t* const outside = ctx.chosen;
-  {
-    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
-    const float* xyz = n ? &centers[0].x : nullptr;
-    const float* rad = radii.data;
-    constexpr size_t kBlock = 64;
-    alignas(16) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
-    alignas(16) uint32_t bo[kBlock];
-    auto testBlock = [&](size_t i0, size_t m) {
-      const float* const p = xyz + 3 * i0;
-      for (size_t j = 0; j < m; ++j) {
-        bx[j] = p[3 * j];
-        by[j] = p[3 * j + 1];
-        bz[j] = p[3 * j + 2];
-        bnr[j] = -rad[i0 + j];
-        bo[j] = 0;
-      }
-      for (int k = 0; k < 6; ++k) {
-        const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
-        for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
-      }
-      for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
-    };
-    // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
-    size_t i0 = 0;
-    for (; i0 + kBlock <= n; i0 += kBlock) testBlock(i0, kBlock);
-    if (i0 < n) testBlock(i0, n - i0);
-  }
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
+  (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(frustum, n ? &centers[0].x : nullptr, radii.data, n, outside);
   // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
   // object's level starts at -1 and the slots' levels are written at the end
   // (locals for every array below: the byte stores would otherwise make the compiler reload the
@@ -831,8 +866,8 @@ bool SelectionJob::run() {
     // (checked exactly below), no other pass over the objects is needed; otherwise every hull is
     // built (with the price histogram) and the search runs as in the cold case.
     const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
-    const double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
-    const double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
+    double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
+    double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
     size_t pcount = 0;
     bool poverflow = false;
     double ptotal = 0.0;
@@ -1225,14 +1260,24 @@ bool SelectionJob::run() {
       if (predict) {
         // (no top_cost > obj_cap test: settled objects do not sum it, and when everything fits the
         // bracket's greedy finds no split, which is a miss for a bracket above 0)
-        if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
-          from_prediction = true;
-        } else {
-          // missed: widen the window next frame; overflowed: narrow it
+        // a miss (the edge outside the bracket) is retried at twice the width, which costs one more
+        // settling pass instead of every hull, the histogram and a collection pass
+        for (int retry = 0;; ++retry) {
+          if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
+            from_prediction = true;
+            break;
+          }
+          // missed: widen the window (now and next frame); overflowed: narrow it next frame
           ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
                                         : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
-          // settled objects have no full hull, and the search needs the histogram
-          storeSums(buildHulls(false));
+          if (poverflow || retry == kPredictRetries) {
+            // settled objects have no full hull, and the search needs the histogram
+            storeSums(buildHulls(false));
+            break;
+          }
+          plo = ctx.last_lambda / (1.0 + ctx.predict_width);
+          phi = ctx.last_lambda * (1.0 + ctx.predict_width);
+          storeSums(buildHulls(true));
         }
       }
       for (int attempt = 0; attempt < 2 && !from_prediction; ++attempt) {

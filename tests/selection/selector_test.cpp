@@ -420,6 +420,34 @@ TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   }
 }
 
+// The AVX2 paths (where the CPU has them) and the SSE2 ones give the same bits, in both modes and
+// along a path (incremental frames included); on a CPU without AVX2 both contexts run SSE2.
+TEST(Selector, AvxAndSse2PathsGiveTheSameBits) {
+  SyntheticScene s = makeScene(12, 3000, 8, 8, 100.0f, true);
+  SelectorConfig cfg;
+  cfg.max_object_count = 3000;
+  cfg.bracket_capacity = 100;
+  Owned a(createSelectorContext(cfg));
+  cfg.sse2_only = true;
+  Owned b(createSelectorContext(cfg));
+  for (int frame = 0; frame < 24; ++frame) {
+    Camera cam = makeCamera(glm::vec3(frame * 0.3f, 0.0f, 10.0f - frame * 0.5f));
+    std::vector<int8_t> la, lb;
+    std::vector<float> ca(s.centers.size()), cb(s.centers.size());
+    SelectionStats sa, sb;
+    SelectionJob ja = makeJob(s, a.ctx, &cam, la, &sa), jb = makeJob(s, b.ctx, &cam, lb, &sb);
+    ja.cost_ms_out = Span<float>(ca.data(), ca.size());
+    jb.cost_ms_out = Span<float>(cb.data(), cb.size());
+    ja.params.budget_ms = jb.params.budget_ms = 6.0f;
+    if (frame % 8 == 7) ja.params.mode = jb.params.mode = SelectionMode::kDistance;
+    ASSERT_TRUE(ja.run());
+    ASSERT_TRUE(jb.run());
+    EXPECT_EQ(la, lb) << "frame " << frame;
+    EXPECT_EQ(0, std::memcmp(ca.data(), cb.data(), ca.size() * sizeof(float))) << "frame " << frame;
+    EXPECT_EQ(0, std::memcmp(&sa, &sb, sizeof(sa))) << "frame " << frame;
+  }
+}
+
 TEST(Selector, LargerBudgetNeverLowersBenefitFromColdStart) {
   for (uint32_t seed = 40; seed < 46; ++seed) {
     SyntheticScene s = makeScene(seed, 600, 5, 7, 80.0f);
