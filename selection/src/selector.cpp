@@ -110,6 +110,15 @@ inline V4i load4(const int32_t* p) {
   return v;
 }
 
+// x where mask is all ones, +0 where it is 0
+inline float maskFloat(float x, uint32_t mask) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  bits &= mask;
+  std::memcpy(&x, &bits, sizeof(x));
+  return x;
+}
+
 // the largest float at most v
 float floatAtMost(double v) {
   float f = static_cast<float>(v);
@@ -1333,26 +1342,26 @@ bool SelectionJob::run() {
     const uint32_t* const lines = levels.line_point_count.data;
     const float h_mult[2] = {1.0f, hh};
     uint32_t dropped = 0, drawn = 0;
-    // without branches: about half of the slots are drawn, in no predictable order; a slot not
-    // drawn reads its level-0 row and adds zeros (x + 0.0 == x, so the sums are the same)
+    // without branches: about half of the slots are drawn, in no predictable order, and GCC turns
+    // selects into branches; a slot not drawn reads its level-0 row and adds its terms masked to
+    // +0 (x + 0.0 == x, so the sums are the same)
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = slot_object[s];
-      const bool is_drawn = chosen[s] != kNotDrawn;
-      const int level = is_drawn ? static_cast<int>(chosen[s]) : -1;
-      level_of[i] = static_cast<int8_t>(level);
-      dropped += !is_drawn && slot_b[s] > 0.0f ? 1u : 0u;
-      drawn += is_drawn ? 1u : 0u;
-      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(is_drawn ? level : 0);
+      const uint8_t chosen_level = chosen[s];
+      const uint32_t keep = 0u - static_cast<uint32_t>(chosen_level != kNotDrawn);  // all ones if drawn
+      level_of[slot_object[s]] = static_cast<int8_t>(chosen_level);               // kNotDrawn is -1
+      dropped += (keep ^ 1u) & (slot_b[s] > 0.0f ? 1u : 0u);
+      drawn += keep & 1u;
+      const uint32_t row = slot_row0[s] + (chosen_level & keep);
       // ctx.pointCost / ctx.pointBenefit at a drawn level
       const float cost = slot_a[s] + rc[row];
-      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[level == slot_prev[s]];
-      predicted += is_drawn ? cost : 0.0f;
-      benefit += is_drawn ? slot_b[s] * acc : 0.0f;
-      f.objects += is_drawn ? 1.0 : 0.0;
-      f.triangles += is_drawn ? tri[row] : 0u;
-      f.vertices += is_drawn ? vert[row] : 0u;
-      f.line_points += is_drawn ? lines[row] : 0u;
-      f.pixels += is_drawn ? slot_px[s] : 0.0f;
+      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[chosen_level == static_cast<uint8_t>(slot_prev[s])];
+      predicted += maskFloat(cost, keep);
+      benefit += maskFloat(slot_b[s] * acc, keep);
+      f.objects += maskFloat(1.0f, keep);
+      f.triangles += tri[row] & keep;
+      f.vertices += vert[row] & keep;
+      f.line_points += lines[row] & keep;
+      f.pixels += maskFloat(slot_px[s], keep);
     }
     st.dropped_count = dropped;
     st.drawn_count = drawn;
