@@ -69,21 +69,18 @@ struct BracketOrder {
   }
 };
 
-// levels of one chain side by side, kLanes = two SSE2 vectors of four floats (GCC vector
+// levels of one chain side by side: kLanes floats, two SSE2 vectors or one AVX2 vector (GCC vector
 // extensions; only IEEE adds, multiplies, compares and selects, so the bits do not depend on how
 // the compiler lowers them)
 constexpr int kLanes = 8;
 typedef float V4f __attribute__((vector_size(16)));
 typedef int32_t V4i __attribute__((vector_size(16)));
+typedef float V8f __attribute__((vector_size(32)));  // AVX2 functions only
+typedef int32_t V8i __attribute__((vector_size(32)));
 // a settled object's choice is the unique maximiser of benefit - lambda cost on the predicted bracket
 // widened by this factor at both ends; far above the float ratios' rounding (about 2^-22 relative)
 constexpr double kSettleMargin = 1.0 / 4096.0;
 
-inline V4f load4(const float* p) {
-  V4f v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
 inline bool anyLane(V4i m) {
   uint64_t w[2];
   std::memcpy(w, &m, sizeof(w));
@@ -104,11 +101,6 @@ constexpr LaneMasks makeLaneMasks() {
   return m;
 }
 constexpr LaneMasks kLaneMasks = makeLaneMasks();
-inline V4i load4(const int32_t* p) {
-  V4i v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
 
 // x where mask is all ones, +0 where it is 0
 inline float maskFloat(float x, uint32_t mask) {
@@ -126,7 +118,7 @@ float floatAtMost(double v) {
   return f;
 }
 
-// What settleSlots reads: the slot columns of pass 1c, this frame's row terms and the widened
+// What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
 // bracket ends.
 struct SettleInput {
   const uint8_t* level_count;
@@ -153,13 +145,22 @@ struct SettleInput {
 // drawn, the level) and the chosen step for a settled slot; the others go, in slot order, to
 // `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
 // Must-draw slots and chains of more than kLanes levels are never settled.
-size_t settleSlots(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* hull, size_t hull_stride,
-                   uint8_t* hull_count, uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
+// The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
+// per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
+// both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
+// default target and take AVX vectors by value.
+template <typename VF, typename VI>
+inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
+                                                             const uint8_t* must, uint8_t* hull, size_t hull_stride,
+                                                             uint8_t* hull_count, uint8_t* chosen_step,
+                                                             uint32_t* unsettled, double* settled_cost) {
+  constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
+  static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
   size_t unsettled_count = 0;
   double total = 0.0;
-  const V4f ones = {1, 1, 1, 1};
+  const VF ones = VF{} + 1.0f;
   // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
-  alignas(16) float hyst[kLanes + 1][kLanes];
+  alignas(32) float hyst[kLanes + 1][kLanes];
   for (int r = 0; r <= kLanes; ++r)
     for (int l = 0; l < kLanes; ++l) hyst[r][l] = l == r - 1 ? in.h1 : 1.0f;
   const float h1 = in.h1, avail = in.avail, lo = in.lo, hi = in.hi;
@@ -185,20 +186,32 @@ size_t settleSlots(const SettleInput& in, size_t slot_count, const uint8_t* must
       cb = sb * (std::min(1.0f, sq * row_inv_w[row]) * h1);
       if (!(cc <= avail) || !(cb > hi * cc)) continue;  // fits alone; beats "not drawn"
     }
-    // the points as pointAt computes them, lanes 0-3 and 4-7
-    const V4f c0 = sa + load4(row_cost + row0), c1 = sa + load4(row_cost + row0 + 4);
-    const V4f t0 = sq * load4(row_inv_w + row0), t1 = sq * load4(row_inv_w + row0 + 4);
-    const V4f b0 = sb * ((t0 < ones ? t0 : ones) * load4(hyst[cand + 1]));
-    const V4f b1 = sb * ((t1 < ones ? t1 : ones) * load4(hyst[cand + 1] + 4));
     const int32_t* const range = kLaneMasks.range[finest][level_count];
     const int32_t* const other = kLaneMasks.other[cand + 1];
-    const V4i v0 = load4(range) & load4(other) & (c0 <= avail);  // the other points that fit alone
-    const V4i v1 = load4(range + 4) & load4(other + 4) & (c1 <= avail);
-    // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
-    const V4f d0 = cc - c0, d1 = cc - c1;
-    const V4f p0 = hi * d0, q0 = lo * d0, p1 = hi * d1, q1 = lo * d1;
-    const V4i beaten0 = cb - b0 > (p0 > q0 ? p0 : q0), beaten1 = cb - b1 > (p1 > q1 ? p1 : q1);
-    if (anyLane((v0 & ~beaten0) | (v1 & ~beaten1))) continue;
+    VI fail = VI{};
+    for (int k = 0; k < kParts; ++k) {
+      VF rc, riw, hm;
+      VI in_range, not_cand;
+      std::memcpy(&rc, row_cost + row0 + k * kWidth, sizeof(rc));
+      std::memcpy(&riw, row_inv_w + row0 + k * kWidth, sizeof(riw));
+      std::memcpy(&hm, hyst[cand + 1] + k * kWidth, sizeof(hm));
+      std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
+      std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
+      // the points as pointAt computes them
+      const VF c = sa + rc;
+      const VF t = sq * riw;
+      const VF b = sb * ((t < ones ? t : ones) * hm);
+      const VI v = in_range & not_cand & (c <= avail);  // the other points that fit alone
+      // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
+      const VF d = cc - c;
+      const VF p = hi * d, q = lo * d;
+      fail |= v & ~(cb - b > (p > q ? p : q));
+    }
+    uint64_t words[sizeof(VI) / sizeof(uint64_t)];
+    std::memcpy(words, &fail, sizeof(words));
+    uint64_t any = 0;
+    for (uint64_t w : words) any |= w;
+    if (any != 0) continue;
     uint8_t* const h = hull + s * hull_stride;
     h[0] = kNotDrawn;
     h[1] = static_cast<uint8_t>(cand);
@@ -209,6 +222,18 @@ size_t settleSlots(const SettleInput& in, size_t slot_count, const uint8_t* must
   }
   *settled_cost = total;
   return unsettled_count;
+}
+size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* hull, size_t hull_stride,
+                       uint8_t* hull_count, uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V4f, V4i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
+                                   settled_cost);
+}
+__attribute__((target("avx2"))) size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
+                                                      uint8_t* hull, size_t hull_stride, uint8_t* hull_count,
+                                                      uint8_t* chosen_step, uint32_t* unsettled,
+                                                      double* settled_cost) {
+  return settleSlotsBody<V8f, V8i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
+                                   settled_cost);
 }
 
 // Pass 1a of run(): outside[i] = 1 when sphere i is outside one of the frustum's planes
@@ -868,7 +893,7 @@ bool SelectionJob::run() {
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
-    // Incremental case (Lagrangian, last frame's price known): first settleSlots finds the objects
+    // Incremental case (Lagrangian, last frame's price known): first settleSlots* finds the objects
     // whose choice cannot change inside a predicted bracket (plo, phi] around last frame's price
     // (on a smooth camera about 97 % of them); only the others get their hull, take their upgrades
     // above phi and put those inside into the bracket array. When the budget's edge falls inside
@@ -883,7 +908,7 @@ bool SelectionJob::run() {
     uint8_t* const chosen_step = ctx.chosen;
     BracketEntry* const pbracket = ctx.bracket;
     const size_t pcapacity = ctx.bracket_capacity;
-    // every row's geometry cost >= 0 (not NaN), which settleSlots relies on
+    // every row's geometry cost >= 0 (not NaN), which settleSlots* relies on
     bool rows_nonnegative = true;
     for (size_t r = 0; r < levels.cell_width.count; ++r) rows_nonnegative &= row_cost[r] >= 0.0f;
     // the sums in locals (shadowing the outer ones until the end): through the captured references
@@ -937,7 +962,7 @@ bool SelectionJob::run() {
                            h1_, floatAtMost(avail_), static_cast<float>(plo_ / (1.0 + kSettleMargin)),
                            static_cast<float>(phi_ * (1.0 + kSettleMargin))};
       if (rows_nonnegative_) {
-        build_count = settleSlots(in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
+        build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
       } else {
         for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
       }
