@@ -1294,17 +1294,19 @@ bool SelectionJob::run() {
       if (predict) {
         // (no top_cost > obj_cap test: settled objects do not sum it, and when everything fits the
         // bracket's greedy finds no split, which is a miss for a bracket above 0)
-        // a miss (the edge outside the bracket) is retried at twice the width, which costs one more
-        // settling pass instead of every hull, the histogram and a collection pass
+        // a miss (the edge outside the bracket) is retried at twice the width, an overflow at half
+        // of it, which costs one more settling pass instead of every hull, the histogram and a
+        // collection pass
         for (int retry = 0;; ++retry) {
           if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
             from_prediction = true;
             break;
           }
-          // missed: widen the window (now and next frame); overflowed: narrow it next frame
-          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
-                                        : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
-          if (poverflow || retry == kPredictRetries) {
+          // missed: widen the window; overflowed: narrow it (now and next frame)
+          const double width = ctx.predict_width;
+          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, width * 0.5)
+                                        : std::min(kPredictWidthMax, width * 2.0);
+          if (retry == kPredictRetries || ctx.predict_width == width) {
             // settled objects have no full hull, and the search needs the histogram
             storeSums(buildHulls(false));
             break;
