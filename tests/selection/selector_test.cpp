@@ -398,25 +398,39 @@ TEST(Selector, LagrangianMatchesGreedyAlongASmoothPath) {
   }
 }
 
+namespace {
+
+// Runs one frame (budget 6 ms) on two contexts and expects the same levels, costs and stats, bit
+// for bit. report_ms >= 0: both contexts first get that time reported for frame 0.
+void expectSameFrame(const SyntheticScene& s, SelectorContext* a, SelectorContext* b, const Camera& cam,
+                     SelectionMode mode, float report_ms, int frame) {
+  std::vector<int8_t> la, lb;
+  std::vector<float> ca(s.centers.size()), cb(s.centers.size());
+  SelectionStats sa, sb;
+  SelectionJob ja = makeJob(s, a, &cam, la, &sa), jb = makeJob(s, b, &cam, lb, &sb);
+  ja.cost_ms_out = Span<float>(ca.data(), ca.size());
+  jb.cost_ms_out = Span<float>(cb.data(), cb.size());
+  ja.params.budget_ms = jb.params.budget_ms = 6.0f;
+  ja.params.mode = jb.params.mode = mode;
+  if (report_ms >= 0.0f) {
+    reportFrameTime(a, sa.frame, report_ms);
+    reportFrameTime(b, sb.frame, report_ms);
+  }
+  ASSERT_TRUE(ja.run());
+  ASSERT_TRUE(jb.run());
+  EXPECT_EQ(la, lb) << "frame " << frame;
+  EXPECT_EQ(0, std::memcmp(ca.data(), cb.data(), ca.size() * sizeof(float))) << "frame " << frame;
+  EXPECT_EQ(0, std::memcmp(&sa, &sb, sizeof(sa))) << "frame " << frame;
+}
+
+}  // namespace
+
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
   Owned a(makeContext(2000, 100)), b(makeContext(2000, 100));
   for (int frame = 0; frame < 10; ++frame) {
-    Camera cam = makeCamera(glm::vec3(frame * 0.7f, 0.0f, 10.0f - frame * 3.0f));
-    std::vector<int8_t> la, lb;
-    std::vector<float> ca(s.centers.size()), cb(s.centers.size());
-    SelectionStats sa, sb;
-    SelectionJob ja = makeJob(s, a.ctx, &cam, la, &sa), jb = makeJob(s, b.ctx, &cam, lb, &sb);
-    ja.cost_ms_out = Span<float>(ca.data(), ca.size());
-    jb.cost_ms_out = Span<float>(cb.data(), cb.size());
-    ja.params.budget_ms = jb.params.budget_ms = 6.0f;
-    reportFrameTime(a.ctx, sa.frame, 7.0f + frame);
-    reportFrameTime(b.ctx, sb.frame, 7.0f + frame);
-    ASSERT_TRUE(ja.run());
-    ASSERT_TRUE(jb.run());
-    EXPECT_EQ(la, lb);
-    EXPECT_EQ(0, std::memcmp(ca.data(), cb.data(), ca.size() * sizeof(float)));
-    EXPECT_EQ(0, std::memcmp(&sa, &sb, sizeof(sa)));
+    const Camera cam = makeCamera(glm::vec3(frame * 0.7f, 0.0f, 10.0f - frame * 3.0f));
+    expectSameFrame(s, a.ctx, b.ctx, cam, SelectionMode::kBudget, 7.0f + frame, frame);
   }
 }
 
@@ -431,20 +445,9 @@ TEST(Selector, AvxAndSse2PathsGiveTheSameBits) {
   cfg.sse2_only = true;
   Owned b(createSelectorContext(cfg));
   for (int frame = 0; frame < 24; ++frame) {
-    Camera cam = makeCamera(glm::vec3(frame * 0.3f, 0.0f, 10.0f - frame * 0.5f));
-    std::vector<int8_t> la, lb;
-    std::vector<float> ca(s.centers.size()), cb(s.centers.size());
-    SelectionStats sa, sb;
-    SelectionJob ja = makeJob(s, a.ctx, &cam, la, &sa), jb = makeJob(s, b.ctx, &cam, lb, &sb);
-    ja.cost_ms_out = Span<float>(ca.data(), ca.size());
-    jb.cost_ms_out = Span<float>(cb.data(), cb.size());
-    ja.params.budget_ms = jb.params.budget_ms = 6.0f;
-    if (frame % 8 == 7) ja.params.mode = jb.params.mode = SelectionMode::kDistance;
-    ASSERT_TRUE(ja.run());
-    ASSERT_TRUE(jb.run());
-    EXPECT_EQ(la, lb) << "frame " << frame;
-    EXPECT_EQ(0, std::memcmp(ca.data(), cb.data(), ca.size() * sizeof(float))) << "frame " << frame;
-    EXPECT_EQ(0, std::memcmp(&sa, &sb, sizeof(sa))) << "frame " << frame;
+    const Camera cam = makeCamera(glm::vec3(frame * 0.3f, 0.0f, 10.0f - frame * 0.5f));
+    const SelectionMode mode = frame % 8 == 7 ? SelectionMode::kDistance : SelectionMode::kBudget;
+    expectSameFrame(s, a.ctx, b.ctx, cam, mode, -1.0f, frame);
   }
 }
 
