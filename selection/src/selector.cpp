@@ -35,7 +35,8 @@ constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2
 constexpr double kPredictWidthStart = 1.0 / 16.0;
 constexpr double kPredictWidthMin = 1.0 / 4096.0;
 constexpr double kPredictWidthMax = 4.0;
-constexpr int kPredictRetries = 2;  // wider brackets tried after a miss before the full search
+constexpr int kPredictRetries = 2;  // wider (after a miss) or narrower (after an overflow) brackets
+                                    // tried before the full search
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -709,7 +710,8 @@ bool SelectionJob::run() {
   // before it is read)
   uint8_t* const outside = ctx.chosen;
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
-  (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(frustum, n ? &centers[0].x : nullptr, radii.data, n, outside);
+  const float* const xyz = n ? &centers[0].x : nullptr;
+  (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(frustum, xyz, radii.data, n, outside);
   // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
   // object's level starts at -1 and the slots' levels are written at the end
   // (locals for every array below: the byte stores would otherwise make the compiler reload the
@@ -797,35 +799,35 @@ bool SelectionJob::run() {
     }
     std::memcpy(slot_q + s0, gq, m * sizeof(float));
     for (size_t j = 0; j < m; ++j) {
-    const size_t s = s0 + j;
-    const size_t i = slot_object[s];
-    const uint32_t chain = chain_of[i];
-    const uint32_t row0 = chain_offset[chain];
-    const uint32_t level_count = chain_offset[chain + 1] - row0;
-    const float q = gq[j];
-    // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-    // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
-    // (most objects are far: their coarsest level is accurate enough, one predictable test)
-    uint32_t finest = level_count - 1;
-    if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
-    for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
-      const uint32_t half = len / 2;
-      const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
-      // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
-      finest += ok * (half + 1);
-      len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
-    }
-    slot_finest[s] = static_cast<uint8_t>(finest);
-    slot_row0[s] = row0;
-    slot_prev[s] = prev_level[i];
-    slot_levels[s] = static_cast<uint8_t>(level_count);
-    const bool must = must_of && must_of[i];
-    slot_must[s] = must ? 1 : 0;
-    if (must && budget) {
-      float cheapest = std::numeric_limits<float>::infinity();
-      for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
-      mandatory += cheapest;
-    }
+      const size_t s = s0 + j;
+      const size_t i = slot_object[s];
+      const uint32_t chain = chain_of[i];
+      const uint32_t row0 = chain_offset[chain];
+      const uint32_t level_count = chain_offset[chain + 1] - row0;
+      const float q = gq[j];
+      // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+      // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
+      // (most objects are far: their coarsest level is accurate enough, one predictable test)
+      uint32_t finest = level_count - 1;
+      if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
+      for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+        const uint32_t half = len / 2;
+        const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
+        // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+        finest += ok * (half + 1);
+        len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+      }
+      slot_finest[s] = static_cast<uint8_t>(finest);
+      slot_row0[s] = row0;
+      slot_prev[s] = prev_level[i];
+      slot_levels[s] = static_cast<uint8_t>(level_count);
+      const bool must = must_of && must_of[i];
+      slot_must[s] = must ? 1 : 0;
+      if (must && budget) {
+        float cheapest = std::numeric_limits<float>::infinity();
+        for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
+        mandatory += cheapest;
+      }
     }
   }
 
@@ -914,172 +916,174 @@ bool SelectionJob::run() {
     // the sums in locals (shadowing the outer ones until the end): through the captured references
     // every += would be a store and a reload
     auto buildHulls = [&](bool settle) {
-    // local copies: the byte stores below may alias anything reached through the closure, so
-    // captured values would be reloaded after each of them
-    const auto slot_levels_ = slot_levels;
-    const auto slot_a_ = slot_a;
-    const auto slot_b_ = slot_b;
-    const auto slot_q_ = slot_q;
-    const auto slot_row0_ = slot_row0;
-    const auto slot_prev_ = slot_prev;
-    const auto slot_must_ = slot_must;
-    const auto slot_finest_ = slot_finest;
-    const auto row_cost_ = row_cost;
-    const auto row_inv_w_ = row_inv_w;
-    const auto hull_ = hull;
-    const auto hull_count_ = hull_count;
-    const auto hull_stride_ = hull_stride;
-    const auto avail_ = avail;
-    const auto hist_cost_ = hist_cost;
-    const auto hist_count_ = hist_count;
-    const auto key_shift_ = key_shift;
-    const auto key_base_ = key_base;
-    const auto inner_buckets_ = inner_buckets;
-    const auto use_greedy_ = use_greedy;
-    const auto phi_ = phi;
-    const auto plo_ = plo;
-    const auto pbracket_ = pbracket;
-    const auto pcapacity_ = pcapacity;
-    const auto chosen_step_ = chosen_step;
-    const float h_mult_[2] = {h_mult[0], h_mult[1]};
-    const auto h1_ = h1;
-    const auto rows_nonnegative_ = rows_nonnegative;
-    const size_t slots_ = slots;
-    uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
-    Pt pts[65];
-    double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
-    size_t segments = 0, pcount = 0;
-    bool poverflow = false;
-    if (!settle && !use_greedy_) {
-      std::memset(hist_cost_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(double));
-      std::memset(hist_count_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(uint32_t));
-    }
-    // settled slots_ first, then the hulls of the others (all slots_ when not settling)
-    uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
-    size_t build_count = slots_;
-    if (settle) {
-      const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_, row_cost_, row_inv_w_,
-                           h1_, floatAtMost(avail_), static_cast<float>(plo_ / (1.0 + kSettleMargin)),
-                           static_cast<float>(phi_ * (1.0 + kSettleMargin))};
-      if (rows_nonnegative_) {
-        build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
-      } else {
-        for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
+      // local copies: the byte stores below may alias anything reached through the closure, so
+      // captured values would be reloaded after each of them
+      const auto slot_levels_ = slot_levels;
+      const auto slot_a_ = slot_a;
+      const auto slot_b_ = slot_b;
+      const auto slot_q_ = slot_q;
+      const auto slot_row0_ = slot_row0;
+      const auto slot_prev_ = slot_prev;
+      const auto slot_must_ = slot_must;
+      const auto slot_finest_ = slot_finest;
+      const auto row_cost_ = row_cost;
+      const auto row_inv_w_ = row_inv_w;
+      const auto hull_ = hull;
+      const auto hull_count_ = hull_count;
+      const auto hull_stride_ = hull_stride;
+      const auto avail_ = avail;
+      const auto hist_cost_ = hist_cost;
+      const auto hist_count_ = hist_count;
+      const auto key_shift_ = key_shift;
+      const auto key_base_ = key_base;
+      const auto inner_buckets_ = inner_buckets;
+      const auto use_greedy_ = use_greedy;
+      const auto phi_ = phi;
+      const auto plo_ = plo;
+      const auto pbracket_ = pbracket;
+      const auto pcapacity_ = pcapacity;
+      const auto chosen_step_ = chosen_step;
+      const float h_mult_[2] = {h_mult[0], h_mult[1]};
+      const auto h1_ = h1;
+      const auto rows_nonnegative_ = rows_nonnegative;
+      const size_t slots_ = slots;
+      uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
+      Pt pts[65];
+      double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
+      size_t segments = 0, pcount = 0;
+      bool poverflow = false;
+      if (!settle && !use_greedy_) {
+        std::memset(hist_cost_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(double));
+        std::memset(hist_count_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(uint32_t));
       }
-    }
-    for (size_t u = 0; u < build_count; ++u) {
-      const size_t s = settle ? unsettled[u] : u;
-      const int level_count = static_cast<int>(slot_levels_[s]);
-      // pointCost / pointBenefit with the slot's terms in registers
-      const float sa = slot_a_[s], sb = slot_b_[s], sq = slot_q_[s];
-      const uint32_t row0 = slot_row0_[s];
-      const int prev = slot_prev_[s];
-      uint8_t* h = hull_ + s * hull_stride_;
-      Pt hp[65];
-      float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
-      size_t hn = 0;
-      // one step of the upper hull_ over points in sorted order (Andrew's monotone chain)
-      auto addPoint = [&](const Pt& p) {
-        if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
-        float r_new = 0.0f;
-        while (hn >= 1) {
-          r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
-          if (hn < 2 || hr[hn - 1] > r_new) break;
-          --hn;
-        }
-        hr[hn] = r_new;
-        h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
-        hp[hn++] = p;
-      };
-      auto pointAt = [&](int l) {
-        const uint32_t row = row0 + static_cast<uint32_t>(l);
-        // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
-        const float acc = std::min(1.0f, sq * row_inv_w_[row]) * h_mult_[l == prev];
-        return Pt{sa + row_cost_[row], sb * acc, l};
-      };
-      const bool must = slot_must_[s] != 0;
-      const int finest = slot_finest_[s];
-      // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
-      // cost, which is the sorted order, and all fit alone; then the hull_ is built as they arrive
-      bool general = false;
-      {
-        float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
-        if (!must) {
-          addPoint(Pt{0.0f, 0.0f, -1});
-          last_c = 0.0f;
-        }
-        for (int l = level_count - 1; l >= finest; --l) {
-          const Pt p = pointAt(l);
-          if (hn == 0) base_cost = p.c;
-          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail_) {
-            general = true;
-            break;
-          }
-          last_c = p.c;
-          addPoint(p);
-        }
-      }
-      if (general) {
-        size_t m = 0;
-        if (!must) pts[m++] = {0.0f, 0.0f, -1};
-        for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
-        // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
-        // the sorted result does not depend on the arrival order)
-        for (size_t a = 1; a < m; ++a) {
-          const Pt p = pts[a];
-          size_t j = a;
-          auto before = [](const Pt& x, const Pt& y) {
-            if (x.c != y.c) return x.c < y.c;
-            if (x.b != y.b) return x.b > y.b;
-            return x.l > y.l;
-          };
-          while (j > 0 && before(p, pts[j - 1])) {
-            pts[j] = pts[j - 1];
-            --j;
-          }
-          pts[j] = p;
-        }
-        const float base_cost = pts[0].c;
-        hn = 0;
-        for (size_t a = 0; a < m; ++a) {
-          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail_) break;  // cannot fit even alone
-          addPoint(pts[a]);
-        }
-      }
-      hull_count_[s] = static_cast<uint8_t>(hn);
-      top_cost += hp[hn - 1].c;
-      base_total += hp[0].c;
-      base_benefit += hp[0].b;
-      segments += hn - 1;
+      // settled slots first, then the hulls of the others (all slots when not settling)
+      uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
+      size_t build_count = slots_;
       if (settle) {
-        uint32_t above = 0, inside = 0;  // segments with ratio > phi_, > plo_ (a prefix: ratios fall)
-        for (size_t k = 1; k < hn; ++k) {
-          above += static_cast<double>(hr[k]) > phi_ ? 1u : 0u;
-          inside += static_cast<double>(hr[k]) > plo_ ? 1u : 0u;
-        }
-        // what the collection below does at (plo_, phi_], on the same float ratios
-        chosen_step_[s] = static_cast<uint8_t>(above);
-        ptotal += hp[above].c;
-        for (size_t k = above + 1; k <= inside; ++k) {
-          if (pcount == pcapacity_) {
-            poverflow = true;
-            break;
-          }
-          pbracket_[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
-        }
-      } else if (!use_greedy_) {
-        for (size_t k = 1; k < hn; ++k) {
-          uint32_t bits;
-          std::memcpy(&bits, &hr[k], sizeof(bits));
-          // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
-          int64_t key = static_cast<int64_t>(bits >> key_shift_) - key_base_ + 1;
-          key = key < 0 ? 0 : (key > inner_buckets_ + 1 ? inner_buckets_ + 1 : key);
-          hist_cost_[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
-          hist_count_[key] += 1;
+        const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_,
+                             row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
+                             static_cast<float>(plo_ / (1.0 + kSettleMargin)),
+                             static_cast<float>(phi_ * (1.0 + kSettleMargin))};
+        if (rows_nonnegative_) {
+          build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
+              in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
+        } else {
+          for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
       }
-    }
-    return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, poverflow};
+      for (size_t u = 0; u < build_count; ++u) {
+        const size_t s = settle ? unsettled[u] : u;
+        const int level_count = static_cast<int>(slot_levels_[s]);
+        // pointCost / pointBenefit with the slot's terms in registers
+        const float sa = slot_a_[s], sb = slot_b_[s], sq = slot_q_[s];
+        const uint32_t row0 = slot_row0_[s];
+        const int prev = slot_prev_[s];
+        uint8_t* h = hull_ + s * hull_stride_;
+        Pt hp[65];
+        float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
+        size_t hn = 0;
+        // one step of the upper hull_ over points in sorted order (Andrew's monotone chain)
+        auto addPoint = [&](const Pt& p) {
+          if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
+          float r_new = 0.0f;
+          while (hn >= 1) {
+            r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
+            if (hn < 2 || hr[hn - 1] > r_new) break;
+            --hn;
+          }
+          hr[hn] = r_new;
+          h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
+          hp[hn++] = p;
+        };
+        auto pointAt = [&](int l) {
+          const uint32_t row = row0 + static_cast<uint32_t>(l);
+          // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
+          const float acc = std::min(1.0f, sq * row_inv_w_[row]) * h_mult_[l == prev];
+          return Pt{sa + row_cost_[row], sb * acc, l};
+        };
+        const bool must = slot_must_[s] != 0;
+        const int finest = slot_finest_[s];
+        // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
+        // cost, which is the sorted order, and all fit alone; then the hull_ is built as they arrive
+        bool general = false;
+        {
+          float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
+          if (!must) {
+            addPoint(Pt{0.0f, 0.0f, -1});
+            last_c = 0.0f;
+          }
+          for (int l = level_count - 1; l >= finest; --l) {
+            const Pt p = pointAt(l);
+            if (hn == 0) base_cost = p.c;
+            if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail_) {
+              general = true;
+              break;
+            }
+            last_c = p.c;
+            addPoint(p);
+          }
+        }
+        if (general) {
+          size_t m = 0;
+          if (!must) pts[m++] = {0.0f, 0.0f, -1};
+          for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
+          // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
+          // the sorted result does not depend on the arrival order)
+          for (size_t a = 1; a < m; ++a) {
+            const Pt p = pts[a];
+            size_t j = a;
+            auto before = [](const Pt& x, const Pt& y) {
+              if (x.c != y.c) return x.c < y.c;
+              if (x.b != y.b) return x.b > y.b;
+              return x.l > y.l;
+            };
+            while (j > 0 && before(p, pts[j - 1])) {
+              pts[j] = pts[j - 1];
+              --j;
+            }
+            pts[j] = p;
+          }
+          const float base_cost = pts[0].c;
+          hn = 0;
+          for (size_t a = 0; a < m; ++a) {
+            if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail_) break;  // cannot fit even alone
+            addPoint(pts[a]);
+          }
+        }
+        hull_count_[s] = static_cast<uint8_t>(hn);
+        top_cost += hp[hn - 1].c;
+        base_total += hp[0].c;
+        base_benefit += hp[0].b;
+        segments += hn - 1;
+        if (settle) {
+          uint32_t above = 0, inside = 0;  // segments with ratio > phi_, > plo_ (a prefix: ratios fall)
+          for (size_t k = 1; k < hn; ++k) {
+            above += static_cast<double>(hr[k]) > phi_ ? 1u : 0u;
+            inside += static_cast<double>(hr[k]) > plo_ ? 1u : 0u;
+          }
+          // what the collection below does at (plo_, phi_], on the same float ratios
+          chosen_step_[s] = static_cast<uint8_t>(above);
+          ptotal += hp[above].c;
+          for (size_t k = above + 1; k <= inside; ++k) {
+            if (pcount == pcapacity_) {
+              poverflow = true;
+              break;
+            }
+            pbracket_[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+          }
+        } else if (!use_greedy_) {
+          for (size_t k = 1; k < hn; ++k) {
+            uint32_t bits;
+            std::memcpy(&bits, &hr[k], sizeof(bits));
+            // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
+            int64_t key = static_cast<int64_t>(bits >> key_shift_) - key_base_ + 1;
+            key = key < 0 ? 0 : (key > inner_buckets_ + 1 ? inner_buckets_ + 1 : key);
+            hist_cost_[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
+            hist_count_[key] += 1;
+          }
+        }
+      }
+      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, poverflow};
     };
     auto storeSums = [&](const HullSums& h) {
       top_cost = h.top_cost;
@@ -1381,7 +1385,8 @@ bool SelectionJob::run() {
       const uint32_t row = slot_row0[s] + (chosen_level & keep);
       // ctx.pointCost / ctx.pointBenefit at a drawn level
       const float cost = slot_a[s] + rc[row];
-      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[chosen_level == static_cast<uint8_t>(slot_prev[s])];
+      const bool current = chosen_level == static_cast<uint8_t>(slot_prev[s]);
+      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
       predicted += maskFloat(cost, keep);
       benefit += maskFloat(slot_b[s] * acc, keep);
       f.objects += maskFloat(1.0f, keep);
