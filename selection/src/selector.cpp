@@ -806,16 +806,32 @@ bool SelectionJob::run() {
       const uint32_t level_count = chain_offset[chain + 1] - row0;
       const float q = gq[j];
       // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-      // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
-      // (most objects are far: their coarsest level is accurate enough, one predictable test)
-      uint32_t finest = level_count - 1;
-      if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
-      for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
-        const uint32_t half = len / 2;
-        const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
-        // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
-        finest += ok * (half + 1);
-        len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+      // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
+      // included) and its length is their count: for a chain of up to kLanes levels, counted over
+      // the chain's lanes at once without a branch (the binary search it replaces had a loop of
+      // varying length per object, which mispredicted)
+      uint32_t finest;
+      if (level_count <= kLanes) {
+        V4i range0, range1;
+        V4f riw0, riw1;
+        std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
+        std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
+        std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
+        std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
+        const V4i ok = ((q * riw0 >= 1.0f) & range0) + ((q * riw1 >= 1.0f) & range1);  // -1 per level
+        finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
+      } else {
+        // a branch-free binary search (most objects are far: their coarsest level is accurate
+        // enough, one predictable test)
+        finest = level_count - 1;
+        if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
+        for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+          const uint32_t half = len / 2;
+          const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
+          // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+          finest += ok * (half + 1);
+          len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+        }
       }
       slot_finest[s] = static_cast<uint8_t>(finest);
       slot_row0[s] = row0;
