@@ -74,6 +74,13 @@ struct BracketOrder {
 // extensions; only IEEE adds, multiplies, compares and selects, so the bits do not depend on how
 // the compiler lowers them)
 constexpr int kLanes = 8;
+// the AVX2 variants of the hot passes exist on x86 only; elsewhere they compile as plain copies
+// that are never chosen (cpuHasAvx2 is false), and the "SSE2" ones lower to the target's vectors
+#if defined(__x86_64__) || defined(__i386__)
+#define SCENELOD_AVX2_TARGET __attribute__((target("avx2")))
+#else
+#define SCENELOD_AVX2_TARGET
+#endif
 typedef float V4f __attribute__((vector_size(16)));
 typedef int32_t V4i __attribute__((vector_size(16)));
 typedef float V8f __attribute__((vector_size(32)));  // AVX2 functions only
@@ -229,10 +236,9 @@ size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* 
   return settleSlotsBody<V4f, V4i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
                                    settled_cost);
 }
-__attribute__((target("avx2"))) size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
-                                                      uint8_t* hull, size_t hull_stride, uint8_t* hull_count,
-                                                      uint8_t* chosen_step, uint32_t* unsettled,
-                                                      double* settled_cost) {
+SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
+                                            uint8_t* hull, size_t hull_stride, uint8_t* hull_count,
+                                            uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
   return settleSlotsBody<V8f, V8i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
                                    settled_cost);
 }
@@ -272,13 +278,17 @@ inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& fru
 void frustumOutsideSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint8_t* outside) {
   frustumOutsideBody(frustum, xyz, rad, n, outside);
 }
-__attribute__((target("avx2"))) void frustumOutsideAvx2(const Frustum& frustum, const float* xyz, const float* rad,
-                                                       size_t n, uint8_t* outside) {
+SCENELOD_AVX2_TARGET void frustumOutsideAvx2(const Frustum& frustum, const float* xyz, const float* rad, size_t n,
+                                             uint8_t* outside) {
   frustumOutsideBody(frustum, xyz, rad, n, outside);
 }
 bool cpuHasAvx2() {
+#if defined(__x86_64__) || defined(__i386__)
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
 }
 
 struct HullSums {
