@@ -35,6 +35,8 @@ constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2
 constexpr double kPredictWidthStart = 1.0 / 16.0;
 constexpr double kPredictWidthMin = 1.0 / 4096.0;
 constexpr double kPredictWidthMax = 4.0;
+constexpr int kPredictRetries = 2;  // wider (after a miss) or narrower (after an overflow) brackets
+                                    // tried before the full search
 
 void* mallocAllocate(void*, size_t bytes, size_t alignment) {
   const size_t a = std::max<size_t>(alignment, alignof(std::max_align_t));
@@ -68,6 +70,233 @@ struct BracketOrder {
   }
 };
 
+// levels of one chain side by side: kLanes floats, two SSE2 vectors or one AVX2 vector (GCC vector
+// extensions; only IEEE adds, multiplies, compares and selects, so the bits do not depend on how
+// the compiler lowers them)
+constexpr int kLanes = 8;
+// the AVX2 variants of the hot passes exist on x86 only; elsewhere they compile as plain copies
+// that are never chosen (cpuHasAvx2 is false), and the "SSE2" ones lower to the target's vectors
+#if defined(__x86_64__) || defined(__i386__)
+#define SCENELOD_AVX2_TARGET __attribute__((target("avx2")))
+#else
+#define SCENELOD_AVX2_TARGET
+#endif
+typedef float V4f __attribute__((vector_size(16)));
+typedef int32_t V4i __attribute__((vector_size(16)));
+typedef float V8f __attribute__((vector_size(32)));  // AVX2 functions only
+typedef int32_t V8i __attribute__((vector_size(32)));
+// a settled object's choice is the unique maximiser of benefit - lambda cost on the predicted bracket
+// widened by this factor at both ends; far above the float ratios' rounding (about 2^-22 relative)
+constexpr double kSettleMargin = 1.0 / 4096.0;
+
+inline bool anyLane(V4i m) {
+  uint64_t w[2];
+  std::memcpy(w, &m, sizeof(w));
+  return (w[0] | w[1]) != 0;
+}
+// lane masks (all bits set = true): range[f][n] holds lanes f..n-1, other[a + 1] every lane but a
+struct LaneMasks {
+  int32_t range[kLanes + 1][kLanes + 1][kLanes];
+  int32_t other[kLanes + 1][kLanes];
+};
+constexpr LaneMasks makeLaneMasks() {
+  LaneMasks m{};
+  for (int f = 0; f <= kLanes; ++f)
+    for (int n = 0; n <= kLanes; ++n)
+      for (int l = 0; l < kLanes; ++l) m.range[f][n][l] = l >= f && l < n ? -1 : 0;
+  for (int a = -1; a < kLanes; ++a)
+    for (int l = 0; l < kLanes; ++l) m.other[a + 1][l] = l != a ? -1 : 0;
+  return m;
+}
+constexpr LaneMasks kLaneMasks = makeLaneMasks();
+
+// x where mask is all ones, +0 where it is 0
+inline float maskFloat(float x, uint32_t mask) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  bits &= mask;
+  std::memcpy(&x, &bits, sizeof(x));
+  return x;
+}
+
+// the largest float at most v
+float floatAtMost(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
+// What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
+// bracket ends.
+struct SettleInput {
+  const uint8_t* level_count;
+  const uint8_t* finest;
+  const int8_t* prev;
+  const uint32_t* row0;
+  const float* a;
+  const float* b;
+  const float* q;
+  const float* row_cost;   // kLanes readable past the last row
+  const float* row_inv_w;
+  float h1;
+  float avail;             // largest float <= the budget left after the mandatory part
+  float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
+};
+
+// Settled objects (incremental case, Lagrangian form): an object whose hull point is the unique
+// maximiser of benefit - lambda cost for every price in the predicted bracket, widened by
+// kSettleMargin at both ends, has no upgrade inside the bracket and takes that point in the exact
+// hull walk too, so it needs no hull. The candidate is last frame's level (on a smooth camera most
+// objects keep theirs); the test holds whatever the candidate: it must beat every cheaper point
+// by a ratio above the top end and every costlier point by a ratio below the bottom end (float
+// differences, exact to about 2^-22 relative, far inside the margin). Writes a two-point hull (not
+// drawn, the level) and the chosen step for a settled slot; the others go, in slot order, to
+// `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
+// Must-draw slots and chains of more than kLanes levels are never settled.
+// The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
+// per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
+// both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
+// default target and take AVX vectors by value.
+template <typename VF, typename VI>
+inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
+                                                             const uint8_t* must, uint8_t* hull, size_t hull_stride,
+                                                             uint8_t* hull_count, uint8_t* chosen_step,
+                                                             uint32_t* unsettled, double* settled_cost) {
+  constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
+  static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
+  size_t unsettled_count = 0;
+  double total = 0.0;
+  const VF ones = VF{} + 1.0f;
+  // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
+  alignas(32) float hyst[kLanes + 1][kLanes];
+  for (int r = 0; r <= kLanes; ++r)
+    for (int l = 0; l < kLanes; ++l) hyst[r][l] = l == r - 1 ? in.h1 : 1.0f;
+  const float h1 = in.h1, avail = in.avail, lo = in.lo, hi = in.hi;
+  const float* const row_cost = in.row_cost;
+  const float* const row_inv_w = in.row_inv_w;
+  for (size_t s = 0; s < slot_count; ++s) {
+    // provisionally unsettled: the index is kept only if the slot is not settled below
+    unsettled[unsettled_count] = static_cast<uint32_t>(s);
+    ++unsettled_count;
+    const int level_count = in.level_count[s];
+    const int finest = in.finest[s];
+    const int cand = in.prev[s];
+    const float sa = in.a[s], sb = in.b[s], sq = in.q[s];
+    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point
+    if (must[s] || level_count > kLanes || !(sa > 0.0f) || cand >= level_count || (cand >= 0 && cand < finest))
+      continue;
+    const uint32_t row0 = in.row0[s];
+    float cb = 0.0f, cc = 0.0f;
+    if (cand >= 0) {
+      // pointAt(cand)
+      const uint32_t row = row0 + static_cast<uint32_t>(cand);
+      cc = sa + row_cost[row];
+      cb = sb * (std::min(1.0f, sq * row_inv_w[row]) * h1);
+      if (!(cc <= avail) || !(cb > hi * cc)) continue;  // fits alone; beats "not drawn"
+    }
+    const int32_t* const range = kLaneMasks.range[finest][level_count];
+    const int32_t* const other = kLaneMasks.other[cand + 1];
+    VI fail = VI{};
+    for (int k = 0; k < kParts; ++k) {
+      VF rc, riw, hm;
+      VI in_range, not_cand;
+      std::memcpy(&rc, row_cost + row0 + k * kWidth, sizeof(rc));
+      std::memcpy(&riw, row_inv_w + row0 + k * kWidth, sizeof(riw));
+      std::memcpy(&hm, hyst[cand + 1] + k * kWidth, sizeof(hm));
+      std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
+      std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
+      // the points as pointAt computes them
+      const VF c = sa + rc;
+      const VF t = sq * riw;
+      const VF b = sb * ((t < ones ? t : ones) * hm);
+      const VI v = in_range & not_cand & (c <= avail);  // the other points that fit alone
+      // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
+      const VF d = cc - c;
+      const VF p = hi * d, q = lo * d;
+      fail |= v & ~(cb - b > (p > q ? p : q));
+    }
+    uint64_t words[sizeof(VI) / sizeof(uint64_t)];
+    std::memcpy(words, &fail, sizeof(words));
+    uint64_t any = 0;
+    for (uint64_t w : words) any |= w;
+    if (any != 0) continue;
+    uint8_t* const h = hull + s * hull_stride;
+    h[0] = kNotDrawn;
+    h[1] = static_cast<uint8_t>(cand);
+    hull_count[s] = cand >= 0 ? 2 : 1;
+    chosen_step[s] = cand >= 0 ? 1 : 0;
+    total += cc;  // 0 for "not drawn"
+    --unsettled_count;
+  }
+  *settled_cost = total;
+  return unsettled_count;
+}
+size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* hull, size_t hull_stride,
+                       uint8_t* hull_count, uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V4f, V4i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
+                                   settled_cost);
+}
+SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
+                                            uint8_t* hull, size_t hull_stride, uint8_t* hull_count,
+                                            uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V8f, V8i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
+                                   settled_cost);
+}
+
+// Pass 1a of run(): outside[i] = 1 when sphere i is outside one of the frustum's planes
+// (sphereInFrustum's six tests without early exits). Blocks of 64 objects are first copied into
+// local columns, so each plane's test is a plain loop over floats that the compiler vectorises
+// with the plane in registers (over the packed centres it managed only 2 wide, reloading the 24
+// plane constants). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
+// products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
+// give the same bits (Selector.AvxAndSse2PathsGiveTheSameBits).
+inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
+                                                              const float* rad, size_t n, uint8_t* outside) {
+  constexpr size_t kBlock = 64;
+  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
+  alignas(32) uint32_t bo[kBlock];
+  auto testBlock = [&](size_t i0, size_t m) {
+    const float* const p = xyz + 3 * i0;
+    for (size_t j = 0; j < m; ++j) {
+      bx[j] = p[3 * j];
+      by[j] = p[3 * j + 1];
+      bz[j] = p[3 * j + 2];
+      bnr[j] = -rad[i0 + j];
+      bo[j] = 0;
+    }
+    for (int k = 0; k < 6; ++k) {
+      const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
+      for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
+    }
+    for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
+  };
+  // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
+  size_t i0 = 0;
+  for (; i0 + kBlock <= n; i0 += kBlock) testBlock(i0, kBlock);
+  if (i0 < n) testBlock(i0, n - i0);
+}
+void frustumOutsideSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint8_t* outside) {
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+}
+SCENELOD_AVX2_TARGET void frustumOutsideAvx2(const Frustum& frustum, const float* xyz, const float* rad, size_t n,
+                                             uint8_t* outside) {
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+}
+bool cpuHasAvx2() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+struct HullSums {
+  double top_cost, base_total, base_benefit, ptotal;
+  size_t segments, pcount;
+  bool poverflow;
+};
+
 struct PassResult {
   double cost = 0.0;        // total object cost with every upgrade of ratio > lambda taken
   size_t below = 0;         // upgrades with ratio in (lo, lambda]
@@ -85,6 +314,7 @@ class SelectorContext {
   size_t bracket_capacity = 0;
   size_t total_bytes = 0;
   size_t per_object_bytes = 0;
+  bool use_avx2 = false;   // the AVX2 code paths (the CPU has it and the config allows it)
 
   // persistent per-object state
   int8_t* prev_level = nullptr;  // level chosen last frame, -1 = not drawn
@@ -195,7 +425,8 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(float), 0}, {rows * sizeof(float), 0},
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
+      {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0}};
   size_t per_object = 0;
   for (size_t i = 0; i < 20; ++i) {
@@ -234,6 +465,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
   c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
   c->max_rows = rows;
+  c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
   resetSelectorHistory(c);
@@ -323,9 +555,25 @@ bool SelectionJob::validate() const {
       if (r > b && w < levels.cell_width[r - 1]) return false;
     }
   }
-  for (size_t i = 0; i < n; ++i)
-    if (chains[i] >= chain_count) return false;
-  return true;
+  // no early exit: an OR over the whole column vectorises (the valid case reads it all anyway)
+  if (n > 0 && chain_count == 0) return false;
+  uint32_t bad = 0;
+  const uint32_t* const chain_of = chains.data;
+  const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
+  // four at a time; unsigned order as signed order after flipping the sign bit (SSE2 has no
+  // unsigned compare)
+  constexpr int32_t kSign = std::numeric_limits<int32_t>::min();
+  const V4i flip = {kSign, kSign, kSign, kSign};
+  const V4i last4 = flip ^ static_cast<int32_t>(last_chain);
+  V4i bad4 = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    V4i v;
+    std::memcpy(&v, chain_of + i, sizeof(v));
+    bad4 |= (v ^ flip) > last4;
+  }
+  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
+  return bad == 0 && !anyLane(bad4);
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
@@ -452,6 +700,11 @@ bool SelectionJob::run() {
       const float w = levels.cell_width[r];
       ctx.row_inv_w[r] = w > 0.0f ? 1.0f / w : std::numeric_limits<float>::infinity();
     }
+    // a chain's kLanes rows are read side by side, past the last row too
+    for (size_t r = levels.cell_width.count; r < levels.cell_width.count + kLanes; ++r) {
+      ctx.row_cost[r] = 0.0f;
+      ctx.row_inv_w[r] = 0.0f;
+    }
   }
   const float c_obj = static_cast<float>(coef.per_object_ms), c_px = static_cast<float>(coef.per_pixel_ms);
   ctx.h1 = 1.0f + params.hysteresis;
@@ -463,39 +716,12 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1a: the frustum test of every object (sphereInFrustum's six plane tests without early exits),
-  // into chosen[] as scratch (it is written again before it is read). Blocks of 64 objects are first
-  // copied into local columns, so each plane's test is a plain loop over floats that the compiler
-  // vectorises 4 wide with the plane in registers (over the packed centres it managed only 2 wide,
-  // reloading the 24 plane constants).
+  // pass 1a: the frustum test of every object, into chosen[] as scratch (it is written again
+  // before it is read)
   uint8_t* const outside = ctx.chosen;
-  {
-    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
-    const float* xyz = n ? &centers[0].x : nullptr;
-    const float* rad = radii.data;
-    constexpr size_t kBlock = 64;
-    alignas(16) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
-    alignas(16) uint32_t bo[kBlock];
-    auto testBlock = [&](size_t i0, size_t m) {
-      const float* const p = xyz + 3 * i0;
-      for (size_t j = 0; j < m; ++j) {
-        bx[j] = p[3 * j];
-        by[j] = p[3 * j + 1];
-        bz[j] = p[3 * j + 2];
-        bnr[j] = -rad[i0 + j];
-        bo[j] = 0;
-      }
-      for (int k = 0; k < 6; ++k) {
-        const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
-        for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
-      }
-      for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
-    };
-    // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
-    size_t i0 = 0;
-    for (; i0 + kBlock <= n; i0 += kBlock) testBlock(i0, kBlock);
-    if (i0 < n) testBlock(i0, n - i0);
-  }
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
+  const float* const xyz = n ? &centers[0].x : nullptr;
+  (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(frustum, xyz, radii.data, n, outside);
   // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
   // object's level starts at -1 and the slots' levels are written at the end
   // (locals for every array below: the byte stores would otherwise make the compiler reload the
@@ -537,53 +763,97 @@ bool SelectionJob::run() {
   const float* const visible_of = visible_fraction.count ? visible_fraction.data : nullptr;
   const uint8_t* const must_of = must_draw.count ? must_draw.data : nullptr;
   const float near_plane = cam.near_plane;
-  for (size_t s = 0; s < slots; ++s) {
-    const size_t i = slot_object[s];
-    const glm::vec3 c = center_of[i];
-    const float r = radius_of[i];
-    const uint32_t chain = chain_of[i];
-    const uint32_t row0 = chain_offset[chain];
-    const uint32_t level_count = chain_offset[chain + 1] - row0;
-    float pixel = ortho_pixel;
-    if (!ortho) {
-      const glm::vec3 d = c - eye;
-      const float dist = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-      pixel = std::max(dist - r, near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+  // in blocks: the inputs of a block's objects are gathered into local columns, then the float
+  // terms run as plain loops over them that the compiler vectorises (sqrt and divisions 4 wide;
+  // the same IEEE operations in the same order as one object at a time, so the same bits), then
+  // the finest level and the byte columns per slot
+  constexpr size_t kSlotBlock = 64;
+  alignas(16) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
+  alignas(16) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock], gq[kSlotBlock];
+  for (size_t s0 = 0; s0 < slots; s0 += kSlotBlock) {
+    const size_t m = std::min(kSlotBlock, slots - s0);
+    for (size_t j = 0; j < m; ++j) {
+      const size_t i = slot_object[s0 + j];
+      gx[j] = center_of[i].x;
+      gy[j] = center_of[i].y;
+      gz[j] = center_of[i].z;
+      gr[j] = radius_of[i];
+      gs[j] = scale_of[i];
     }
-    const float r_px = r / pixel;
-    const float px = std::min(kPi * r_px * r_px, viewport_px);
-    const float q = x_cells * pixel / scale_of[i];
-    // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-    // level, so the accurate-enough levels 1.. are a prefix; its length by a branch-free binary search
-    // (most objects are far: their coarsest level is accurate enough, one predictable test)
-    uint32_t finest = level_count - 1;
-    if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
-    for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
-      const uint32_t half = len / 2;
-      const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
-      // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
-      finest += ok * (half + 1);
-      len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+    // missing factors are 1 (b * 1.0f == b)
+    for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gm[j] = motion_of ? motion_of[slot_object[s0 + j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gv[j] = visible_of ? visible_of[slot_object[s0 + j]] : 1.0f;
+    float* const sa = slot_a + s0;
+    float* const sb = slot_b + s0;
+    float* const spx = slot_px + s0;
+    // gx becomes the pixel size R
+    if (ortho) {
+      for (size_t j = 0; j < m; ++j) gx[j] = ortho_pixel;
+    } else {
+      for (size_t j = 0; j < m; ++j) {
+        const float dx = gx[j] - eye.x, dy = gy[j] - eye.y, dz = gz[j] - eye.z;
+        const float dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+        gx[j] = std::max(dist - gr[j], near_plane) * pixel_factor;  // = pixelSize(cam, dist - r)
+      }
     }
-    float b = px;
-    if (importance_of) b *= importance_of[i];
-    if (focus_of) b *= focus_of[i];
-    if (motion_of) b *= motion_of[i];
-    if (visible_of) b *= visible_of[i];
-    slot_a[s] = c_obj + c_px * px;
-    slot_b[s] = b;
-    slot_q[s] = q;
-    slot_px[s] = px;
-    slot_finest[s] = static_cast<uint8_t>(finest);
-    slot_row0[s] = row0;
-    slot_prev[s] = prev_level[i];
-    slot_levels[s] = static_cast<uint8_t>(level_count);
-    const bool must = must_of && must_of[i];
-    slot_must[s] = must ? 1 : 0;
-    if (must && budget) {
-      float cheapest = std::numeric_limits<float>::infinity();
-      for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
-      mandatory += cheapest;
+    for (size_t j = 0; j < m; ++j) {
+      const float pixel = gx[j];
+      const float r_px = gr[j] / pixel;
+      const float px = std::min(kPi * r_px * r_px, viewport_px);
+      gq[j] = x_cells * pixel / gs[j];
+      sa[j] = c_obj + c_px * px;
+      sb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
+      spx[j] = px;
+    }
+    std::memcpy(slot_q + s0, gq, m * sizeof(float));
+    for (size_t j = 0; j < m; ++j) {
+      const size_t s = s0 + j;
+      const size_t i = slot_object[s];
+      const uint32_t chain = chain_of[i];
+      const uint32_t row0 = chain_offset[chain];
+      const uint32_t level_count = chain_offset[chain + 1] - row0;
+      const float q = gq[j];
+      // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+      // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
+      // included) and its length is their count: for a chain of up to kLanes levels, counted over
+      // the chain's lanes at once without a branch (the binary search it replaces had a loop of
+      // varying length per object, which mispredicted)
+      uint32_t finest;
+      if (level_count <= kLanes) {
+        V4i range0, range1;
+        V4f riw0, riw1;
+        std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
+        std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
+        std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
+        std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
+        const V4i ok = ((q * riw0 >= 1.0f) & range0) + ((q * riw1 >= 1.0f) & range1);  // -1 per level
+        finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
+      } else {
+        // a branch-free binary search (most objects are far: their coarsest level is accurate
+        // enough, one predictable test)
+        finest = level_count - 1;
+        if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
+        for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+          const uint32_t half = len / 2;
+          const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
+          // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+          finest += ok * (half + 1);
+          len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+        }
+      }
+      slot_finest[s] = static_cast<uint8_t>(finest);
+      slot_row0[s] = row0;
+      slot_prev[s] = prev_level[i];
+      slot_levels[s] = static_cast<uint8_t>(level_count);
+      const bool must = must_of && must_of[i];
+      slot_must[s] = must ? 1 : 0;
+      if (must && budget) {
+        float cheapest = std::numeric_limits<float>::infinity();
+        for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
+        mandatory += cheapest;
+      }
     }
   }
 
@@ -639,11 +909,8 @@ bool SelectionJob::run() {
       std::memcpy(&centre_bits, &centre_f, sizeof(centre_bits));
       const int e0 = std::min(255 - kHistBinades, std::max(1, static_cast<int>((centre_bits >> 23) & 0xff) - kHistBinades / 2));
       key_base = int64_t(e0) << sub_bits;
-      std::memset(hist_cost, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(double));
-      std::memset(hist_count, 0, static_cast<size_t>(inner_buckets + 2) * sizeof(uint32_t));
     }
     struct Pt { float c, b; int l; };
-    Pt pts[65];
     double top_cost = 0.0;   // every upgrade taken: what the pass at lambda = 0 would sum
     double base_total = 0.0; // no upgrade taken
     double base_benefit = 0.0;  // benefit with no upgrade taken (the 1/2 guarantee's alternative)
@@ -654,129 +921,206 @@ bool SelectionJob::run() {
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
-    // Incremental case (Lagrangian, last frame's price known): while the hulls are built, every
-    // object already takes its upgrades above a predicted bracket (plo, phi] around last frame's
-    // price, and the upgrades inside go to the bracket array. When the budget's edge falls inside
-    // (checked exactly below), the collection pass over the objects is not needed.
+    // Incremental case (Lagrangian, last frame's price known): first settleSlots* finds the objects
+    // whose choice cannot change inside a predicted bracket (plo, phi] around last frame's price
+    // (on a smooth camera about 97 % of them); only the others get their hull, take their upgrades
+    // above phi and put those inside into the bracket array. When the budget's edge falls inside
+    // (checked exactly below), no other pass over the objects is needed; otherwise every hull is
+    // built (with the price histogram) and the search runs as in the cold case.
     const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
-    const double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
-    const double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
+    double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
+    double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
     size_t pcount = 0;
     bool poverflow = false;
     double ptotal = 0.0;
     uint8_t* const chosen_step = ctx.chosen;
     BracketEntry* const pbracket = ctx.bracket;
     const size_t pcapacity = ctx.bracket_capacity;
-    for (size_t s = 0; s < slots; ++s) {
-      const int level_count = static_cast<int>(slot_levels[s]);
-      // pointCost / pointBenefit with the slot's terms in registers
-      const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
-      const uint32_t row0 = slot_row0[s];
-      const int prev = slot_prev[s];
-      uint8_t* h = hull + s * hull_stride;
-      Pt hp[65];
-      float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
-      size_t hn = 0;
-      // one step of the upper hull over points in sorted order (Andrew's monotone chain)
-      auto addPoint = [&](const Pt& p) {
-        if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
-        float r_new = 0.0f;
-        while (hn >= 1) {
-          r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
-          if (hn < 2 || hr[hn - 1] > r_new) break;
-          --hn;
-        }
-        hr[hn] = r_new;
-        h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
-        hp[hn++] = p;
-      };
-      auto pointAt = [&](int l) {
-        const uint32_t row = row0 + static_cast<uint32_t>(l);
-        // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
-        const float acc = std::min(1.0f, sq * row_inv_w[row]) * h_mult[l == prev];
-        return Pt{sa + row_cost[row], sb * acc, l};
-      };
-      const bool must = slot_must[s] != 0;
-      const int finest = slot_finest[s];
-      // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
-      // cost, which is the sorted order, and all fit alone; then the hull is built as they arrive
-      bool general = false;
-      {
-        float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
-        if (!must) {
-          addPoint(Pt{0.0f, 0.0f, -1});
-          last_c = 0.0f;
-        }
-        for (int l = level_count - 1; l >= finest; --l) {
-          const Pt p = pointAt(l);
-          if (hn == 0) base_cost = p.c;
-          if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail) {
-            general = true;
-            break;
-          }
-          last_c = p.c;
-          addPoint(p);
+    // every row's geometry cost >= 0 (not NaN), which settleSlots* relies on
+    bool rows_nonnegative = true;
+    for (size_t r = 0; r < levels.cell_width.count; ++r) rows_nonnegative &= row_cost[r] >= 0.0f;
+    // the sums in locals (shadowing the outer ones until the end): through the captured references
+    // every += would be a store and a reload
+    auto buildHulls = [&](bool settle) {
+      // local copies: the byte stores below may alias anything reached through the closure, so
+      // captured values would be reloaded after each of them
+      const auto slot_levels_ = slot_levels;
+      const auto slot_a_ = slot_a;
+      const auto slot_b_ = slot_b;
+      const auto slot_q_ = slot_q;
+      const auto slot_row0_ = slot_row0;
+      const auto slot_prev_ = slot_prev;
+      const auto slot_must_ = slot_must;
+      const auto slot_finest_ = slot_finest;
+      const auto row_cost_ = row_cost;
+      const auto row_inv_w_ = row_inv_w;
+      const auto hull_ = hull;
+      const auto hull_count_ = hull_count;
+      const auto hull_stride_ = hull_stride;
+      const auto avail_ = avail;
+      const auto hist_cost_ = hist_cost;
+      const auto hist_count_ = hist_count;
+      const auto key_shift_ = key_shift;
+      const auto key_base_ = key_base;
+      const auto inner_buckets_ = inner_buckets;
+      const auto use_greedy_ = use_greedy;
+      const auto phi_ = phi;
+      const auto plo_ = plo;
+      const auto pbracket_ = pbracket;
+      const auto pcapacity_ = pcapacity;
+      const auto chosen_step_ = chosen_step;
+      const float h_mult_[2] = {h_mult[0], h_mult[1]};
+      const auto h1_ = h1;
+      const auto rows_nonnegative_ = rows_nonnegative;
+      const size_t slots_ = slots;
+      uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
+      Pt pts[65];
+      double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
+      size_t segments = 0, pcount = 0;
+      bool poverflow = false;
+      if (!settle && !use_greedy_) {
+        std::memset(hist_cost_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(double));
+        std::memset(hist_count_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(uint32_t));
+      }
+      // settled slots first, then the hulls of the others (all slots when not settling)
+      uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
+      size_t build_count = slots_;
+      if (settle) {
+        const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_,
+                             row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
+                             static_cast<float>(plo_ / (1.0 + kSettleMargin)),
+                             static_cast<float>(phi_ * (1.0 + kSettleMargin))};
+        if (rows_nonnegative_) {
+          build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
+              in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
+        } else {
+          for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
       }
-      if (general) {
-        size_t m = 0;
-        if (!must) pts[m++] = {0.0f, 0.0f, -1};
-        for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
-        // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
-        // the sorted result does not depend on the arrival order)
-        for (size_t a = 1; a < m; ++a) {
-          const Pt p = pts[a];
-          size_t j = a;
-          auto before = [](const Pt& x, const Pt& y) {
-            if (x.c != y.c) return x.c < y.c;
-            if (x.b != y.b) return x.b > y.b;
-            return x.l > y.l;
-          };
-          while (j > 0 && before(p, pts[j - 1])) {
-            pts[j] = pts[j - 1];
-            --j;
+      for (size_t u = 0; u < build_count; ++u) {
+        const size_t s = settle ? unsettled[u] : u;
+        const int level_count = static_cast<int>(slot_levels_[s]);
+        // pointCost / pointBenefit with the slot's terms in registers
+        const float sa = slot_a_[s], sb = slot_b_[s], sq = slot_q_[s];
+        const uint32_t row0 = slot_row0_[s];
+        const int prev = slot_prev_[s];
+        uint8_t* h = hull_ + s * hull_stride_;
+        Pt hp[65];
+        float hr[65];  // hr[k] = ratio(hp[k - 1], hp[k]), kept so each test divides once
+        size_t hn = 0;
+        // one step of the upper hull_ over points in sorted order (Andrew's monotone chain)
+        auto addPoint = [&](const Pt& p) {
+          if (hn > 0 && !(p.b > hp[hn - 1].b)) return;
+          float r_new = 0.0f;
+          while (hn >= 1) {
+            r_new = SelectorContext::ratio(hp[hn - 1].c, hp[hn - 1].b, p.c, p.b);
+            if (hn < 2 || hr[hn - 1] > r_new) break;
+            --hn;
           }
-          pts[j] = p;
+          hr[hn] = r_new;
+          h[hn] = static_cast<uint8_t>(p.l);  // -1 becomes kNotDrawn
+          hp[hn++] = p;
+        };
+        auto pointAt = [&](int l) {
+          const uint32_t row = row0 + static_cast<uint32_t>(l);
+          // hysteresis by a table lookup, not a branch (x * 1.0f == x, so the values are the same)
+          const float acc = std::min(1.0f, sq * row_inv_w_[row]) * h_mult_[l == prev];
+          return Pt{sa + row_cost_[row], sb * acc, l};
+        };
+        const bool must = slot_must_[s] != 0;
+        const int finest = slot_finest_[s];
+        // common case: the points arrive (not drawn, then coarsest to finest level) in strictly rising
+        // cost, which is the sorted order, and all fit alone; then the hull_ is built as they arrive
+        bool general = false;
+        {
+          float last_c = -std::numeric_limits<float>::infinity(), base_cost = 0.0f;
+          if (!must) {
+            addPoint(Pt{0.0f, 0.0f, -1});
+            last_c = 0.0f;
+          }
+          for (int l = level_count - 1; l >= finest; --l) {
+            const Pt p = pointAt(l);
+            if (hn == 0) base_cost = p.c;
+            if (!(p.c > last_c) || static_cast<double>(p.c) - base_cost > avail_) {
+              general = true;
+              break;
+            }
+            last_c = p.c;
+            addPoint(p);
+          }
         }
-        const float base_cost = pts[0].c;
-        hn = 0;
-        for (size_t a = 0; a < m; ++a) {
-          if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail) break;  // cannot fit even alone
-          addPoint(pts[a]);
+        if (general) {
+          size_t m = 0;
+          if (!must) pts[m++] = {0.0f, 0.0f, -1};
+          for (int l = level_count - 1; l >= finest; --l) pts[m++] = pointAt(l);
+          // insertion sort: cost ascending, benefit descending, coarser level first (a total order, so
+          // the sorted result does not depend on the arrival order)
+          for (size_t a = 1; a < m; ++a) {
+            const Pt p = pts[a];
+            size_t j = a;
+            auto before = [](const Pt& x, const Pt& y) {
+              if (x.c != y.c) return x.c < y.c;
+              if (x.b != y.b) return x.b > y.b;
+              return x.l > y.l;
+            };
+            while (j > 0 && before(p, pts[j - 1])) {
+              pts[j] = pts[j - 1];
+              --j;
+            }
+            pts[j] = p;
+          }
+          const float base_cost = pts[0].c;
+          hn = 0;
+          for (size_t a = 0; a < m; ++a) {
+            if (hn > 0 && static_cast<double>(pts[a].c) - base_cost > avail_) break;  // cannot fit even alone
+            addPoint(pts[a]);
+          }
         }
-      }
-      hull_count[s] = static_cast<uint8_t>(hn);
-      top_cost += hp[hn - 1].c;
-      base_total += hp[0].c;
-      base_benefit += hp[0].b;
-      segments += hn - 1;
-      if (!use_greedy) {
-        uint32_t above = 0, inside = 0;  // segments with ratio > phi, > plo (a prefix: ratios fall)
-        for (size_t k = 1; k < hn; ++k) {
-          above += static_cast<double>(hr[k]) > phi ? 1u : 0u;
-          inside += static_cast<double>(hr[k]) > plo ? 1u : 0u;
-          uint32_t bits;
-          std::memcpy(&bits, &hr[k], sizeof(bits));
-          // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
-          int64_t key = static_cast<int64_t>(bits >> key_shift) - key_base + 1;
-          key = key < 0 ? 0 : (key > inner_buckets + 1 ? inner_buckets + 1 : key);
-          hist_cost[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
-          hist_count[key] += 1;
-        }
-        if (predict) {
-          // what the collection below does at (plo, phi], on the same float ratios
-          chosen_step[s] = static_cast<uint8_t>(above);
+        hull_count_[s] = static_cast<uint8_t>(hn);
+        top_cost += hp[hn - 1].c;
+        base_total += hp[0].c;
+        base_benefit += hp[0].b;
+        segments += hn - 1;
+        if (settle) {
+          uint32_t above = 0, inside = 0;  // segments with ratio > phi_, > plo_ (a prefix: ratios fall)
+          for (size_t k = 1; k < hn; ++k) {
+            above += static_cast<double>(hr[k]) > phi_ ? 1u : 0u;
+            inside += static_cast<double>(hr[k]) > plo_ ? 1u : 0u;
+          }
+          // what the collection below does at (plo_, phi_], on the same float ratios
+          chosen_step_[s] = static_cast<uint8_t>(above);
           ptotal += hp[above].c;
           for (size_t k = above + 1; k <= inside; ++k) {
-            if (pcount == pcapacity) {
+            if (pcount == pcapacity_) {
               poverflow = true;
               break;
             }
-            pbracket[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+            pbracket_[pcount++] = {hr[k], static_cast<uint32_t>(s), static_cast<uint32_t>(k - 1)};
+          }
+        } else if (!use_greedy_) {
+          for (size_t k = 1; k < hn; ++k) {
+            uint32_t bits;
+            std::memcpy(&bits, &hr[k], sizeof(bits));
+            // negative or NaN ratios (bad inputs) land above the window; the collection checks its bound
+            int64_t key = static_cast<int64_t>(bits >> key_shift_) - key_base_ + 1;
+            key = key < 0 ? 0 : (key > inner_buckets_ + 1 ? inner_buckets_ + 1 : key);
+            hist_cost_[key] += static_cast<double>(hp[k].c) - static_cast<double>(hp[k - 1].c);
+            hist_count_[key] += 1;
           }
         }
       }
-    }
+      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, poverflow};
+    };
+    auto storeSums = [&](const HullSums& h) {
+      top_cost = h.top_cost;
+      base_total = h.base_total;
+      base_benefit = h.base_benefit;
+      ptotal = h.ptotal;
+      segments = h.segments;
+      pcount = h.pcount;
+      poverflow = h.poverflow;
+    };
+    storeSums(buildHulls(predict));
 
     int64_t split_slot = -1;
     uint32_t split_step = 0;
@@ -978,12 +1322,28 @@ bool SelectionJob::run() {
       // sums find (the budget within rounding of a bucket edge), again by passes from last frame's price
       bool from_prediction = false;
       if (predict) {
-        if (!poverflow && top_cost > obj_cap && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
-          from_prediction = true;
-        } else {
-          // missed: widen the window next frame; overflowed: narrow it
-          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, ctx.predict_width * 0.5)
-                                        : std::min(kPredictWidthMax, ctx.predict_width * 2.0);
+        // (no top_cost > obj_cap test: settled objects do not sum it, and when everything fits the
+        // bracket's greedy finds no split, which is a miss for a bracket above 0)
+        // a miss (the edge outside the bracket) is retried at twice the width, an overflow at half
+        // of it, which costs one more settling pass instead of every hull, the histogram and a
+        // collection pass
+        for (int retry = 0;; ++retry) {
+          if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
+            from_prediction = true;
+            break;
+          }
+          // missed: widen the window; overflowed: narrow it (now and next frame)
+          const double width = ctx.predict_width;
+          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, width * 0.5)
+                                        : std::min(kPredictWidthMax, width * 2.0);
+          if (retry == kPredictRetries || ctx.predict_width == width) {
+            // settled objects have no full hull, and the search needs the histogram
+            storeSums(buildHulls(false));
+            break;
+          }
+          plo = ctx.last_lambda / (1.0 + ctx.predict_width);
+          phi = ctx.last_lambda * (1.0 + ctx.predict_width);
+          storeSums(buildHulls(true));
         }
       }
       for (int attempt = 0; attempt < 2 && !from_prediction; ++attempt) {
@@ -1037,28 +1397,29 @@ bool SelectionJob::run() {
     const uint32_t* const tri = levels.triangle_count.data;
     const uint32_t* const vert = levels.vertex_count.data;
     const uint32_t* const lines = levels.line_point_count.data;
+    const float h_mult[2] = {1.0f, hh};
     uint32_t dropped = 0, drawn = 0;
+    // without branches: about half of the slots are drawn, in no predictable order, and GCC turns
+    // selects into branches; a slot not drawn reads its level-0 row and adds its terms masked to
+    // +0 (x + 0.0 == x, so the sums are the same)
     for (size_t s = 0; s < slots; ++s) {
-      const size_t i = slot_object[s];
-      const int level = chosen[s] == kNotDrawn ? -1 : static_cast<int>(chosen[s]);
-      level_of[i] = static_cast<int8_t>(level);
-      if (level < 0) {
-        if (slot_b[s] > 0.0f) ++dropped;
-        continue;
-      }
-      const uint32_t row = slot_row0[s] + static_cast<uint32_t>(level);
+      const uint8_t chosen_level = chosen[s];
+      const uint32_t keep = 0u - static_cast<uint32_t>(chosen_level != kNotDrawn);  // all ones if drawn
+      level_of[slot_object[s]] = static_cast<int8_t>(chosen_level);               // kNotDrawn is -1
+      dropped += (keep ^ 1u) & (slot_b[s] > 0.0f ? 1u : 0u);
+      drawn += keep & 1u;
+      const uint32_t row = slot_row0[s] + (chosen_level & keep);
       // ctx.pointCost / ctx.pointBenefit at a drawn level
       const float cost = slot_a[s] + rc[row];
-      float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]);
-      if (level == slot_prev[s]) acc *= hh;
-      predicted += cost;
-      benefit += slot_b[s] * acc;
-      f.objects += 1.0;
-      f.triangles += tri[row];
-      f.vertices += vert[row];
-      f.line_points += lines[row];
-      f.pixels += slot_px[s];
-      ++drawn;
+      const bool current = chosen_level == static_cast<uint8_t>(slot_prev[s]);
+      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
+      predicted += maskFloat(cost, keep);
+      benefit += maskFloat(slot_b[s] * acc, keep);
+      f.objects += maskFloat(1.0f, keep);
+      f.triangles += tri[row] & keep;
+      f.vertices += vert[row] & keep;
+      f.line_points += lines[row] & keep;
+      f.pixels += maskFloat(slot_px[s], keep);
     }
     st.dropped_count = dropped;
     st.drawn_count = drawn;

@@ -104,6 +104,8 @@ struct SelectorConfig {
   CostCoefficients initial_cost;
   CalibrationParams calibration;
   Allocator allocator;               // null functions = defaultAllocator()
+  bool sse2_only = false;            // true: the SSE2 code paths even where the CPU has AVX2 (both
+                                     // give the same bits; tests compare them)
 };
 
 // Creates a context: all memory for max_object_count objects in one allocation. Returns null on a bad
