@@ -10,8 +10,10 @@
 // most 64 sphere cells (one per w/4 sub-cube, whose diagonal is below w/2). Cells past the third
 // of a cube are chained through flat arrays, so a list's length needs no fixed bound. A cell containing a vertex at q (grid
 // units) has its centre within 1/2 of q along each axis: only the 2 x 2 x 2 cubes covering
-// [q - 1/2, q + 1/2] are searched. Each grid cube's slot holds its first three cells inline (one
-// cache line per cube), and the slots of the next vertices in weight order are prefetched.
+// [q - 1/2, q + 1/2] are searched. When the mesh's box spans few enough grid cubes, the grid is a flat
+// array of list heads over that box (one load per cube, no hashing); otherwise a hash whose slots hold
+// each grid cube's first three cells inline (one cache line per cube), the slots of the next vertices
+// in weight order being prefetched. Both give the same cells: the joining rule breaks ties by id.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -157,6 +159,77 @@ class CellGrid {
   size_t size_ = 0;
 };
 
+// The containment test and the joining rule, shared by both grids: the order in which candidate
+// cells are tested never changes the result, because ties are broken by id.
+struct BestCell {
+  glm::vec3 pv;
+  float half, half2;
+  bool cube, nearest;
+  uint32_t best = kNone;
+  float best_d2 = std::numeric_limits<float>::infinity();
+
+  void test(float cx, float cy, float cz, uint32_t c) {
+    const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    const bool inside = cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= half) : d2 <= half2;
+    // cells are numbered in creation order, which is the order of their centres' weights
+    const bool better = nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
+    if (inside && better) {
+      best = c;
+      best_d2 = d2;
+    }
+  }
+};
+
+// Bytes of list heads a dense grid may take beyond the hash's measured ~50 bytes per cell: while
+// the mesh's box in grid cubes stays below this, a flat array replaces the hash.
+constexpr double kDenseBaseBytes = 1 << 20;
+constexpr double kDenseBytesPerCell = 32.0;
+
+// §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
+// origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
+// with no hashing, probing or key test. Cells are chained through `next`, newest first.
+void assignDense(const PreparedMesh& p, float cell_width, const int32_t lo_cube[3], const size_t dims[3],
+                 BestCell rule, size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t next;  // next cell listed in the same grid cube
+  };
+  std::vector<Cell> cells;
+  cells.reserve(expected);
+  const size_t sy = dims[0], sz = dims[0] * dims[1];
+  std::vector<uint32_t> head(sz * dims[2], kNone);
+  const float inv = 1.0f / cell_width;
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const glm::vec3 q = pv * inv;
+    int32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = floorToInt(q[a] - 0.5f - kSearchSlack) - lo_cube[a];
+      hi[a] = floorToInt(q[a] + 0.5f + kSearchSlack) - lo_cube[a];
+    }
+    BestCell b = rule;
+    b.pv = pv;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+        const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+          for (uint32_t c = row[x]; c != kNone; c = cells[c].next) b.test(cells[c].x, cells[c].y, cells[c].z, c);
+      }
+    if (b.best == kNone) {
+      b.best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
+                       size_t(floorToInt(q.x) - lo_cube[0]);
+      cells.push_back({pv.x, pv.y, pv.z, head[k]});
+      head[k] = b.best;
+    }
+    out.cluster_of[p.order[i]] = b.best;
+  }
+}
+
 }  // namespace
 
 void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bool nearest, Assignment& out) {
@@ -176,6 +249,22 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
   const size_t expected = static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16;
   out.heaviest.reserve(expected);
+  BestCell rule{glm::vec3(0.0f), half, half2, cube, nearest};
+  {
+    // every searched cube lies within one cube of the box's (the slack is far below a cube)
+    int32_t lo_cube[3];
+    size_t dims[3];
+    double volume = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      lo_cube[a] = floorToInt(p.bounds.min[a] * inv) - 2;
+      dims[a] = size_t(floorToInt(p.bounds.max[a] * inv) + 3 - lo_cube[a]);
+      volume *= double(dims[a]);
+    }
+    if (volume * sizeof(uint32_t) <= kDenseBaseBytes + kDenseBytesPerCell * double(expected)) {
+      assignDense(p, cell_width, lo_cube, dims, rule, expected, out);
+      return;
+    }
+  }
   CellGrid grid(expected / 2);  // occupied grid cubes: measured 1.4 to 1.8 cells each on the bunny
 
   const size_t n = p.order.size();
@@ -209,19 +298,9 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     if (i + kPrefetchDistance < n) plan(i + kPrefetchDistance, s);
     const uint32_t v = p.order[i];
     const glm::vec3 pv = sorted[i];
-    uint32_t best = kNone;
-    float best_d2 = std::numeric_limits<float>::infinity();
-    auto test = [&](float cx, float cy, float cz, uint32_t c) {
-      const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
-      const float d2 = dx * dx + dy * dy + dz * dz;
-      const bool inside = cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= half) : d2 <= half2;
-      // cells are numbered in creation order, which is the order of their centres' weights
-      const bool better = nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
-      if (inside && better) {
-        best = c;
-        best_d2 = d2;
-      }
-    };
+    BestCell b = rule;
+    b.pv = pv;
+    auto test = [&](float cx, float cy, float cz, uint32_t c) { b.test(cx, cy, cz, c); };
     auto scan = [&](const CubeSlot* slot) {
       if (!slot) return;
       const uint32_t k = std::min(slot->n, 3u);
@@ -249,6 +328,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
         for (int32_t y = ly; y <= hi[1]; ++y)
           for (int32_t z = lz; z <= hi[2]; ++z) scan(grid.find(x, y, z, cubeHash(x, y, z)));
     }
+    uint32_t best = b.best;
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(v);
