@@ -11,9 +11,11 @@
 // of a cube are chained through flat arrays, so a list's length needs no fixed bound. A cell containing a vertex at q (grid
 // units) has its centre within 1/2 of q along each axis: only the 2 x 2 x 2 cubes covering
 // [q - 1/2, q + 1/2] are searched. When the mesh's box spans few enough grid cubes, the grid is a flat
-// array of list heads over that box (one load per cube, no hashing); otherwise a hash whose slots hold
-// each grid cube's first three cells inline (one cache line per cube), the slots of the next vertices
-// in weight order being prefetched. Both give the same cells: the joining rule breaks ties by id.
+// array of list heads over that box (one load per cube, no hashing), preferably of cubes of side w/2
+// (3 x 3 x 3 of them searched: 2.4 times less volume than 2 x 2 x 2 cubes of side w, so fewer cells
+// to test; each lists at most one cube cell); otherwise a hash whose slots hold each grid cube's
+// first three cells inline (one cache line per cube), the slots of the next vertices in weight order
+// being prefetched. All give the same cells: the joining rule breaks ties by id.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -189,8 +191,8 @@ constexpr double kDenseBytesPerCell = 32.0;
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-void assignDense(const PreparedMesh& p, float cell_width, const int32_t lo_cube[3], const size_t dims[3],
-                 BestCell rule, size_t expected, Assignment& out) {
+void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
+                 const size_t dims[3], BestCell rule, size_t expected, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t next;  // next cell listed in the same grid cube
@@ -199,7 +201,8 @@ void assignDense(const PreparedMesh& p, float cell_width, const int32_t lo_cube[
   cells.reserve(expected);
   const size_t sy = dims[0], sz = dims[0] * dims[1];
   std::vector<uint32_t> head(sz * dims[2], kNone);
-  const float inv = 1.0f / cell_width;
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
   const glm::vec3* sorted = p.sorted_positions.data();
   for (size_t i = 0; i < n; ++i) {
@@ -207,17 +210,25 @@ void assignDense(const PreparedMesh& p, float cell_width, const int32_t lo_cube[
     const glm::vec3 q = pv * inv;
     int32_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = floorToInt(q[a] - 0.5f - kSearchSlack) - lo_cube[a];
-      hi[a] = floorToInt(q[a] + 0.5f + kSearchSlack) - lo_cube[a];
+      lo[a] = floorToInt(q[a] - reach - slack) - lo_cube[a];
+      hi[a] = floorToInt(q[a] + reach + slack) - lo_cube[a];
     }
-    BestCell b = rule;
-    b.pv = pv;
+    // the non-empty heads first, gathered without a branch: which of the 27 cubes hold a cell is
+    // random, so testing each head would mispredict about once per vertex and cube
+    uint32_t found[64];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
+    uint32_t found_count = 0;
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
       for (int32_t y = lo[1]; y <= hi[1]; ++y) {
         const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
-        for (int32_t x = lo[0]; x <= hi[0]; ++x)
-          for (uint32_t c = row[x]; c != kNone; c = cells[c].next) b.test(cells[c].x, cells[c].y, cells[c].z, c);
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+          found[found_count] = row[x];
+          found_count += row[x] != kNone;
+        }
       }
+    BestCell b = rule;
+    b.pv = pv;
+    for (uint32_t j = 0; j < found_count; ++j)
+      for (uint32_t c = found[j]; c != kNone; c = cells[c].next) b.test(cells[c].x, cells[c].y, cells[c].z, c);
     if (b.best == kNone) {
       b.best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
@@ -250,18 +261,23 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   const size_t expected = static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16;
   out.heaviest.reserve(expected);
   BestCell rule{glm::vec3(0.0f), half, half2, cube, nearest};
-  {
-    // every searched cube lies within one cube of the box's (the slack is far below a cube)
+  // grid cubes of side w/2 where their heads fit: a vertex then tests the cells of 3 x 3 x 3 cubes
+  // of side w/2 instead of 2 x 2 x 2 of side w, 2.4 times less volume, which matters at coarse levels
+  // where a cube of side w lists several cells; then cubes of side w; then the hash
+  for (const int sub : {2, 1}) {
+    const float cube_width = cell_width / float(sub);
+    const float cube_inv = 1.0f / cube_width;
+    // every searched cube lies within two cubes of the box's (the slack is far below a cube)
     int32_t lo_cube[3];
     size_t dims[3];
     double volume = 1.0;
     for (int a = 0; a < 3; ++a) {
-      lo_cube[a] = floorToInt(p.bounds.min[a] * inv) - 2;
-      dims[a] = size_t(floorToInt(p.bounds.max[a] * inv) + 3 - lo_cube[a]);
+      lo_cube[a] = floorToInt(p.bounds.min[a] * cube_inv) - 3;
+      dims[a] = size_t(floorToInt(p.bounds.max[a] * cube_inv) + 4 - lo_cube[a]);
       volume *= double(dims[a]);
     }
     if (volume * sizeof(uint32_t) <= kDenseBaseBytes + kDenseBytesPerCell * double(expected)) {
-      assignDense(p, cell_width, lo_cube, dims, rule, expected, out);
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, out);
       return;
     }
   }

@@ -32,14 +32,19 @@ struct Case {
 }  // namespace
 
 TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
-  // the part alone is searched through the flat grid of list heads; a triangle far away makes the
-  // box of grid cubes too large for it, so the same part is also searched through the hash
-  Mesh far_triangle;
-  far_triangle.positions = {{4000.0f, 4000.0f, 4000.0f}, {4000.5f, 4000.0f, 4000.0f}, {4000.0f, 4000.5f, 4000.0f}};
-  far_triangle.triangles = {0, 1, 2};
-  Mesh with_far = test::makeCadPart();
-  test::appendMesh(with_far, far_triangle);
-  for (const Mesh& m : {test::makeCadPart(), with_far}) {
+  // the part alone is searched through a flat grid of heads over cubes of side w/2; a triangle some
+  // way off makes the box of grid cubes too large for that at the finer widths (cubes of side w
+  // instead), and one far away too large for any flat grid (the hash): all three must give cells
+  // satisfying the definitions
+  auto withTriangleAt = [](float d) {
+    Mesh m = test::makeCadPart();
+    Mesh t;
+    t.positions = {{d, d, d}, {d + 0.5f, d, d}, {d, d + 0.5f, d}};
+    t.triangles = {0, 1, 2};
+    test::appendMesh(m, t);
+    return m;
+  };
+  for (const Mesh& m : {test::makeCadPart(), withTriangleAt(20.0f), withTriangleAt(4000.0f)}) {
     SCOPED_TRACE(m.vertexCount());
     PreparedMesh p;
     ClusterParams params;
