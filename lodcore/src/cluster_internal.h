@@ -143,7 +143,8 @@ void computeThickness(const PreparedMesh& p, const Assignment& a, const std::vec
                       Eliminated& e);
 
 // normals.cpp: builds the output mesh from cluster-level primitives, splitting vertices whose
-// incident faces meet at more than the crease angle.
-void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
+// incident faces meet at more than the crease angle. Consumes e.triangles and e.edge_thickness (their
+// storage becomes the output's).
+void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
 
 }  // namespace scenelod::detail
