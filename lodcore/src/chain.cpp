@@ -133,11 +133,12 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   std::mutex progress_mutex;
   std::atomic<size_t> done{0};
   // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
-  // takes the finest level not started yet, so the big first level overlaps all the small ones
-  // instead of sharing a thread with the next ones in a static split of the index range
-  std::atomic<size_t> next_level{0};
+  // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
+  // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
+  std::atomic<size_t> next_claim{0};
   tbb::parallel_for(size_t(0), n, [&](size_t) {
-    const size_t k = next_level++;
+    const size_t claim = next_claim++;
+    const size_t k = claim == 0 ? 0 : n - claim;
     const Clock::time_point start = Clock::now();
     ClusterParams cp = params.cluster;
     cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
