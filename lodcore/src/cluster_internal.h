@@ -94,6 +94,16 @@ struct Assignment {
 
   // the box a representative of cluster c is clamped to (a sphere cell clamps in synthesis)
   void cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const;
+
+  // starts a level over `vertex_count` vertices, none assigned yet
+  void reset(size_t vertex_count, float width, bool is_uniform, CellShape cell_shape) {
+    cluster_of.assign(vertex_count, kNone);
+    heaviest.clear();
+    cluster_count = 0;
+    cell_width = width;
+    uniform = is_uniform;
+    shape = cell_shape;
+  }
 };
 
 // floor to int32 without a libm call (inputs are checked to stay within +-2^30)

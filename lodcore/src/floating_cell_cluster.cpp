@@ -244,13 +244,7 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
 }  // namespace
 
 void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bool nearest, Assignment& out) {
-  const Mesh& m = *p.mesh;
-  out.cluster_of.assign(m.vertexCount(), kNone);
-  out.heaviest.clear();
-  out.cluster_count = 0;
-  out.cell_width = cell_width;
-  out.uniform = false;
-  out.shape = shape;
+  out.reset(p.mesh->vertexCount(), cell_width, false, shape);
   const float inv = 1.0f / cell_width;
   const float half = 0.5f * cell_width;
   const float half2 = half * half;
