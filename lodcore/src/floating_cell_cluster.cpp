@@ -161,27 +161,26 @@ class CellGrid {
   size_t size_ = 0;
 };
 
-// The containment test and the joining rule, shared by both grids: the order in which candidate
-// cells are tested never changes the result, because ties are broken by id.
-struct BestCell {
-  glm::vec3 pv;
+// The containment test and the joining rule, shared by all grids: the order in which candidate
+// cells are tested never changes the result, because ties are broken by id. The best cell so far is
+// the caller's locals (kept in registers; a struct holding them was spilled in the hash loop, which
+// cost a quarter of its time on the 1 M sphere).
+struct JoinRule {
   float half, half2;
   bool cube, nearest;
-  uint32_t best = kNone;
-  float best_d2 = std::numeric_limits<float>::infinity();
-
-  void test(float cx, float cy, float cz, uint32_t c) {
-    const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
-    const float d2 = dx * dx + dy * dy + dz * dz;
-    const bool inside = cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= half) : d2 <= half2;
-    // cells are numbered in creation order, which is the order of their centres' weights
-    const bool better = nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
-    if (inside && better) {
-      best = c;
-      best_d2 = d2;
-    }
-  }
 };
+inline void testCell(const JoinRule& r, const glm::vec3& pv, float cx, float cy, float cz, uint32_t c, uint32_t& best,
+                     float& best_d2) {
+  const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
+  const float d2 = dx * dx + dy * dy + dz * dz;
+  const bool inside = r.cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= r.half) : d2 <= r.half2;
+  // cells are numbered in creation order, which is the order of their centres' weights
+  const bool better = r.nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
+  if (inside && better) {
+    best = c;
+    best_d2 = d2;
+  }
+}
 
 // Bytes of list heads a dense grid may take beyond the hash's measured ~50 bytes per cell: while
 // the mesh's box in grid cubes stays below this, a flat array replaces the hash.
@@ -192,7 +191,7 @@ constexpr double kDenseBytesPerCell = 32.0;
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], BestCell rule, size_t expected, Assignment& out) {
+                 const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t next;  // next cell listed in the same grid cube
@@ -225,19 +224,20 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
           found_count += row[x] != kNone;
         }
       }
-    BestCell b = rule;
-    b.pv = pv;
+    uint32_t best = kNone;
+    float best_d2 = std::numeric_limits<float>::infinity();
     for (uint32_t j = 0; j < found_count; ++j)
-      for (uint32_t c = found[j]; c != kNone; c = cells[c].next) b.test(cells[c].x, cells[c].y, cells[c].z, c);
-    if (b.best == kNone) {
-      b.best = out.cluster_count++;
+      for (uint32_t c = found[j]; c != kNone; c = cells[c].next)
+        testCell(rule, pv, cells[c].x, cells[c].y, cells[c].z, c, best, best_d2);
+    if (best == kNone) {
+      best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
       const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
                        size_t(floorToInt(q.x) - lo_cube[0]);
       cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = b.best;
+      head[k] = best;
     }
-    out.cluster_of[p.order[i]] = b.best;
+    out.cluster_of[p.order[i]] = best;
   }
 }
 
@@ -254,7 +254,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
   const size_t expected = static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16;
   out.heaviest.reserve(expected);
-  BestCell rule{glm::vec3(0.0f), half, half2, cube, nearest};
+  const JoinRule rule{half, half2, cube, nearest};
   // grid cubes of side w/2 where their heads fit: a vertex then tests the cells of 3 x 3 x 3 cubes
   // of side w/2 instead of 2 x 2 x 2 of side w, 2.4 times less volume, which matters at coarse levels
   // where a cube of side w lists several cells; then cubes of side w; then the hash
@@ -308,9 +308,9 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     if (i + kPrefetchDistance < n) plan(i + kPrefetchDistance, s);
     const uint32_t v = p.order[i];
     const glm::vec3 pv = sorted[i];
-    BestCell b = rule;
-    b.pv = pv;
-    auto test = [&](float cx, float cy, float cz, uint32_t c) { b.test(cx, cy, cz, c); };
+    uint32_t best = kNone;
+    float best_d2 = std::numeric_limits<float>::infinity();
+    auto test = [&](float cx, float cy, float cz, uint32_t c) { testCell(rule, pv, cx, cy, cz, c, best, best_d2); };
     auto scan = [&](const CubeSlot* slot) {
       if (!slot) return;
       const uint32_t k = std::min(slot->n, 3u);
@@ -338,7 +338,6 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
         for (int32_t y = ly; y <= hi[1]; ++y)
           for (int32_t z = lz; z <= hi[2]; ++z) scan(grid.find(x, y, z, cubeHash(x, y, z)));
     }
-    uint32_t best = b.best;
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(v);
