@@ -92,8 +92,9 @@ struct Assignment {
   glm::vec3 grid_origin{0.0f};       // uniform: the bounding-box minimum the grid starts at
   CellShape shape = CellShape::kCube;
 
-  // the box a representative of cluster c is clamped to (a sphere cell clamps in synthesis)
-  void cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const;
+  // the box a representative of the cluster whose heaviest vertex lies at `p` is clamped to (a
+  // sphere cell clamps in synthesis); taking the position, not the cluster, spares a random read
+  void cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const;
 
   // starts a level over `vertex_count` vertices, none assigned yet
   void reset(size_t vertex_count, float width, bool is_uniform, CellShape cell_shape) {

@@ -348,8 +348,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-void Assignment::cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const {
-  const glm::vec3 p = m.positions[heaviest[c]];
+void Assignment::cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const {
   if (uniform) {
     const glm::vec3 q = (p - grid_origin) * (1.0f / cell_width);
     lo = grid_origin + glm::floor(q) * cell_width;
