@@ -132,7 +132,13 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   stats.level_seconds.assign(n, 0.0);
   std::mutex progress_mutex;
   std::atomic<size_t> done{0};
-  tbb::parallel_for(size_t(0), n, [&](size_t k) {
+  // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
+  // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
+  // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
+  std::atomic<size_t> next_claim{0};
+  tbb::parallel_for(size_t(0), n, [&](size_t) {
+    const size_t claim = next_claim++;
+    const size_t k = claim == 0 ? 0 : n - claim;
     const Clock::time_point start = Clock::now();
     ClusterParams cp = params.cluster;
     cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));

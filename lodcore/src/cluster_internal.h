@@ -92,8 +92,19 @@ struct Assignment {
   glm::vec3 grid_origin{0.0f};       // uniform: the bounding-box minimum the grid starts at
   CellShape shape = CellShape::kCube;
 
-  // the box a representative of cluster c is clamped to (a sphere cell clamps in synthesis)
-  void cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const;
+  // the box a representative of the cluster whose heaviest vertex lies at `p` is clamped to (a
+  // sphere cell clamps in synthesis); taking the position, not the cluster, spares a random read
+  void cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const;
+
+  // starts a level over `vertex_count` vertices, none assigned yet
+  void reset(size_t vertex_count, float width, bool is_uniform, CellShape cell_shape) {
+    cluster_of.assign(vertex_count, kNone);
+    heaviest.clear();
+    cluster_count = 0;
+    cell_width = width;
+    uniform = is_uniform;
+    shape = cell_shape;
+  }
 };
 
 // floor to int32 without a libm call (inputs are checked to stay within +-2^30)
@@ -143,7 +154,8 @@ void computeThickness(const PreparedMesh& p, const Assignment& a, const std::vec
                       Eliminated& e);
 
 // normals.cpp: builds the output mesh from cluster-level primitives, splitting vertices whose
-// incident faces meet at more than the crease angle.
-void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
+// incident faces meet at more than the crease angle. Consumes e.triangles and e.edge_thickness (their
+// storage becomes the output's).
+void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
 
 }  // namespace scenelod::detail

@@ -12,37 +12,42 @@ namespace scenelod::detail {
 
 namespace {
 
-// open addressing from a 64-bit key to a uint32 value; grows at half load
+// open addressing from a 64-bit key to a uint32 value; grows at half load. Key and value share a
+// slot, so that a probe reads one cache line.
 class U64Map {
  public:
   explicit U64Map(size_t expected) {
     size_t cap = 64;
     while (cap < expected * 2) cap <<= 1;
-    keys_.resize(cap);
-    values_.assign(cap, kNone);
+    slots_.assign(cap, Slot{0, kNone});
   }
   uint32_t find(uint64_t k) const {
-    const size_t mask = keys_.size() - 1;
+    const size_t mask = slots_.size() - 1;
     for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      if (values_[i] == kNone) return kNone;
-      if (keys_[i] == k) return values_[i];
+      if (slots_[i].value == kNone) return kNone;
+      if (slots_[i].key == k) return slots_[i].value;
     }
   }
   // the value of k; a new key holds kNone and must be set at once
   uint32_t& at(uint64_t k) {
-    if ((size_ + 1) * 2 > keys_.size()) grow();
-    const size_t mask = keys_.size() - 1;
+    if ((size_ + 1) * 2 > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
     for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      if (values_[i] == kNone) {
-        keys_[i] = k;
+      Slot& s = slots_[i];
+      if (s.value == kNone) {
+        s.key = k;
         ++size_;
-        return values_[i];
+        return s.value;
       }
-      if (keys_[i] == k) return values_[i];
+      if (s.key == k) return s.value;
     }
   }
 
  private:
+  struct Slot {
+    uint64_t key;
+    uint32_t value;
+  };
   static size_t hash(uint64_t k) {
     k ^= k >> 33;
     k *= 0xff51afd7ed558ccdull;
@@ -50,18 +55,14 @@ class U64Map {
     return static_cast<size_t>(k);
   }
   void grow() {
-    std::vector<uint64_t> ok;
-    std::vector<uint32_t> ov;
-    ok.swap(keys_);
-    ov.swap(values_);
-    keys_.resize(ok.size() * 2);
-    values_.assign(keys_.size(), kNone);
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(old.size() * 2, Slot{0, kNone});
     size_ = 0;
-    for (size_t i = 0; i < ok.size(); ++i)
-      if (ov[i] != kNone) at(ok[i]) = ov[i];
+    for (const Slot& s : old)
+      if (s.value != kNone) at(s.key) = s.value;
   }
-  std::vector<uint64_t> keys_;
-  std::vector<uint32_t> values_;
+  std::vector<Slot> slots_;
   size_t size_ = 0;
 };
 
@@ -86,7 +87,8 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
   // input count) rather than the input, so that it stays in cache; grows at half load
   size_t cap = 64;
-  const size_t expected = std::min(tn, size_t(2) * a.cluster_count);
+  // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output)
+  const size_t expected = std::min(tn, size_t(2) * a.cluster_count + a.cluster_count / 16 + 64);
   while (cap < expected * 2) cap <<= 1;
   std::vector<uint32_t> table(cap, kNone);
   size_t mask = cap - 1;
@@ -98,9 +100,19 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   out.triangles.reserve(3 * expected);
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
   std::vector<float> input_thickness;   // per candidate edge: largest thickness of an input edge on it
-  U64Map edge_index(64);
+  // candidate edges join adjacent clusters: up to about 3 per cluster, sized for one so that the table
+  // stays small at fine levels, where few triangles collapse, and regrows at most twice
+  U64Map edge_index(std::min(tn, size_t(a.cluster_count)));
   std::vector<CollapsedTriangle> collapsed;
+  // clusters of collapsed primitives, each listed once in order of first appearance (the order
+  // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
+  std::vector<uint8_t> candidate(a.cluster_count, 0);
+  auto addPoint = [&](uint32_t c) {
+    if (candidate[c]) return;
+    candidate[c] = 1;
+    point_candidates.push_back(c);
+  };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
     uint32_t& e = edge_index.at(pairKey(x, y));
     if (e == kNone) {
@@ -146,7 +158,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     }
     ++out.collapsed_triangles;
     if (c0 == c1 && c1 == c2) {
-      if (keep_points) point_candidates.push_back(c0);
+      if (keep_points) addPoint(c0);
       continue;
     }
     if (!keep_edges) continue;
@@ -157,13 +169,13 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
     if (x == y) {
-      point_candidates.push_back(x);
+      addPoint(x);
       continue;
     }
     const uint32_t s = edgeSlot(x, y);
     input_thickness[s] = std::max(input_thickness[s], m.edgeThickness(e));
   }
-  for (uint32_t v : m.points) point_candidates.push_back(co[v]);
+  for (uint32_t v : m.points) addPoint(co[v]);
   std::vector<uint32_t>().swap(table);
 
   // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points

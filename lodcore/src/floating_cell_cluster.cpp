@@ -10,8 +10,12 @@
 // most 64 sphere cells (one per w/4 sub-cube, whose diagonal is below w/2). Cells past the third
 // of a cube are chained through flat arrays, so a list's length needs no fixed bound. A cell containing a vertex at q (grid
 // units) has its centre within 1/2 of q along each axis: only the 2 x 2 x 2 cubes covering
-// [q - 1/2, q + 1/2] are searched. Each grid cube's slot holds its first three cells inline (one
-// cache line per cube), and the slots of the next vertices in weight order are prefetched.
+// [q - 1/2, q + 1/2] are searched. When the mesh's box spans few enough grid cubes, the grid is a flat
+// array of list heads over that box (one load per cube, no hashing), preferably of cubes of side w/2
+// (3 x 3 x 3 of them searched: 2.4 times less volume than 2 x 2 x 2 cubes of side w, so fewer cells
+// to test; each lists at most one cube cell); otherwise a hash whose slots hold each grid cube's
+// first three cells inline (one cache line per cube), the slots of the next vertices in weight order
+// being prefetched. All give the same cells: the joining rule breaks ties by id.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -157,16 +161,90 @@ class CellGrid {
   size_t size_ = 0;
 };
 
+// The containment test and the joining rule, shared by all grids: the order in which candidate
+// cells are tested never changes the result, because ties are broken by id. The best cell so far is
+// the caller's locals (kept in registers; a struct holding them was spilled in the hash loop, which
+// cost a quarter of its time on the 1 M sphere).
+struct JoinRule {
+  float half, half2;
+  bool cube, nearest;
+};
+inline void testCell(const JoinRule& r, const glm::vec3& pv, float cx, float cy, float cz, uint32_t c, uint32_t& best,
+                     float& best_d2) {
+  const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
+  const float d2 = dx * dx + dy * dy + dz * dz;
+  const bool inside = r.cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= r.half) : d2 <= r.half2;
+  // cells are numbered in creation order, which is the order of their centres' weights
+  const bool better = r.nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
+  if (inside && better) {
+    best = c;
+    best_d2 = d2;
+  }
+}
+
+// Bytes of list heads a dense grid may take beyond the hash's measured ~50 bytes per cell: while
+// the mesh's box in grid cubes stays below this, a flat array replaces the hash.
+constexpr double kDenseBaseBytes = 1 << 20;
+constexpr double kDenseBytesPerCell = 32.0;
+
+// §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
+// origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
+// with no hashing, probing or key test. Cells are chained through `next`, newest first.
+void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
+                 const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t next;  // next cell listed in the same grid cube
+  };
+  std::vector<Cell> cells;
+  cells.reserve(expected);
+  const size_t sy = dims[0], sz = dims[0] * dims[1];
+  std::vector<uint32_t> head(sz * dims[2], kNone);
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const glm::vec3 q = pv * inv;
+    int32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = floorToInt(q[a] - reach - slack) - lo_cube[a];
+      hi[a] = floorToInt(q[a] + reach + slack) - lo_cube[a];
+    }
+    // the non-empty heads first, gathered without a branch: which of the 27 cubes hold a cell is
+    // random, so testing each head would mispredict about once per vertex and cube
+    uint32_t found[64];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
+    uint32_t found_count = 0;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+        const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+          found[found_count] = row[x];
+          found_count += row[x] != kNone;
+        }
+      }
+    uint32_t best = kNone;
+    float best_d2 = std::numeric_limits<float>::infinity();
+    for (uint32_t j = 0; j < found_count; ++j)
+      for (uint32_t c = found[j]; c != kNone; c = cells[c].next)
+        testCell(rule, pv, cells[c].x, cells[c].y, cells[c].z, c, best, best_d2);
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
+                       size_t(floorToInt(q.x) - lo_cube[0]);
+      cells.push_back({pv.x, pv.y, pv.z, head[k]});
+      head[k] = best;
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+
 }  // namespace
 
 void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bool nearest, Assignment& out) {
-  const Mesh& m = *p.mesh;
-  out.cluster_of.assign(m.vertexCount(), kNone);
-  out.heaviest.clear();
-  out.cluster_count = 0;
-  out.cell_width = cell_width;
-  out.uniform = false;
-  out.shape = shape;
+  out.reset(p.mesh->vertexCount(), cell_width, false, shape);
   const float inv = 1.0f / cell_width;
   const float half = 0.5f * cell_width;
   const float half2 = half * half;
@@ -176,6 +254,27 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
   const size_t expected = static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16;
   out.heaviest.reserve(expected);
+  const JoinRule rule{half, half2, cube, nearest};
+  // grid cubes of side w/2 where their heads fit: a vertex then tests the cells of 3 x 3 x 3 cubes
+  // of side w/2 instead of 2 x 2 x 2 of side w, 2.4 times less volume, which matters at coarse levels
+  // where a cube of side w lists several cells; then cubes of side w; then the hash
+  for (const int sub : {2, 1}) {
+    const float cube_width = cell_width / float(sub);
+    const float cube_inv = 1.0f / cube_width;
+    // every searched cube lies within two cubes of the box's (the slack is far below a cube)
+    int32_t lo_cube[3];
+    size_t dims[3];
+    double volume = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      lo_cube[a] = floorToInt(p.bounds.min[a] * cube_inv) - 3;
+      dims[a] = size_t(floorToInt(p.bounds.max[a] * cube_inv) + 4 - lo_cube[a]);
+      volume *= double(dims[a]);
+    }
+    if (volume * sizeof(uint32_t) <= kDenseBaseBytes + kDenseBytesPerCell * double(expected)) {
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, out);
+      return;
+    }
+  }
   CellGrid grid(expected / 2);  // occupied grid cubes: measured 1.4 to 1.8 cells each on the bunny
 
   const size_t n = p.order.size();
@@ -211,17 +310,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     const glm::vec3 pv = sorted[i];
     uint32_t best = kNone;
     float best_d2 = std::numeric_limits<float>::infinity();
-    auto test = [&](float cx, float cy, float cz, uint32_t c) {
-      const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
-      const float d2 = dx * dx + dy * dy + dz * dz;
-      const bool inside = cube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= half) : d2 <= half2;
-      // cells are numbered in creation order, which is the order of their centres' weights
-      const bool better = nearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
-      if (inside && better) {
-        best = c;
-        best_d2 = d2;
-      }
-    };
+    auto test = [&](float cx, float cy, float cz, uint32_t c) { testCell(rule, pv, cx, cy, cz, c, best, best_d2); };
     auto scan = [&](const CubeSlot* slot) {
       if (!slot) return;
       const uint32_t k = std::min(slot->n, 3u);
@@ -259,8 +348,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-void Assignment::cellBox(const Mesh& m, uint32_t c, glm::vec3& lo, glm::vec3& hi) const {
-  const glm::vec3 p = m.positions[heaviest[c]];
+void Assignment::cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const {
   if (uniform) {
     const glm::vec3 q = (p - grid_origin) * (1.0f / cell_width);
     lo = grid_origin + glm::floor(q) * cell_width;

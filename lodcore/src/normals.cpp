@@ -12,7 +12,7 @@
 
 namespace scenelod::detail {
 
-void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
+void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
   out = Mesh();
   const size_t nc = r.positions.size();
   const size_t tn = e.triangles.size() / 3;
@@ -39,10 +39,15 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
   for (uint32_t c : e.edges) needs_vertex[c] = 1;
   for (uint32_t c : e.points) needs_vertex[c] = 1;
 
-  std::vector<uint32_t> corner_vertex(e.triangles.size());
   std::vector<uint32_t> base_vertex(nc, kNone);
-  out.positions.reserve(nc);
-  out.normals.reserve(nc);
+  // one vertex per used cluster, plus its copies split at creases (a few per cent on scanned meshes):
+  // reserving that, not the cluster count, keeps the arrays from doubling on the first split
+  size_t used_count = 0;
+  for (size_t c = 0; c < nc; ++c) used_count += offsets[c + 1] != offsets[c] || needs_vertex[c];
+  const size_t expected_vertices = used_count + used_count / 16 + 16;
+  out.positions.reserve(expected_vertices);
+  out.normals.reserve(expected_vertices);
+  if (colors) out.colors.reserve(expected_vertices);
   auto addVertex = [&](uint32_t c, const glm::vec3& n) {
     out.positions.push_back(r.positions[c]);
     out.normals.push_back(n);
@@ -70,7 +75,9 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
           break;
         }
       if (v == kNone) v = addVertex(c, n);
-      corner_vertex[corners[i]] = v;
+      // each corner's cluster id is no longer read once the corner lists exist: the output
+      // vertex takes its place, so the output triangles need no second array
+      e.triangles[corners[i]] = v;
     }
     if (b != en) base_vertex[c] = first_vertex;
     else if (needs_vertex[c]) base_vertex[c] = addVertex(c, r.normals[c]);
@@ -81,10 +88,11 @@ void buildOutputMesh(const Eliminated& e, const Representatives& r, float crease
   out.positions.shrink_to_fit();
   out.normals.shrink_to_fit();
   out.colors.shrink_to_fit();
-  out.triangles = std::move(corner_vertex);
+  out.triangles = std::move(e.triangles);
+  out.triangles.shrink_to_fit();  // elimination reserved for about 2 triangles per cluster
   out.edges.resize(e.edges.size());
   for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];
-  out.edge_thickness = e.edge_thickness;
+  out.edge_thickness = std::move(e.edge_thickness);
   if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
   out.points.resize(e.points.size());
   for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];

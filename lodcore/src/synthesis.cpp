@@ -187,7 +187,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
       q.b0 = s.b[0], q.b1 = s.b[1], q.b2 = s.b[2];
       x = solveQuadric(q, x);
       glm::vec3 lo, hi;
-      a.cellBox(m, c, lo, hi);
+      a.cellBox(s.centre, lo, hi);
       x = glm::clamp(x, lo - s.centre, hi - s.centre);
       if (!a.uniform && a.shape == CellShape::kSphere) {
         const float l = glm::length(x);

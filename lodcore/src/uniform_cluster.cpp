@@ -9,14 +9,8 @@
 namespace scenelod::detail {
 
 void assignUniform(const PreparedMesh& p, float cell_width, Assignment& out) {
-  const Mesh& m = *p.mesh;
-  out.cluster_of.assign(m.vertexCount(), kNone);
-  out.heaviest.clear();
-  out.cluster_count = 0;
-  out.cell_width = cell_width;
-  out.uniform = true;
+  out.reset(p.mesh->vertexCount(), cell_width, true, CellShape::kCube);
   out.grid_origin = p.bounds.min;
-  out.shape = CellShape::kCube;
   const float inv = 1.0f / cell_width;
   const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
   GridHash grid(static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16);

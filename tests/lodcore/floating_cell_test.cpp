@@ -32,52 +32,67 @@ struct Case {
 }  // namespace
 
 TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
-  Mesh m = test::makeCadPart();
-  PreparedMesh p;
-  ClusterParams params;
-  ASSERT_TRUE(prepareMesh(m, params, p).ok());
-  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
-                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere}, Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
-    for (float w : {0.15f, 0.4f, 1.1f}) {
-      params.method = c.method;
-      params.cell_shape = c.shape;
-      params.cell_width = w;
-      ClusterAssignment a;
-      ASSERT_TRUE(assignClusters(p, params, a).ok());
-      const size_t nc = a.heaviest.size();
-      SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
-      // cells are created heaviest first
-      for (size_t k = 1; k < nc; ++k) EXPECT_GE(p.weights[a.heaviest[k - 1]], p.weights[a.heaviest[k]]);
-      // no cell centre is inside another cell
-      for (size_t i = 0; i < nc; ++i)
-        for (size_t j = i + 1; j < nc; ++j)
-          ASSERT_FALSE(inside(m.positions[a.heaviest[i]] - m.positions[a.heaviest[j]], w, c.shape)) << i << " " << j;
-      // at most 8 cube cells (64 sphere cells) per grid cube of side w
-      std::map<std::tuple<int, int, int>, int> per_cube;
-      int most = 0;
-      for (uint32_t v : a.heaviest) {
-        const glm::vec3 q = glm::floor(m.positions[v] / w);
-        most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
-      }
-      EXPECT_LE(most, c.shape == CellShape::kCube ? 8 : 64);
-      // every referenced vertex is assigned, lies in its cell, and is assigned by the variant's rule
-      // among the cells that existed when it was visited (centres earlier in the weight order)
-      std::vector<size_t> rank(m.positions.size());
-      for (size_t i = 0; i < p.order.size(); ++i) rank[p.order[i]] = i;
-      for (size_t v = 0; v < m.positions.size(); ++v) {
-        const uint32_t cl = a.cluster_of[v];
-        ASSERT_NE(cl, kNone);
-        ASSERT_LT(cl, nc);
-        const glm::vec3 pv = m.positions[v];
-        ASSERT_TRUE(inside(pv - m.positions[a.heaviest[cl]], w, c.shape));
-        for (uint32_t o = 0; o < nc; ++o) {
-          const glm::vec3 d = pv - m.positions[a.heaviest[o]];
-          if (!inside(d, w, c.shape) || rank[a.heaviest[o]] > rank[v]) continue;
-          if (c.method == LodMethod::kFloatingHeaviest) {
-            ASSERT_GE(o, cl) << "vertex " << v << " is inside an earlier (heavier) cell";
-          } else {
-            const glm::vec3 dc = pv - m.positions[a.heaviest[cl]];
-            ASSERT_GE(glm::dot(d, d), glm::dot(dc, dc)) << "vertex " << v << " has a nearer centre";
+  // the part alone is searched through a flat grid of heads over cubes of side w/2; a triangle some
+  // way off makes the box of grid cubes too large for that at the finer widths (cubes of side w
+  // instead), and one far away too large for any flat grid (the hash): all three must give cells
+  // satisfying the definitions
+  auto withTriangleAt = [](float d) {
+    Mesh m = test::makeCadPart();
+    Mesh t;
+    t.positions = {{d, d, d}, {d + 0.5f, d, d}, {d, d + 0.5f, d}};
+    t.triangles = {0, 1, 2};
+    test::appendMesh(m, t);
+    return m;
+  };
+  for (const Mesh& m : {test::makeCadPart(), withTriangleAt(20.0f), withTriangleAt(4000.0f)}) {
+    SCOPED_TRACE(m.vertexCount());
+    PreparedMesh p;
+    ClusterParams params;
+    ASSERT_TRUE(prepareMesh(m, params, p).ok());
+    for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                   Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                   Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+      for (float w : {0.15f, 0.4f, 1.1f}) {
+        params.method = c.method;
+        params.cell_shape = c.shape;
+        params.cell_width = w;
+        ClusterAssignment a;
+        ASSERT_TRUE(assignClusters(p, params, a).ok());
+        const size_t nc = a.heaviest.size();
+        SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
+        // cells are created heaviest first
+        for (size_t k = 1; k < nc; ++k) EXPECT_GE(p.weights[a.heaviest[k - 1]], p.weights[a.heaviest[k]]);
+        // no cell centre is inside another cell
+        for (size_t i = 0; i < nc; ++i)
+          for (size_t j = i + 1; j < nc; ++j)
+            ASSERT_FALSE(inside(m.positions[a.heaviest[i]] - m.positions[a.heaviest[j]], w, c.shape)) << i << " " << j;
+        // at most 8 cube cells (64 sphere cells) per grid cube of side w
+        std::map<std::tuple<int, int, int>, int> per_cube;
+        int most = 0;
+        for (uint32_t v : a.heaviest) {
+          const glm::vec3 q = glm::floor(m.positions[v] / w);
+          most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
+        }
+        EXPECT_LE(most, c.shape == CellShape::kCube ? 8 : 64);
+        // every referenced vertex is assigned, lies in its cell, and is assigned by the variant's rule
+        // among the cells that existed when it was visited (centres earlier in the weight order)
+        std::vector<size_t> rank(m.positions.size());
+        for (size_t i = 0; i < p.order.size(); ++i) rank[p.order[i]] = i;
+        for (size_t v = 0; v < m.positions.size(); ++v) {
+          const uint32_t cl = a.cluster_of[v];
+          ASSERT_NE(cl, kNone);
+          ASSERT_LT(cl, nc);
+          const glm::vec3 pv = m.positions[v];
+          ASSERT_TRUE(inside(pv - m.positions[a.heaviest[cl]], w, c.shape));
+          for (uint32_t o = 0; o < nc; ++o) {
+            const glm::vec3 d = pv - m.positions[a.heaviest[o]];
+            if (!inside(d, w, c.shape) || rank[a.heaviest[o]] > rank[v]) continue;
+            if (c.method == LodMethod::kFloatingHeaviest) {
+              ASSERT_GE(o, cl) << "vertex " << v << " is inside an earlier (heavier) cell";
+            } else {
+              const glm::vec3 dc = pv - m.positions[a.heaviest[cl]];
+              ASSERT_GE(glm::dot(d, d), glm::dot(dc, dc)) << "vertex " << v << " has a nearer centre";
+            }
           }
         }
       }
