@@ -1434,11 +1434,6 @@ bool SelectionJob::run() {
       half_slot = split_slot;
       half_step = split_step + 1;
     }
-    // hull entries are level bytes already (kNotDrawn = -1)
-    {
-      uint8_t* const chosen = ctx.chosen;
-      for (size_t s = 0; s < slots; ++s) chosen[s] = hull[s * hull_stride + chosen[s]];
-    }
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
@@ -1446,7 +1441,10 @@ bool SelectionJob::run() {
   }
 
   if (budget) {
-    // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
+    // write levels, statistics, features; chosen[] holds steps along the hulls, whose entries are
+    // level bytes (kNotDrawn = -1), read here rather than in a pass of their own
+    const uint8_t* const hull = ctx.hull;
+    const size_t hull_stride = ctx.hull_stride;
     auto writeOut = [&]() {
       f = CostFeatures();
       predicted = coef.per_frame_ms;
@@ -1455,16 +1453,17 @@ bool SelectionJob::run() {
       drawn = 0;
       const uint8_t* const chosen = ctx.chosen;
       for (size_t s = 0; s < slots; ++s) {
-        level_of[slot_object[s]] = static_cast<int8_t>(chosen[s]);  // kNotDrawn is -1
-        addSlot(chosen[s], slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
+        const uint8_t level = hull[s * hull_stride + chosen[s]];
+        level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
+        addSlot(level, slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
       }
     };
     writeOut();
     // the sum of benefits over slots in slot order is what the greedy's choice scores
     if (half_slot >= 0 && half_alt_benefit > benefit) {
       const size_t js = static_cast<size_t>(half_slot);
-      for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = ctx.hull[s * ctx.hull_stride];
-      ctx.chosen[js] = ctx.hull[js * ctx.hull_stride + half_step];
+      std::memset(ctx.chosen, 0, slots);  // every slot at its base
+      ctx.chosen[js] = static_cast<uint8_t>(half_step);
       st.flags |= kFlagSplitFallback;
       writeOut();
     }
