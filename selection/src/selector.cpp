@@ -795,31 +795,22 @@ bool SelectionJob::run() {
   alignas(32) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
   alignas(32) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock];
   // the block's slot terms: in budget mode the slot columns themselves, in distance mode locals
-  alignas(32) uint32_t lobj[kSlotBlock], lrow0[kSlotBlock];
+  alignas(32) uint32_t lrow0[kSlotBlock];
   alignas(32) float lq[kSlotBlock], la[kSlotBlock], lb[kSlotBlock], lpx[kSlotBlock];
   alignas(32) uint8_t lfinest[kSlotBlock], llevels[kSlotBlock];
   alignas(32) int8_t lprev[kSlotBlock];
-  size_t slots = 0;
-  for (size_t i0 = 0; i0 < n; i0 += kSlotBlock) {
-    const size_t mo = std::min(kSlotBlock, n - i0);
-    uint32_t* const gobj = budget ? slot_object + slots : lobj;
-    uint32_t* const grow0 = budget ? slot_row0 + slots : lrow0;
-    float* const gq = budget ? slot_q + slots : lq;
-    float* const ga = budget ? slot_a + slots : la;
-    float* const gb = budget ? slot_b + slots : lb;
-    float* const gpx = budget ? slot_px + slots : lpx;
-    uint8_t* const gfinest = budget ? slot_finest + slots : lfinest;
-    uint8_t* const glevels = budget ? slot_levels + slots : llevels;
-    int8_t* const gprev = budget ? slot_prev + slots : lprev;
-    frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
-    // branch-free compaction of the block's objects in view (and with levels)
-    size_t m = 0;
-    for (size_t j = 0; j < mo; ++j) {
-      const uint32_t chain = chain_of[i0 + j];
-      const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
-      gobj[m] = static_cast<uint32_t>(i0 + j);
-      m += 1u - out;
-    }
+  // per slot, over the block of the m slots from s0 (m <= kSlotBlock): the terms and the finest
+  // level, then in budget mode the must-draw part, in distance mode the level and the sums
+  auto slotBlock = [&](size_t s0, size_t m) __attribute__((always_inline)) {
+    uint32_t* const gobj = slot_object + s0;
+    uint32_t* const grow0 = budget ? slot_row0 + s0 : lrow0;
+    float* const gq = budget ? slot_q + s0 : lq;
+    float* const ga = budget ? slot_a + s0 : la;
+    float* const gb = budget ? slot_b + s0 : lb;
+    float* const gpx = budget ? slot_px + s0 : lpx;
+    uint8_t* const gfinest = budget ? slot_finest + s0 : lfinest;
+    uint8_t* const glevels = budget ? slot_levels + s0 : llevels;
+    int8_t* const gprev = budget ? slot_prev + s0 : lprev;
     for (size_t j = 0; j < m; ++j) {
       const size_t i = gobj[j];
       gx[j] = center_of[i].x;
@@ -891,10 +882,7 @@ bool SelectionJob::run() {
       gprev[j] = prev_level[i];
       glevels[j] = static_cast<uint8_t>(level_count);
     }
-    // every object's level starts at -1 (culled: stays), the slots' levels are written after
-    std::memset(level_of + i0, 0xFF, mo);
     if (budget) {
-      const size_t s0 = slots;
       for (size_t j = 0; j < m; ++j) {
         const size_t s = s0 + j;
         const bool must = must_of && must_of[gobj[j]];
@@ -907,8 +895,6 @@ bool SelectionJob::run() {
         }
       }
     } else {
-      if (cost_out)
-        for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
       for (size_t j = 0; j < m; ++j) {
         const uint32_t row0 = grow0[j];
         int level = gfinest[j];
@@ -921,13 +907,31 @@ bool SelectionJob::run() {
         level_of[gobj[j]] = static_cast<int8_t>(level);
         if (cost_out) cost_out[gobj[j]] = cost;
       }
-      for (size_t j = 0; j < mo; ++j) {
-        switches += level_of[i0 + j] != prev_level[i0 + j] ? 1u : 0u;
-        prev_level[i0 + j] = level_of[i0 + j];
-      }
     }
-    slots += m;
+  };
+  // slots are compacted a block of objects at a time and handed on in full blocks of kSlotBlock
+  // (loops of a constant trip count, which predict) while their objects' inputs are still in cache
+  size_t slots = 0, done = 0;
+  for (size_t i0 = 0; i0 < n; i0 += kSlotBlock) {
+    const size_t mo = std::min(kSlotBlock, n - i0);
+    frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
+    // branch-free compaction of the block's objects in view (and with levels); every object's
+    // level starts at -1 (culled: stays) and the slots' levels are written later
+    for (size_t j = 0; j < mo; ++j) {
+      const uint32_t chain = chain_of[i0 + j];
+      const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
+      level_of[i0 + j] = -1;
+      slot_object[slots] = static_cast<uint32_t>(i0 + j);
+      slots += 1u - out;
+    }
+    if (cost_out && !budget)
+      for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
+    if (slots - done >= kSlotBlock) {
+      slotBlock(done, kSlotBlock);
+      done += kSlotBlock;
+    }
   }
+  for (; done < slots; done += kSlotBlock) slotBlock(done, std::min(kSlotBlock, slots - done));
   const uint32_t culled = static_cast<uint32_t>(n - slots);
 
   SelectionStats st;
@@ -1474,10 +1478,10 @@ bool SelectionJob::run() {
         if (levels_out[i] >= 0) cost_out[i] = ctx.pointCost(s, levels_out[i]);
       }
     }
-    for (size_t i = 0; i < n; ++i) {
-      switches += level_of[i] != prev_level[i] ? 1u : 0u;
-      prev_level[i] = level_of[i];
-    }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    switches += level_of[i] != prev_level[i] ? 1u : 0u;
+    prev_level[i] = level_of[i];
   }
   st.dropped_count = dropped;
   st.drawn_count = drawn;
