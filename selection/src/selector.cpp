@@ -716,37 +716,29 @@ bool SelectionJob::run() {
   const float viewport_px = static_cast<float>(cam.viewport_width_px) * static_cast<float>(cam.viewport_height_px);
   const float x_cells = params.pixels_per_cell;
 
-  // pass 1a: the frustum test of every object, into chosen[] as scratch (it is written again
-  // before it is read)
-  uint8_t* const outside = ctx.chosen;
-  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
-  const float* const xyz = n ? &centers[0].x : nullptr;
-  (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(frustum, xyz, radii.data, n, outside);
-  // pass 1b: branch-free compaction of the objects in view (and with levels) into slots; every
-  // object's level starts at -1 and the slots' levels are written at the end
+  // Passes 1a-1c fused over blocks of kSlotBlock objects held in local columns: the frustum test,
+  // the compaction of the objects in view (and with levels) into slots, and per slot the
+  // level-independent terms and the finest candidate level, so that each object's inputs are read
+  // once. Budget mode stores the slots' terms in the slot columns for the hull passes; distance mode
+  // needs no column: it chooses the level and adds the slot to the frame's sums in the same block
+  // (slot order as in writeOut, so the same sums). The float terms run as plain loops over the local
+  // columns that the compiler vectorises (sqrt and divisions 4 or 8 wide; the same IEEE operations
+  // as one object at a time, so the same bits).
   // (locals for every array below: the byte stores would otherwise make the compiler reload the
   // pointers from the job and the context on every iteration)
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
+  const float* const xyz = n ? &centers[0].x : nullptr;
+  const auto frustum_outside = ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2;
   const uint32_t* const chain_offset = levels.chain_level_offset.data;
   const uint32_t* const chain_of = chains.data;
   int8_t* const level_of = levels_out.data;
   uint32_t* const slot_object = ctx.slot_object;
-  size_t slots = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t chain = chain_of[i];
-    const uint32_t out = static_cast<uint32_t>(outside[i]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
-    level_of[i] = -1;
-    slot_object[slots] = static_cast<uint32_t>(i);
-    slots += 1u - out;
-  }
-  const uint32_t culled = static_cast<uint32_t>(n - slots);
-
-  // pass 1c: per slot the level-independent terms and the finest candidate level
   double mandatory = coef.per_frame_ms;
   const glm::vec3* const center_of = centers.data;
   const float* const radius_of = radii.data;
   const float* const scale_of = max_scales.data;
   const float* const row_inv_w = ctx.row_inv_w;
-  const int8_t* const prev_level = ctx.prev_level;
+  int8_t* const prev_level = ctx.prev_level;
   float* const slot_a = ctx.slot_a;
   float* const slot_b = ctx.slot_b;
   float* const slot_q = ctx.slot_q;
@@ -762,18 +754,65 @@ bool SelectionJob::run() {
   const float* const motion_of = motion.count ? motion.data : nullptr;
   const float* const visible_of = visible_fraction.count ? visible_fraction.data : nullptr;
   const uint8_t* const must_of = must_draw.count ? must_draw.data : nullptr;
+  float* const cost_out = cost_ms_out.count ? cost_ms_out.data : nullptr;
   const float near_plane = cam.near_plane;
-  // in blocks: the inputs of a block's objects are gathered into local columns, then the float
-  // terms run as plain loops over them that the compiler vectorises (sqrt and divisions 4 wide;
-  // the same IEEE operations in the same order as one object at a time, so the same bits), then
-  // the finest level and the byte columns per slot
+  const float* const row_cost = ctx.row_cost;
+  const uint32_t* const tri = levels.triangle_count.data;
+  const uint32_t* const vert = levels.vertex_count.data;
+  const uint32_t* const lines = levels.line_point_count.data;
+  const float h_mult[2] = {1.0f, ctx.h1};
+  const float h1 = ctx.h1;
+
+  // the frame's sums (writeOut in budget mode, the fused blocks in distance mode)
+  CostFeatures f;
+  double predicted = coef.per_frame_ms, benefit = 0.0;
+  uint32_t dropped = 0, drawn = 0, switches = 0;
+  // one slot's share of them at level byte `level`, without branches: in budget mode about half of
+  // the slots are drawn, in no predictable order, and GCC turns selects into branches; a slot not
+  // drawn reads its level-0 row and adds its terms masked to +0 (x + 0.0 == x, so the sums are the
+  // same); returns the slot's cost at that level
+  auto addSlot = [&](uint8_t level, float a, float b, float q, float px, uint32_t row0, int8_t prev) {
+    const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+    dropped += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+    drawn += keep & 1u;
+    const uint32_t row = row0 + (level & keep);
+    // ctx.pointCost / ctx.pointBenefit at a drawn level
+    const float cost = a + row_cost[row];
+    const bool current = level == static_cast<uint8_t>(prev);
+    const float acc = std::min(1.0f, q * row_inv_w[row]) * h_mult[current];
+    predicted += maskFloat(cost, keep);
+    benefit += maskFloat(b * acc, keep);
+    f.objects += maskFloat(1.0f, keep);
+    f.triangles += tri[row] & keep;
+    f.vertices += vert[row] & keep;
+    f.line_points += lines[row] & keep;
+    f.pixels += maskFloat(px, keep);
+    return cost;
+  };
+
   constexpr size_t kSlotBlock = 64;
-  alignas(16) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
-  alignas(16) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock], gq[kSlotBlock];
-  for (size_t s0 = 0; s0 < slots; s0 += kSlotBlock) {
-    const size_t m = std::min(kSlotBlock, slots - s0);
+  alignas(32) uint8_t gout[kSlotBlock];
+  alignas(32) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
+  alignas(32) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock];
+  // the block's slot terms: in budget mode the slot columns themselves, in distance mode locals
+  alignas(32) uint32_t lrow0[kSlotBlock];
+  alignas(32) float lq[kSlotBlock], la[kSlotBlock], lb[kSlotBlock], lpx[kSlotBlock];
+  alignas(32) uint8_t lfinest[kSlotBlock], llevels[kSlotBlock];
+  alignas(32) int8_t lprev[kSlotBlock];
+  // per slot, over the block of the m slots from s0 (m <= kSlotBlock): the terms and the finest
+  // level, then in budget mode the must-draw part, in distance mode the level and the sums
+  auto slotBlock = [&](size_t s0, size_t m) __attribute__((always_inline)) {
+    uint32_t* const gobj = slot_object + s0;
+    uint32_t* const grow0 = budget ? slot_row0 + s0 : lrow0;
+    float* const gq = budget ? slot_q + s0 : lq;
+    float* const ga = budget ? slot_a + s0 : la;
+    float* const gb = budget ? slot_b + s0 : lb;
+    float* const gpx = budget ? slot_px + s0 : lpx;
+    uint8_t* const gfinest = budget ? slot_finest + s0 : lfinest;
+    uint8_t* const glevels = budget ? slot_levels + s0 : llevels;
+    int8_t* const gprev = budget ? slot_prev + s0 : lprev;
     for (size_t j = 0; j < m; ++j) {
-      const size_t i = slot_object[s0 + j];
+      const size_t i = gobj[j];
       gx[j] = center_of[i].x;
       gy[j] = center_of[i].y;
       gz[j] = center_of[i].z;
@@ -781,13 +820,10 @@ bool SelectionJob::run() {
       gs[j] = scale_of[i];
     }
     // missing factors are 1 (b * 1.0f == b)
-    for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[slot_object[s0 + j]] : 1.0f;
-    for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[slot_object[s0 + j]] : 1.0f;
-    for (size_t j = 0; j < m; ++j) gm[j] = motion_of ? motion_of[slot_object[s0 + j]] : 1.0f;
-    for (size_t j = 0; j < m; ++j) gv[j] = visible_of ? visible_of[slot_object[s0 + j]] : 1.0f;
-    float* const sa = slot_a + s0;
-    float* const sb = slot_b + s0;
-    float* const spx = slot_px + s0;
+    for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[gobj[j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[gobj[j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gm[j] = motion_of ? motion_of[gobj[j]] : 1.0f;
+    for (size_t j = 0; j < m; ++j) gv[j] = visible_of ? visible_of[gobj[j]] : 1.0f;
     // gx becomes the pixel size R
     if (ortho) {
       for (size_t j = 0; j < m; ++j) gx[j] = ortho_pixel;
@@ -803,14 +839,12 @@ bool SelectionJob::run() {
       const float r_px = gr[j] / pixel;
       const float px = std::min(kPi * r_px * r_px, viewport_px);
       gq[j] = x_cells * pixel / gs[j];
-      sa[j] = c_obj + c_px * px;
-      sb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
-      spx[j] = px;
+      ga[j] = c_obj + c_px * px;
+      gb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
+      gpx[j] = px;
     }
-    std::memcpy(slot_q + s0, gq, m * sizeof(float));
     for (size_t j = 0; j < m; ++j) {
-      const size_t s = s0 + j;
-      const size_t i = slot_object[s];
+      const size_t i = gobj[j];
       const uint32_t chain = chain_of[i];
       const uint32_t row0 = chain_offset[chain];
       const uint32_t level_count = chain_offset[chain + 1] - row0;
@@ -843,19 +877,62 @@ bool SelectionJob::run() {
           len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
         }
       }
-      slot_finest[s] = static_cast<uint8_t>(finest);
-      slot_row0[s] = row0;
-      slot_prev[s] = prev_level[i];
-      slot_levels[s] = static_cast<uint8_t>(level_count);
-      const bool must = must_of && must_of[i];
-      slot_must[s] = must ? 1 : 0;
-      if (must && budget) {
-        float cheapest = std::numeric_limits<float>::infinity();
-        for (int l = finest; l < static_cast<int>(level_count); ++l) cheapest = std::min(cheapest, ctx.pointCost(s, l));
-        mandatory += cheapest;
+      gfinest[j] = static_cast<uint8_t>(finest);
+      grow0[j] = row0;
+      gprev[j] = prev_level[i];
+      glevels[j] = static_cast<uint8_t>(level_count);
+    }
+    if (budget) {
+      for (size_t j = 0; j < m; ++j) {
+        const size_t s = s0 + j;
+        const bool must = must_of && must_of[gobj[j]];
+        slot_must[s] = must ? 1 : 0;
+        if (must) {
+          float cheapest = std::numeric_limits<float>::infinity();
+          for (int l = gfinest[j]; l < static_cast<int>(glevels[j]); ++l)
+            cheapest = std::min(cheapest, ga[j] + row_cost[grow0[j] + static_cast<uint32_t>(l)]);  // ctx.pointCost
+          mandatory += cheapest;
+        }
+      }
+    } else {
+      for (size_t j = 0; j < m; ++j) {
+        const uint32_t row0 = grow0[j];
+        int level = gfinest[j];
+        const int p = gprev[j];
+        // hysteresis: a coarser current level stays while it is within the margin (ctx.accuracy)
+        if (p > level && p < static_cast<int>(glevels[j]) &&
+            std::min(1.0f, gq[j] * row_inv_w[row0 + static_cast<uint32_t>(p)]) * h1 >= 1.0f)
+          level = p;
+        const float cost = addSlot(static_cast<uint8_t>(level), ga[j], gb[j], gq[j], gpx[j], row0, gprev[j]);
+        level_of[gobj[j]] = static_cast<int8_t>(level);
+        if (cost_out) cost_out[gobj[j]] = cost;
       }
     }
+  };
+  // slots are compacted a block of objects at a time and handed on in full blocks of kSlotBlock
+  // (loops of a constant trip count, which predict) while their objects' inputs are still in cache
+  size_t slots = 0, done = 0;
+  for (size_t i0 = 0; i0 < n; i0 += kSlotBlock) {
+    const size_t mo = std::min(kSlotBlock, n - i0);
+    frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
+    // branch-free compaction of the block's objects in view (and with levels); every object's
+    // level starts at -1 (culled: stays) and the slots' levels are written later
+    for (size_t j = 0; j < mo; ++j) {
+      const uint32_t chain = chain_of[i0 + j];
+      const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
+      level_of[i0 + j] = -1;
+      slot_object[slots] = static_cast<uint32_t>(i0 + j);
+      slots += 1u - out;
+    }
+    if (cost_out && !budget)
+      for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
+    if (slots - done >= kSlotBlock) {
+      slotBlock(done, kSlotBlock);
+      done += kSlotBlock;
+    }
   }
+  for (; done < slots; done += kSlotBlock) slotBlock(done, std::min(kSlotBlock, slots - done));
+  const uint32_t culled = static_cast<uint32_t>(n - slots);
 
   SelectionStats st;
   st.frame = ctx.frame;
@@ -866,16 +943,7 @@ bool SelectionJob::run() {
   uint32_t half_step = 0;  // every other slot at its base, with this benefit
   double half_alt_benefit = 0.0;
 
-  if (!budget) {
-    for (size_t s = 0; s < slots; ++s) {
-      const uint32_t level_count = ctx.slot_levels[s];
-      int level = ctx.slot_finest[s];
-      const int p = ctx.slot_prev[s];
-      // hysteresis: a coarser current level stays while it is within the margin
-      if (p > level && p < static_cast<int>(level_count) && ctx.accuracy(s, p) * ctx.h1 >= 1.0f) level = p;
-      ctx.chosen[s] = static_cast<uint8_t>(level);
-    }
-  } else {
+  if (budget) {
     // pass 2: each slot's upper convex hull over the points that fit alone
     const double avail = cap - mandatory;
     const double obj_cap = cap - coef.per_frame_ms;  // objects' share of the budget
@@ -915,9 +983,6 @@ bool SelectionJob::run() {
     double base_total = 0.0; // no upgrade taken
     double base_benefit = 0.0;  // benefit with no upgrade taken (the 1/2 guarantee's alternative)
     size_t segments = 0;
-    const float* const row_cost = ctx.row_cost;
-    const float h1 = ctx.h1;
-    const float h_mult[2] = {1.0f, h1};
     uint8_t* const hull = ctx.hull;
     uint8_t* const hull_count = ctx.hull_count;
     const size_t hull_stride = ctx.hull_stride;
@@ -1373,83 +1438,55 @@ bool SelectionJob::run() {
       half_slot = split_slot;
       half_step = split_step + 1;
     }
-    // hull entries are level bytes already (kNotDrawn = -1)
-    {
-      uint8_t* const chosen = ctx.chosen;
-      for (size_t s = 0; s < slots; ++s) chosen[s] = hull[s * hull_stride + chosen[s]];
-    }
     ctx.last_lambda = lambda;
     st.lambda = lambda;
     st.search_passes = passes;
     if (mandatory > cap) st.flags |= kFlagOverBudget;
   }
 
-  // write levels, statistics, features; chosen[] now holds levels (kNotDrawn = -1)
-  CostFeatures f;
-  double predicted = coef.per_frame_ms, benefit = 0.0;
-  auto writeOut = [&]() {
-    f = CostFeatures();
-    predicted = coef.per_frame_ms;
-    benefit = 0.0;
-    const uint8_t* const chosen = ctx.chosen;
-    const float* const rc = ctx.row_cost;
-    const float hh = ctx.h1;
-    const uint32_t* const tri = levels.triangle_count.data;
-    const uint32_t* const vert = levels.vertex_count.data;
-    const uint32_t* const lines = levels.line_point_count.data;
-    const float h_mult[2] = {1.0f, hh};
-    uint32_t dropped = 0, drawn = 0;
-    // without branches: about half of the slots are drawn, in no predictable order, and GCC turns
-    // selects into branches; a slot not drawn reads its level-0 row and adds its terms masked to
-    // +0 (x + 0.0 == x, so the sums are the same)
-    for (size_t s = 0; s < slots; ++s) {
-      const uint8_t chosen_level = chosen[s];
-      const uint32_t keep = 0u - static_cast<uint32_t>(chosen_level != kNotDrawn);  // all ones if drawn
-      level_of[slot_object[s]] = static_cast<int8_t>(chosen_level);               // kNotDrawn is -1
-      dropped += (keep ^ 1u) & (slot_b[s] > 0.0f ? 1u : 0u);
-      drawn += keep & 1u;
-      const uint32_t row = slot_row0[s] + (chosen_level & keep);
-      // ctx.pointCost / ctx.pointBenefit at a drawn level
-      const float cost = slot_a[s] + rc[row];
-      const bool current = chosen_level == static_cast<uint8_t>(slot_prev[s]);
-      const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
-      predicted += maskFloat(cost, keep);
-      benefit += maskFloat(slot_b[s] * acc, keep);
-      f.objects += maskFloat(1.0f, keep);
-      f.triangles += tri[row] & keep;
-      f.vertices += vert[row] & keep;
-      f.line_points += lines[row] & keep;
-      f.pixels += maskFloat(slot_px[s], keep);
-    }
-    st.dropped_count = dropped;
-    st.drawn_count = drawn;
-  };
-  writeOut();
-  // the sum of benefits over slots in slot order is what the greedy's choice scores
-  if (half_slot >= 0 && half_alt_benefit > benefit) {
-    const size_t js = static_cast<size_t>(half_slot);
-    for (size_t s = 0; s < slots; ++s) ctx.chosen[s] = ctx.hull[s * ctx.hull_stride];
-    ctx.chosen[js] = ctx.hull[js * ctx.hull_stride + half_step];
-    st.flags |= kFlagSplitFallback;
+  if (budget) {
+    // write levels, statistics, features; chosen[] holds steps along the hulls, whose entries are
+    // level bytes (kNotDrawn = -1), read here rather than in a pass of their own
+    const uint8_t* const hull = ctx.hull;
+    const size_t hull_stride = ctx.hull_stride;
+    auto writeOut = [&]() {
+      f = CostFeatures();
+      predicted = coef.per_frame_ms;
+      benefit = 0.0;
+      dropped = 0;
+      drawn = 0;
+      const uint8_t* const chosen = ctx.chosen;
+      for (size_t s = 0; s < slots; ++s) {
+        const uint8_t level = hull[s * hull_stride + chosen[s]];
+        level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
+        addSlot(level, slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
+      }
+    };
     writeOut();
+    // the sum of benefits over slots in slot order is what the greedy's choice scores
+    if (half_slot >= 0 && half_alt_benefit > benefit) {
+      const size_t js = static_cast<size_t>(half_slot);
+      std::memset(ctx.chosen, 0, slots);  // every slot at its base
+      ctx.chosen[js] = static_cast<uint8_t>(half_step);
+      st.flags |= kFlagSplitFallback;
+      writeOut();
+    }
+    if (cost_out) {
+      for (size_t i = 0; i < n; ++i) cost_out[i] = 0.0f;
+      for (size_t s = 0; s < slots; ++s) {
+        const size_t i = ctx.slot_object[s];
+        if (levels_out[i] >= 0) cost_out[i] = ctx.pointCost(s, levels_out[i]);
+      }
+    }
   }
+  for (size_t i = 0; i < n; ++i) {
+    switches += level_of[i] != prev_level[i] ? 1u : 0u;
+    prev_level[i] = level_of[i];
+  }
+  st.dropped_count = dropped;
+  st.drawn_count = drawn;
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
-  if (cost_ms_out.count) {
-    for (size_t i = 0; i < n; ++i) cost_ms_out[i] = 0.0f;
-    for (size_t s = 0; s < slots; ++s) {
-      const size_t i = ctx.slot_object[s];
-      if (levels_out[i] >= 0) cost_ms_out[i] = ctx.pointCost(s, levels_out[i]);
-    }
-  }
-  {
-    int8_t* const prev = ctx.prev_level;
-    uint32_t switches = 0;
-    for (size_t i = 0; i < n; ++i) {
-      switches += level_of[i] != prev[i] ? 1u : 0u;
-      prev[i] = level_of[i];
-    }
-    st.switch_count = switches;
-  }
+  st.switch_count = switches;
   st.predicted_ms = predicted;
   st.total_benefit = benefit;
   st.features = f;
