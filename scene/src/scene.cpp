@@ -805,11 +805,6 @@ void Scene::unlinkObject(uint32_t k) {
   *link = object_next_[k];
 }
 
-// with GCC on x86-64 the pass is also compiled for AVX (VEX encoding: no register copies around the
-// shuffles, broadcasts from memory) and picked at load time; no FMA, so both give the same bits
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__SSE2__) && !defined(__AVX__)
-__attribute__((target_clones("avx", "default")))
-#endif
 size_t Scene::update() {
   const size_t n = order_.size();
   const bool all = all_objects_dirty_, edited = some_objects_dirty_;
