@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/scene/bounding_sphere.h"
-#include "../../scene/src/scene_wide.h"
+#include "scene_wide.h"  // private test hook (tests/CMakeLists.txt adds scene/src)
 
 using namespace scenelod;
 using namespace scenelod::scene;
