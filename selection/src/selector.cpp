@@ -243,9 +243,9 @@ SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_c
                                    settled_cost);
 }
 
-// Pass 1a of run(): outside[i] = 1 when sphere i is outside one of the frustum's planes
-// (sphereInFrustum's six tests without early exits). Blocks of 64 objects are first copied into
-// local columns, so each plane's test is a plain loop over floats that the compiler vectorises
+// The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
+// outside one of the frustum's planes (sphereInFrustum's six tests without early exits). Blocks of
+// 64 objects are first copied into local columns, so each plane's test is a plain loop over floats that the compiler vectorises
 // with the plane in registers (over the packed centres it managed only 2 wide, reloading the 24
 // plane constants). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
 // products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
