@@ -10,68 +10,6 @@
 
 namespace scenelod::detail {
 
-namespace {
-
-// open addressing from a 64-bit key to a uint32 value; grows at half load. Key and value share a
-// slot, so that a probe reads one cache line.
-class U64Map {
- public:
-  explicit U64Map(size_t expected) {
-    size_t cap = 64;
-    while (cap < expected * 2) cap <<= 1;
-    slots_.assign(cap, Slot{0, kNone});
-  }
-  uint32_t find(uint64_t k) const {
-    const size_t mask = slots_.size() - 1;
-    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      if (slots_[i].value == kNone) return kNone;
-      if (slots_[i].key == k) return slots_[i].value;
-    }
-  }
-  // the value of k; a new key holds kNone and must be set at once
-  uint32_t& at(uint64_t k) {
-    if ((size_ + 1) * 2 > slots_.size()) grow();
-    const size_t mask = slots_.size() - 1;
-    for (size_t i = hash(k) & mask;; i = (i + 1) & mask) {
-      Slot& s = slots_[i];
-      if (s.value == kNone) {
-        s.key = k;
-        ++size_;
-        return s.value;
-      }
-      if (s.key == k) return s.value;
-    }
-  }
-
- private:
-  struct Slot {
-    uint64_t key;
-    uint32_t value;
-  };
-  static size_t hash(uint64_t k) {
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdull;
-    k ^= k >> 33;
-    return static_cast<size_t>(k);
-  }
-  void grow() {
-    std::vector<Slot> old;
-    old.swap(slots_);
-    slots_.assign(old.size() * 2, Slot{0, kNone});
-    size_ = 0;
-    for (const Slot& s : old)
-      if (s.value != kNone) at(s.key) = s.value;
-  }
-  std::vector<Slot> slots_;
-  size_t size_ = 0;
-};
-
-uint64_t pairKey(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
-
-}  // namespace
-
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
   const Mesh& m = *p.mesh;
@@ -83,12 +21,14 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   out.collapsed_triangles = 0;
 
   const size_t tn = m.triangleCount();
-  // triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
+  const size_t nc = a.cluster_count;
+  // Triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
   // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
-  // input count) rather than the input, so that it stays in cache; grows at half load
-  size_t cap = 64;
+  // input count) rather than the input, so that it stays in cache; grows at half load.
   // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output)
-  const size_t expected = std::min(tn, size_t(2) * a.cluster_count + a.cluster_count / 16 + 64);
+  const size_t expected = std::min(tn, size_t(2) * nc + nc / 16 + 64);
+  out.triangles.reserve(3 * expected);
+  size_t cap = 64;
   while (cap < expected * 2) cap <<= 1;
   std::vector<uint32_t> table(cap, kNone);
   size_t mask = cap - 1;
@@ -97,28 +37,39 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
     return static_cast<size_t>(h ^ (h >> 31));
   };
-  out.triangles.reserve(3 * expected);
+  // Candidate edges are found again through per-cluster lists, each edge listed under its lower id:
+  // a lookup is one load from an array of heads (4 bytes per cluster, in cache) and a walk of a
+  // node or two that a nearby input triangle wrote recently (the input order is spatially coherent,
+  // the cluster ids are not). The hash this replaces (16-byte slots, two per cluster) was larger
+  // than the cache at fine levels, where the coverage pass's lookups went to random slots of it.
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
+  struct EdgeNode {
+    uint32_t hi;    // the edge's higher cluster id
+    uint32_t next;  // the next candidate edge listed under the same low id
+  };
+  std::vector<EdgeNode> edge_nodes;     // per candidate edge
   std::vector<float> input_thickness;   // per candidate edge: largest thickness of an input edge on it
-  // candidate edges join adjacent clusters: up to about 3 per cluster, sized for one so that the table
-  // stays small at fine levels, where few triangles collapse, and regrows at most twice
-  U64Map edge_index(std::min(tn, size_t(a.cluster_count)));
+  std::vector<uint32_t> edge_head(keep_edges || m.edgeCount() > 0 ? nc : 0, kNone);
   std::vector<CollapsedTriangle> collapsed;
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
-  std::vector<uint8_t> candidate(a.cluster_count, 0);
+  std::vector<uint8_t> candidate(nc, 0);
   auto addPoint = [&](uint32_t c) {
     if (candidate[c]) return;
     candidate[c] = 1;
     point_candidates.push_back(c);
   };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
-    uint32_t& e = edge_index.at(pairKey(x, y));
+    const uint32_t lo = std::min(x, y), hi = std::max(x, y);
+    uint32_t e = edge_head[lo];
+    while (e != kNone && edge_nodes[e].hi != hi) e = edge_nodes[e].next;
     if (e == kNone) {
       e = static_cast<uint32_t>(edges.size() / 2);
-      edges.push_back(std::min(x, y));
-      edges.push_back(std::max(x, y));
+      edges.push_back(lo);
+      edges.push_back(hi);
+      edge_nodes.push_back({hi, edge_head[lo]});
+      edge_head[lo] = e;
       input_thickness.push_back(0.0f);
     }
     return e;
@@ -181,14 +132,21 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
   const size_t en = edges.size() / 2;
   std::vector<uint8_t> covered(en, 0);
-  std::vector<uint8_t> used(a.cluster_count, 0);
+  std::vector<uint8_t> used(nc, 0);
   if (en > 0) {
     for (size_t t = 0; t < out.triangles.size(); t += 3)
       for (int k = 0; k < 3; ++k) {
-        const uint32_t e = edge_index.find(pairKey(out.triangles[t + k], out.triangles[t + (k + 1) % 3]));
-        if (e != kNone) covered[e] = 1;
+        const uint32_t x = out.triangles[t + k], y = out.triangles[t + (k + 1) % 3];
+        const uint32_t lo = std::min(x, y), hi = std::max(x, y);
+        for (uint32_t e = edge_head[lo]; e != kNone; e = edge_nodes[e].next)
+          if (edge_nodes[e].hi == hi) {
+            covered[e] = 1;
+            break;
+          }
       }
   }
+  std::vector<uint32_t>().swap(edge_head);
+  std::vector<EdgeNode>().swap(edge_nodes);
   for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
