@@ -7,10 +7,66 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "cluster_internal.h"
 
 namespace scenelod::detail {
+
+namespace {
+
+// One cluster's incident faces as structure-of-arrays, padded with zeros to a multiple of 4.
+struct ClusterFaces {
+  std::vector<float> x, y, z, w;
+  void resize(size_t k) {
+    const size_t padded = (k + 3) & ~size_t(3);
+    if (x.size() < padded) x.resize(padded), y.resize(padded), z.resize(padded), w.resize(padded);
+    for (size_t j = k; j < padded; ++j) x[j] = y[j] = z[j] = w[j] = 0.0f;
+  }
+};
+
+// Corner normals of one cluster: for each corner i, the sum over the cluster's faces j, in order, of
+// face j's unit normal times its double area, over the faces within the crease angle of face i (and
+// face i itself). Four corners at a time, one per SIMD lane: each lane does the scalar loop's
+// operations in the scalar loop's order (a skipped face adds +0, which never changes a sum that
+// starts at +0), so the sums are bit-identical to it, without its unpredictable branch per pair.
+void cornerNormals(const ClusterFaces& f, size_t k, float cos_crease, glm::vec3* n) {
+#if defined(__SSE2__)
+  const __m128 cosv = _mm_set1_ps(cos_crease);
+  for (size_t i0 = 0; i0 < k; i0 += 4) {
+    const __m128 tx = _mm_loadu_ps(&f.x[i0]), ty = _mm_loadu_ps(&f.y[i0]), tz = _mm_loadu_ps(&f.z[i0]);
+    const __m128i lane = _mm_add_epi32(_mm_set1_epi32(int(i0)), _mm_set_epi32(3, 2, 1, 0));
+    __m128 nx = _mm_setzero_ps(), ny = _mm_setzero_ps(), nz = _mm_setzero_ps();
+    for (size_t j = 0; j < k; ++j) {
+      const __m128 ux = _mm_set1_ps(f.x[j]), uy = _mm_set1_ps(f.y[j]), uz = _mm_set1_ps(f.z[j]);
+      const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(tx, ux), _mm_mul_ps(ty, uy)), _mm_mul_ps(tz, uz));
+      const __m128 self = _mm_castsi128_ps(_mm_cmpeq_epi32(lane, _mm_set1_epi32(int(j))));
+      const __m128 take = _mm_or_ps(self, _mm_cmpge_ps(d, cosv));
+      const float wj = f.w[j];
+      nx = _mm_add_ps(nx, _mm_and_ps(take, _mm_set1_ps(f.x[j] * wj)));
+      ny = _mm_add_ps(ny, _mm_and_ps(take, _mm_set1_ps(f.y[j] * wj)));
+      nz = _mm_add_ps(nz, _mm_and_ps(take, _mm_set1_ps(f.z[j] * wj)));
+    }
+    alignas(16) float ox[4], oy[4], oz[4];
+    _mm_store_ps(ox, nx), _mm_store_ps(oy, ny), _mm_store_ps(oz, nz);
+    for (size_t l = 0; l < 4 && i0 + l < k; ++l) n[i0 + l] = glm::vec3(ox[l], oy[l], oz[l]);
+  }
+#else
+  for (size_t i = 0; i < k; ++i) {
+    const glm::vec3 ut(f.x[i], f.y[i], f.z[i]);
+    glm::vec3 s(0.0f);
+    for (size_t j = 0; j < k; ++j) {
+      const glm::vec3 uu(f.x[j], f.y[j], f.z[j]);
+      if (j == i || glm::dot(ut, uu) >= cos_crease) s += uu * f.w[j];
+    }
+    n[i] = s;
+  }
+#endif
+}
+
+}  // namespace
 
 void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
   out = Mesh();
@@ -54,24 +110,27 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
     if (colors) out.colors.push_back(r.colors[c]);
     return static_cast<uint32_t>(out.positions.size() - 1);
   };
+  ClusterFaces cf;
+  std::vector<glm::vec3> sums;  // per corner of the current cluster
   for (uint32_t c = 0; c < nc; ++c) {
     const uint32_t b = offsets[c], en = offsets[c + 1];
     const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
+    const size_t k = en - b;
+    cf.resize(k);
+    if (sums.size() < k) sums.resize(k);
+    for (size_t j = 0; j < k; ++j) {
+      const glm::vec4& fj = face[corners[b + j] / 3];
+      cf.x[j] = fj.x, cf.y[j] = fj.y, cf.z[j] = fj.z, cf.w[j] = fj.w;
+    }
+    cornerNormals(cf, k, cos_crease, sums.data());
     for (uint32_t i = b; i < en; ++i) {
-      const uint32_t t = corners[i] / 3;
-      const glm::vec3 ut(face[t]);
-      glm::vec3 n(0.0f);
-      for (uint32_t j = b; j < en; ++j) {
-        const uint32_t u = corners[j] / 3;
-        const glm::vec3 uu(face[u]);
-        if (u == t || glm::dot(ut, uu) >= cos_crease) n += uu * face[u].w;
-      }
+      glm::vec3 n = sums[i - b];
       const float l = glm::length(n);
       n = l > 0.0f ? n / l : r.normals[c];
       uint32_t v = kNone;
-      for (uint32_t k = first_vertex; k < out.positions.size(); ++k)
-        if (out.normals[k] == n) {
-          v = k;
+      for (uint32_t q = first_vertex; q < out.positions.size(); ++q)
+        if (out.normals[q] == n) {
+          v = q;
           break;
         }
       if (v == kNone) v = addVertex(c, n);
