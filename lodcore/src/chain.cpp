@@ -100,14 +100,20 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   Clock::time_point t0 = Clock::now();
   if (Error e = prepareMesh(original, params.cluster, p)) return e;
   stats.prepare_seconds = since(t0);
+  // level 0, the copy of the input, is made last, once the prepared mesh and the levels' scratch are
+  // freed, so that it does not add to the peak memory of the levels
+  auto finish = [&]() {
+    p = PreparedMesh();
+    LodLevel& base = out.levels[0];
+    base.mesh = original;
+    base.cell_width = 0.0f;
+    base.max_error = 0.0f;
+    base.method = LodMethod::kOriginal;
+    base.bounds = computeBoundingSphere(original);
+  };
   out.levels.resize(1);
-  LodLevel& base = out.levels[0];
-  base.mesh = original;
-  base.cell_width = 0.0f;
-  base.max_error = 0.0f;
-  base.method = LodMethod::kOriginal;
-  base.bounds = computeBoundingSphere(original);
   if (p.order.empty() || params.level_count == 0) {
+    finish();
     params.progress(1.0, "done");
     return {};
   }
@@ -118,13 +124,19 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
     params.progress(0.05, "choosing w1");
     const size_t tn = original.triangleCount();
     if (tn >= 2) {
-      if (Error e = findCellWidthForTarget(p, params.cluster, tn / 2, w1, 0.05)) return e;
+      if (Error e = findCellWidthForTarget(p, params.cluster, tn / 2, w1, 0.05)) {
+        finish();
+        return e;
+      }
     } else {
       w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
     }
   }
   stats.first_width_seconds = since(t0);
-  if (Error e = detail::checkCellWidth(p, w1)) return e;
+  if (Error e = detail::checkCellWidth(p, w1)) {
+    finish();
+    return e;
+  }
 
   const size_t n = params.level_count;
   out.levels.resize(n + 1);
@@ -161,6 +173,7 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
       out.levels.clear();
       return e;
     }
+  finish();
   return {};
 }
 

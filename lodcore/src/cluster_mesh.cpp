@@ -38,6 +38,7 @@ Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params,
   const Mesh& m = *prepared.mesh;
   detail::Representatives r;
   detail::synthesize(prepared, a, params.synthesis, r);
+  std::vector<uint32_t>().swap(a.heaviest);  // only synthesis reads it: free it before elimination's peak
   detail::Eliminated el;
   detail::eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
   if (stats) {

@@ -43,13 +43,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // the cluster ids are not). The hash this replaces (16-byte slots, two per cluster) was larger
   // than the cache at fine levels, where the coverage pass's lookups went to random slots of it.
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
-  struct EdgeNode {
-    uint32_t hi;    // the edge's higher cluster id
-    uint32_t next;  // the next candidate edge listed under the same low id
-  };
-  std::vector<EdgeNode> edge_nodes;     // per candidate edge
-  std::vector<float> input_thickness;   // per candidate edge: largest thickness of an input edge on it
-  std::vector<uint32_t> edge_head(keep_edges || m.edgeCount() > 0 ? nc : 0, kNone);
+  std::vector<uint32_t> edge_next;      // per candidate edge: the next one listed under the same low id
+  // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
+  std::vector<float> input_thickness;
+  const bool input_edges = m.edgeCount() > 0;
+  std::vector<uint32_t> edge_head(keep_edges || input_edges ? nc : 0, kNone);
   std::vector<CollapsedTriangle> collapsed;
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
@@ -63,14 +61,14 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
     const uint32_t lo = std::min(x, y), hi = std::max(x, y);
     uint32_t e = edge_head[lo];
-    while (e != kNone && edge_nodes[e].hi != hi) e = edge_nodes[e].next;
+    while (e != kNone && edges[2 * e + 1] != hi) e = edge_next[e];
     if (e == kNone) {
       e = static_cast<uint32_t>(edges.size() / 2);
       edges.push_back(lo);
       edges.push_back(hi);
-      edge_nodes.push_back({hi, edge_head[lo]});
+      edge_next.push_back(edge_head[lo]);
       edge_head[lo] = e;
-      input_thickness.push_back(0.0f);
+      if (input_edges) input_thickness.push_back(0.0f);
     }
     return e;
   };
@@ -138,15 +136,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       for (int k = 0; k < 3; ++k) {
         const uint32_t x = out.triangles[t + k], y = out.triangles[t + (k + 1) % 3];
         const uint32_t lo = std::min(x, y), hi = std::max(x, y);
-        for (uint32_t e = edge_head[lo]; e != kNone; e = edge_nodes[e].next)
-          if (edge_nodes[e].hi == hi) {
+        for (uint32_t e = edge_head[lo]; e != kNone; e = edge_next[e])
+          if (edges[2 * e + 1] == hi) {
             covered[e] = 1;
             break;
           }
       }
   }
   std::vector<uint32_t>().swap(edge_head);
-  std::vector<EdgeNode>().swap(edge_nodes);
+  std::vector<uint32_t>().swap(edge_next);
   for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
@@ -169,8 +167,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     if (remap[ct.edge] != kNone) collapsed[kept++] = {ct.triangle, remap[ct.edge]};
   collapsed.resize(kept);
   computeThickness(p, a, collapsed, out);
-  for (size_t e = 0; e < en; ++e)
-    if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], input_thickness[e]);
+  if (input_edges)
+    for (size_t e = 0; e < en; ++e)
+      if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], input_thickness[e]);
 }
 
 }  // namespace scenelod::detail
