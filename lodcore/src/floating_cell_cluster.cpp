@@ -182,6 +182,20 @@ inline void testCell(const JoinRule& r, const glm::vec3& pv, float cx, float cy,
   }
 }
 
+// testCell with the shape and the rule fixed at compile time (the flat grid's loop is specialised)
+template <bool kCube, bool kNearest>
+inline void testCellT(const JoinRule& r, const glm::vec3& pv, float cx, float cy, float cz, uint32_t c,
+                      uint32_t& best, float& best_d2) {
+  const float dx = pv.x - cx, dy = pv.y - cy, dz = pv.z - cz;
+  const float d2 = dx * dx + dy * dy + dz * dz;
+  const bool inside = kCube ? (std::max({std::fabs(dx), std::fabs(dy), std::fabs(dz)}) <= r.half) : d2 <= r.half2;
+  const bool better = kNearest ? (d2 < best_d2 || (d2 == best_d2 && c < best)) : c < best;
+  if (inside && better) {
+    best = c;
+    best_d2 = d2;
+  }
+}
+
 // Bytes of list heads a dense grid may take beyond the hash's measured ~50 bytes per cell: while
 // the mesh's box in grid cubes stays below this, a flat array replaces the hash. On large meshes it
 // may also take up to 8 bytes per referenced vertex (twice the level's cluster_of array): the 1 M
@@ -193,8 +207,9 @@ constexpr double kDenseBytesPerVertex = 8.0;
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+template <bool kCube, bool kNearest>
+void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
+                  const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t next;  // next cell listed in the same grid cube
@@ -219,19 +234,32 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
     // random, so testing each head would mispredict about once per vertex and cube
     uint32_t found[64];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
     uint32_t found_count = 0;
-    for (int32_t z = lo[2]; z <= hi[2]; ++z)
-      for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-        const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
-        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
-          found[found_count] = row[x];
-          found_count += row[x] != kNone;
+    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
+      // the common case of cubes of side w/2 (3 per axis), unrolled
+      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      for (int z = 0; z < 3; ++z)
+        for (int y = 0; y < 3; ++y) {
+          const uint32_t* row = base + size_t(z) * sz + size_t(y) * sy;
+          for (int x = 0; x < 3; ++x) {
+            found[found_count] = row[x];
+            found_count += row[x] != kNone;
+          }
         }
-      }
+    } else {
+      for (int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+          const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+            found[found_count] = row[x];
+            found_count += row[x] != kNone;
+          }
+        }
+    }
     uint32_t best = kNone;
     float best_d2 = std::numeric_limits<float>::infinity();
     for (uint32_t j = 0; j < found_count; ++j)
       for (uint32_t c = found[j]; c != kNone; c = cells[c].next)
-        testCell(rule, pv, cells[c].x, cells[c].y, cells[c].z, c, best, best_d2);
+        testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c, best, best_d2);
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
@@ -242,6 +270,16 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
     }
     out.cluster_of[p.order[i]] = best;
   }
+}
+
+void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
+                 const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+  if (rule.cube)
+    (rule.nearest ? assignDenseT<true, true> : assignDenseT<true, false>)(p, cube_width, reach, lo_cube, dims, rule,
+                                                                          expected, out);
+  else
+    (rule.nearest ? assignDenseT<false, true> : assignDenseT<false, false>)(p, cube_width, reach, lo_cube, dims,
+                                                                            rule, expected, out);
 }
 
 }  // namespace
