@@ -23,6 +23,11 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
+
 #include "cluster_internal.h"
 
 namespace scenelod::detail {
@@ -207,17 +212,21 @@ constexpr double kDenseBytesPerVertex = 8.0;
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-template <bool kCube, bool kNearest>
+template <bool kCube, bool kNearest, bool kLanes>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
     float x, y, z;
-    uint32_t next;  // next cell listed in the same grid cube
+    uint32_t next;  // index of the next cell listed in the same grid cube; 0 ends the list
   };
+  // cells[k + 1] is cluster k's cell; cells[0] is a sentinel at NaN, which contains no vertex: empty
+  // heads (0) point to it, so that the cells found can be tested four at a time, padded with it
   std::vector<Cell> cells;
-  cells.reserve(expected);
+  cells.reserve(expected + 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], kNone);
+  std::vector<uint32_t> head(sz * dims[2], 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
@@ -232,7 +241,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     }
     // the non-empty heads first, gathered without a branch: which of the 27 cubes hold a cell is
     // random, so testing each head would mispredict about once per vertex and cube
-    uint32_t found[64];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
+    uint32_t found[64 + 3];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
     uint32_t found_count = 0;
     if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
       // the common case of cubes of side w/2 (3 per axis), unrolled
@@ -242,7 +251,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
           const uint32_t* row = base + size_t(z) * sz + size_t(y) * sy;
           for (int x = 0; x < 3; ++x) {
             found[found_count] = row[x];
-            found_count += row[x] != kNone;
+            found_count += row[x] != 0;
           }
         }
     } else {
@@ -251,22 +260,82 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
           const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
-            found_count += row[x] != kNone;
+            found_count += row[x] != 0;
           }
         }
     }
     uint32_t best = kNone;
     float best_d2 = std::numeric_limits<float>::infinity();
-    for (uint32_t j = 0; j < found_count; ++j)
-      for (uint32_t c = found[j]; c != kNone; c = cells[c].next)
-        testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c, best, best_d2);
+#if defined(__SSE2__)
+    if (kLanes) {
+      found[found_count] = found[found_count + 1] = found[found_count + 2] = 0;  // pad with the sentinel
+      const __m128 px = _mm_set1_ps(pv.x), py = _mm_set1_ps(pv.y), pz = _mm_set1_ps(pv.z);
+      __m128 bd2 = _mm_set1_ps(std::numeric_limits<float>::infinity());
+      __m128i bid = _mm_set1_epi32(0x7fffffff);
+      __m128i chained = _mm_setzero_si128();
+      for (uint32_t j = 0; j < found_count; j += 4) {
+        __m128 a0 = _mm_loadu_ps(&cells[found[j]].x), a1 = _mm_loadu_ps(&cells[found[j + 1]].x);
+        __m128 a2 = _mm_loadu_ps(&cells[found[j + 2]].x), a3 = _mm_loadu_ps(&cells[found[j + 3]].x);
+        _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+        const __m128 dx = _mm_sub_ps(px, a0), dy = _mm_sub_ps(py, a1), dz = _mm_sub_ps(pz, a2);
+        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+        __m128 inside;
+        if (kCube) {
+          const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+          inside = _mm_cmple_ps(
+              _mm_max_ps(_mm_max_ps(_mm_and_ps(dx, absmask), _mm_and_ps(dy, absmask)), _mm_and_ps(dz, absmask)),
+              _mm_set1_ps(rule.half));
+        } else {
+          inside = _mm_cmple_ps(d2, _mm_set1_ps(rule.half2));
+        }
+        const __m128i id =
+            _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(found + j)), _mm_set1_epi32(1));
+        const __m128 id_less = _mm_castsi128_ps(_mm_cmplt_epi32(id, bid));
+        const __m128 better =
+            kNearest ? _mm_or_ps(_mm_cmplt_ps(d2, bd2), _mm_and_ps(_mm_cmpeq_ps(d2, bd2), id_less)) : id_less;
+        const __m128 take = _mm_and_ps(inside, better);
+        bd2 = _mm_or_ps(_mm_and_ps(take, d2), _mm_andnot_ps(take, bd2));
+        const __m128i takei = _mm_castps_si128(take);
+        bid = _mm_or_si128(_mm_and_si128(takei, id), _mm_andnot_si128(takei, bid));
+        chained = _mm_or_si128(chained, _mm_castps_si128(a3));
+      }
+      // the least (d2, id) of the four lanes, without branches: the least d2, then the least id
+      // among the lanes holding it (for the heaviest rule the least id)
+      __m128i sel = bid;
+      if (kNearest) {
+        __m128 m = _mm_min_ps(bd2, _mm_shuffle_ps(bd2, bd2, _MM_SHUFFLE(2, 3, 0, 1)));
+        m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        const __m128i at_min = _mm_castps_si128(_mm_cmpeq_ps(bd2, m));
+        sel = _mm_or_si128(_mm_and_si128(at_min, bid), _mm_andnot_si128(at_min, _mm_set1_epi32(0x7fffffff)));
+        best_d2 = _mm_cvtss_f32(m);
+      }
+      __m128i t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(2, 3, 0, 1));
+      __m128i lt = _mm_cmplt_epi32(t, sel);
+      sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
+      t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(1, 0, 3, 2));
+      lt = _mm_cmplt_epi32(t, sel);
+      sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
+      const int32_t id0 = _mm_cvtsi128_si32(sel);
+      best = id0 == 0x7fffffff ? kNone : uint32_t(id0);
+      if (best == kNone) best_d2 = std::numeric_limits<float>::infinity();
+      if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) != 0xffff)
+        for (uint32_t j = 0; j < found_count; ++j)
+          for (uint32_t c = cells[found[j]].next; c != 0; c = cells[c].next)
+            testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c - 1, best, best_d2);
+    } else
+#endif
+    {
+      for (uint32_t j = 0; j < found_count; ++j)
+        for (uint32_t c = found[j]; c != 0; c = cells[c].next)
+          testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c - 1, best, best_d2);
+    }
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
       const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
                        size_t(floorToInt(q.x) - lo_cube[0]);
       cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = best;
+      head[k] = best + 1;
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -274,12 +343,19 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                  const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
-  if (rule.cube)
-    (rule.nearest ? assignDenseT<true, true> : assignDenseT<true, false>)(p, cube_width, reach, lo_cube, dims, rule,
-                                                                          expected, out);
-  else
-    (rule.nearest ? assignDenseT<false, true> : assignDenseT<false, false>)(p, cube_width, reach, lo_cube, dims,
-                                                                            rule, expected, out);
+  // the lanes pay where clusters are large (a vertex meets several cells, and its test of each was a
+  // branch mispredicted about a third of the time); at the finest levels, with a cell per one or two
+  // vertices, the scalar loop is faster (bunny, min of 100 calls: at 50 % 1.71 vs 1.83 ms, at 25 %
+  // 1.92 vs 1.76, at 12 % and coarser 1.62 vs 1.07)
+  const bool lanes = double(expected) * 3.0 < double(p.order.size());
+  using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
+                      Assignment&);
+  static constexpr Fn kFns[2][2][2] = {
+      {{assignDenseT<false, false, false>, assignDenseT<false, false, true>},
+       {assignDenseT<false, true, false>, assignDenseT<false, true, true>}},
+      {{assignDenseT<true, false, false>, assignDenseT<true, false, true>},
+       {assignDenseT<true, true, false>, assignDenseT<true, true, true>}}};
+  kFns[rule.cube][rule.nearest][lanes](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
