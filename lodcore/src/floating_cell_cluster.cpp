@@ -268,6 +268,11 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     float best_d2 = std::numeric_limits<float>::infinity();
 #if defined(__SSE2__)
     if (kLanes) {
+      // the cells found, four at a time, one per lane, without a branch per cell: each lane computes
+      // d^2 and the containment with testCell's operations and keeps its least (d^2, id) under the
+      // same order, then the four lanes' minima are reduced, so the cell chosen is the same; the
+      // list is padded with the sentinel (never inside). A cube of side w/2 lists at most one cube
+      // cell, so successors (sphere cells, cubes of side w) are left to a scalar walk after.
       found[found_count] = found[found_count + 1] = found[found_count + 2] = 0;  // pad with the sentinel
       const __m128 px = _mm_set1_ps(pv.x), py = _mm_set1_ps(pv.y), pz = _mm_set1_ps(pv.z);
       __m128 bd2 = _mm_set1_ps(std::numeric_limits<float>::infinity());
