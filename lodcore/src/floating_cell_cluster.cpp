@@ -272,15 +272,21 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       // d^2 and the containment with testCell's operations and keeps its least (d^2, id) under the
       // same order, then the four lanes' minima are reduced, so the cell chosen is the same; the
       // list is padded with the sentinel (never inside). A cube of side w/2 lists at most one cube
-      // cell, so successors (sphere cells, cubes of side w) are left to a scalar walk after.
-      found[found_count] = found[found_count + 1] = found[found_count + 2] = 0;  // pad with the sentinel
+      // cell; where lists are longer (sphere cells, cubes of side w), the successors of the cells
+      // just tested are gathered (without a branch) and tested the same way, one round per step
+      // along the lists.
       const __m128 px = _mm_set1_ps(pv.x), py = _mm_set1_ps(pv.y), pz = _mm_set1_ps(pv.z);
       __m128 bd2 = _mm_set1_ps(std::numeric_limits<float>::infinity());
       __m128i bid = _mm_set1_epi32(0x7fffffff);
+      uint32_t* list = found;
+      uint32_t list_count = found_count;
+      uint32_t successors[64 + 3];
+      for (;;) {
+      list[list_count] = list[list_count + 1] = list[list_count + 2] = 0;  // pad with the sentinel
       __m128i chained = _mm_setzero_si128();
-      for (uint32_t j = 0; j < found_count; j += 4) {
-        __m128 a0 = _mm_loadu_ps(&cells[found[j]].x), a1 = _mm_loadu_ps(&cells[found[j + 1]].x);
-        __m128 a2 = _mm_loadu_ps(&cells[found[j + 2]].x), a3 = _mm_loadu_ps(&cells[found[j + 3]].x);
+      for (uint32_t j = 0; j < list_count; j += 4) {
+        __m128 a0 = _mm_loadu_ps(&cells[list[j]].x), a1 = _mm_loadu_ps(&cells[list[j + 1]].x);
+        __m128 a2 = _mm_loadu_ps(&cells[list[j + 2]].x), a3 = _mm_loadu_ps(&cells[list[j + 3]].x);
         _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
         const __m128 dx = _mm_sub_ps(px, a0), dy = _mm_sub_ps(py, a1), dz = _mm_sub_ps(pz, a2);
         const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
@@ -294,7 +300,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
           inside = _mm_cmple_ps(d2, _mm_set1_ps(rule.half2));
         }
         const __m128i id =
-            _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(found + j)), _mm_set1_epi32(1));
+            _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(list + j)), _mm_set1_epi32(1));
         const __m128 id_less = _mm_castsi128_ps(_mm_cmplt_epi32(id, bid));
         const __m128 better =
             kNearest ? _mm_or_ps(_mm_cmplt_ps(d2, bd2), _mm_and_ps(_mm_cmpeq_ps(d2, bd2), id_less)) : id_less;
@@ -303,6 +309,17 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
         const __m128i takei = _mm_castps_si128(take);
         bid = _mm_or_si128(_mm_and_si128(takei, id), _mm_andnot_si128(takei, bid));
         chained = _mm_or_si128(chained, _mm_castps_si128(a3));
+      }
+      if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) == 0xffff) break;
+      uint32_t* next_list = list == found ? successors : found;
+      uint32_t next_count = 0;
+      for (uint32_t j = 0; j < list_count; ++j) {
+        const uint32_t c = cells[list[j]].next;
+        next_list[next_count] = c;
+        next_count += c != 0;
+      }
+      list = next_list;
+      list_count = next_count;
       }
       // the least (d2, id) of the four lanes, without branches: the least d2, then the least id
       // among the lanes holding it (for the heaviest rule the least id)
@@ -323,10 +340,6 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       const int32_t id0 = _mm_cvtsi128_si32(sel);
       best = id0 == 0x7fffffff ? kNone : uint32_t(id0);
       if (best == kNone) best_d2 = std::numeric_limits<float>::infinity();
-      if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) != 0xffff)
-        for (uint32_t j = 0; j < found_count; ++j)
-          for (uint32_t c = cells[found[j]].next; c != 0; c = cells[c].next)
-            testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c - 1, best, best_d2);
     } else
 #endif
     {
