@@ -212,7 +212,7 @@ constexpr double kDenseBytesPerVertex = 8.0;
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-template <bool kCube, bool kNearest, bool kLanes>
+template <bool kCube, bool kNearest>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
@@ -265,9 +265,8 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
         }
     }
     uint32_t best = kNone;
-    float best_d2 = std::numeric_limits<float>::infinity();
 #if defined(__SSE2__)
-    if (kLanes) {
+    {
       // the cells found, four at a time, one per lane, without a branch per cell: each lane computes
       // d^2 and the containment with testCell's operations and keeps its least (d^2, id) under the
       // same order, then the four lanes' minima are reduced, so the cell chosen is the same; the
@@ -329,7 +328,6 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
         m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
         const __m128i at_min = _mm_castps_si128(_mm_cmpeq_ps(bd2, m));
         sel = _mm_or_si128(_mm_and_si128(at_min, bid), _mm_andnot_si128(at_min, _mm_set1_epi32(0x7fffffff)));
-        best_d2 = _mm_cvtss_f32(m);
       }
       __m128i t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(2, 3, 0, 1));
       __m128i lt = _mm_cmplt_epi32(t, sel);
@@ -339,14 +337,13 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
       const int32_t id0 = _mm_cvtsi128_si32(sel);
       best = id0 == 0x7fffffff ? kNone : uint32_t(id0);
-      if (best == kNone) best_d2 = std::numeric_limits<float>::infinity();
-    } else
-#endif
-    {
-      for (uint32_t j = 0; j < found_count; ++j)
-        for (uint32_t c = found[j]; c != 0; c = cells[c].next)
-          testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c - 1, best, best_d2);
     }
+#else
+    float best_d2 = std::numeric_limits<float>::infinity();
+    for (uint32_t j = 0; j < found_count; ++j)
+      for (uint32_t c = found[j]; c != 0; c = cells[c].next)
+        testCellT<kCube, kNearest>(rule, pv, cells[c].x, cells[c].y, cells[c].z, c - 1, best, best_d2);
+#endif
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
@@ -361,19 +358,11 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                  const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
-  // the lanes pay where clusters are large (a vertex meets several cells, and its test of each was a
-  // branch mispredicted about a third of the time); at the finest levels, with a cell per one or two
-  // vertices, the scalar loop is faster (bunny, min of 100 calls: at 50 % 1.71 vs 1.83 ms, at 25 %
-  // 1.92 vs 1.76, at 12 % and coarser 1.62 vs 1.07)
-  const bool lanes = double(expected) * 3.0 < double(p.order.size());
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
-  static constexpr Fn kFns[2][2][2] = {
-      {{assignDenseT<false, false, false>, assignDenseT<false, false, true>},
-       {assignDenseT<false, true, false>, assignDenseT<false, true, true>}},
-      {{assignDenseT<true, false, false>, assignDenseT<true, false, true>},
-       {assignDenseT<true, true, false>, assignDenseT<true, true, true>}}};
-  kFns[rule.cube][rule.nearest][lanes](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  static constexpr Fn kFns[2][2] = {{assignDenseT<false, false>, assignDenseT<false, true>},
+                                    {assignDenseT<true, false>, assignDenseT<true, true>}};
+  kFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
