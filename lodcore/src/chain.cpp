@@ -94,7 +94,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats& stats) {
+// `take`, when given, is `original` itself, handed over by the caller: level 0 takes it by move
+// instead of a copy once the levels are done
+Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
+                        ChainStats& stats) {
   params.progress(0.0, "grading");
   PreparedMesh p;
   Clock::time_point t0 = Clock::now();
@@ -105,11 +108,12 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   auto finish = [&]() {
     p = PreparedMesh();
     LodLevel& base = out.levels[0];
-    base.mesh = original;
+    base.bounds = computeBoundingSphere(original);
+    if (take) base.mesh = std::move(*take);
+    else base.mesh = original;
     base.cell_width = 0.0f;
     base.max_error = 0.0f;
     base.method = LodMethod::kOriginal;
-    base.bounds = computeBoundingSphere(original);
   };
   out.levels.resize(1);
   if (p.order.empty() || params.level_count == 0) {
@@ -125,7 +129,7 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
     const size_t tn = original.triangleCount();
     if (tn >= 2) {
       if (Error e = findCellWidthForTarget(p, params.cluster, tn / 2, w1, 0.05)) {
-        finish();
+        out.levels.clear();
         return e;
       }
     } else {
@@ -134,7 +138,7 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   }
   stats.first_width_seconds = since(t0);
   if (Error e = detail::checkCellWidth(p, w1)) {
-    finish();
+    out.levels.clear();
     return e;
   }
 
@@ -177,9 +181,8 @@ Error buildClusterChain(const Mesh& original, const ChainParams& params, LodChai
   return {};
 }
 
-}  // namespace
-
-Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats* stats_out) {
+Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
+                     ChainStats* stats_out) {
   out.levels.clear();
   ChainStats local;
   ChainStats& stats = stats_out ? *stats_out : local;
@@ -195,17 +198,23 @@ Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out,
     case LodMethod::kFloatingNearest:
     {
       const Clock::time_point t0 = Clock::now();
-      const Error e = buildClusterChain(original, params, out, stats);
+      const Error e = buildClusterChain(original, take, params, out, stats);
       stats.total_seconds = since(t0);
       return e;
     }
     case LodMethod::kZhang:
-      return buildZhangChain(original, params, out);
+    {
+      const Error e = buildZhangChain(original, params, out);
+      // these generators copy level 0; a handed-over mesh replaces the copy, as documented
+      if (!e && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
+      return e;
+    }
     case LodMethod::kScrooge:
     {
       const Clock::time_point t0 = Clock::now();
       const Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
       stats.total_seconds = since(t0);
+      if (!e && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
       return e;
     }
     case LodMethod::kOriginal:
@@ -213,6 +222,16 @@ Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out,
   }
   return {Status::kInvalidArgument, std::string("method '") + lodMethodName(params.cluster.method) +
                                         "' does not generate levels"};
+}
+
+}  // namespace
+
+Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, ChainStats* stats) {
+  return buildChainImpl(original, nullptr, params, out, stats);
+}
+
+Error buildChain(Mesh&& original, const ChainParams& params, LodChain& out, ChainStats* stats) {
+  return buildChainImpl(original, &original, params, out, stats);
 }
 
 }  // namespace scenelod

@@ -174,3 +174,40 @@ TEST(Chain, BadInputAndEmptyMesh) {
   EXPECT_EQ(chain.levelCount(), 1u);
   EXPECT_EQ(findCellWidthForTarget(empty, cp.cluster, 10, w).status, Status::kInvalidArgument);
 }
+
+// buildChain(Mesh&&): the same chain as from a const reference, level 0 being the handed-over mesh
+// (its buffers moved, not copied); on error the caller keeps its mesh and the chain is empty
+TEST(Chain, HandedOverMeshBecomesLevelZeroWithTheSameLevels) {
+  const Mesh m = testMesh();
+  for (LodMethod method : {LodMethod::kFloatingNearest, LodMethod::kUniform, LodMethod::kZhang}) {
+    ChainParams cp;
+    cp.cluster.method = method;
+    cp.level_count = 4;
+    LodChain copied, taken;
+    ASSERT_TRUE(buildChain(m, cp, copied).ok());
+    Mesh own = m;
+    const glm::vec3* buffer = own.positions.data();
+    ASSERT_TRUE(buildChain(std::move(own), cp, taken).ok()) << lodMethodName(method);
+    EXPECT_TRUE(own.positions.empty()) << lodMethodName(method);
+    EXPECT_EQ(taken.levels[0].mesh.positions.data(), buffer) << "level 0 was copied, not moved";
+    ASSERT_EQ(copied.levelCount(), taken.levelCount());
+    for (size_t k = 0; k < copied.levelCount(); ++k) {
+      EXPECT_TRUE(sameMesh(copied.levels[k].mesh, taken.levels[k].mesh)) << lodMethodName(method) << " level " << k;
+      EXPECT_EQ(copied.levels[k].cell_width, taken.levels[k].cell_width);
+      EXPECT_EQ(copied.levels[k].max_error, taken.levels[k].max_error);
+      EXPECT_EQ(copied.levels[k].bounds.radius, taken.levels[k].bounds.radius);
+    }
+  }
+  ChainParams cp;
+  cp.growth = 0.5f;
+  Mesh own = m;
+  LodChain chain;
+  EXPECT_EQ(buildChain(std::move(own), cp, chain).status, Status::kInvalidArgument);
+  EXPECT_TRUE(sameMesh(own, m));
+  EXPECT_TRUE(chain.empty());
+  cp.growth = 2.0f;
+  own.triangles[0] = 1u << 30;  // bad index: the mesh is rejected and stays the caller's
+  EXPECT_EQ(buildChain(std::move(own), cp, chain).status, Status::kInvalidMesh);
+  EXPECT_EQ(own.triangles[0], 1u << 30);
+  EXPECT_EQ(own.positions, m.positions);
+}

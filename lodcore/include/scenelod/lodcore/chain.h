@@ -32,6 +32,12 @@ struct ChainParams {
 // level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB.
 Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, struct ChainStats* stats = nullptr);
 
+// The same chain from a mesh the caller hands over: level 0 takes `original` by move instead of
+// copying it (for the clustering methods only after the levels are built, so the copy's V x 24 +
+// T x 12 bytes never add to the peak). On success `original` is left moved-from (empty); on error
+// it is unchanged and `out` is empty. Use it when the engine no longer needs its own copy.
+Error buildChain(Mesh&& original, const ChainParams& params, LodChain& out, struct ChainStats* stats = nullptr);
+
 // Where a chain's build time went (filled by buildChain when asked).
 struct ChainStats {
   double prepare_seconds = 0.0;       // validation, grading and the sort by weight
