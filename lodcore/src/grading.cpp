@@ -34,6 +34,7 @@ constexpr float kPi = 3.14159265358979f;
 constexpr float kMinTheta = 1e-3f;        // rossignac: 1/theta is capped at 1/kMinTheta
 constexpr float kBoundaryFactor = 0.5f;   // boost: a boundary vertex is on the silhouette at least half the time
 constexpr size_t kExactPairLimit = 64;    // above this many directions, the widest pair is found by two sweeps
+constexpr uint32_t kScanLimit = 64;       // up to this many incidences, distinct neighbours by linear scan
 
 // smallest dot product over pairs of unit vectors (cos of the largest angle between them)
 float minPairDot(const glm::vec3* d, size_t n) {
@@ -59,14 +60,23 @@ float minPairDot(const glm::vec3* d, size_t n) {
   return best;
 }
 
-// insertion sort: neighbour lists are short (twice the degree)
-void sortSmall(uint32_t* a, size_t n) {
-  for (size_t i = 1; i < n; ++i) {
-    const uint32_t x = a[i];
-    size_t j = i;
-    for (; j > 0 && a[j - 1] > x; --j) a[j] = a[j - 1];
-    a[j] = x;
+// sorts the n neighbours (u, triangle count) collected with repeats by u and merges the repeats,
+// summing their counts; returns the number of distinct neighbours
+size_t mergeNeighbours(uint32_t* nb, uint32_t* tris, size_t n, std::vector<std::pair<uint32_t, uint32_t>>& pairs) {
+  pairs.resize(n);
+  for (size_t i = 0; i < n; ++i) pairs[i] = {nb[i], tris[i]};
+  std::sort(pairs.begin(), pairs.end());
+  size_t m = 0;
+  for (const auto& p : pairs) {
+    if (m > 0 && nb[m - 1] == p.first) {
+      tris[m - 1] += p.second;
+    } else {
+      nb[m] = p.first;
+      tris[m] = p.second;
+      ++m;
+    }
   }
+  return m;
 }
 
 struct GradeOutput {
@@ -117,35 +127,62 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
   std::mutex longest_mutex;
   float longest_edge = 0.0f;  // a max: the same whatever the split between threads
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
     std::vector<glm::vec3> dirs, normals;
-    std::vector<uint32_t> tri_nb, all_nb;
+    std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
-      out.raw[v] = 0.0f;
-      if (out.angular) out.angular[v] = 0.0f;
-      if (out.sums) out.sums[v] = VertexFaceSums();
-      if (colors) out.color_sums[v] = glm::vec4(0.0f);
-      if (b == e) continue;
-      tri_nb.clear();
-      all_nb.clear();
-      normals.clear();
+      if (b == e) {
+        out.raw[v] = 0.0f;
+        if (out.angular) out.angular[v] = 0.0f;
+        if (out.sums) out.sums[v] = VertexFaceSums();
+        if (colors) out.color_sums[v] = glm::vec4(0.0f);
+        continue;
+      }
+      const size_t row = e - b;
+      if (nb.size() < 2 * row) {
+        nb.resize(2 * row);
+        nb_tris.resize(2 * row);
+        dirs.resize(2 * row);
+        normals.resize(row);
+      }
+      uint32_t* nbp = nb.data();
+      uint32_t* trip = nb_tris.data();
+      size_t nn = 0, nnormals = 0;
+      // distinct neighbours by a linear scan without early exit (rows are short; cheaper than sorting);
+      // `tri` is 1 for a triangle's corner, 0 for an input edge's end. Long rows collect repeats and
+      // sort them (mergeNeighbours), O(d log d).
+      const bool scan = row <= kScanLimit;
+      auto addNeighbour = [&](uint32_t u, uint32_t tri) {
+        uint32_t found = 0;
+        if (scan)
+          for (size_t j = 0; j < nn; ++j) {
+            const uint32_t same = nbp[j] == u;
+            trip[j] += same & tri;
+            found |= same;
+          }
+        nbp[nn] = u;
+        trip[nn] = tri;
+        nn += !found;
+      };
       VertexFaceSums s;
       glm::vec4 cs(0.0f);
       const glm::vec3 pv = pos[v];
       for (uint32_t i = b; i < e; ++i) {
         const Incidence inc = incidence[i];
         if (inc.b == detail::kNone) {
-          all_nb.push_back(inc.a);
+          addNeighbour(inc.a, 0);
           continue;
         }
-        tri_nb.push_back(inc.a);
-        tri_nb.push_back(inc.b);
+        addNeighbour(inc.a, 1);
+        addNeighbour(inc.b, 1);
         const glm::vec3 cr = glm::cross(pos[inc.a] - pv, pos[inc.b] - pv);
         const float nl = glm::length(cr);
         if (!(nl > 0.0f)) continue;
         const glm::vec3 n = cr / nl;
-        if (boost_features) normals.push_back(n);
+        normals[nnormals++] = n;
         const float area = 0.5f * nl;
         s.a[0] += area * n.x * n.x; s.a[1] += area * n.x * n.y; s.a[2] += area * n.x * n.z;
         s.a[3] += area * n.y * n.y; s.a[4] += area * n.y * n.z; s.a[5] += area * n.z * n.z;
@@ -157,46 +194,36 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       }
       if (out.sums) out.sums[v] = s;
       if (colors) out.color_sums[v] = cs;
-      // boundary: some neighbour is shared by only one incident triangle (appears once in tri_nb)
-      sortSmall(tri_nb.data(), tri_nb.size());
+      if (!scan) nn = mergeNeighbours(nbp, trip, nn, pairs);
+      // boundary: some neighbour is shared by only one incident triangle
       bool boundary = false;
-      for (size_t i = 0; i < tri_nb.size();) {
-        size_t j = i + 1;
-        while (j < tri_nb.size() && tri_nb[j] == tri_nb[i]) ++j;
-        if (j - i == 1) boundary = true;
-        i = j;
-      }
-      // distinct neighbours: repeated directions change neither the widest pair nor the longest edge
-      if (all_nb.empty()) {
-        all_nb.assign(tri_nb.begin(), tri_nb.end());  // already sorted
-      } else {
-        all_nb.insert(all_nb.end(), tri_nb.begin(), tri_nb.end());
-        sortSmall(all_nb.data(), all_nb.size());
-      }
-      all_nb.erase(std::unique(all_nb.begin(), all_nb.end()), all_nb.end());
-      dirs.clear();
+      for (size_t j = 0; j < nn; ++j) boundary |= trip[j] == 1;
+      // the widest pair and the longest edge do not depend on the neighbours' order, except for the
+      // estimate of minPairDot on long lists, whose neighbours mergeNeighbours left in index order
+      size_t ndirs = 0;
       float longest_v = 0.0f;
-      for (uint32_t u : all_nb) {
-        const glm::vec3 d = pos[u] - pos[v];
+      for (size_t j = 0; j < nn; ++j) {
+        const glm::vec3 d = pos[nbp[j]] - pv;
         const float len = glm::length(d);
         if (len > 0.0f) {
-          dirs.push_back(d / len);
+          dirs[ndirs++] = d / len;
           longest_v = std::max(longest_v, len);
         }
       }
       range_longest = std::max(range_longest, longest_v);
-      if (dirs.empty()) continue;  // only zero-length edges: no direction, weight 0
-      const float cos_theta = std::clamp(minPairDot(dirs.data(), dirs.size()), -1.0f, 1.0f);
-      float a;
-      if (grading == Grading::kLowTan) {
-        a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
-        if (boost_features) {
-          if (boundary) a = std::max(a, kBoundaryFactor);
-          const float crease = (1.0f - std::clamp(minPairDot(normals.data(), normals.size()), -1.0f, 1.0f)) * 0.5f;
-          a = std::max(a, crease);
+      float a = 0.0f;
+      if (ndirs > 0) {  // else only zero-length edges: no direction, weight 0
+        const float cos_theta = std::clamp(minPairDot(dirs.data(), ndirs), -1.0f, 1.0f);
+        if (grading == Grading::kLowTan) {
+          a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
+          if (boost_features) {
+            if (boundary) a = std::max(a, kBoundaryFactor);
+            const float crease = (1.0f - std::clamp(minPairDot(normals.data(), nnormals), -1.0f, 1.0f)) * 0.5f;
+            a = std::max(a, crease);
+          }
+        } else {
+          a = kPi / std::max(std::acos(cos_theta), kMinTheta);
         }
-      } else {
-        a = kPi / std::max(std::acos(cos_theta), kMinTheta);
       }
       if (out.angular) out.angular[v] = a;
       out.raw[v] = longest_v * a;
