@@ -85,6 +85,8 @@ struct GradeOutput {
   float* longest_edge;           // the longest edge of the mesh
   VertexFaceSums* sums;          // per vertex, may be null
   glm::vec4* color_sums;         // per vertex, may be null
+  uint8_t* in_rows = nullptr;    // per vertex, may be null: 1 when a triangle or an edge uses it
+  Aabb* bounds = nullptr;        // may be null: of the vertices triangles or edges use (min > max if none)
 };
 
 // Grades every vertex and, when asked, sums its incident faces. One counting sort builds the
@@ -125,15 +127,18 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
   const bool colors = out.color_sums && !mesh.colors.empty();
 
   std::mutex longest_mutex;
-  float longest_edge = 0.0f;  // a max: the same whatever the split between threads
+  float longest_edge = 0.0f;
+  glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
     std::vector<glm::vec3> dirs, normals;
     std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
+      if (out.in_rows) out.in_rows[v] = b != e;
       if (b == e) {
         out.raw[v] = 0.0f;
         if (out.angular) out.angular[v] = 0.0f;
@@ -170,6 +175,8 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       VertexFaceSums s;
       glm::vec4 cs(0.0f);
       const glm::vec3 pv = pos[v];
+      lo = glm::min(lo, pv);
+      hi = glm::max(hi, pv);
       for (uint32_t i = b; i < e; ++i) {
         const Incidence inc = incidence[i];
         if (inc.b == detail::kNone) {
@@ -228,10 +235,14 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       if (out.angular) out.angular[v] = a;
       out.raw[v] = longest_v * a;
     }
+    // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
     longest_edge = std::max(longest_edge, range_longest);
+    box_lo = glm::min(box_lo, lo);
+    box_hi = glm::max(box_hi, hi);
   });
   *out.longest_edge = longest_edge;
+  if (out.bounds) out.bounds->min = box_lo, out.bounds->max = box_hi;
 }
 
 // Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
@@ -310,39 +321,53 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   out.face_sums.resize(vn);
   if (!in.colors.empty()) out.face_colors.resize(vn);
   float longest_edge = 0.0f;
+  std::vector<uint8_t> referenced(vn);
+  Aabb rows_box;
   gradeAndSum(in, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
-               in.colors.empty() ? nullptr : out.face_colors.data()});
+               in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
   out.longest_edge = longest_edge;
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
 
-  std::vector<uint8_t> referenced(vn, 0);
-  for (uint32_t v : in.triangles) referenced[v] = 1;
-  for (uint32_t v : in.edges) referenced[v] = 1;
-  for (uint32_t v : in.points) referenced[v] = 1;
-  size_t count = 0;
-  bool first = true;
-  for (size_t v = 0; v < vn; ++v) {
-    if (!referenced[v]) continue;
-    ++count;
-    const glm::vec3& p = in.positions[v];
-    if (first) out.bounds.min = out.bounds.max = p, first = false;
-    out.bounds.min = glm::min(out.bounds.min, p);
-    out.bounds.max = glm::max(out.bounds.max, p);
+  // referenced: used by a triangle or an edge (the grading rows) or by a point
+  glm::vec3 lo = rows_box.min, hi = rows_box.max;
+  for (uint32_t v : in.points) {
+    referenced[v] = 1;
+    lo = glm::min(lo, in.positions[v]);
+    hi = glm::max(hi, in.positions[v]);
   }
+  size_t count = 0;
+  for (size_t v = 0; v < vn; ++v) count += referenced[v];
+  if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
   sortByWeight(raw, referenced, count, out.order);
   out.sorted_positions.resize(count);
-  for (size_t i = 0; i < count; ++i) out.sorted_positions[i] = in.positions[out.order[i]];
+  const glm::vec3* pos = in.positions.data();
+  const uint32_t* order = out.order.data();
+  glm::vec3* sorted = out.sorted_positions.data();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
+  });
 
-  double sum = 0.0, area = 0.0;
+  // surface area and summed edge length in double, per fixed chunk of triangles and then over the
+  // chunks in order: the same sums whatever the number of threads
   const size_t tn = in.triangleCount();
-  for (size_t t = 0; t < tn; ++t) {
-    const glm::vec3 a = in.positions[in.triangles[3 * t]], b = in.positions[in.triangles[3 * t + 1]],
-                    c = in.positions[in.triangles[3 * t + 2]];
-    sum += double(glm::length(b - a)) + double(glm::length(c - b)) + double(glm::length(a - c));
-    area += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
-  }
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (tn + kChunk - 1) / kChunk;
+  std::vector<double> chunk_length(chunks), chunk_area(chunks);
+  const uint32_t* tri = in.triangles.data();
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    double sum = 0.0, area = 0.0;
+    for (size_t t = c * kChunk, end = std::min(tn, t + kChunk); t < end; ++t) {
+      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
+      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
+      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
+    }
+    chunk_length[c] = sum;
+    chunk_area[c] = area;
+  });
+  double sum = 0.0, area = 0.0;
+  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);

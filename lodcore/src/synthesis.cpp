@@ -41,6 +41,9 @@ namespace {
 constexpr float kMeanWeightFloor = 0.05f;
 // quadric: eigenvalues below this fraction of the largest are treated as zero (singular directions)
 constexpr double kEigenCutoff = 1e-3;
+// the closed-form full-rank test keeps this margin above the cutoff, so that its rounding never
+// decides a case the eigenvalues would decide the other way
+constexpr double kFullRankMargin = 1.0 + 1e-9;
 
 struct Quadric {
   float a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;  // sum of area * n n^T
@@ -124,13 +127,25 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
                  -(a[2][0] * x0.x + a[2][1] * x0.y + a[2][2] * x0.z + q.b2)};
   // a zero residual (one-vertex clusters: every plane passes through x0) leaves x0 unchanged
   if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0) return x0;
+  double y[3] = {0.0, 0.0, 0.0};
+  // full rank without the eigenvalues (most clusters): the smallest eigenvalue is at least
+  // det / c1 (c1 the sum of the principal 2x2 minors, >= l1 l2) and the largest at most the trace
+  {
+    const double tr = a[0][0] + a[1][1] + a[2][2];
+    const double m00 = a[1][1] * a[2][2] - a[1][2] * a[1][2], m11 = a[0][0] * a[2][2] - a[0][2] * a[0][2],
+                 m22 = a[0][0] * a[1][1] - a[0][1] * a[0][1];
+    const double c1 = m00 + m11 + m22;
+    const double det = a[0][0] * m00 + a[0][1] * (a[0][2] * a[1][2] - a[0][1] * a[2][2]) +
+                       a[0][2] * (a[0][1] * a[1][2] - a[0][2] * a[1][1]);
+    if (tr > 0.0 && c1 > 0.0 && det >= kFullRankMargin * kEigenCutoff * tr * c1 && solveSymmetric(a, r, y))
+      return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
+  }
   double w[3];
   symmetricEigenvalues(a, w);
   // A is a sum of area x n n^T: positive semi-definite, so the largest eigenvalue is the largest in size
   const double wmax = std::max(w[0], -w[2]);
   if (!(wmax > 0.0)) return x0;
   const double cut = kEigenCutoff * wmax;
-  double y[3] = {0.0, 0.0, 0.0};
   bool solved = false;
   if (std::fabs(w[2]) >= cut && std::fabs(w[1]) >= cut) {
     solved = solveSymmetric(a, r, y);
