@@ -30,6 +30,32 @@ const char* gradingName(Grading g) {
 
 namespace {
 
+// x / scale rounded to a 16-bit fraction: unorm in [0, 1] or snorm in [-1, 1] (half away from zero)
+uint16_t toUnorm16(float x, float inv_scale) {
+  const float f = std::clamp(x * inv_scale, 0.0f, 1.0f) * 65535.0f;
+  return static_cast<uint16_t>(f + 0.5f);
+}
+int16_t toSnorm16(float x, float inv_scale) {
+  const float f = std::clamp(x * inv_scale, -1.0f, 1.0f) * 32767.0f;
+  return static_cast<int16_t>(f >= 0.0f ? f + 0.5f : f - 0.5f);
+}
+
+}  // namespace
+
+void VertexFaceSums::encode(float face_area, const float a[6], const float n[3]) {
+  *this = VertexFaceSums();
+  if (!(face_area > 0.0f)) return;
+  area = face_area;
+  const float inv = 1.0f / face_area;
+  diagonal[0] = toUnorm16(a[0], inv), diagonal[1] = toUnorm16(a[3], inv), diagonal[2] = toUnorm16(a[5], inv);
+  // |a_ij| <= sqrt(a_ii a_jj) <= area / 2 off the diagonal (the trace is the area)
+  off_diagonal[0] = toSnorm16(a[1], 2.0f * inv), off_diagonal[1] = toSnorm16(a[2], 2.0f * inv);
+  off_diagonal[2] = toSnorm16(a[4], 2.0f * inv);
+  for (int k = 0; k < 3; ++k) normal[k] = toSnorm16(n[k], inv);
+}
+
+namespace {
+
 constexpr float kPi = 3.14159265358979f;
 constexpr float kMinTheta = 1e-3f;        // rossignac: 1/theta is capped at 1/kMinTheta
 constexpr float kBoundaryFactor = 0.5f;   // boost: a boundary vertex is on the silhouette at least half the time
@@ -172,7 +198,7 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
         trip[nn] = tri;
         nn += !found;
       };
-      VertexFaceSums s;
+      float qa[6] = {0, 0, 0, 0, 0, 0}, qn[3] = {0, 0, 0}, area_sum = 0.0f;
       glm::vec4 cs(0.0f);
       const glm::vec3 pv = pos[v];
       lo = glm::min(lo, pv);
@@ -191,15 +217,16 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
         const glm::vec3 n = cr / nl;
         normals[nnormals++] = n;
         const float area = 0.5f * nl;
-        s.a[0] += area * n.x * n.x; s.a[1] += area * n.x * n.y; s.a[2] += area * n.x * n.z;
-        s.a[3] += area * n.y * n.y; s.a[4] += area * n.y * n.z; s.a[5] += area * n.z * n.z;
-        s.normal[0] += area * n.x; s.normal[1] += area * n.y; s.normal[2] += area * n.z;
+        qa[0] += area * n.x * n.x; qa[1] += area * n.x * n.y; qa[2] += area * n.x * n.z;
+        qa[3] += area * n.y * n.y; qa[4] += area * n.y * n.z; qa[5] += area * n.z * n.z;
+        qn[0] += area * n.x; qn[1] += area * n.y; qn[2] += area * n.z;
+        area_sum += area;
         if (colors) {
           const glm::vec3 fc = (mesh.colors[v] + mesh.colors[inc.a] + mesh.colors[inc.b]) * (1.0f / 3.0f);
           cs += glm::vec4(fc * area, area);
         }
       }
-      if (out.sums) out.sums[v] = s;
+      if (out.sums) out.sums[v].encode(area_sum, qa, qn);
       if (colors) out.color_sums[v] = cs;
       if (!scan) nn = mergeNeighbours(nbp, trip, nn, pairs);
       // boundary: some neighbour is shared by only one incident triangle

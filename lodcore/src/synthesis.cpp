@@ -222,14 +222,16 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     s.sum += d;
     s.count += 1.0f;
     if (have_face_sums) {
-      const VertexFaceSums& f = p.face_sums[v];
-      s.normal += glm::vec3(f.normal[0], f.normal[1], f.normal[2]);
+      const VertexFaceSums& fs = p.face_sums[v];
+      s.normal += fs.normalSum();
       if (quadric) {
-        for (int k = 0; k < 6; ++k) s.a[k] += f.a[k];
+        float fa[6];
+        fs.quadric(fa);
+        for (int k = 0; k < 6; ++k) s.a[k] += fa[k];
         // the vertex lies on all its faces' planes: relative to the centre, b = -A d
-        s.b[0] -= f.a[0] * d.x + f.a[1] * d.y + f.a[2] * d.z;
-        s.b[1] -= f.a[1] * d.x + f.a[3] * d.y + f.a[4] * d.z;
-        s.b[2] -= f.a[2] * d.x + f.a[4] * d.y + f.a[5] * d.z;
+        s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
+        s.b[1] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
+        s.b[2] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
       }
     }
     if (colors) {
