@@ -198,9 +198,11 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     float a[6] = {0, 0, 0, 0, 0, 0};  // quadric: sum of area n n^T
     float b[3] = {0, 0, 0};           // quadric: sum of area n d, planes relative to the centre
     glm::vec3 normal{0.0f};           // sum of area n
+    explicit Sums(const glm::vec3& c) : centre(c) {}
   };
-  std::vector<Sums> sums(nc);
-  for (uint32_t c = 0; c < nc; ++c) sums[c].centre = pos[a.heaviest[c]];
+  std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
+  sums.reserve(nc);
+  for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
   std::vector<glm::vec4> face_color;    // xyz: sum of area x face colour, w: sum of area
   std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
   if (colors) {
