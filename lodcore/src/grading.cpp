@@ -30,14 +30,11 @@ const char* gradingName(Grading g) {
 
 namespace {
 
-// x / scale rounded to a 16-bit fraction: unorm in [0, 1] or snorm in [-1, 1] (half away from zero)
-uint16_t toUnorm16(float x, float inv_scale) {
-  const float f = std::clamp(x * inv_scale, 0.0f, 1.0f) * 65535.0f;
-  return static_cast<uint16_t>(f + 0.5f);
-}
+// x / scale rounded to the nearest snorm16 fraction in [-1, 1]; branch-free (the signs are random):
+// shifted to be positive, truncation is the floor
 int16_t toSnorm16(float x, float inv_scale) {
   const float f = std::clamp(x * inv_scale, -1.0f, 1.0f) * 32767.0f;
-  return static_cast<int16_t>(f >= 0.0f ? f + 0.5f : f - 0.5f);
+  return static_cast<int16_t>(static_cast<int32_t>(f + 32768.5f) - 32768);
 }
 
 }  // namespace
@@ -47,11 +44,8 @@ void VertexFaceSums::encode(float face_area, const float a[6], const float n[3])
   if (!(face_area > 0.0f)) return;
   area = face_area;
   const float inv = 1.0f / face_area;
-  diagonal[0] = toUnorm16(a[0], inv), diagonal[1] = toUnorm16(a[3], inv), diagonal[2] = toUnorm16(a[5], inv);
-  // |a_ij| <= sqrt(a_ii a_jj) <= area / 2 off the diagonal (the trace is the area)
-  off_diagonal[0] = toSnorm16(a[1], 2.0f * inv), off_diagonal[1] = toSnorm16(a[2], 2.0f * inv);
-  off_diagonal[2] = toSnorm16(a[4], 2.0f * inv);
-  for (int k = 0; k < 3; ++k) normal[k] = toSnorm16(n[k], inv);
+  for (int k = 0; k < 6; ++k) q[k] = toSnorm16(a[k], inv);
+  for (int k = 0; k < 3; ++k) q[6 + k] = toSnorm16(n[k], inv);
 }
 
 namespace {

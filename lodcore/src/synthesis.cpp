@@ -224,11 +224,10 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     s.sum += d;
     s.count += 1.0f;
     if (have_face_sums) {
-      const VertexFaceSums& fs = p.face_sums[v];
-      s.normal += fs.normalSum();
+      float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
+      p.face_sums[v].decode(fa);
+      s.normal += glm::vec3(fa[6], fa[7], fa[8]);
       if (quadric) {
-        float fa[6];
-        fs.quadric(fa);
         for (int k = 0; k < 6; ++k) s.a[k] += fa[k];
         // the vertex lies on all its faces' planes: relative to the centre, b = -A d
         s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;

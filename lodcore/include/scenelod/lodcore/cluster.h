@@ -8,6 +8,7 @@
 // duplicate primitives into triangles / thick edges / points, recompute normals and colours.
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -52,27 +53,35 @@ struct ClusterParams {
 // Sums over the triangles incident on one vertex (each triangle counted once per corner, as in
 // Lindstrom's per-cluster accumulation), made once per mesh so that a level's synthesis is a pass
 // over vertices. Stored in 24 bytes as the summed area and 16-bit fractions of it: the quadric's
-// entries are at most the area (its trace) and the normal sum at most the area in length, so each
-// keeps about 1.5e-5 of the area (decode with quadric() and normalSum()).
+// entries are at most the area (its trace) in size and the normal sum at most the area in length,
+// so each keeps about 3e-5 of the area (decode with decode()).
 struct VertexFaceSums {
-  float area = 0.0f;                 // sum of the incident faces' areas (the trace of the quadric)
-  uint16_t diagonal[3] = {0, 0, 0};  // sum of area * n n^T: xx, yy, zz, as unorm16 fractions of area
-  int16_t off_diagonal[3] = {0, 0, 0};  // xy, xz, yz, as snorm16 fractions of area / 2 (|.| <= area / 2)
-  int16_t normal[3] = {0, 0, 0};        // sum of area * n, as snorm16 fractions of area
+  float area = 0.0f;  // sum of the incident faces' areas (the trace of the quadric)
+  // snorm16 fractions of area: sum of area * n n^T (xx, xy, xz, yy, yz, zz, n the unit face normal),
+  // then sum of area * n (x, y, z)
+  int16_t q[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   // every incident plane passes through the vertex, so the quadric's linear part relative to the
   // vertex is 0 and needs no storage: relative to a point c it is -A (v - c)
 
   // fills the fields from the sums (a: xx, xy, xz, yy, yz, zz; n: sum of area * n)
   void encode(float face_area, const float a[6], const float n[3]);
-  // the quadric's entries xx, xy, xz, yy, yz, zz
-  void quadric(float a[6]) const {
-    const float d = area * (1.0f / 65535.0f), o = area * (0.5f / 32767.0f);
-    a[0] = float(diagonal[0]) * d, a[1] = float(off_diagonal[0]) * o, a[2] = float(off_diagonal[1]) * o;
-    a[3] = float(diagonal[1]) * d, a[4] = float(off_diagonal[2]) * o, a[5] = float(diagonal[2]) * d;
-  }
-  glm::vec3 normalSum() const {
+  // out[0..5]: the quadric's entries xx, xy, xz, yy, yz, zz; out[6..8]: the normal sum
+  void decode(float out[9]) const {
     const float s = area * (1.0f / 32767.0f);
-    return glm::vec3(float(normal[0]) * s, float(normal[1]) * s, float(normal[2]) * s);
+#if defined(__GNUC__)
+    // four at a time (the same conversions and products as the loop below)
+    typedef int16_t Short4 __attribute__((vector_size(8)));
+    typedef float Float4 __attribute__((vector_size(16)));
+    Short4 lo, hi;
+    std::memcpy(&lo, q, sizeof lo);
+    std::memcpy(&hi, q + 4, sizeof hi);
+    const Float4 a = __builtin_convertvector(lo, Float4) * s, b = __builtin_convertvector(hi, Float4) * s;
+    std::memcpy(out, &a, sizeof a);
+    std::memcpy(out + 4, &b, sizeof b);
+    out[8] = float(q[8]) * s;
+#else
+    for (int k = 0; k < 9; ++k) out[k] = float(q[k]) * s;
+#endif
   }
 };
 
