@@ -31,9 +31,11 @@ const char* gradingName(Grading g) {
 namespace {
 
 // x / scale rounded to the nearest snorm16 fraction in [-1, 1]; branch-free (the signs are random):
-// shifted to be positive, truncation is the floor
+// shifted to be positive, truncation is the floor. A NaN (sums overflowed to infinity) gives -1
+// rather than an undefined conversion.
 int16_t toSnorm16(float x, float inv_scale) {
-  const float f = std::clamp(x * inv_scale, -1.0f, 1.0f) * 32767.0f;
+  const float c = x * inv_scale;
+  const float f = (c > -1.0f ? (c < 1.0f ? c : 1.0f) : -1.0f) * 32767.0f;
   return static_cast<int16_t>(static_cast<int32_t>(f + 32768.5f) - 32768);
 }
 
