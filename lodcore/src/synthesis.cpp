@@ -6,6 +6,7 @@
 // Also the cluster's area-weighted colour (Reddy, SCROOGE §7.3) and normal.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -30,6 +31,24 @@ const char* cellShapeName(CellShape s) {
     case CellShape::kSphere: return "sphere";
   }
   return "unknown";
+}
+
+void VertexFaceSums::decode(float out[9]) const {
+  const float s = area * (1.0f / 32767.0f);
+#if defined(__GNUC__)
+  // four at a time (the same conversions and products as the loop below)
+  typedef int16_t Short4 __attribute__((vector_size(8)));
+  typedef float Float4 __attribute__((vector_size(16)));
+  Short4 lo, hi;
+  std::memcpy(&lo, q, sizeof lo);
+  std::memcpy(&hi, q + 4, sizeof hi);
+  const Float4 a = __builtin_convertvector(lo, Float4) * s, b = __builtin_convertvector(hi, Float4) * s;
+  std::memcpy(out, &a, sizeof a);
+  std::memcpy(out + 4, &b, sizeof b);
+  out[8] = float(q[8]) * s;
+#else
+  for (int k = 0; k < 9; ++k) out[k] = float(q[k]) * s;
+#endif
 }
 
 namespace detail {

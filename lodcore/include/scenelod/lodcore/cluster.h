@@ -8,7 +8,6 @@
 // duplicate primitives into triangles / thick edges / points, recompute normals and colours.
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -66,23 +65,7 @@ struct VertexFaceSums {
   // fills the fields from the sums (a: xx, xy, xz, yy, yz, zz; n: sum of area * n)
   void encode(float face_area, const float a[6], const float n[3]);
   // out[0..5]: the quadric's entries xx, xy, xz, yy, yz, zz; out[6..8]: the normal sum
-  void decode(float out[9]) const {
-    const float s = area * (1.0f / 32767.0f);
-#if defined(__GNUC__)
-    // four at a time (the same conversions and products as the loop below)
-    typedef int16_t Short4 __attribute__((vector_size(8)));
-    typedef float Float4 __attribute__((vector_size(16)));
-    Short4 lo, hi;
-    std::memcpy(&lo, q, sizeof lo);
-    std::memcpy(&hi, q + 4, sizeof hi);
-    const Float4 a = __builtin_convertvector(lo, Float4) * s, b = __builtin_convertvector(hi, Float4) * s;
-    std::memcpy(out, &a, sizeof a);
-    std::memcpy(out + 4, &b, sizeof b);
-    out[8] = float(q[8]) * s;
-#else
-    for (int k = 0; k < 9; ++k) out[k] = float(q[k]) * s;
-#endif
-  }
+  void decode(float out[9]) const;
 };
 
 // A mesh graded and sorted by weight once, so that every level of a chain reuses the sort (§4).
