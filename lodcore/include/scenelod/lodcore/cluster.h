@@ -62,8 +62,8 @@ struct VertexFaceSums {
   // every incident plane passes through the vertex, so the quadric's linear part relative to the
   // vertex is 0 and needs no storage: relative to a point c it is -A (v - c)
 
-  // fills the fields from the sums (a: xx, xy, xz, yy, yz, zz; n: sum of area * n)
-  void encode(float face_area, const float a[6], const float n[3]);
+  // fills the fields from the sums: quadric xx, xy, xz, yy, yz, zz, then the normal sum x, y, z
+  void encode(float face_area, const float sums[9]);
   // out[0..5]: the quadric's entries xx, xy, xz, yy, yz, zz; out[6..8]: the normal sum
   void decode(float out[9]) const;
 };
