@@ -33,23 +33,30 @@ const char* cellShapeName(CellShape s) {
   return "unknown";
 }
 
-void VertexFaceSums::decode(float out[9]) const {
-  const float s = area * (1.0f / 32767.0f);
+namespace {
+
+// VertexFaceSums::decode, inlined into synthesis's per-vertex pass
+inline void decodeFaceSums(const VertexFaceSums& f, float out[9]) {
+  const float s = f.area * (1.0f / 32767.0f);
 #if defined(__GNUC__)
   // four at a time (the same conversions and products as the loop below)
   typedef int16_t Short4 __attribute__((vector_size(8)));
   typedef float Float4 __attribute__((vector_size(16)));
   Short4 lo, hi;
-  std::memcpy(&lo, q, sizeof lo);
-  std::memcpy(&hi, q + 4, sizeof hi);
+  std::memcpy(&lo, f.q, sizeof lo);
+  std::memcpy(&hi, f.q + 4, sizeof hi);
   const Float4 a = __builtin_convertvector(lo, Float4) * s, b = __builtin_convertvector(hi, Float4) * s;
   std::memcpy(out, &a, sizeof a);
   std::memcpy(out + 4, &b, sizeof b);
-  out[8] = float(q[8]) * s;
+  out[8] = float(f.q[8]) * s;
 #else
-  for (int k = 0; k < 9; ++k) out[k] = float(q[k]) * s;
+  for (int k = 0; k < 9; ++k) out[k] = float(f.q[k]) * s;
 #endif
 }
+
+}  // namespace
+
+void VertexFaceSums::decode(float out[9]) const { decodeFaceSums(*this, out); }
 
 namespace detail {
 
@@ -244,7 +251,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     s.count += 1.0f;
     if (have_face_sums) {
       float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
-      p.face_sums[v].decode(fa);
+      decodeFaceSums(p.face_sums[v], fa);
       s.normal += glm::vec3(fa[6], fa[7], fa[8]);
       if (quadric) {
         for (int k = 0; k < 6; ++k) s.a[k] += fa[k];
