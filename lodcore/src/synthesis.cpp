@@ -221,9 +221,10 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     glm::vec3 wsum{0.0f};  // sum of weight x offset
     float count = 0.0f;
     glm::vec3 sum{0.0f};   // sum of offsets
-    float a[6] = {0, 0, 0, 0, 0, 0};  // quadric: sum of area n n^T
-    float b[3] = {0, 0, 0};           // quadric: sum of area n d, planes relative to the centre
-    glm::vec3 normal{0.0f};           // sum of area n
+    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n; one
+    // array so that the per-vertex adds go four at a time
+    float a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    float b[3] = {0, 0, 0};  // quadric: sum of area n d, planes relative to the centre
     explicit Sums(const glm::vec3& c) : centre(c) {}
   };
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
@@ -252,9 +253,8 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     if (have_face_sums) {
       float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
       decodeFaceSums(p.face_sums[v], fa);
-      s.normal += glm::vec3(fa[6], fa[7], fa[8]);
+      for (int k = 0; k < 9; ++k) s.a[k] += fa[k];  // (the quadric part is unused but harmless for mean)
       if (quadric) {
-        for (int k = 0; k < 6; ++k) s.a[k] += fa[k];
         // the vertex lies on all its faces' planes: relative to the centre, b = -A d
         s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
         s.b[1] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
@@ -290,8 +290,9 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
       }
     }
     out.positions[c] = s.centre + x;
-    const float nl = glm::length(s.normal);
-    out.normals[c] = nl > 0.0f ? s.normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+    const glm::vec3 normal(s.a[6], s.a[7], s.a[8]);
+    const float nl = glm::length(normal);
+    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
     if (colors) {
       if (face_color[c].w > 0.0f) out.colors[c] = glm::vec3(face_color[c]) / face_color[c].w;
       else if (vertex_color[c].w > 0.0f) out.colors[c] = glm::vec3(vertex_color[c]) / vertex_color[c].w;
