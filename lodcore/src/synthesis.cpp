@@ -1,8 +1,8 @@
 // Synthesis of one representative per cluster (Rossignac & Borrel 1993; Low & Tan 1997 §2 step 4):
 // the weighted mean of the cluster's vertices, its heaviest vertex (the floating cell's centre), or
 // the point minimising the sum of the quadrics of the faces around the cluster (Lindstrom 2000,
-// out-of-core clustering), solved with a truncated eigen-decomposition so that directions the faces
-// do not constrain stay at the weighted mean, then clamped to the cell.
+// out-of-core clustering), solved with a truncated pseudo-inverse (per rank, in closed form) so that
+// directions the faces do not constrain stay at the weighted mean, then clamped to the cell.
 // Also the cluster's area-weighted colour (Reddy, SCROOGE §7.3) and normal.
 #include <algorithm>
 #include <cmath>
