@@ -30,10 +30,49 @@ const char* gradingName(Grading g) {
 
 namespace {
 
+// x / scale rounded to the nearest snorm16 fraction in [-1, 1]; branch-free (the signs are random):
+// shifted to be positive, truncation is the floor. A NaN (sums overflowed to infinity) gives -1
+// rather than an undefined conversion.
+int16_t toSnorm16(float x, float inv_scale) {
+  const float c = x * inv_scale;
+  const float f = (c > -1.0f ? (c < 1.0f ? c : 1.0f) : -1.0f) * 32767.0f;
+  return static_cast<int16_t>(static_cast<int32_t>(f + 32768.5f) - 32768);
+}
+
+}  // namespace
+
+void VertexFaceSums::encode(float face_area, const float sums[9]) {
+  *this = VertexFaceSums();
+  if (!(face_area > 0.0f)) return;
+  area = face_area;
+  const float inv = 1.0f / face_area;
+#if defined(__GNUC__)
+  // four at a time, the same arithmetic as toSnorm16
+  typedef float Float4 __attribute__((vector_size(16)));
+  typedef int32_t Int4 __attribute__((vector_size(16)));
+  for (int k = 0; k < 8; k += 4) {
+    Float4 c;
+    std::memcpy(&c, sums + k, sizeof c);
+    c *= inv;
+    const Float4 one = {1.0f, 1.0f, 1.0f, 1.0f};
+    c = c < one ? c : one;
+    c = c > -one ? c : -one;
+    const Int4 i = __builtin_convertvector(c * 32767.0f + 32768.5f, Int4) - 32768;
+    for (int j = 0; j < 4; ++j) q[k + j] = static_cast<int16_t>(i[j]);
+  }
+  q[8] = toSnorm16(sums[8], inv);
+#else
+  for (int k = 0; k < 9; ++k) q[k] = toSnorm16(sums[k], inv);
+#endif
+}
+
+namespace {
+
 constexpr float kPi = 3.14159265358979f;
 constexpr float kMinTheta = 1e-3f;        // rossignac: 1/theta is capped at 1/kMinTheta
 constexpr float kBoundaryFactor = 0.5f;   // boost: a boundary vertex is on the silhouette at least half the time
 constexpr size_t kExactPairLimit = 64;    // above this many directions, the widest pair is found by two sweeps
+constexpr uint32_t kScanLimit = 64;       // up to this many incidences, distinct neighbours by linear scan
 
 // smallest dot product over pairs of unit vectors (cos of the largest angle between them)
 float minPairDot(const glm::vec3* d, size_t n) {
@@ -59,14 +98,23 @@ float minPairDot(const glm::vec3* d, size_t n) {
   return best;
 }
 
-// insertion sort: neighbour lists are short (twice the degree)
-void sortSmall(uint32_t* a, size_t n) {
-  for (size_t i = 1; i < n; ++i) {
-    const uint32_t x = a[i];
-    size_t j = i;
-    for (; j > 0 && a[j - 1] > x; --j) a[j] = a[j - 1];
-    a[j] = x;
+// sorts the n neighbours (u, triangle count) collected with repeats by u and merges the repeats,
+// summing their counts; returns the number of distinct neighbours
+size_t mergeNeighbours(uint32_t* nb, uint32_t* tris, size_t n, std::vector<std::pair<uint32_t, uint32_t>>& pairs) {
+  pairs.resize(n);
+  for (size_t i = 0; i < n; ++i) pairs[i] = {nb[i], tris[i]};
+  std::sort(pairs.begin(), pairs.end());
+  size_t m = 0;
+  for (const auto& p : pairs) {
+    if (m > 0 && nb[m - 1] == p.first) {
+      tris[m - 1] += p.second;
+    } else {
+      nb[m] = p.first;
+      tris[m] = p.second;
+      ++m;
+    }
   }
+  return m;
 }
 
 struct GradeOutput {
@@ -75,6 +123,8 @@ struct GradeOutput {
   float* longest_edge;           // the longest edge of the mesh
   VertexFaceSums* sums;          // per vertex, may be null
   glm::vec4* color_sums;         // per vertex, may be null
+  uint8_t* in_rows = nullptr;    // per vertex, may be null: 1 when a triangle or an edge uses it
+  Aabb* bounds = nullptr;        // may be null: of the vertices triangles or edges use (min > max if none)
 };
 
 // Grades every vertex and, when asked, sums its incident faces. One counting sort builds the
@@ -115,96 +165,123 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
   const bool colors = out.color_sums && !mesh.colors.empty();
 
   std::mutex longest_mutex;
-  float longest_edge = 0.0f;  // a max: the same whatever the split between threads
+  float longest_edge = 0.0f;
+  glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
     std::vector<glm::vec3> dirs, normals;
-    std::vector<uint32_t> tri_nb, all_nb;
+    std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
-      out.raw[v] = 0.0f;
-      if (out.angular) out.angular[v] = 0.0f;
-      if (out.sums) out.sums[v] = VertexFaceSums();
-      if (colors) out.color_sums[v] = glm::vec4(0.0f);
-      if (b == e) continue;
-      tri_nb.clear();
-      all_nb.clear();
-      normals.clear();
-      VertexFaceSums s;
+      if (out.in_rows) out.in_rows[v] = b != e;
+      if (b == e) {
+        out.raw[v] = 0.0f;
+        if (out.angular) out.angular[v] = 0.0f;
+        if (out.sums) out.sums[v] = VertexFaceSums();
+        if (colors) out.color_sums[v] = glm::vec4(0.0f);
+        continue;
+      }
+      const size_t row = e - b;
+      if (nb.size() < 2 * row) {
+        nb.resize(2 * row);
+        nb_tris.resize(2 * row);
+        dirs.resize(2 * row);
+        normals.resize(row);
+      }
+      uint32_t* nbp = nb.data();
+      uint32_t* trip = nb_tris.data();
+      size_t nn = 0, nnormals = 0;
+      // distinct neighbours by a linear scan without early exit (rows are short; cheaper than sorting);
+      // `tri` is 1 for a triangle's corner, 0 for an input edge's end. Long rows collect repeats and
+      // sort them (mergeNeighbours), O(d log d).
+      const bool scan = row <= kScanLimit;
+      auto addNeighbour = [&](uint32_t u, uint32_t tri) {
+        uint32_t found = 0;
+        if (scan)
+          for (size_t j = 0; j < nn; ++j) {
+            const uint32_t same = nbp[j] == u;
+            trip[j] += same & tri;
+            found |= same;
+          }
+        nbp[nn] = u;
+        trip[nn] = tri;
+        nn += !found;
+      };
+      float qs[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, area_sum = 0.0f;  // quadric xx..zz, normal x, y, z
       glm::vec4 cs(0.0f);
       const glm::vec3 pv = pos[v];
+      lo = glm::min(lo, pv);
+      hi = glm::max(hi, pv);
       for (uint32_t i = b; i < e; ++i) {
         const Incidence inc = incidence[i];
         if (inc.b == detail::kNone) {
-          all_nb.push_back(inc.a);
+          addNeighbour(inc.a, 0);
           continue;
         }
-        tri_nb.push_back(inc.a);
-        tri_nb.push_back(inc.b);
+        addNeighbour(inc.a, 1);
+        addNeighbour(inc.b, 1);
         const glm::vec3 cr = glm::cross(pos[inc.a] - pv, pos[inc.b] - pv);
         const float nl = glm::length(cr);
         if (!(nl > 0.0f)) continue;
         const glm::vec3 n = cr / nl;
-        if (boost_features) normals.push_back(n);
+        normals[nnormals++] = n;
         const float area = 0.5f * nl;
-        s.a[0] += area * n.x * n.x; s.a[1] += area * n.x * n.y; s.a[2] += area * n.x * n.z;
-        s.a[3] += area * n.y * n.y; s.a[4] += area * n.y * n.z; s.a[5] += area * n.z * n.z;
-        s.normal[0] += area * n.x; s.normal[1] += area * n.y; s.normal[2] += area * n.z;
+        qs[0] += area * n.x * n.x; qs[1] += area * n.x * n.y; qs[2] += area * n.x * n.z;
+        qs[3] += area * n.y * n.y; qs[4] += area * n.y * n.z; qs[5] += area * n.z * n.z;
+        qs[6] += area * n.x; qs[7] += area * n.y; qs[8] += area * n.z;
+        area_sum += area;
         if (colors) {
           const glm::vec3 fc = (mesh.colors[v] + mesh.colors[inc.a] + mesh.colors[inc.b]) * (1.0f / 3.0f);
           cs += glm::vec4(fc * area, area);
         }
       }
-      if (out.sums) out.sums[v] = s;
+      if (out.sums) out.sums[v].encode(area_sum, qs);
       if (colors) out.color_sums[v] = cs;
-      // boundary: some neighbour is shared by only one incident triangle (appears once in tri_nb)
-      sortSmall(tri_nb.data(), tri_nb.size());
+      if (!scan) nn = mergeNeighbours(nbp, trip, nn, pairs);
+      // boundary: some neighbour is shared by only one incident triangle
       bool boundary = false;
-      for (size_t i = 0; i < tri_nb.size();) {
-        size_t j = i + 1;
-        while (j < tri_nb.size() && tri_nb[j] == tri_nb[i]) ++j;
-        if (j - i == 1) boundary = true;
-        i = j;
-      }
-      // distinct neighbours: repeated directions change neither the widest pair nor the longest edge
-      if (all_nb.empty()) {
-        all_nb.assign(tri_nb.begin(), tri_nb.end());  // already sorted
-      } else {
-        all_nb.insert(all_nb.end(), tri_nb.begin(), tri_nb.end());
-        sortSmall(all_nb.data(), all_nb.size());
-      }
-      all_nb.erase(std::unique(all_nb.begin(), all_nb.end()), all_nb.end());
-      dirs.clear();
+      for (size_t j = 0; j < nn; ++j) boundary |= trip[j] == 1;
+      // the widest pair and the longest edge do not depend on the neighbours' order, except for the
+      // estimate of minPairDot on long lists, whose neighbours mergeNeighbours left in index order
+      size_t ndirs = 0;
       float longest_v = 0.0f;
-      for (uint32_t u : all_nb) {
-        const glm::vec3 d = pos[u] - pos[v];
+      for (size_t j = 0; j < nn; ++j) {
+        const glm::vec3 d = pos[nbp[j]] - pv;
         const float len = glm::length(d);
         if (len > 0.0f) {
-          dirs.push_back(d / len);
+          dirs[ndirs++] = d / len;
           longest_v = std::max(longest_v, len);
         }
       }
       range_longest = std::max(range_longest, longest_v);
-      if (dirs.empty()) continue;  // only zero-length edges: no direction, weight 0
-      const float cos_theta = std::clamp(minPairDot(dirs.data(), dirs.size()), -1.0f, 1.0f);
-      float a;
-      if (grading == Grading::kLowTan) {
-        a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
-        if (boost_features) {
-          if (boundary) a = std::max(a, kBoundaryFactor);
-          const float crease = (1.0f - std::clamp(minPairDot(normals.data(), normals.size()), -1.0f, 1.0f)) * 0.5f;
-          a = std::max(a, crease);
+      float a = 0.0f;
+      if (ndirs > 0) {  // else only zero-length edges: no direction, weight 0
+        const float cos_theta = std::clamp(minPairDot(dirs.data(), ndirs), -1.0f, 1.0f);
+        if (grading == Grading::kLowTan) {
+          a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
+          if (boost_features) {
+            if (boundary) a = std::max(a, kBoundaryFactor);
+            const float crease = (1.0f - std::clamp(minPairDot(normals.data(), nnormals), -1.0f, 1.0f)) * 0.5f;
+            a = std::max(a, crease);
+          }
+        } else {
+          a = kPi / std::max(std::acos(cos_theta), kMinTheta);
         }
-      } else {
-        a = kPi / std::max(std::acos(cos_theta), kMinTheta);
       }
       if (out.angular) out.angular[v] = a;
       out.raw[v] = longest_v * a;
     }
+    // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
     longest_edge = std::max(longest_edge, range_longest);
+    box_lo = glm::min(box_lo, lo);
+    box_hi = glm::max(box_hi, hi);
   });
   *out.longest_edge = longest_edge;
+  if (out.bounds) out.bounds->min = box_lo, out.bounds->max = box_hi;
 }
 
 // Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
@@ -283,39 +360,53 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   out.face_sums.resize(vn);
   if (!in.colors.empty()) out.face_colors.resize(vn);
   float longest_edge = 0.0f;
+  std::vector<uint8_t> referenced(vn);
+  Aabb rows_box;
   gradeAndSum(in, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
-               in.colors.empty() ? nullptr : out.face_colors.data()});
+               in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
   out.longest_edge = longest_edge;
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
 
-  std::vector<uint8_t> referenced(vn, 0);
-  for (uint32_t v : in.triangles) referenced[v] = 1;
-  for (uint32_t v : in.edges) referenced[v] = 1;
-  for (uint32_t v : in.points) referenced[v] = 1;
-  size_t count = 0;
-  bool first = true;
-  for (size_t v = 0; v < vn; ++v) {
-    if (!referenced[v]) continue;
-    ++count;
-    const glm::vec3& p = in.positions[v];
-    if (first) out.bounds.min = out.bounds.max = p, first = false;
-    out.bounds.min = glm::min(out.bounds.min, p);
-    out.bounds.max = glm::max(out.bounds.max, p);
+  // referenced: used by a triangle or an edge (the grading rows) or by a point
+  glm::vec3 lo = rows_box.min, hi = rows_box.max;
+  for (uint32_t v : in.points) {
+    referenced[v] = 1;
+    lo = glm::min(lo, in.positions[v]);
+    hi = glm::max(hi, in.positions[v]);
   }
+  size_t count = 0;
+  for (size_t v = 0; v < vn; ++v) count += referenced[v];
+  if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
   sortByWeight(raw, referenced, count, out.order);
   out.sorted_positions.resize(count);
-  for (size_t i = 0; i < count; ++i) out.sorted_positions[i] = in.positions[out.order[i]];
+  const glm::vec3* pos = in.positions.data();
+  const uint32_t* order = out.order.data();
+  glm::vec3* sorted = out.sorted_positions.data();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
+  });
 
-  double sum = 0.0, area = 0.0;
+  // surface area and summed edge length in double, per fixed chunk of triangles and then over the
+  // chunks in order: the same sums whatever the number of threads
   const size_t tn = in.triangleCount();
-  for (size_t t = 0; t < tn; ++t) {
-    const glm::vec3 a = in.positions[in.triangles[3 * t]], b = in.positions[in.triangles[3 * t + 1]],
-                    c = in.positions[in.triangles[3 * t + 2]];
-    sum += double(glm::length(b - a)) + double(glm::length(c - b)) + double(glm::length(a - c));
-    area += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
-  }
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (tn + kChunk - 1) / kChunk;
+  std::vector<double> chunk_length(chunks), chunk_area(chunks);
+  const uint32_t* tri = in.triangles.data();
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    double sum = 0.0, area = 0.0;
+    for (size_t t = c * kChunk, end = std::min(tn, t + kChunk); t < end; ++t) {
+      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
+      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
+      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
+    }
+    chunk_length[c] = sum;
+    chunk_area[c] = area;
+  });
+  double sum = 0.0, area = 0.0;
+  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);

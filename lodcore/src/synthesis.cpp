@@ -1,11 +1,12 @@
 // Synthesis of one representative per cluster (Rossignac & Borrel 1993; Low & Tan 1997 §2 step 4):
 // the weighted mean of the cluster's vertices, its heaviest vertex (the floating cell's centre), or
 // the point minimising the sum of the quadrics of the faces around the cluster (Lindstrom 2000,
-// out-of-core clustering), solved with a truncated eigen-decomposition so that directions the faces
-// do not constrain stay at the weighted mean, then clamped to the cell.
+// out-of-core clustering), solved with a truncated pseudo-inverse (per rank, in closed form) so that
+// directions the faces do not constrain stay at the weighted mean, then clamped to the cell.
 // Also the cluster's area-weighted colour (Reddy, SCROOGE §7.3) and normal.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -32,6 +33,31 @@ const char* cellShapeName(CellShape s) {
   return "unknown";
 }
 
+namespace {
+
+// VertexFaceSums::decode, inlined into synthesis's per-vertex pass
+inline void decodeFaceSums(const VertexFaceSums& f, float out[9]) {
+  const float s = f.area * (1.0f / 32767.0f);
+#if defined(__GNUC__)
+  // four at a time (the same conversions and products as the loop below)
+  typedef int16_t Short4 __attribute__((vector_size(8)));
+  typedef float Float4 __attribute__((vector_size(16)));
+  Short4 lo, hi;
+  std::memcpy(&lo, f.q, sizeof lo);
+  std::memcpy(&hi, f.q + 4, sizeof hi);
+  const Float4 a = __builtin_convertvector(lo, Float4) * s, b = __builtin_convertvector(hi, Float4) * s;
+  std::memcpy(out, &a, sizeof a);
+  std::memcpy(out + 4, &b, sizeof b);
+  out[8] = float(f.q[8]) * s;
+#else
+  for (int k = 0; k < 9; ++k) out[k] = float(f.q[k]) * s;
+#endif
+}
+
+}  // namespace
+
+void VertexFaceSums::decode(float out[9]) const { decodeFaceSums(*this, out); }
+
 namespace detail {
 
 namespace {
@@ -41,67 +67,133 @@ namespace {
 constexpr float kMeanWeightFloor = 0.05f;
 // quadric: eigenvalues below this fraction of the largest are treated as zero (singular directions)
 constexpr double kEigenCutoff = 1e-3;
+// the closed-form full-rank test keeps this margin above the cutoff, so that its rounding never
+// decides a case the eigenvalues would decide the other way
+constexpr double kFullRankMargin = 1.0 + 1e-9;
 
 struct Quadric {
   float a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;  // sum of area * n n^T
   float b0 = 0, b1 = 0, b2 = 0;                               // sum of area * n d, planes relative to the cell centre
 };
 
-// eigen-decomposition of a symmetric 3x3 matrix by Jacobi rotations: a = v diag(w) v^T
-void symmetricEigen(double a[3][3], double w[3], double v[3][3]) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
-  const double scale = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2] +
-                       2.0 * (a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2]);
-  for (int sweep = 0; sweep < 16; ++sweep) {
-    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-    if (off <= 1e-24 * scale) break;  // off-diagonal part negligible relative to the matrix
-    for (int p = 0; p < 2; ++p)
-      for (int q = p + 1; q < 3; ++q) {
-        if (std::fabs(a[p][q]) < 1e-300) continue;
-        const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
-        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-        for (int k = 0; k < 3; ++k) {  // a = J^T a J
-          const double akp = a[k][p], akq = a[k][q];
-          a[k][p] = c * akp - s * akq;
-          a[k][q] = s * akp + c * akq;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double apk = a[p][k], aqk = a[q][k];
-          a[p][k] = c * apk - s * aqk;
-          a[q][k] = s * apk + c * aqk;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double vkp = v[k][p], vkq = v[k][q];
-          v[k][p] = c * vkp - s * vkq;
-          v[k][q] = s * vkp + c * vkq;
-        }
-      }
+// the eigenvalues of a symmetric 3x3 matrix, largest first, in closed form (the trigonometric
+// solution of the characteristic cubic): accurate to rounding relative to the largest, which is all
+// the truncation below compares against
+void symmetricEigenvalues(const double a[3][3], double w[3]) {
+  const double q = (a[0][0] + a[1][1] + a[2][2]) * (1.0 / 3.0);
+  const double p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+  const double d0 = a[0][0] - q, d1 = a[1][1] - q, d2 = a[2][2] - q;
+  const double p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * p1;
+  if (!(p2 > 0.0)) {  // a multiple of the identity
+    w[0] = w[1] = w[2] = q;
+    return;
   }
-  for (int i = 0; i < 3; ++i) w[i] = a[i][i];
+  const double p = std::sqrt(p2 * (1.0 / 6.0)), ip = 1.0 / p;
+  // det((a - q I) / p) / 2, in [-1, 1] up to rounding
+  const double b00 = d0 * ip, b11 = d1 * ip, b22 = d2 * ip;
+  const double b01 = a[0][1] * ip, b02 = a[0][2] * ip, b12 = a[1][2] * ip;
+  const double det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02);
+  const double r = std::clamp(0.5 * det, -1.0, 1.0);
+  const double c = std::cos(std::acos(r) * (1.0 / 3.0));  // cos(phi), phi in [0, pi/3]
+  const double s = std::sqrt(std::max(0.0, 1.0 - c * c));
+  w[0] = q + 2.0 * p * c;
+  w[2] = q + p * (-c - 1.7320508075688772 * s);  // q + 2p cos(phi + 2pi/3)
+  w[1] = 3.0 * q - w[0] - w[2];
 }
 
-// minimiser of x^T A x + 2 b^T x nearest to x0 in the directions A leaves free
+// unit eigenvector of the symmetric `a` for the eigenvalue `l`, which must be apart from the other
+// two: the widest cross product of two rows of a - l I (rank 2). Returns false when all three are tiny.
+bool eigenvector(const double a[3][3], double l, double v[3]) {
+  const double r0[3] = {a[0][0] - l, a[0][1], a[0][2]};
+  const double r1[3] = {a[0][1], a[1][1] - l, a[1][2]};
+  const double r2[3] = {a[0][2], a[1][2], a[2][2] - l};
+  const double c01[3] = {r0[1] * r1[2] - r0[2] * r1[1], r0[2] * r1[0] - r0[0] * r1[2], r0[0] * r1[1] - r0[1] * r1[0]};
+  const double c02[3] = {r0[1] * r2[2] - r0[2] * r2[1], r0[2] * r2[0] - r0[0] * r2[2], r0[0] * r2[1] - r0[1] * r2[0]};
+  const double c12[3] = {r1[1] * r2[2] - r1[2] * r2[1], r1[2] * r2[0] - r1[0] * r2[2], r1[0] * r2[1] - r1[1] * r2[0]};
+  const double n01 = c01[0] * c01[0] + c01[1] * c01[1] + c01[2] * c01[2];
+  const double n02 = c02[0] * c02[0] + c02[1] * c02[1] + c02[2] * c02[2];
+  const double n12 = c12[0] * c12[0] + c12[1] * c12[1] + c12[2] * c12[2];
+  const double* best = c01;
+  double n = n01;
+  if (n02 > n) best = c02, n = n02;
+  if (n12 > n) best = c12, n = n12;
+  if (!(n > 0.0)) return false;
+  const double inv = 1.0 / std::sqrt(n);
+  for (int i = 0; i < 3; ++i) v[i] = best[i] * inv;
+  return true;
+}
+
+// y = m^-1 r for a symmetric m (by the adjugate); false when m is singular
+bool solveSymmetric(const double m[3][3], const double r[3], double y[3]) {
+  const double c00 = m[1][1] * m[2][2] - m[1][2] * m[1][2];
+  const double c01 = m[0][2] * m[1][2] - m[0][1] * m[2][2];
+  const double c02 = m[0][1] * m[1][2] - m[0][2] * m[1][1];
+  const double c11 = m[0][0] * m[2][2] - m[0][2] * m[0][2];
+  const double c12 = m[0][1] * m[0][2] - m[0][0] * m[1][2];
+  const double c22 = m[0][0] * m[1][1] - m[0][1] * m[0][1];
+  const double det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+  if (!(std::fabs(det) > 0.0)) return false;
+  const double id = 1.0 / det;
+  y[0] = (c00 * r[0] + c01 * r[1] + c02 * r[2]) * id;
+  y[1] = (c01 * r[0] + c11 * r[1] + c12 * r[2]) * id;
+  y[2] = (c02 * r[0] + c12 * r[1] + c22 * r[2]) * id;
+  return true;
+}
+
+// minimiser of x^T A x + 2 b^T x nearest to x0 in the directions A leaves free: x0 + A^+ r with
+// r = -(A x0 + b) and A^+ the pseudo-inverse that drops eigenvalues below kEigenCutoff x the
+// largest. Each rank is solved without an eigen-decomposition: full rank by the adjugate (the
+// condition number is at most 1 / kEigenCutoff); rank 2 by the adjugate of A with its dropped
+// direction lifted to the largest eigenvalue, applied to r without that direction; rank 1 along the
+// dominant eigenvector.
 glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
-  double a[3][3] = {{q.a00, q.a01, q.a02}, {q.a01, q.a11, q.a12}, {q.a02, q.a12, q.a22}};
-  // residual at x0: r = -(A x0 + b); x = x0 + A^+ r
-  const double r[3] = {-(a[0][0] * x0.x + a[0][1] * x0.y + a[0][2] * x0.z + q.b0),
-                       -(a[1][0] * x0.x + a[1][1] * x0.y + a[1][2] * x0.z + q.b1),
-                       -(a[2][0] * x0.x + a[2][1] * x0.y + a[2][2] * x0.z + q.b2)};
+  const double a[3][3] = {{q.a00, q.a01, q.a02}, {q.a01, q.a11, q.a12}, {q.a02, q.a12, q.a22}};
+  double r[3] = {-(a[0][0] * x0.x + a[0][1] * x0.y + a[0][2] * x0.z + q.b0),
+                 -(a[1][0] * x0.x + a[1][1] * x0.y + a[1][2] * x0.z + q.b1),
+                 -(a[2][0] * x0.x + a[2][1] * x0.y + a[2][2] * x0.z + q.b2)};
   // a zero residual (one-vertex clusters: every plane passes through x0) leaves x0 unchanged
   if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0) return x0;
-  double w[3], v[3][3];
-  symmetricEigen(a, w, v);
-  const double wmax = std::max({std::fabs(w[0]), std::fabs(w[1]), std::fabs(w[2])});
-  if (!(wmax > 0.0)) return x0;
-  double x[3] = {x0.x, x0.y, x0.z};
-  for (int k = 0; k < 3; ++k) {
-    if (std::fabs(w[k]) < kEigenCutoff * wmax) continue;  // singular direction: stay at x0
-    const double proj = (v[0][k] * r[0] + v[1][k] * r[1] + v[2][k] * r[2]) / w[k];
-    for (int i = 0; i < 3; ++i) x[i] += v[i][k] * proj;
+  double y[3] = {0.0, 0.0, 0.0};
+  // full rank without the eigenvalues (most clusters): the smallest eigenvalue is at least
+  // det / c1 (c1 the sum of the principal 2x2 minors, >= l1 l2) and the largest at most the trace
+  {
+    const double tr = a[0][0] + a[1][1] + a[2][2];
+    const double m00 = a[1][1] * a[2][2] - a[1][2] * a[1][2], m11 = a[0][0] * a[2][2] - a[0][2] * a[0][2],
+                 m22 = a[0][0] * a[1][1] - a[0][1] * a[0][1];
+    const double c1 = m00 + m11 + m22;
+    const double det = a[0][0] * m00 + a[0][1] * (a[0][2] * a[1][2] - a[0][1] * a[2][2]) +
+                       a[0][2] * (a[0][1] * a[1][2] - a[0][2] * a[1][1]);
+    if (tr > 0.0 && c1 > 0.0 && det >= kFullRankMargin * kEigenCutoff * tr * c1 && solveSymmetric(a, r, y))
+      return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
   }
-  return glm::vec3(float(x[0]), float(x[1]), float(x[2]));
+  double w[3];
+  symmetricEigenvalues(a, w);
+  // A is a sum of area x n n^T: positive semi-definite, so the largest eigenvalue is the largest in size
+  const double wmax = std::max(w[0], -w[2]);
+  if (!(wmax > 0.0)) return x0;
+  const double cut = kEigenCutoff * wmax;
+  bool solved = false;
+  if (std::fabs(w[2]) >= cut && std::fabs(w[1]) >= cut) {
+    solved = solveSymmetric(a, r, y);
+  } else if (std::fabs(w[1]) >= cut) {
+    double v[3];
+    if (eigenvector(a, w[2], v)) {
+      const double d = v[0] * r[0] + v[1] * r[1] + v[2] * r[2];
+      double m[3][3];
+      for (int i = 0; i < 3; ++i) {
+        r[i] -= d * v[i];
+        for (int j = 0; j < 3; ++j) m[i][j] = a[i][j] + (w[0] - w[2]) * v[i] * v[j];
+      }
+      solved = solveSymmetric(m, r, y);
+    }
+  }
+  if (!solved) {  // rank 1, or the two small eigenvalues too close to tell apart: the dominant direction
+    double v[3];
+    if (!eigenvector(a, w[0], v)) return x0;
+    const double d = (v[0] * r[0] + v[1] * r[1] + v[2] * r[2]) / w[0];
+    for (int i = 0; i < 3; ++i) y[i] = v[i] * d;
+  }
+  return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
 }
 
 }  // namespace
@@ -129,12 +221,15 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     glm::vec3 wsum{0.0f};  // sum of weight x offset
     float count = 0.0f;
     glm::vec3 sum{0.0f};   // sum of offsets
-    float a[6] = {0, 0, 0, 0, 0, 0};  // quadric: sum of area n n^T
-    float b[3] = {0, 0, 0};           // quadric: sum of area n d, planes relative to the centre
-    glm::vec3 normal{0.0f};           // sum of area n
+    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n; one
+    // array so that the per-vertex adds go four at a time
+    float a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    float b[3] = {0, 0, 0};  // quadric: sum of area n d, planes relative to the centre
+    explicit Sums(const glm::vec3& c) : centre(c) {}
   };
-  std::vector<Sums> sums(nc);
-  for (uint32_t c = 0; c < nc; ++c) sums[c].centre = pos[a.heaviest[c]];
+  std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
+  sums.reserve(nc);
+  for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
   std::vector<glm::vec4> face_color;    // xyz: sum of area x face colour, w: sum of area
   std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
   if (colors) {
@@ -156,14 +251,14 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     s.sum += d;
     s.count += 1.0f;
     if (have_face_sums) {
-      const VertexFaceSums& f = p.face_sums[v];
-      s.normal += glm::vec3(f.normal[0], f.normal[1], f.normal[2]);
+      float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
+      decodeFaceSums(p.face_sums[v], fa);
+      for (int k = 0; k < 9; ++k) s.a[k] += fa[k];  // (the quadric part is unused but harmless for mean)
       if (quadric) {
-        for (int k = 0; k < 6; ++k) s.a[k] += f.a[k];
         // the vertex lies on all its faces' planes: relative to the centre, b = -A d
-        s.b[0] -= f.a[0] * d.x + f.a[1] * d.y + f.a[2] * d.z;
-        s.b[1] -= f.a[1] * d.x + f.a[3] * d.y + f.a[4] * d.z;
-        s.b[2] -= f.a[2] * d.x + f.a[4] * d.y + f.a[5] * d.z;
+        s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
+        s.b[1] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
+        s.b[2] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
       }
     }
     if (colors) {
@@ -195,8 +290,9 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
       }
     }
     out.positions[c] = s.centre + x;
-    const float nl = glm::length(s.normal);
-    out.normals[c] = nl > 0.0f ? s.normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+    const glm::vec3 normal(s.a[6], s.a[7], s.a[8]);
+    const float nl = glm::length(normal);
+    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
     if (colors) {
       if (face_color[c].w > 0.0f) out.colors[c] = glm::vec3(face_color[c]) / face_color[c].w;
       else if (vertex_color[c].w > 0.0f) out.colors[c] = glm::vec3(vertex_color[c]) / vertex_color[c].w;

@@ -112,3 +112,37 @@ TEST(Grading, ZeroLengthEdgesGiveFiniteWeights) {
   for (float x : w) EXPECT_TRUE(std::isfinite(x) && x >= 0.0f);
   EXPECT_EQ(w[1], 0.0f);  // only zero-length edges
 }
+
+TEST(Grading, LongFanIsGradedLikeAShortOne) {
+  // a flat fan of n triangles around vertex 0: past 64 incidences the distinct neighbours are found
+  // by sorting instead of scanning; either way the closed fan's centre is a flat interior vertex
+  // (0), and with one triangle removed it is a boundary vertex (0.5 with the boost)
+  for (int n : {8, 100}) {
+    Mesh m;
+    m.positions.push_back({0, 0, 0});
+    for (int i = 0; i < n; ++i) {
+      const float a = 2.0f * 3.14159265f * float(i) / float(n);
+      m.positions.push_back({std::cos(a), std::sin(a), 0.0f});
+    }
+    for (int i = 0; i < n; ++i) m.triangles.insert(m.triangles.end(), {0u, uint32_t(1 + i), uint32_t(1 + (i + 1) % n)});
+    std::vector<float> w, ang;
+    gradeVertices(m, Grading::kLowTan, true, w, &ang);
+    EXPECT_NEAR(ang[0], 0.0f, 1e-4f) << n;
+    m.triangles.resize(m.triangles.size() - 3);
+    gradeVertices(m, Grading::kLowTan, true, w, &ang);
+    EXPECT_NEAR(ang[0], 0.5f, 1e-5f) << n;
+  }
+}
+
+TEST(Grading, PreparedBoundsAndOrderIncludePointOnlyVertices) {
+  Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 8, 12);
+  m.positions.push_back({5, -6, 7});
+  m.points.push_back(uint32_t(m.positions.size() - 1));
+  PreparedMesh p;
+  ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+  EXPECT_EQ(p.order.size(), m.positions.size());
+  EXPECT_EQ(p.bounds.max.x, 5.0f);
+  EXPECT_EQ(p.bounds.min.y, -6.0f);
+  EXPECT_EQ(p.bounds.max.z, 7.0f);
+  EXPECT_NEAR(p.bounds.min.x, -1.0f, 1e-5f);
+}

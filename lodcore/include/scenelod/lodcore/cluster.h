@@ -51,12 +51,21 @@ struct ClusterParams {
 
 // Sums over the triangles incident on one vertex (each triangle counted once per corner, as in
 // Lindstrom's per-cluster accumulation), made once per mesh so that a level's synthesis is a pass
-// over vertices. 36 bytes.
+// over vertices. Stored in 24 bytes as the summed area and 16-bit fractions of it: the quadric's
+// entries are at most the area (its trace) in size and the normal sum at most the area in length,
+// so each keeps about 3e-5 of the area (decode with decode()).
 struct VertexFaceSums {
-  float a[6] = {0, 0, 0, 0, 0, 0};  // sum of area * n n^T: xx, xy, xz, yy, yz, zz (n the unit face normal)
-  float normal[3] = {0, 0, 0};      // sum of area * n
+  float area = 0.0f;  // sum of the incident faces' areas (the trace of the quadric)
+  // snorm16 fractions of area: sum of area * n n^T (xx, xy, xz, yy, yz, zz, n the unit face normal),
+  // then sum of area * n (x, y, z)
+  int16_t q[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   // every incident plane passes through the vertex, so the quadric's linear part relative to the
   // vertex is 0 and needs no storage: relative to a point c it is -A (v - c)
+
+  // fills the fields from the sums: quadric xx, xy, xz, yy, yz, zz, then the normal sum x, y, z
+  void encode(float face_area, const float sums[9]);
+  // out[0..5]: the quadric's entries xx, xy, xz, yy, yz, zz; out[6..8]: the normal sum
+  void decode(float out[9]) const;
 };
 
 // A mesh graded and sorted by weight once, so that every level of a chain reuses the sort (§4).
@@ -74,7 +83,7 @@ struct PreparedMesh {
   double surface_area = 0.0;     // of all triangles (sizes the per-level grid hash)
   // filled by prepareMesh; a hand-made PreparedMesh without them clusters with the weighted mean in
   // place of the quadric minimiser and +z as the normal of edge and point vertices
-  std::vector<VertexFaceSums> face_sums;  // one per vertex (36 bytes): incident-face quadric and normal
+  std::vector<VertexFaceSums> face_sums;  // one per vertex (24 bytes): incident-face quadric and normal
   std::vector<glm::vec4> face_colors;     // one per vertex when the mesh has colours: sum of area x face
                                           // colour (xyz) and of area (w); empty otherwise
 
@@ -97,7 +106,7 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
 // in error messages. Errors: invalid mesh (NaN, index out of range, size mismatch).
 // Cost: O(V + T) (grading over a vertex -> incidence table built by counting sort, radix sort by
 // weight); keeps weights, order and sorted positions (20 bytes per vertex) and the per-vertex face
-// sums (36 bytes per vertex, 16 more with colours); parallel over vertices with TBB.
+// sums (24 bytes per vertex, 16 more with colours); parallel over vertices with TBB.
 Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out,
                   const std::string& what = "mesh");
 
