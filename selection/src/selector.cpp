@@ -175,26 +175,28 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
   for (size_t s = 0; s < slot_count; ++s) {
-    // provisionally unsettled: the index is kept only if the slot is not settled below
-    unsettled[unsettled_count] = static_cast<uint32_t>(s);
-    ++unsettled_count;
+    // No branch per slot: whether the slot may settle at all, whether its candidate fits and beats
+    // "not drawn", and the vector test are one mask (about half of the candidates are "not drawn",
+    // in no predictable order, so a branch on it mispredicted). An ineligible slot's table indices
+    // are clamped to harmless rows; its result is discarded.
     const int level_count = in.level_count[s];
     const int finest = in.finest[s];
-    const int cand = in.prev[s];
+    const int cand0 = in.prev[s];
     const float sa = in.a[s], sb = in.b[s], sq = in.q[s];
     // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point
-    if (must[s] || level_count > kLanes || !(sa > 0.0f) || cand >= level_count || (cand >= 0 && cand < finest))
-      continue;
+    const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) & (cand0 >= -1) & (cand0 < level_count) &
+                          ((cand0 < 0) | (cand0 >= finest));
+    const int cand = eligible ? cand0 : -1;
+    const int fi = eligible ? finest : 0, lc = eligible ? level_count : 0;
+    const uint32_t drawn_mask = 0u - static_cast<uint32_t>(cand >= 0);  // all ones if the candidate is drawn
     const uint32_t row0 = in.row0[s];
-    float cb = 0.0f, cc = 0.0f;
-    if (cand >= 0) {
-      // pointAt(cand)
-      const uint32_t row = row0 + static_cast<uint32_t>(cand);
-      cc = sa + row_cost[row];
-      cb = sb * (std::min(1.0f, sq * row_inv_w[row]) * h1);
-      if (!(cc <= avail) || !(cb > hi * cc)) continue;  // fits alone; beats "not drawn"
-    }
-    const int32_t* const range = kLaneMasks.range[finest][level_count];
+    // pointAt(cand), +0 for "not drawn"
+    const uint32_t crow = row0 + static_cast<uint32_t>(cand & static_cast<int>(drawn_mask));
+    const float cc = maskFloat(sa + row_cost[crow], drawn_mask);
+    const float cb = maskFloat(sb * (std::min(1.0f, sq * row_inv_w[crow]) * h1), drawn_mask);
+    // a drawn candidate must fit alone and beat "not drawn"
+    const bool cand_ok = (cand < 0) | ((cc <= avail) & (cb > hi * cc));
+    const int32_t* const range = kLaneMasks.range[fi][lc];
     const int32_t* const other = kLaneMasks.other[cand + 1];
     VI fail = VI{};
     for (int k = 0; k < kParts; ++k) {
@@ -219,14 +221,17 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     std::memcpy(words, &fail, sizeof(words));
     uint64_t any = 0;
     for (uint64_t w : words) any |= w;
-    if (any != 0) continue;
+    const bool settled = eligible & cand_ok & (any == 0);
+    // written for every slot: an unsettled slot's hull, count and step are written again when its
+    // hull is built
     uint8_t* const h = hull + s * hull_stride;
     h[0] = kNotDrawn;
     h[1] = static_cast<uint8_t>(cand);
-    hull_count[s] = cand >= 0 ? 2 : 1;
-    chosen_step[s] = cand >= 0 ? 1 : 0;
-    total += cc;  // 0 for "not drawn"
-    --unsettled_count;
+    hull_count[s] = static_cast<uint8_t>(1 + (drawn_mask & 1u));
+    chosen_step[s] = static_cast<uint8_t>(drawn_mask & 1u);
+    total += maskFloat(cc, 0u - static_cast<uint32_t>(settled));  // 0 for "not drawn" and unsettled slots
+    unsettled[unsettled_count] = static_cast<uint32_t>(s);
+    unsettled_count += settled ? 0u : 1u;
   }
   *settled_cost = total;
   return unsettled_count;
