@@ -109,14 +109,30 @@ constexpr LaneMasks makeLaneMasks() {
   return m;
 }
 constexpr LaneMasks kLaneMasks = makeLaneMasks();
+// set bits per byte value
+struct BitCount8 {
+  uint8_t n[256];
+  constexpr uint8_t operator[](int i) const { return n[i]; }
+};
+constexpr BitCount8 makeBitCount8() {
+  BitCount8 t{};
+  for (int i = 0; i < 256; ++i) t.n[i] = static_cast<uint8_t>((i & 1) + (i >> 1 & 1) + (i >> 2 & 1) + (i >> 3 & 1) +
+                                                              (i >> 4 & 1) + (i >> 5 & 1) + (i >> 6 & 1) + (i >> 7 & 1));
+  return t;
+}
+constexpr BitCount8 kBitCount8 = makeBitCount8();
 
 // x where mask is all ones, +0 where it is 0
 inline float maskFloat(float x, uint32_t mask) {
-  uint32_t bits;
-  std::memcpy(&bits, &x, sizeof(bits));
-  bits &= mask;
-  std::memcpy(&x, &bits, sizeof(x));
-  return x;
+  // in a vector register (an and of the float's register with the mask's), not through an integer one
+  const V4f v = {x, 0.0f, 0.0f, 0.0f};
+  const V4i m = {static_cast<int32_t>(mask), 0, 0, 0};
+  V4i vi;
+  std::memcpy(&vi, &v, sizeof(vi));
+  vi &= m;
+  V4f r;
+  std::memcpy(&r, &vi, sizeof(r));
+  return r[0];
 }
 
 // the largest float at most v
@@ -770,6 +786,10 @@ bool SelectionJob::run() {
 
   // the frame's sums (writeOut in budget mode, the fused blocks in distance mode)
   CostFeatures f;
+  // the integer features summed exactly in 64 bits (n < 2^31 terms below 2^32): the same value as
+  // the double sum in slot order while the total stays below 2^53 (every partial sum is then an
+  // exact double); f.objects is `drawn`
+  uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
   double predicted = coef.per_frame_ms, benefit = 0.0;
   uint32_t dropped = 0, drawn = 0, switches = 0;
   // one slot's share of them at level byte `level`, without branches: in budget mode about half of
@@ -787,10 +807,9 @@ bool SelectionJob::run() {
     const float acc = std::min(1.0f, q * row_inv_w[row]) * h_mult[current];
     predicted += maskFloat(cost, keep);
     benefit += maskFloat(b * acc, keep);
-    f.objects += maskFloat(1.0f, keep);
-    f.triangles += tri[row] & keep;
-    f.vertices += vert[row] & keep;
-    f.line_points += lines[row] & keep;
+    tri_sum += tri[row] & keep;
+    vert_sum += vert[row] & keep;
+    line_sum += lines[row] & keep;
     f.pixels += maskFloat(px, keep);
     return cost;
   };
@@ -867,8 +886,17 @@ bool SelectionJob::run() {
         std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
         std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
         std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
-        const V4i ok = ((q * riw0 >= 1.0f) & range0) + ((q * riw1 >= 1.0f) & range1);  // -1 per level
+        const V4i ok0 = (q * riw0 >= 1.0f) & range0, ok1 = (q * riw1 >= 1.0f) & range1;  // -1 per level
+#if defined(__x86_64__) || defined(__i386__)
+        // the lanes' sign bits as a byte (movmskps), counted by a table
+        V4f okf0, okf1;
+        std::memcpy(&okf0, &ok0, sizeof(okf0));
+        std::memcpy(&okf1, &ok1, sizeof(okf1));
+        finest = kBitCount8[__builtin_ia32_movmskps(okf0) | (__builtin_ia32_movmskps(okf1) << 4)];
+#else
+        const V4i ok = ok0 + ok1;
         finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
+#endif
       } else {
         // a branch-free binary search (most objects are far: their coarsest level is accurate
         // enough, one predictable test)
@@ -914,6 +942,11 @@ bool SelectionJob::run() {
       }
     }
   };
+  // chains without levels (their objects are never slots): the compaction reads the chain table
+  // per object only when there are any
+  bool any_empty_chain = false;
+  for (size_t c = 0, chain_count = levels.chainCount(); c < chain_count; ++c)
+    any_empty_chain |= chain_offset[c + 1] == chain_offset[c];
   // slots are compacted a block of objects at a time and handed on in full blocks of kSlotBlock
   // (loops of a constant trip count, which predict) while their objects' inputs are still in cache
   size_t slots = 0, done = 0;
@@ -922,12 +955,20 @@ bool SelectionJob::run() {
     frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
     // branch-free compaction of the block's objects in view (and with levels); every object's
     // level starts at -1 (culled: stays) and the slots' levels are written later
-    for (size_t j = 0; j < mo; ++j) {
-      const uint32_t chain = chain_of[i0 + j];
-      const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
-      level_of[i0 + j] = -1;
-      slot_object[slots] = static_cast<uint32_t>(i0 + j);
-      slots += 1u - out;
+    if (any_empty_chain) {
+      for (size_t j = 0; j < mo; ++j) {
+        const uint32_t chain = chain_of[i0 + j];
+        const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
+        level_of[i0 + j] = -1;
+        slot_object[slots] = static_cast<uint32_t>(i0 + j);
+        slots += 1u - out;
+      }
+    } else {
+      for (size_t j = 0; j < mo; ++j) {
+        level_of[i0 + j] = -1;
+        slot_object[slots] = static_cast<uint32_t>(i0 + j);
+        slots += 1u - static_cast<uint32_t>(gout[j]);
+      }
     }
     if (cost_out && !budget)
       for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
@@ -1456,6 +1497,7 @@ bool SelectionJob::run() {
     const size_t hull_stride = ctx.hull_stride;
     auto writeOut = [&]() {
       f = CostFeatures();
+      tri_sum = vert_sum = line_sum = 0;
       predicted = coef.per_frame_ms;
       benefit = 0.0;
       dropped = 0;
@@ -1494,6 +1536,25 @@ bool SelectionJob::run() {
   st.switch_count = switches;
   st.predicted_ms = predicted;
   st.total_benefit = benefit;
+  f.objects = static_cast<double>(drawn);
+  {
+    // above 2^53 the double sums in slot order rounded: sum them so again (drawn objects in object
+    // order are the slots in slot order, and a slot not drawn added +0)
+    constexpr uint64_t kExact = uint64_t(1) << 53;
+    const uint32_t* const feature[3] = {tri, vert, lines};
+    const uint64_t sums[3] = {tri_sum, vert_sum, line_sum};
+    double* const out[3] = {&f.triangles, &f.vertices, &f.line_points};
+    for (int k = 0; k < 3; ++k) {
+      if (sums[k] < kExact) {
+        *out[k] = static_cast<double>(sums[k]);
+        continue;
+      }
+      double t = 0.0;
+      for (size_t i = 0; i < n; ++i)
+        if (level_of[i] >= 0) t += feature[k][chain_offset[chain_of[i]] + static_cast<uint32_t>(level_of[i])];
+      *out[k] = t;
+    }
+  }
   st.features = f;
 
   const size_t ring = static_cast<size_t>(ctx.frame % kRingSize);
