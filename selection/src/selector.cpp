@@ -187,9 +187,10 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   alignas(32) float hyst[kLanes + 1][kLanes];
   for (int r = 0; r <= kLanes; ++r)
     for (int l = 0; l < kLanes; ++l) hyst[r][l] = l == r - 1 ? in.h1 : 1.0f;
-  const float h1 = in.h1, avail = in.avail, lo = in.lo, hi = in.hi;
+  const float avail = in.avail, lo = in.lo, hi = in.hi;
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
+  alignas(32) float pc[kLanes + 1] = {}, pb[kLanes + 1] = {};
   for (size_t s = 0; s < slot_count; ++s) {
     // No branch per slot: whether the slot may settle at all, whether its candidate fits and beats
     // "not drawn", and the vector test are one mask (about half of the candidates are "not drawn",
@@ -199,39 +200,43 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     const int finest = in.finest[s];
     const int cand0 = in.prev[s];
     const float sa = in.a[s], sb = in.b[s], sq = in.q[s];
-    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point
-    const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) & (cand0 >= -1) & (cand0 < level_count) &
-                          ((cand0 < 0) | (cand0 >= finest));
+    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point; the
+    // candidate is "not drawn" or a level in [finest, level_count) (unsigned compares: one each)
+    const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) &
+                          ((cand0 == -1) | (static_cast<unsigned>(cand0 - finest) <
+                                            static_cast<unsigned>(level_count - finest)));
     const int cand = eligible ? cand0 : -1;
     const int fi = eligible ? finest : 0, lc = eligible ? level_count : 0;
-    const uint32_t drawn_mask = 0u - static_cast<uint32_t>(cand >= 0);  // all ones if the candidate is drawn
     const uint32_t row0 = in.row0[s];
-    // pointAt(cand), +0 for "not drawn"
-    const uint32_t crow = row0 + static_cast<uint32_t>(cand & static_cast<int>(drawn_mask));
-    const float cc = maskFloat(sa + row_cost[crow], drawn_mask);
-    const float cb = maskFloat(sb * (std::min(1.0f, sq * row_inv_w[crow]) * h1), drawn_mask);
-    // a drawn candidate must fit alone and beat "not drawn"
-    const bool cand_ok = (cand < 0) | ((cc <= avail) & (cb > hi * cc));
     const int32_t* const range = kLaneMasks.range[fi][lc];
     const int32_t* const other = kLaneMasks.other[cand + 1];
-    VI fail = VI{};
+    // the points as pointAt computes them, lane l at pc[l + 1] / pb[l + 1]; pc[0] = pb[0] = +0 is
+    // "not drawn", so the candidate's point is pc[cand + 1], pb[cand + 1] without a branch
+    VF c[kParts], b[kParts];
     for (int k = 0; k < kParts; ++k) {
       VF rc, riw, hm;
-      VI in_range, not_cand;
       std::memcpy(&rc, row_cost + row0 + k * kWidth, sizeof(rc));
       std::memcpy(&riw, row_inv_w + row0 + k * kWidth, sizeof(riw));
       std::memcpy(&hm, hyst[cand + 1] + k * kWidth, sizeof(hm));
+      c[k] = sa + rc;
+      const VF t = sq * riw;
+      b[k] = sb * ((t < ones ? t : ones) * hm);
+      std::memcpy(pc + 1 + k * kWidth, &c[k], sizeof(VF));
+      std::memcpy(pb + 1 + k * kWidth, &b[k], sizeof(VF));
+    }
+    const float cc = pc[cand + 1], cb = pb[cand + 1];
+    // a drawn candidate must fit alone and beat "not drawn"
+    const bool cand_ok = (cand < 0) | ((cc <= avail) & (cb > hi * cc));
+    VI fail = VI{};
+    for (int k = 0; k < kParts; ++k) {
+      VI in_range, not_cand;
       std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
       std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
-      // the points as pointAt computes them
-      const VF c = sa + rc;
-      const VF t = sq * riw;
-      const VF b = sb * ((t < ones ? t : ones) * hm);
-      const VI v = in_range & not_cand & (c <= avail);  // the other points that fit alone
+      const VI v = in_range & not_cand & (c[k] <= avail);  // the other points that fit alone
       // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
-      const VF d = cc - c;
+      const VF d = cc - c[k];
       const VF p = hi * d, q = lo * d;
-      fail |= v & ~(cb - b > (p > q ? p : q));
+      fail |= v & ~(cb - b[k] > (p > q ? p : q));
     }
     uint64_t words[sizeof(VI) / sizeof(uint64_t)];
     std::memcpy(words, &fail, sizeof(words));
@@ -243,8 +248,9 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     uint8_t* const h = hull + s * hull_stride;
     h[0] = kNotDrawn;
     h[1] = static_cast<uint8_t>(cand);
-    hull_count[s] = static_cast<uint8_t>(1 + (drawn_mask & 1u));
-    chosen_step[s] = static_cast<uint8_t>(drawn_mask & 1u);
+    const uint8_t drawn = cand >= 0 ? 1 : 0;
+    hull_count[s] = static_cast<uint8_t>(1 + drawn);
+    chosen_step[s] = drawn;
     total += maskFloat(cc, 0u - static_cast<uint32_t>(settled));  // 0 for "not drawn" and unsettled slots
     unsettled[unsettled_count] = static_cast<uint32_t>(s);
     unsettled_count += settled ? 0u : 1u;
