@@ -191,15 +191,22 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
   alignas(32) float pc[kLanes + 1] = {}, pb[kLanes + 1] = {};
+  const uint8_t* const in_level_count = in.level_count;
+  const uint8_t* const in_finest = in.finest;
+  const int8_t* const in_prev = in.prev;
+  const uint32_t* const in_row0 = in.row0;
+  const float* const in_a = in.a;
+  const float* const in_b = in.b;
+  const float* const in_q = in.q;
   for (size_t s = 0; s < slot_count; ++s) {
     // No branch per slot: whether the slot may settle at all, whether its candidate fits and beats
     // "not drawn", and the vector test are one mask (about half of the candidates are "not drawn",
     // in no predictable order, so a branch on it mispredicted). An ineligible slot's table indices
     // are clamped to harmless rows; its result is discarded.
-    const int level_count = in.level_count[s];
-    const int finest = in.finest[s];
-    const int cand0 = in.prev[s];
-    const float sa = in.a[s], sb = in.b[s], sq = in.q[s];
+    const int level_count = in_level_count[s];
+    const int finest = in_finest[s];
+    const int cand0 = in_prev[s];
+    const float sa = in_a[s], sb = in_b[s], sq = in_q[s];
     // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point; the
     // candidate is "not drawn" or a level in [finest, level_count) (unsigned compares: one each)
     const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) &
@@ -207,7 +214,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
                                             static_cast<unsigned>(level_count - finest)));
     const int cand = eligible ? cand0 : -1;
     const int fi = eligible ? finest : 0, lc = eligible ? level_count : 0;
-    const uint32_t row0 = in.row0[s];
+    const uint32_t row0 = in_row0[s];
     const int32_t* const range = kLaneMasks.range[fi][lc];
     const int32_t* const other = kLaneMasks.other[cand + 1];
     // the points as pointAt computes them, lane l at pc[l + 1] / pb[l + 1]; pc[0] = pb[0] = +0 is
@@ -251,7 +258,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     const uint8_t drawn = cand >= 0 ? 1 : 0;
     hull_count[s] = static_cast<uint8_t>(1 + drawn);
     chosen_step[s] = drawn;
-    total += maskFloat(cc, 0u - static_cast<uint32_t>(settled));  // 0 for "not drawn" and unsettled slots
+    total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
     unsettled[unsettled_count] = static_cast<uint32_t>(s);
     unsettled_count += settled ? 0u : 1u;
   }
