@@ -26,6 +26,10 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr size_t kRingSize = 16;   // frames whose features are kept for late time reports
 constexpr uint8_t kNotDrawn = 0xFF;
+// chosen[] values of settled slots (no hull is written for them; hull steps are below 65): at last
+// frame's level, or at their base ("not drawn", the ½ guarantee's alternative)
+constexpr uint8_t kSettledAtPrev = 0xFE;
+constexpr uint8_t kSettledAtBase = 0xFD;
 // price histogram: a window of kHistBinades binades (powers of two) of the ratio, each cut into up to
 // 2^kHistMaxSubBits buckets by the top mantissa bits
 constexpr int kHistBinades = 32;
@@ -165,9 +169,9 @@ struct SettleInput {
 // hull walk too, so it needs no hull. The candidate is last frame's level (on a smooth camera most
 // objects keep theirs); the test holds whatever the candidate: it must beat every cheaper point
 // by a ratio above the top end and every costlier point by a ratio below the bottom end (float
-// differences, exact to about 2^-22 relative, far inside the margin). Writes a two-point hull (not
-// drawn, the level) and the chosen step for a settled slot; the others go, in slot order, to
-// `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
+// differences, exact to about 2^-22 relative, far inside the margin). A settled slot gets no hull:
+// its chosen step is kSettledAtPrev (its hull would be "not drawn", the level, and the write-out
+// reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
 // Must-draw slots and chains of more than kLanes levels are never settled.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
@@ -175,8 +179,7 @@ struct SettleInput {
 // default target and take AVX vectors by value.
 template <typename VF, typename VI>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
-                                                             const uint8_t* must, uint8_t* hull, size_t hull_stride,
-                                                             uint8_t* hull_count, uint8_t* chosen_step,
+                                                             const uint8_t* must, uint8_t* chosen_step,
                                                              uint32_t* unsettled, double* settled_cost) {
   constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
   static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
@@ -250,14 +253,8 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     uint64_t any = 0;
     for (uint64_t w : words) any |= w;
     const bool settled = eligible & cand_ok & (any == 0);
-    // written for every slot: an unsettled slot's hull, count and step are written again when its
-    // hull is built
-    uint8_t* const h = hull + s * hull_stride;
-    h[0] = kNotDrawn;
-    h[1] = static_cast<uint8_t>(cand);
-    const uint8_t drawn = cand >= 0 ? 1 : 0;
-    hull_count[s] = static_cast<uint8_t>(1 + drawn);
-    chosen_step[s] = drawn;
+    // written for every slot: an unsettled slot's step is written again when its hull is built
+    chosen_step[s] = kSettledAtPrev;
     total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
     unsettled[unsettled_count] = static_cast<uint32_t>(s);
     unsettled_count += settled ? 0u : 1u;
@@ -265,16 +262,13 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   *settled_cost = total;
   return unsettled_count;
 }
-size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* hull, size_t hull_stride,
-                       uint8_t* hull_count, uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V4f, V4i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
-                                   settled_cost);
+size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* chosen_step,
+                       uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V4f, V4i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
 }
 SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
-                                            uint8_t* hull, size_t hull_stride, uint8_t* hull_count,
                                             uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V8f, V8i>(in, slot_count, must, hull, hull_stride, hull_count, chosen_step, unsettled,
-                                   settled_cost);
+  return settleSlotsBody<V8f, V8i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
 }
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
@@ -1116,7 +1110,7 @@ bool SelectionJob::run() {
                              static_cast<float>(phi_ * (1.0 + kSettleMargin))};
         if (rows_nonnegative_) {
           build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
-              in, slots_, slot_must_, hull_, hull_stride_, hull_count_, chosen_step_, unsettled, &ptotal);
+              in, slots_, slot_must_, chosen_step_, unsettled, &ptotal);
         } else {
           for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
@@ -1505,7 +1499,8 @@ bool SelectionJob::run() {
 
   if (budget) {
     // write levels, statistics, features; chosen[] holds steps along the hulls, whose entries are
-    // level bytes (kNotDrawn = -1), read here rather than in a pass of their own
+    // level bytes (kNotDrawn = -1), read here rather than in a pass of their own, or
+    // kSettledAtPrev / kSettledAtBase for a settled slot
     const uint8_t* const hull = ctx.hull;
     const size_t hull_stride = ctx.hull_stride;
     auto writeOut = [&]() {
@@ -1516,8 +1511,15 @@ bool SelectionJob::run() {
       dropped = 0;
       drawn = 0;
       const uint8_t* const chosen = ctx.chosen;
+      const int8_t* const prev_of_slot = slot_prev;
       for (size_t s = 0; s < slots; ++s) {
-        const uint8_t level = hull[s * hull_stride + chosen[s]];
+        // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
+        const uint8_t c = chosen[s];
+        uint8_t level;
+        if (c >= kSettledAtBase)
+          level = c == kSettledAtPrev ? static_cast<uint8_t>(prev_of_slot[s]) : kNotDrawn;
+        else
+          level = hull[s * hull_stride + c];
         level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
         addSlot(level, slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
       }
@@ -1526,7 +1528,8 @@ bool SelectionJob::run() {
     // the sum of benefits over slots in slot order is what the greedy's choice scores
     if (half_slot >= 0 && half_alt_benefit > benefit) {
       const size_t js = static_cast<size_t>(half_slot);
-      std::memset(ctx.chosen, 0, slots);  // every slot at its base
+      for (size_t s = 0; s < slots; ++s)  // every slot at its base
+        ctx.chosen[s] = ctx.chosen[s] == kSettledAtPrev ? kSettledAtBase : 0;
       ctx.chosen[js] = static_cast<uint8_t>(half_step);
       st.flags |= kFlagSplitFallback;
       writeOut();
