@@ -18,6 +18,9 @@
 #include <cstring>
 #include <limits>
 #include <new>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 namespace scenelod::selection {
 
@@ -310,6 +313,70 @@ SCENELOD_AVX2_TARGET void frustumOutsideAvx2(const Frustum& frustum, const float
                                              uint8_t* outside) {
   frustumOutsideBody(frustum, xyz, rad, n, outside);
 }
+// The frustum test and the compaction of run()'s object blocks when no chain is empty (n <= 64):
+// the indices base + j of the spheres in view, in order, to dst (room for n entries); returns
+// their count.
+size_t frustumCompactSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
+                          uint32_t* dst) {
+  alignas(16) uint8_t outside[64];
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+  size_t count = 0;
+  for (size_t j = 0; j < n; ++j) {
+    dst[count] = base + static_cast<uint32_t>(j);
+    count += 1u - static_cast<uint32_t>(outside[j]);
+  }
+  return count;
+}
+#if defined(__x86_64__) || defined(__i386__)
+// per 8-bit mask of kept lanes: their lane numbers in order, 3 bits each (the rest 0)
+struct KeepPermutes {
+  uint32_t lanes[256];
+};
+constexpr KeepPermutes makeKeepPermutes() {
+  KeepPermutes t{};
+  for (int mask = 0; mask < 256; ++mask) {
+    uint32_t packed = 0;
+    int k = 0;
+    for (int l = 0; l < 8; ++l)
+      if (mask >> l & 1) packed |= static_cast<uint32_t>(l) << (3 * k++);
+    t.lanes[mask] = packed;
+  }
+  return t;
+}
+constexpr KeepPermutes kKeepPermutes = makeKeepPermutes();
+// eight objects at a time: the kept lanes' indices moved to the front of a vector (vpermd, its
+// lane numbers from the table) and stored whole; the next store starts after the kept ones, so
+// the result is frustumCompactSse2's (integers only)
+__attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz,
+                                                                 const float* rad, size_t n, uint32_t base,
+                                                                 uint32_t* dst) {
+  alignas(32) uint8_t outside[64];
+  frustumOutsideBody(frustum, xyz, rad, n, outside);
+  size_t count = 0, j = 0;
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i shifts = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+  const __m256i seven = _mm256_set1_epi32(7);
+  for (; j + 8 <= n; j += 8) {
+    const __m256i o = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(outside + j)));
+    const int keep = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(o, _mm256_setzero_si256())));
+    const __m256i perm = _mm256_and_si256(
+        _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int32_t>(kKeepPermutes.lanes[keep])), shifts), seven);
+    const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(base + j)), lane);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(idx, perm));
+    count += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(keep)));
+  }
+  for (; j < n; ++j) {
+    dst[count] = base + static_cast<uint32_t>(j);
+    count += 1u - static_cast<uint32_t>(outside[j]);
+  }
+  return count;
+}
+#else
+size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
+                          uint32_t* dst) {
+  return frustumCompactSse2(frustum, xyz, rad, n, base, dst);
+}
+#endif
 bool cpuHasAvx2() {
 #if defined(__x86_64__) || defined(__i386__)
   __builtin_cpu_init();
@@ -757,6 +824,7 @@ bool SelectionJob::run() {
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "centers are read as packed floats");
   const float* const xyz = n ? &centers[0].x : nullptr;
   const auto frustum_outside = ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2;
+  const auto frustum_compact = ctx.use_avx2 ? frustumCompactAvx2 : frustumCompactSse2;
   const uint32_t* const chain_offset = levels.chain_level_offset.data;
   const uint32_t* const chain_of = chains.data;
   int8_t* const level_of = levels_out.data;
@@ -959,10 +1027,10 @@ bool SelectionJob::run() {
   size_t slots = 0, done = 0;
   for (size_t i0 = 0; i0 < n; i0 += kSlotBlock) {
     const size_t mo = std::min(kSlotBlock, n - i0);
-    frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
-    // branch-free compaction of the block's objects in view (and with levels); every object's
-    // level starts at -1 (culled: stays) and the slots' levels are written later
+    // every object's level starts at -1 (culled: stays) and the slots' levels are written later
     if (any_empty_chain) {
+      frustum_outside(frustum, xyz + 3 * i0, radius_of + i0, mo, gout);
+      // branch-free compaction of the block's objects in view and with levels
       for (size_t j = 0; j < mo; ++j) {
         const uint32_t chain = chain_of[i0 + j];
         const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
@@ -971,11 +1039,8 @@ bool SelectionJob::run() {
         slots += 1u - out;
       }
     } else {
-      for (size_t j = 0; j < mo; ++j) {
-        level_of[i0 + j] = -1;
-        slot_object[slots] = static_cast<uint32_t>(i0 + j);
-        slots += 1u - static_cast<uint32_t>(gout[j]);
-      }
+      for (size_t j = 0; j < mo; ++j) level_of[i0 + j] = -1;
+      slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), slot_object + slots);
     }
     if (cost_out && !budget)
       for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;

@@ -480,6 +480,36 @@ TEST(Selector, LagrangianMatchesGreedyWhenTheHalfFallbackWinsOnAWarmFrame) {
   EXPECT_GE(switched_to_fallback, 3u);
 }
 
+TEST(Selector, ObjectsOnAChainWithoutLevelsAreLikeCulledOnes) {
+  // a chain with no level: its objects are never slots. The same scene with those objects moved
+  // behind the camera instead must give the same frames, bit for bit, in both modes
+  SyntheticScene with_empty = makeScene(31, 400, 4, 6, 60.0f);
+  SyntheticScene culled = with_empty;
+  const uint32_t empty = with_empty.table.addChain(Span<const float>(), Span<const uint32_t>(), Span<const uint32_t>(),
+                                                   Span<const uint32_t>());
+  culled.table = with_empty.table;  // the same table (the empty chain unused)
+  for (size_t i = 0; i < with_empty.chains.size(); i += 4) {
+    with_empty.chains[i] = empty;
+    culled.centers[i] = glm::vec3(0.0f, 0.0f, 1000.0f);  // behind the camera, which looks down -z
+  }
+  Owned a(makeContext(400)), b(makeContext(400));
+  for (int frame = 0; frame < 6; ++frame) {
+    const Camera cam = makeCamera(glm::vec3(0.1f * frame, 0.0f, 5.0f));
+    std::vector<int8_t> la, lb;
+    SelectionStats sa, sb;
+    SelectionJob ja = makeJob(with_empty, a.ctx, &cam, la, &sa), jb = makeJob(culled, b.ctx, &cam, lb, &sb);
+    ja.params.mode = jb.params.mode = frame % 3 == 2 ? SelectionMode::kDistance : SelectionMode::kBudget;
+    ja.params.budget_ms = jb.params.budget_ms = 2.0f;
+    ASSERT_TRUE(ja.run());
+    ASSERT_TRUE(jb.run());
+    EXPECT_EQ(la, lb) << "frame " << frame;
+    EXPECT_EQ(0, std::memcmp(&sa, &sb, sizeof(sa))) << "frame " << frame;
+    for (size_t i = 0; i < la.size(); i += 4) EXPECT_EQ(la[i], -1) << "object " << i;
+    EXPECT_GE(sa.culled_count, 100u);
+    EXPECT_GT(sa.drawn_count, 0u);
+  }
+}
+
 namespace {
 
 // Runs one frame (budget 6 ms) on two contexts and expects the same levels, costs and stats, bit
