@@ -990,10 +990,12 @@ bool SelectionJob::run() {
       gprev[j] = prev_level[i];
       glevels[j] = static_cast<uint8_t>(level_count);
     }
-    if (budget) {
+    if (budget && !must_of) {
+      std::memset(slot_must + s0, 0, m);
+    } else if (budget) {
       for (size_t j = 0; j < m; ++j) {
         const size_t s = s0 + j;
-        const bool must = must_of && must_of[gobj[j]];
+        const bool must = must_of[gobj[j]] != 0;
         slot_must[s] = must ? 1 : 0;
         if (must) {
           float cheapest = std::numeric_limits<float>::infinity();
