@@ -251,10 +251,16 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       const VF p = hi * d, q = lo * d;
       fail |= v & ~(cb - b[k] > (p > q ? p : q));
     }
-    uint64_t words[sizeof(VI) / sizeof(uint64_t)];
-    std::memcpy(words, &fail, sizeof(words));
-    uint64_t any = 0;
-    for (uint64_t w : words) any |= w;
+    // any lane set: the vector's halves ORed down to 16 bytes, then two words
+    V4i fail4 = V4i{};
+    for (size_t k = 0; k < sizeof(VI) / sizeof(V4i); ++k) {
+      V4i part;
+      std::memcpy(&part, reinterpret_cast<const unsigned char*>(&fail) + k * sizeof(V4i), sizeof(part));
+      fail4 |= part;
+    }
+    uint64_t words[2];
+    std::memcpy(words, &fail4, sizeof(words));
+    const uint64_t any = words[0] | words[1];
     const bool settled = eligible & cand_ok & (any == 0);
     // written for every slot: an unsettled slot's step is written again when its hull is built
     chosen_step[s] = kSettledAtPrev;
