@@ -395,6 +395,7 @@ bool cpuHasAvx2() {
 struct HullSums {
   double top_cost, base_total, base_benefit, ptotal;
   size_t segments, pcount;
+  size_t pwanted;  // the upgrades inside the predicted bracket, stored or not (>= pcount)
   bool poverflow;
 };
 
@@ -1121,7 +1122,7 @@ bool SelectionJob::run() {
     const bool predict = !use_greedy && ctx.has_history && ctx.last_lambda > 0.0 && std::isfinite(ctx.last_lambda);
     double plo = predict ? ctx.last_lambda / (1.0 + ctx.predict_width) : 0.0;
     double phi = predict ? ctx.last_lambda * (1.0 + ctx.predict_width) : 0.0;
-    size_t pcount = 0;
+    size_t pcount = 0, pwanted = 0;
     bool poverflow = false;
     double ptotal = 0.0;
     uint8_t* const chosen_step = ctx.chosen;
@@ -1167,7 +1168,7 @@ bool SelectionJob::run() {
       uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
       Pt pts[65];
       double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
-      size_t segments = 0, pcount = 0;
+      size_t segments = 0, pcount = 0, pwanted = 0;
       bool poverflow = false;
       if (!settle && !use_greedy_) {
         std::memset(hist_cost_, 0, static_cast<size_t>(inner_buckets_ + 2) * sizeof(double));
@@ -1281,6 +1282,7 @@ bool SelectionJob::run() {
           // what the collection below does at (plo_, phi_], on the same float ratios
           chosen_step_[s] = static_cast<uint8_t>(above);
           ptotal += hp[above].c;
+          pwanted += inside - above;
           for (size_t k = above + 1; k <= inside; ++k) {
             if (pcount == pcapacity_) {
               poverflow = true;
@@ -1300,7 +1302,7 @@ bool SelectionJob::run() {
           }
         }
       }
-      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, poverflow};
+      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, pwanted, poverflow};
     };
     auto storeSums = [&](const HullSums& h) {
       top_cost = h.top_cost;
@@ -1309,6 +1311,7 @@ bool SelectionJob::run() {
       ptotal = h.ptotal;
       segments = h.segments;
       pcount = h.pcount;
+      pwanted = h.pwanted;
       poverflow = h.poverflow;
     };
     storeSums(buildHulls(predict));
@@ -1516,8 +1519,11 @@ bool SelectionJob::run() {
         // (no top_cost > obj_cap test: settled objects do not sum it, and when everything fits the
         // bracket's greedy finds no split, which is a miss for a bracket above 0)
         // a miss (the edge outside the bracket) is retried at twice the width, an overflow at half
-        // of it, which costs one more settling pass instead of every hull, the histogram and a
-        // collection pass
+        // of it or less (the width that would hold about 3/4 of the capacity, from the count of
+        // the upgrades inside, stored or not), and between a miss and an overflow of the same
+        // frame at their geometric mean; each retry costs one more settling pass instead of every
+        // hull, the histogram and a collection pass
+        double overflow_width = 0.0, miss_width = 0.0;  // this frame's tries that overflowed / missed
         for (int retry = 0;; ++retry) {
           if (!poverflow && bracketGreedy(plo, phi, pcount, ptotal) == Collected::kDone) {
             from_prediction = true;
@@ -1525,8 +1531,17 @@ bool SelectionJob::run() {
           }
           // missed: widen the window; overflowed: narrow it (now and next frame)
           const double width = ctx.predict_width;
-          ctx.predict_width = poverflow ? std::max(kPredictWidthMin, width * 0.5)
-                                        : std::min(kPredictWidthMax, width * 2.0);
+          double next;
+          if (poverflow) {
+            overflow_width = width;
+            next = std::min(width * 0.5, width * 0.75 * static_cast<double>(pcapacity) / static_cast<double>(pwanted));
+            if (miss_width > 0.0) next = std::max(next, std::sqrt(miss_width * width));
+          } else {
+            miss_width = width;
+            next = width * 2.0;
+            if (overflow_width > 0.0) next = std::min(next, std::sqrt(overflow_width * width));
+          }
+          ctx.predict_width = std::min(kPredictWidthMax, std::max(kPredictWidthMin, next));
           if (retry == kPredictRetries || ctx.predict_width == width) {
             // settled objects have no full hull, and the search needs the histogram
             storeSums(buildHulls(false));
