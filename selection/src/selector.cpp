@@ -69,13 +69,40 @@ struct BracketEntry {
   uint32_t slot;
   uint32_t step;  // upgrade from hull point `step` to `step + 1`
 };
-struct BracketOrder {
-  bool operator()(const BracketEntry& x, const BracketEntry& y) const {
-    if (x.ratio != y.ratio) return x.ratio > y.ratio;
-    if (x.slot != y.slot) return x.slot < y.slot;
-    return x.step < y.step;
+// Sorts the bracket's entries, collected in (slot, step) order, by ratio descending, then slot,
+// then step (a total order: deterministic): a stable LSD radix sort on the ratio's bits,
+// descending (bracket ratios are above the bracket's lower end >= 0: positive floats, whose bits
+// are in their order), four passes of 8 bits through `scratch` (as many entries), a pass skipped
+// when all keys share its byte. The order std::sort gave with that comparison, without an
+// unpredictable branch per comparison.
+void sortBracket(BracketEntry* entries, BracketEntry* scratch, size_t count) {
+  BracketEntry* from = entries;
+  BracketEntry* to = scratch;
+  for (int shift = 0; shift < 32; shift += 8) {
+    uint32_t offsets[256] = {};
+    for (size_t e = 0; e < count; ++e) {
+      uint32_t bits;
+      std::memcpy(&bits, &from[e].ratio, sizeof(bits));
+      ++offsets[(~bits >> shift) & 0xFF];
+    }
+    uint32_t first = 0;
+    bool single = false;
+    for (int b = 0; b < 256; ++b) {
+      const uint32_t c = offsets[b];
+      single |= c == count;
+      offsets[b] = first;
+      first += c;
+    }
+    if (single) continue;
+    for (size_t e = 0; e < count; ++e) {
+      uint32_t bits;
+      std::memcpy(&bits, &from[e].ratio, sizeof(bits));
+      to[offsets[(~bits >> shift) & 0xFF]++] = from[e];
+    }
+    std::swap(from, to);
   }
-};
+  if (from != entries) std::memcpy(entries, from, count * sizeof(BracketEntry));
+}
 
 // levels of one chain side by side: kLanes floats, two SSE2 vectors or one AVX2 vector (GCC vector
 // extensions; only IEEE adds, multiplies, compares and selects, so the bits do not depend on how
@@ -441,6 +468,7 @@ class SelectorContext {
   uint8_t* chosen = nullptr;     // index into the slot's hull
   HeapEntry* heap = nullptr;
   BracketEntry* bracket = nullptr;
+  BracketEntry* bracket_scratch = nullptr;  // as many: the radix sort's other buffer
   // price histogram of this frame's hull segments (Lagrangian form): per bucket of the ratio's float
   // bits, the summed cost step (8 bytes) and the segment count (4 bytes); kHistBuckets + 2 entries,
   // the first and last for ratios below and above the window
@@ -521,7 +549,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
   constexpr size_t kPerObjectParts = 15;
-  Part parts[20] = {
+  Part parts[21] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
@@ -529,9 +557,10 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0},
-      {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0}};
+      {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0},
+      {config.bracket_capacity * sizeof(BracketEntry), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 20; ++i) {
+  for (size_t i = 0; i < 21; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -566,6 +595,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
   c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
   c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
+  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[20].at);
   c->max_rows = rows;
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
@@ -1434,7 +1464,7 @@ bool SelectionJob::run() {
         split_slot = -1;
         // the bracket must hold the budget's edge: the upgrades above it fit, all of them together not
         if (hi != inf && total > obj_cap) return Collected::kEdgeOutside;
-        std::sort(ctx.bracket, ctx.bracket + count, BracketOrder());
+        sortBracket(ctx.bracket, ctx.bracket_scratch, count);
         for (size_t e = 0; e < count; ++e) {
           const BracketEntry& be = ctx.bracket[e];
           if (ctx.chosen[be.slot] != be.step) continue;  // an earlier step of this slot did not fit
