@@ -309,9 +309,9 @@ SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_c
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
 // outside one of the frustum's planes (sphereInFrustum's six tests without early exits). Blocks of
-// 64 objects are first copied into local columns, so each plane's test is a plain loop over floats that the compiler vectorises
-// with the plane in registers (over the packed centres it managed only 2 wide, reloading the 24
-// plane constants). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
+// 64 objects are first copied into local columns, so the six planes' tests are one plain loop over
+// floats that the compiler vectorises (over the packed centres it managed only 2 wide; one loop per
+// plane read the columns six times). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
 // products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
 // give the same bits (Selector.AvxAndSse2PathsGiveTheSameBits).
 inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
@@ -319,6 +319,13 @@ inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& fru
   constexpr size_t kBlock = 64;
   alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
   alignas(32) uint32_t bo[kBlock];
+  float pa[6], pb[6], pc[6], pd[6];
+  for (int k = 0; k < 6; ++k) {
+    pa[k] = frustum.planes[k].x;
+    pb[k] = frustum.planes[k].y;
+    pc[k] = frustum.planes[k].z;
+    pd[k] = frustum.planes[k].w;
+  }
   auto testBlock = [&](size_t i0, size_t m) {
     const float* const p = xyz + 3 * i0;
     for (size_t j = 0; j < m; ++j) {
@@ -326,11 +333,14 @@ inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& fru
       by[j] = p[3 * j + 1];
       bz[j] = p[3 * j + 2];
       bnr[j] = -rad[i0 + j];
-      bo[j] = 0;
     }
-    for (int k = 0; k < 6; ++k) {
-      const float a = frustum.planes[k].x, b = frustum.planes[k].y, c = frustum.planes[k].z, d = frustum.planes[k].w;
-      for (size_t j = 0; j < m; ++j) bo[j] |= a * bx[j] + b * by[j] + c * bz[j] + d < bnr[j] ? 1u : 0u;
+    // the six planes in one loop over the block (each element's coordinates loaded once)
+    for (size_t j = 0; j < m; ++j) {
+      const float x = bx[j], y = by[j], z = bz[j], nr = bnr[j];
+      uint32_t o = 0;
+      for (int k = 0; k < 6; ++k)
+        o |= pa[k] * x + pb[k] * y + pc[k] * z + pd[k] < nr ? 1u : 0u;
+      bo[j] = o;
     }
     for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
   };
