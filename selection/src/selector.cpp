@@ -436,6 +436,86 @@ struct HullSums {
   bool poverflow;
 };
 
+// What writeOutSlots reads: the slot columns, the hulls' level bytes and the row tables.
+struct WriteOutInput {
+  const uint8_t* chosen;     // per slot: hull step, or kSettledAtPrev / kSettledAtBase
+  const uint8_t* hull;       // hull_stride level bytes per slot
+  size_t hull_stride;
+  const uint32_t* slot_object;
+  const float* a;
+  const float* b;
+  const float* q;
+  const float* px;
+  const uint32_t* row0;
+  const int8_t* prev;
+  const float* row_cost;
+  const float* row_inv_w;
+  const uint32_t* tri;
+  const uint32_t* vert;
+  const uint32_t* lines;
+  float h1;
+};
+
+// The frame's sums over the slots in slot order (addSlot's terms).
+struct SlotSums {
+  double predicted, benefit, pixels;
+  uint64_t tri, vert, lines;
+  uint32_t dropped, drawn;
+};
+
+// The budget write-out: each slot's level into level_of and its share of the frame's sums, in slot
+// order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
+// its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
+// the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
+__attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t slot_count, double predicted0,
+                                                 int8_t* level_of) {
+  const uint8_t* const chosen = in.chosen;
+  const uint8_t* const hull = in.hull;
+  const size_t hull_stride = in.hull_stride;
+  const uint32_t* const slot_object = in.slot_object;
+  const float* const slot_a = in.a;
+  const float* const slot_b = in.b;
+  const float* const slot_q = in.q;
+  const float* const slot_px = in.px;
+  const uint32_t* const slot_row0 = in.row0;
+  const int8_t* const slot_prev = in.prev;
+  const float* const row_cost = in.row_cost;
+  const float* const row_inv_w = in.row_inv_w;
+  const uint32_t* const tri = in.tri;
+  const uint32_t* const vert = in.vert;
+  const uint32_t* const lines = in.lines;
+  const float h_mult[2] = {1.0f, in.h1};
+  double predicted = predicted0, benefit = 0.0, pixels = 0.0;
+  uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
+  uint32_t dropped = 0, drawn = 0;
+  for (size_t s = 0; s < slot_count; ++s) {
+    // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
+    const uint8_t c = chosen[s];
+    const int8_t prev = slot_prev[s];
+    uint8_t level;
+    if (c >= kSettledAtBase)
+      level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
+    else
+      level = hull[s * hull_stride + c];
+    level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
+    const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+    const float b = slot_b[s];
+    dropped += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+    drawn += keep & 1u;
+    const uint32_t row = slot_row0[s] + (level & keep);
+    const float cost = slot_a[s] + row_cost[row];
+    const bool current = level == static_cast<uint8_t>(prev);
+    const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
+    predicted += maskFloat(cost, keep);
+    benefit += maskFloat(b * acc, keep);
+    tri_sum += tri[row] & keep;
+    vert_sum += vert[row] & keep;
+    line_sum += lines[row] & keep;
+    pixels += maskFloat(slot_px[s], keep);
+  }
+  return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
+}
+
 struct PassResult {
   double cost = 0.0;        // total object cost with every upgrade of ratio > lambda taken
   size_t below = 0;         // upgrades with ratio in (lo, lambda]
@@ -1638,19 +1718,17 @@ bool SelectionJob::run() {
       benefit = 0.0;
       dropped = 0;
       drawn = 0;
-      const uint8_t* const chosen = ctx.chosen;
-      const int8_t* const prev_of_slot = slot_prev;
-      for (size_t s = 0; s < slots; ++s) {
-        // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
-        const uint8_t c = chosen[s];
-        uint8_t level;
-        if (c >= kSettledAtBase)
-          level = c == kSettledAtPrev ? static_cast<uint8_t>(prev_of_slot[s]) : kNotDrawn;
-        else
-          level = hull[s * hull_stride + c];
-        level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
-        addSlot(level, slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
-      }
+      const WriteOutInput in{ctx.chosen, hull, hull_stride, slot_object, slot_a, slot_b, slot_q, slot_px,
+                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1};
+      const SlotSums sums = writeOutSlots(in, slots, predicted, level_of);
+      predicted = sums.predicted;
+      benefit = sums.benefit;
+      f.pixels = sums.pixels;
+      tri_sum = sums.tri;
+      vert_sum = sums.vert;
+      line_sum = sums.lines;
+      dropped = sums.dropped;
+      drawn = sums.drawn;
     };
     writeOut();
     // the sum of benefits over slots in slot order is what the greedy's choice scores
