@@ -488,13 +488,12 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
   double predicted = predicted0, benefit = 0.0, pixels = 0.0;
   uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
   uint32_t dropped = 0, drawn = 0;
-  // blocks of kBlock slots in three loops: the levels, row gathers and integer sums (scalar); the
-  // float terms masked to +0 for slots not drawn (plain loops over local columns, vectorised); the
-  // double sums in slot order
+  // blocks of kBlock slots in two loops: the levels, row gathers and integer sums (scalar); then the
+  // float terms masked to +0 for slots not drawn, four slots at a time in vectors, and their double
+  // sums lane by lane (slot order)
   constexpr size_t kBlock = 64;
   alignas(32) float lrc[kBlock], lriw[kBlock], lh[kBlock];
   alignas(32) uint32_t lkeep[kBlock];
-  alignas(32) float lcost[kBlock], lben[kBlock], lpx[kBlock];
   for (size_t s0 = 0; s0 < slot_count; s0 += kBlock) {
     const size_t m = std::min(kBlock, slot_count - s0);
     for (size_t j = 0; j < m; ++j) {
@@ -509,7 +508,6 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
         level = hull[s * hull_stride + c];
       level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
       const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
-      drawn += keep & 1u;
       const uint32_t row = slot_row0[s] + (level & keep);
       lrc[j] = row_cost[row];
       lriw[j] = row_inv_w[row];
@@ -528,7 +526,7 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
     size_t j = 0;
     const V4f ones = {1.0f, 1.0f, 1.0f, 1.0f};
     const V4f zeros = {};
-    V4i dropped4 = {};
+    V4i dropped4 = {}, drawn4 = {};
     for (; j + 4 <= m; j += 4) {
       V4f a4, b4, q4, px4, rc4, riw4, h4;
       V4i k4;
@@ -551,28 +549,33 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
       ci &= k4;
       bi &= k4;
       pi &= k4;
-      std::memcpy(lcost + j, &ci, sizeof(ci));
-      std::memcpy(lben + j, &bi, sizeof(bi));
-      std::memcpy(lpx + j, &pi, sizeof(pi));
+      V4f cm, bm, pm;
+      std::memcpy(&cm, &ci, sizeof(cm));
+      std::memcpy(&bm, &bi, sizeof(bm));
+      std::memcpy(&pm, &pi, sizeof(pm));
+      for (int l = 0; l < 4; ++l) {
+        predicted += cm[l];
+        benefit += bm[l];
+        pixels += pm[l];
+      }
       dropped4 -= ~k4 & (b4 > zeros);  // -1 per dropped lane
+      drawn4 -= k4;
     }
     dropped += static_cast<uint32_t>(dropped4[0] + dropped4[1] + dropped4[2] + dropped4[3]);
+    drawn += static_cast<uint32_t>(drawn4[0] + drawn4[1] + drawn4[2] + drawn4[3]);
     for (; j < m; ++j) {
       uint32_t keep;
       std::memcpy(&keep, lkeep + j, sizeof(keep));
       const float b = bb[j];
       dropped += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+      drawn += keep & 1u;
       const float cost = ba[j] + lrc[j];
       const float acc = std::min(1.0f, bq[j] * lriw[j]) * lh[j];
-      lcost[j] = maskFloat(cost, keep);
-      lben[j] = maskFloat(b * acc, keep);
-      lpx[j] = maskFloat(bpx[j], keep);
+      predicted += maskFloat(cost, keep);
+      benefit += maskFloat(b * acc, keep);
+      pixels += maskFloat(bpx[j], keep);
     }
-    for (size_t j = 0; j < m; ++j) {
-      predicted += lcost[j];
-      benefit += lben[j];
-      pixels += lpx[j];
-    }
+
   }
   return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
 }
