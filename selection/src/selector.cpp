@@ -436,6 +436,60 @@ struct HullSums {
   bool poverflow;
 };
 
+// The coarsest level of accuracy 1 of a chain of more than kLanes levels (row_inv_w from its first
+// row): a branch-free binary search (most objects are far: their coarsest level is accurate enough,
+// one predictable test).
+inline uint32_t finestBySearch(float q, const float* row_inv_w, uint32_t level_count) {
+  uint32_t finest = level_count - 1;
+  if (!(q * row_inv_w[finest] >= 1.0f)) finest = 0;
+  for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+    const uint32_t half = len / 2;
+    const uint32_t ok = q * row_inv_w[finest + half + 1] >= 1.0f ? 1u : 0u;
+    // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+    finest += ok * (half + 1);
+    len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+  }
+  return finest;
+}
+
+// Pass 1c's per-slot chain terms for m slots, AVX2 (the SSE2 form is inline in SelectionJob::run):
+// first row, level count, previous level and the finest candidate, the count of accurate-enough
+// levels 1.. over the chain's 8 lanes in one vector (the same compares as the SSE2 form's two).
+SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
+                                         const uint32_t* chain_offset, const float* row_inv_w,
+                                         const int8_t* prev_level, uint8_t* gfinest, uint32_t* grow0,
+                                         int8_t* gprev, uint8_t* glevels) {
+  static_assert(kLanes == 8, "one AVX2 vector per chain");
+  for (size_t j = 0; j < m; ++j) {
+    const size_t i = gobj[j];
+    const uint32_t chain = chain_of[i];
+    const uint32_t row0 = chain_offset[chain];
+    const uint32_t level_count = chain_offset[chain + 1] - row0;
+    const float q = gq[j];
+    uint32_t finest;
+    if (level_count <= kLanes) {
+      V8i range;
+      V8f riw;
+      std::memcpy(&range, kLaneMasks.range[1][level_count], sizeof(range));
+      std::memcpy(&riw, row_inv_w + row0, sizeof(riw));
+      const V8i ok = (q * riw >= 1.0f) & range;  // -1 per level
+#if defined(__x86_64__) || defined(__i386__)
+      V8f okf;
+      std::memcpy(&okf, &ok, sizeof(okf));
+      finest = kBitCount8[__builtin_ia32_movmskps256(okf)];
+#else
+      finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3] + ok[4] + ok[5] + ok[6] + ok[7]));
+#endif
+    } else {
+      finest = finestBySearch(q, row_inv_w + row0, level_count);
+    }
+    gfinest[j] = static_cast<uint8_t>(finest);
+    grow0[j] = row0;
+    gprev[j] = prev_level[i];
+    glevels[j] = static_cast<uint8_t>(level_count);
+  }
+}
+
 // What writeOutSlots reads: the slot columns, the hulls' level bytes and the row tables.
 struct WriteOutInput {
   const uint8_t* chosen;     // per slot: hull step, or kSettledAtPrev / kSettledAtBase
@@ -1016,6 +1070,7 @@ bool SelectionJob::run() {
   const float* const xyz = n ? &centers[0].x : nullptr;
   const auto frustum_outside = ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2;
   const auto frustum_compact = ctx.use_avx2 ? frustumCompactAvx2 : frustumCompactSse2;
+  const bool use_avx2 = ctx.use_avx2;
   const uint32_t* const chain_offset = levels.chain_level_offset.data;
   const uint32_t* const chain_of = chains.data;
   int8_t* const level_of = levels_out.data;
@@ -1133,53 +1188,47 @@ bool SelectionJob::run() {
       gb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
       gpx[j] = px;
     }
-    for (size_t j = 0; j < m; ++j) {
-      const size_t i = gobj[j];
-      const uint32_t chain = chain_of[i];
-      const uint32_t row0 = chain_offset[chain];
-      const uint32_t level_count = chain_offset[chain + 1] - row0;
-      const float q = gq[j];
-      // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-      // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
-      // included) and its length is their count: for a chain of up to kLanes levels, counted over
-      // the chain's lanes at once without a branch (the binary search it replaces had a loop of
-      // varying length per object, which mispredicted)
-      uint32_t finest;
-      if (level_count <= kLanes) {
-        V4i range0, range1;
-        V4f riw0, riw1;
-        std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
-        std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
-        std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
-        std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
-        const V4i ok0 = (q * riw0 >= 1.0f) & range0, ok1 = (q * riw1 >= 1.0f) & range1;  // -1 per level
-#if defined(__x86_64__) || defined(__i386__)
-        // the lanes' sign bits as a byte (movmskps), counted by a table
-        V4f okf0, okf1;
-        std::memcpy(&okf0, &ok0, sizeof(okf0));
-        std::memcpy(&okf1, &ok1, sizeof(okf1));
-        finest = kBitCount8[__builtin_ia32_movmskps(okf0) | (__builtin_ia32_movmskps(okf1) << 4)];
-#else
-        const V4i ok = ok0 + ok1;
-        finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
-#endif
-      } else {
-        // a branch-free binary search (most objects are far: their coarsest level is accurate
-        // enough, one predictable test)
-        finest = level_count - 1;
-        if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
-        for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
-          const uint32_t half = len / 2;
-          const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
-          // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
-          finest += ok * (half + 1);
-          len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+    if (use_avx2) {
+      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels);
+    } else {
+      for (size_t j = 0; j < m; ++j) {
+        const size_t i = gobj[j];
+        const uint32_t chain = chain_of[i];
+        const uint32_t row0 = chain_offset[chain];
+        const uint32_t level_count = chain_offset[chain + 1] - row0;
+        const float q = gq[j];
+        // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+        // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
+        // included) and its length is their count: for a chain of up to kLanes levels, counted over
+        // the chain's lanes at once without a branch (the binary search it replaces had a loop of
+        // varying length per object, which mispredicted)
+        uint32_t finest;
+        if (level_count <= kLanes) {
+          V4i range0, range1;
+          V4f riw0, riw1;
+          std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
+          std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
+          std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
+          std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
+          const V4i ok0 = (q * riw0 >= 1.0f) & range0, ok1 = (q * riw1 >= 1.0f) & range1;  // -1 per level
+  #if defined(__x86_64__) || defined(__i386__)
+          // the lanes' sign bits as a byte (movmskps), counted by a table
+          V4f okf0, okf1;
+          std::memcpy(&okf0, &ok0, sizeof(okf0));
+          std::memcpy(&okf1, &ok1, sizeof(okf1));
+          finest = kBitCount8[__builtin_ia32_movmskps(okf0) | (__builtin_ia32_movmskps(okf1) << 4)];
+  #else
+          const V4i ok = ok0 + ok1;
+          finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
+  #endif
+        } else {
+          finest = finestBySearch(q, row_inv_w + row0, level_count);
         }
+        gfinest[j] = static_cast<uint8_t>(finest);
+        grow0[j] = row0;
+        gprev[j] = prev_level[i];
+        glevels[j] = static_cast<uint8_t>(level_count);
       }
-      gfinest[j] = static_cast<uint8_t>(finest);
-      grow0[j] = row0;
-      gprev[j] = prev_level[i];
-      glevels[j] = static_cast<uint8_t>(level_count);
     }
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
