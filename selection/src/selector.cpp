@@ -436,6 +436,204 @@ struct HullSums {
   bool poverflow;
 };
 
+// The coarsest level of accuracy 1 of a chain of more than kLanes levels (row_inv_w from its first
+// row): a branch-free binary search (most objects are far: their coarsest level is accurate enough,
+// one predictable test).
+inline uint32_t finestBySearch(float q, const float* row_inv_w, uint32_t level_count) {
+  uint32_t finest = level_count - 1;
+  if (!(q * row_inv_w[finest] >= 1.0f)) finest = 0;
+  for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
+    const uint32_t half = len / 2;
+    const uint32_t ok = q * row_inv_w[finest + half + 1] >= 1.0f ? 1u : 0u;
+    // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
+    finest += ok * (half + 1);
+    len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+  }
+  return finest;
+}
+
+// Pass 1c's per-slot chain terms for m slots, AVX2 (the SSE2 form is inline in SelectionJob::run):
+// first row, level count, previous level and the finest candidate, the count of accurate-enough
+// levels 1.. over the chain's 8 lanes in one vector (the same compares as the SSE2 form's two).
+SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
+                                         const uint32_t* chain_offset, const float* row_inv_w,
+                                         const int8_t* prev_level, uint8_t* gfinest, uint32_t* grow0,
+                                         int8_t* gprev, uint8_t* glevels) {
+  static_assert(kLanes == 8, "one AVX2 vector per chain");
+  for (size_t j = 0; j < m; ++j) {
+    const size_t i = gobj[j];
+    const uint32_t chain = chain_of[i];
+    const uint32_t row0 = chain_offset[chain];
+    const uint32_t level_count = chain_offset[chain + 1] - row0;
+    const float q = gq[j];
+    uint32_t finest;
+    if (level_count <= kLanes) {
+      V8i range;
+      V8f riw;
+      std::memcpy(&range, kLaneMasks.range[1][level_count], sizeof(range));
+      std::memcpy(&riw, row_inv_w + row0, sizeof(riw));
+      const V8i ok = (q * riw >= 1.0f) & range;  // -1 per level
+#if defined(__x86_64__) || defined(__i386__)
+      V8f okf;
+      std::memcpy(&okf, &ok, sizeof(okf));
+      finest = kBitCount8[__builtin_ia32_movmskps256(okf)];
+#else
+      finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3] + ok[4] + ok[5] + ok[6] + ok[7]));
+#endif
+    } else {
+      finest = finestBySearch(q, row_inv_w + row0, level_count);
+    }
+    gfinest[j] = static_cast<uint8_t>(finest);
+    grow0[j] = row0;
+    gprev[j] = prev_level[i];
+    glevels[j] = static_cast<uint8_t>(level_count);
+  }
+}
+
+// What writeOutSlots reads: the slot columns, the hulls' level bytes and the row tables.
+struct WriteOutInput {
+  const uint8_t* chosen;     // per slot: hull step, or kSettledAtPrev / kSettledAtBase
+  const uint8_t* hull;       // hull_stride level bytes per slot
+  size_t hull_stride;
+  const uint32_t* slot_object;
+  const float* a;
+  const float* b;
+  const float* q;
+  const float* px;
+  const uint32_t* row0;
+  const int8_t* prev;
+  const float* row_cost;
+  const float* row_inv_w;
+  const uint32_t* tri;
+  const uint32_t* vert;
+  const uint32_t* lines;
+  float h1;
+};
+
+// The frame's sums over the slots in slot order (addSlot's terms).
+struct SlotSums {
+  double predicted, benefit, pixels;
+  uint64_t tri, vert, lines;
+  uint32_t dropped, drawn;
+};
+
+// The budget write-out: each slot's level into level_of and its share of the frame's sums, in slot
+// order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
+// its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
+// the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
+__attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t slot_count, double predicted0,
+                                                 int8_t* level_of) {
+  const uint8_t* const chosen = in.chosen;
+  const uint8_t* const hull = in.hull;
+  const size_t hull_stride = in.hull_stride;
+  const uint32_t* const slot_object = in.slot_object;
+  const float* const slot_a = in.a;
+  const float* const slot_b = in.b;
+  const float* const slot_q = in.q;
+  const float* const slot_px = in.px;
+  const uint32_t* const slot_row0 = in.row0;
+  const int8_t* const slot_prev = in.prev;
+  const float* const row_cost = in.row_cost;
+  const float* const row_inv_w = in.row_inv_w;
+  const uint32_t* const tri = in.tri;
+  const uint32_t* const vert = in.vert;
+  const uint32_t* const lines = in.lines;
+  const float h_mult[2] = {1.0f, in.h1};
+  double predicted = predicted0, benefit = 0.0, pixels = 0.0;
+  uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
+  uint32_t dropped = 0, drawn = 0;
+  // blocks of kBlock slots in two loops: the levels, row gathers and integer sums (scalar); then the
+  // float terms masked to +0 for slots not drawn, four slots at a time in vectors, and their double
+  // sums lane by lane (slot order)
+  constexpr size_t kBlock = 64;
+  alignas(32) float lrc[kBlock], lriw[kBlock], lh[kBlock];
+  alignas(32) uint32_t lkeep[kBlock];
+  for (size_t s0 = 0; s0 < slot_count; s0 += kBlock) {
+    const size_t m = std::min(kBlock, slot_count - s0);
+    for (size_t j = 0; j < m; ++j) {
+      const size_t s = s0 + j;
+      // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
+      const uint8_t c = chosen[s];
+      const int8_t prev = slot_prev[s];
+      uint8_t level;
+      if (c >= kSettledAtBase)
+        level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
+      else
+        level = hull[s * hull_stride + c];
+      level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
+      const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+      const uint32_t row = slot_row0[s] + (level & keep);
+      lrc[j] = row_cost[row];
+      lriw[j] = row_inv_w[row];
+      lh[j] = h_mult[level == static_cast<uint8_t>(prev)];
+      std::memcpy(lkeep + j, &keep, sizeof(keep));  // the mask's bits
+      tri_sum += tri[row] & keep;
+      vert_sum += vert[row] & keep;
+      line_sum += lines[row] & keep;
+    }
+    const float* const ba = slot_a + s0;
+    const float* const bb = slot_b + s0;
+    const float* const bq = slot_q + s0;
+    const float* const bpx = slot_px + s0;
+    // ctx.pointCost / ctx.pointBenefit at a drawn level, +0 when not drawn (x + 0.0 == x): four
+    // slots at a time in vectors (the same IEEE operations per lane), the tail one at a time
+    size_t j = 0;
+    const V4f ones = {1.0f, 1.0f, 1.0f, 1.0f};
+    const V4f zeros = {};
+    V4i dropped4 = {}, drawn4 = {};
+    for (; j + 4 <= m; j += 4) {
+      V4f a4, b4, q4, px4, rc4, riw4, h4;
+      V4i k4;
+      std::memcpy(&a4, ba + j, sizeof(a4));
+      std::memcpy(&b4, bb + j, sizeof(b4));
+      std::memcpy(&q4, bq + j, sizeof(q4));
+      std::memcpy(&px4, bpx + j, sizeof(px4));
+      std::memcpy(&rc4, lrc + j, sizeof(rc4));
+      std::memcpy(&riw4, lriw + j, sizeof(riw4));
+      std::memcpy(&h4, lh + j, sizeof(h4));
+      std::memcpy(&k4, lkeep + j, sizeof(k4));
+      const V4f cost = a4 + rc4;
+      const V4f t = q4 * riw4;
+      const V4f acc = (t < ones ? t : ones) * h4;  // std::min(1.0f, t): 1 for NaN
+      const V4f ben = b4 * acc;
+      V4i ci, bi, pi;
+      std::memcpy(&ci, &cost, sizeof(ci));
+      std::memcpy(&bi, &ben, sizeof(bi));
+      std::memcpy(&pi, &px4, sizeof(pi));
+      ci &= k4;
+      bi &= k4;
+      pi &= k4;
+      V4f cm, bm, pm;
+      std::memcpy(&cm, &ci, sizeof(cm));
+      std::memcpy(&bm, &bi, sizeof(bm));
+      std::memcpy(&pm, &pi, sizeof(pm));
+      for (int l = 0; l < 4; ++l) {
+        predicted += cm[l];
+        benefit += bm[l];
+        pixels += pm[l];
+      }
+      dropped4 -= ~k4 & (b4 > zeros);  // -1 per dropped lane
+      drawn4 -= k4;
+    }
+    dropped += static_cast<uint32_t>(dropped4[0] + dropped4[1] + dropped4[2] + dropped4[3]);
+    drawn += static_cast<uint32_t>(drawn4[0] + drawn4[1] + drawn4[2] + drawn4[3]);
+    for (; j < m; ++j) {
+      uint32_t keep;
+      std::memcpy(&keep, lkeep + j, sizeof(keep));
+      const float b = bb[j];
+      dropped += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+      drawn += keep & 1u;
+      const float cost = ba[j] + lrc[j];
+      const float acc = std::min(1.0f, bq[j] * lriw[j]) * lh[j];
+      predicted += maskFloat(cost, keep);
+      benefit += maskFloat(b * acc, keep);
+      pixels += maskFloat(bpx[j], keep);
+    }
+
+  }
+  return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
+}
+
 struct PassResult {
   double cost = 0.0;        // total object cost with every upgrade of ratio > lambda taken
   size_t below = 0;         // upgrades with ratio in (lo, lambda]
@@ -872,6 +1070,7 @@ bool SelectionJob::run() {
   const float* const xyz = n ? &centers[0].x : nullptr;
   const auto frustum_outside = ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2;
   const auto frustum_compact = ctx.use_avx2 ? frustumCompactAvx2 : frustumCompactSse2;
+  const bool use_avx2 = ctx.use_avx2;
   const uint32_t* const chain_offset = levels.chain_level_offset.data;
   const uint32_t* const chain_of = chains.data;
   int8_t* const level_of = levels_out.data;
@@ -989,53 +1188,47 @@ bool SelectionJob::run() {
       gb[j] = (((px * gi[j]) * gf[j]) * gm[j]) * gv[j];
       gpx[j] = px;
     }
-    for (size_t j = 0; j < m; ++j) {
-      const size_t i = gobj[j];
-      const uint32_t chain = chain_of[i];
-      const uint32_t row0 = chain_offset[chain];
-      const uint32_t level_count = chain_offset[chain + 1] - row0;
-      const float q = gq[j];
-      // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
-      // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
-      // included) and its length is their count: for a chain of up to kLanes levels, counted over
-      // the chain's lanes at once without a branch (the binary search it replaces had a loop of
-      // varying length per object, which mispredicted)
-      uint32_t finest;
-      if (level_count <= kLanes) {
-        V4i range0, range1;
-        V4f riw0, riw1;
-        std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
-        std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
-        std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
-        std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
-        const V4i ok0 = (q * riw0 >= 1.0f) & range0, ok1 = (q * riw1 >= 1.0f) & range1;  // -1 per level
-#if defined(__x86_64__) || defined(__i386__)
-        // the lanes' sign bits as a byte (movmskps), counted by a table
-        V4f okf0, okf1;
-        std::memcpy(&okf0, &ok0, sizeof(okf0));
-        std::memcpy(&okf1, &ok1, sizeof(okf1));
-        finest = kBitCount8[__builtin_ia32_movmskps(okf0) | (__builtin_ia32_movmskps(okf1) << 4)];
-#else
-        const V4i ok = ok0 + ok1;
-        finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
-#endif
-      } else {
-        // a branch-free binary search (most objects are far: their coarsest level is accurate
-        // enough, one predictable test)
-        finest = level_count - 1;
-        if (!(q * row_inv_w[row0 + finest] >= 1.0f)) finest = 0;
-        for (uint32_t len = finest == 0 && level_count >= 2 ? level_count - 2 : 0; len > 0;) {
-          const uint32_t half = len / 2;
-          const uint32_t ok = q * row_inv_w[row0 + finest + half + 1] >= 1.0f ? 1u : 0u;
-          // arithmetic instead of selects: compilers turn the selects into branches, which mispredict
-          finest += ok * (half + 1);
-          len = half + ok * (len - 2 * half - 1);  // ok: len - half - 1 (unsigned wrap-around is exact)
+    if (use_avx2) {
+      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels);
+    } else {
+      for (size_t j = 0; j < m; ++j) {
+        const size_t i = gobj[j];
+        const uint32_t chain = chain_of[i];
+        const uint32_t row0 = chain_offset[chain];
+        const uint32_t level_count = chain_offset[chain + 1] - row0;
+        const float q = gq[j];
+        // the coarsest level of accuracy 1 (level 0, w = 0, always is): widths do not fall with the
+        // level, so the accurate-enough levels 1.. are a prefix (q * (1 / w) >= 1 falls with w, NaN
+        // included) and its length is their count: for a chain of up to kLanes levels, counted over
+        // the chain's lanes at once without a branch (the binary search it replaces had a loop of
+        // varying length per object, which mispredicted)
+        uint32_t finest;
+        if (level_count <= kLanes) {
+          V4i range0, range1;
+          V4f riw0, riw1;
+          std::memcpy(&range0, kLaneMasks.range[1][level_count], sizeof(range0));
+          std::memcpy(&range1, kLaneMasks.range[1][level_count] + 4, sizeof(range1));
+          std::memcpy(&riw0, row_inv_w + row0, sizeof(riw0));
+          std::memcpy(&riw1, row_inv_w + row0 + 4, sizeof(riw1));
+          const V4i ok0 = (q * riw0 >= 1.0f) & range0, ok1 = (q * riw1 >= 1.0f) & range1;  // -1 per level
+  #if defined(__x86_64__) || defined(__i386__)
+          // the lanes' sign bits as a byte (movmskps), counted by a table
+          V4f okf0, okf1;
+          std::memcpy(&okf0, &ok0, sizeof(okf0));
+          std::memcpy(&okf1, &ok1, sizeof(okf1));
+          finest = kBitCount8[__builtin_ia32_movmskps(okf0) | (__builtin_ia32_movmskps(okf1) << 4)];
+  #else
+          const V4i ok = ok0 + ok1;
+          finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3]));
+  #endif
+        } else {
+          finest = finestBySearch(q, row_inv_w + row0, level_count);
         }
+        gfinest[j] = static_cast<uint8_t>(finest);
+        grow0[j] = row0;
+        gprev[j] = prev_level[i];
+        glevels[j] = static_cast<uint8_t>(level_count);
       }
-      gfinest[j] = static_cast<uint8_t>(finest);
-      grow0[j] = row0;
-      gprev[j] = prev_level[i];
-      glevels[j] = static_cast<uint8_t>(level_count);
     }
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
@@ -1638,19 +1831,17 @@ bool SelectionJob::run() {
       benefit = 0.0;
       dropped = 0;
       drawn = 0;
-      const uint8_t* const chosen = ctx.chosen;
-      const int8_t* const prev_of_slot = slot_prev;
-      for (size_t s = 0; s < slots; ++s) {
-        // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
-        const uint8_t c = chosen[s];
-        uint8_t level;
-        if (c >= kSettledAtBase)
-          level = c == kSettledAtPrev ? static_cast<uint8_t>(prev_of_slot[s]) : kNotDrawn;
-        else
-          level = hull[s * hull_stride + c];
-        level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
-        addSlot(level, slot_a[s], slot_b[s], slot_q[s], slot_px[s], slot_row0[s], slot_prev[s]);
-      }
+      const WriteOutInput in{ctx.chosen, hull, hull_stride, slot_object, slot_a, slot_b, slot_q, slot_px,
+                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1};
+      const SlotSums sums = writeOutSlots(in, slots, predicted, level_of);
+      predicted = sums.predicted;
+      benefit = sums.benefit;
+      f.pixels = sums.pixels;
+      tri_sum = sums.tri;
+      vert_sum = sums.vert;
+      line_sum = sums.lines;
+      dropped = sums.dropped;
+      drawn = sums.drawn;
     };
     writeOut();
     // the sum of benefits over slots in slot order is what the greedy's choice scores
