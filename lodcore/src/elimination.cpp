@@ -73,47 +73,74 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     return e;
   };
 
-  for (size_t t = 0; t < tn; ++t) {
-    uint32_t c0 = co[m.triangles[3 * t]], c1 = co[m.triangles[3 * t + 1]], c2 = co[m.triangles[3 * t + 2]];
-    if (c0 != c1 && c1 != c2 && c0 != c2) {
-      // rotate (keeping orientation) so the smallest id comes first
-      if (c1 < c0 && c1 < c2) { const uint32_t t0 = c0; c0 = c1; c1 = c2; c2 = t0; }
-      else if (c2 < c0 && c2 < c1) { const uint32_t t0 = c0; c0 = c2; c2 = c1; c1 = t0; }
-      for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
-        const uint32_t o = table[i];
-        if (o == kNone) {
-          table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
-          if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
-            cap <<= 1;
-            mask = cap - 1;
-            table.assign(cap, kNone);
-            for (size_t k = 0; k < out.triangles.size(); k += 3) {
-              size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
-              while (table[j] != kNone) j = (j + 1) & mask;
-              table[j] = static_cast<uint32_t>(k / 3);
-            }
-            size_t j = triangleHash(c0, c1, c2) & mask;
+  auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
+    for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
+      const uint32_t o = table[i];
+      if (o == kNone) {
+        table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
+        if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
+          cap <<= 1;
+          mask = cap - 1;
+          table.assign(cap, kNone);
+          for (size_t k = 0; k < out.triangles.size(); k += 3) {
+            size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
             while (table[j] != kNone) j = (j + 1) & mask;
-            table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
+            table[j] = static_cast<uint32_t>(k / 3);
           }
-          out.triangles.push_back(c0);
-          out.triangles.push_back(c1);
-          out.triangles.push_back(c2);
-          break;
+          size_t j = triangleHash(c0, c1, c2) & mask;
+          while (table[j] != kNone) j = (j + 1) & mask;
+          table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
         }
-        if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) break;
+        out.triangles.push_back(c0);
+        out.triangles.push_back(c1);
+        out.triangles.push_back(c2);
+        return;
       }
-      continue;
+      if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) return;
     }
-    ++out.collapsed_triangles;
-    if (c0 == c1 && c1 == c2) {
-      if (keep_points) addPoint(c0);
-      continue;
+  };
+
+  // The triangles are classified in blocks without a branch (kept, collapsed to an edge, collapsed
+  // to a point: at coarse levels the three are mixed at random, so a branch on the class
+  // mispredicted about once per triangle), each class into its own small list; the lists are then
+  // processed in input order, so ids and output order are those of a single pass.
+  constexpr size_t kBlock = 512;
+  uint32_t kept_block[3 * kBlock], edge_block[3 * kBlock], point_block[kBlock];
+  const uint32_t* tri = m.triangles.data();
+  for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
+    const size_t t1 = std::min(tn, t0 + kBlock);
+    size_t kept_count = 0, edge_count = 0, point_count = 0;
+    for (size_t t = t0; t < t1; ++t) {
+      const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
+      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+      const bool kept = !(e01 | e12 | e02), point = e01 & e12;
+      // rotation (keeping orientation) that puts the smallest id first
+      const uint32_t lo = std::min(c0, std::min(c1, c2));
+      const bool first0 = c0 == lo, first1 = c1 == lo;
+      uint32_t* k = kept_block + 3 * kept_count;
+      k[0] = lo;
+      k[1] = first0 ? c1 : (first1 ? c2 : c0);
+      k[2] = first0 ? c2 : (first1 ? c0 : c1);
+      kept_count += kept;
+      const uint32_t y = e01 ? c2 : c1;
+      uint32_t* e = edge_block + 3 * edge_count;
+      e[0] = c0;
+      e[1] = y;
+      e[2] = static_cast<uint32_t>(t);
+      edge_count += !kept & !point;
+      point_block[point_count] = c0;
+      point_count += point;
     }
-    if (!keep_edges) continue;
-    const uint32_t x = c0, y = c0 == c1 ? c2 : c1;
-    const uint32_t e = edgeSlot(x, y);
-    if (compute_thickness) collapsed.push_back({static_cast<uint32_t>(t), e});
+    out.collapsed_triangles += (t1 - t0) - kept_count;
+    for (size_t j = 0; j < kept_count; ++j)
+      addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
+    if (keep_points)
+      for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
+    if (keep_edges)
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+        if (compute_thickness) collapsed.push_back({edge_block[3 * j + 2], e});
+      }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
