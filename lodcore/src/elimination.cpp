@@ -10,6 +10,10 @@
 
 namespace scenelod::detail {
 
+namespace {
+inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
+}  // namespace
+
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
   const Mesh& m = *p.mesh;
@@ -59,7 +63,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     point_candidates.push_back(c);
   };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
-    const uint32_t lo = std::min(x, y), hi = std::max(x, y);
+    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
     uint32_t e = edge_head[lo];
     while (e != kNone && edges[2 * e + 1] != hi) e = edge_next[e];
     if (e == kNone) {
@@ -114,15 +118,17 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
       const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
       const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-      // rotation (keeping orientation) that puts the smallest id first
-      const uint32_t lo = std::min(c0, std::min(c1, c2));
-      const bool first0 = c0 == lo, first1 = c1 == lo;
+      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
+      // selects (which the compiler turned into branches)
+      const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
+      const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
+      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
       uint32_t* k = kept_block + 3 * kept_count;
       k[0] = lo;
-      k[1] = first0 ? c1 : (first1 ? c2 : c0);
-      k[2] = first0 ? c2 : (first1 ? c0 : c1);
+      k[1] = c[r + 1];
+      k[2] = c[r + 2];
       kept_count += kept;
-      const uint32_t y = e01 ? c2 : c1;
+      const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
       uint32_t* e = edge_block + 3 * edge_count;
       e[0] = c0;
       e[1] = y;
