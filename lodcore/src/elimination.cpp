@@ -6,12 +6,82 @@
 // Input edges and points are mapped the same way.
 #include <algorithm>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "cluster_internal.h"
 
 namespace scenelod::detail {
 
 namespace {
 inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
+
+// Candidate edges listed under their lower cluster id. Where the clusters are few enough (below),
+// a cluster's first four edges are kept inline in a 32-byte block, their higher ids compared at
+// once, so that a lookup is one block read and a branch that is taken only for a new edge (the
+// walk of a list mispredicted about once per lookup at coarse levels, where a low id heads several
+// edges); later edges, and all edges where the blocks would be too large, are chained through
+// flat arrays under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle
+// wrote recently: the input order is spatially coherent, the cluster ids are not).
+class EdgeLists {
+ public:
+  EdgeLists(size_t clusters, bool use_blocks) {
+    if (use_blocks) blocks_.assign(clusters, Block{{kNone, kNone, kNone, kNone}, {kNone, kNone, kNone, kNone}});
+    head_.assign(clusters, kNone);
+  }
+  // the id of edge (lo, hi), lo < hi, or kNone
+  uint32_t find(uint32_t lo, uint32_t hi) const {
+    if (blocks_.empty()) return walk(lo, hi);
+    const Block& b = blocks_[lo];
+#if defined(__SSE2__)
+    const __m128i eq =
+        _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(b.hi)), _mm_set1_epi32(int32_t(hi)));
+    const uint32_t found = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(eq)));
+#else
+    uint32_t found = 0;
+    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << k;
+#endif
+    // without a branch: the id when found inline, else kNone
+    const uint32_t id = b.id[__builtin_ctz(found | 8u)] | (0u - uint32_t(found == 0));
+    if ((found == 0) & (b.hi[3] != kNone)) return walk(lo, hi);  // a full block: the rest are chained
+    return id;
+  }
+  // lists edge `id` = (lo, hi), not listed yet
+  void add(uint32_t lo, uint32_t hi, uint32_t id) {
+    if (!blocks_.empty()) {
+      Block& b = blocks_[lo];
+      for (int k = 0; k < 4; ++k)
+        if (b.hi[k] == kNone) {
+          b.hi[k] = hi;
+          b.id[k] = id;
+          return;
+        }
+    }
+    node_hi_.push_back(hi);
+    node_id_.push_back(id);
+    node_next_.push_back(head_[lo]);
+    head_[lo] = static_cast<uint32_t>(node_hi_.size() - 1);
+  }
+
+ private:
+  uint32_t walk(uint32_t lo, uint32_t hi) const {
+    for (uint32_t e = head_[lo]; e != kNone; e = node_next_[e])
+      if (node_hi_[e] == hi) return node_id_[e];
+    return kNone;
+  }
+  struct Block {
+    uint32_t hi[4];  // higher ids of the first four edges, kNone where free (filled in order)
+    uint32_t id[4];
+  };
+  std::vector<Block> blocks_;
+  std::vector<uint32_t> head_;  // per cluster: its first chained edge
+  std::vector<uint32_t> node_hi_, node_id_, node_next_;
+};
+
+// the blocks above are used while they take at most this (the bunny's levels; not the 1 M sphere's
+// finer ones, where the heads alone keep the lists in cache)
+constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 }  // namespace
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
@@ -41,17 +111,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
     return static_cast<size_t>(h ^ (h >> 31));
   };
-  // Candidate edges are found again through per-cluster lists, each edge listed under its lower id:
-  // a lookup is one load from an array of heads (4 bytes per cluster, in cache) and a walk of a
-  // node or two that a nearby input triangle wrote recently (the input order is spatially coherent,
-  // the cluster ids are not). The hash this replaces (16-byte slots, two per cluster) was larger
-  // than the cache at fine levels, where the coverage pass's lookups went to random slots of it.
+  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
+  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
+  // pass's lookups went to random slots of it.
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
-  std::vector<uint32_t> edge_next;      // per candidate edge: the next one listed under the same low id
   // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
   std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
-  std::vector<uint32_t> edge_head(keep_edges || input_edges ? nc : 0, kNone);
+  const size_t listed = keep_edges || input_edges ? nc : 0;
+  EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
   std::vector<CollapsedTriangle> collapsed;
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
@@ -64,14 +132,12 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
     const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
-    uint32_t e = edge_head[lo];
-    while (e != kNone && edges[2 * e + 1] != hi) e = edge_next[e];
+    uint32_t e = edge_lists.find(lo, hi);
     if (e == kNone) {
       e = static_cast<uint32_t>(edges.size() / 2);
       edges.push_back(lo);
       edges.push_back(hi);
-      edge_next.push_back(edge_head[lo]);
-      edge_head[lo] = e;
+      edge_lists.add(lo, hi, e);
       if (input_edges) input_thickness.push_back(0.0f);
     }
     return e;
@@ -162,22 +228,18 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
 
   // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
   const size_t en = edges.size() / 2;
-  std::vector<uint8_t> covered(en, 0);
+  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
   std::vector<uint8_t> used(nc, 0);
   if (en > 0) {
-    for (size_t t = 0; t < out.triangles.size(); t += 3)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t x = out.triangles[t + k], y = out.triangles[t + (k + 1) % 3];
-        const uint32_t lo = std::min(x, y), hi = std::max(x, y);
-        for (uint32_t e = edge_head[lo]; e != kNone; e = edge_next[e])
-          if (edges[2 * e + 1] == hi) {
-            covered[e] = 1;
-            break;
-          }
-      }
+    for (size_t t = 0; t < out.triangles.size(); t += 3) {
+      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
+      const uint32_t a = branchlessMin(c0, c1), b = branchlessMin(c1, c2), c = branchlessMin(c2, c0);
+      covered[branchlessMin(edge_lists.find(a, c0 ^ c1 ^ a), uint32_t(en))] = 1;
+      covered[branchlessMin(edge_lists.find(b, c1 ^ c2 ^ b), uint32_t(en))] = 1;
+      covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
+    }
   }
-  std::vector<uint32_t>().swap(edge_head);
-  std::vector<uint32_t>().swap(edge_next);
+  { EdgeLists released(0, false); std::swap(released, edge_lists); }
   for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
