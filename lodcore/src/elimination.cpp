@@ -32,6 +32,7 @@ class EdgeLists {
   }
   // the id of edge (lo, hi), lo < hi, or kNone
   uint32_t find(uint32_t lo, uint32_t hi) const {
+    swapOwner(lo, hi);
     if (blocks_.empty()) return walk(lo, hi);
     const Block& b = blocks_[lo];
 #if defined(__SSE2__)
@@ -44,11 +45,13 @@ class EdgeLists {
 #endif
     // without a branch: the id when found inline, else kNone
     const uint32_t id = b.id[__builtin_ctz(found | 8u)] | (0u - uint32_t(found == 0));
-    if ((found == 0) & (b.hi[3] != kNone)) return walk(lo, hi);  // a full block: the rest are chained
+    // not found in a full block: the rest are chained (one test, rarely taken)
+    if ((0u - uint32_t(found == 0)) & (b.hi[3] ^ kNone)) return walk(lo, hi);
     return id;
   }
   // lists edge `id` = (lo, hi), not listed yet
   void add(uint32_t lo, uint32_t hi, uint32_t id) {
+    swapOwner(lo, hi);
     if (!blocks_.empty()) {
       Block& b = blocks_[lo];
       for (int k = 0; k < 4; ++k)
@@ -65,6 +68,13 @@ class EdgeLists {
   }
 
  private:
+  // an edge is listed under its lower id when the ids' sum is odd, else under the higher one: the
+  // lowest ids (the heaviest clusters) would otherwise head all their edges, overfilling blocks
+  static void swapOwner(uint32_t& lo, uint32_t& hi) {
+    const uint32_t flip = (((lo ^ hi) & 1u) - 1u) & (lo ^ hi);  // lo ^ hi when the sum is even
+    lo ^= flip;
+    hi ^= flip;
+  }
   uint32_t walk(uint32_t lo, uint32_t hi) const {
     for (uint32_t e = head_[lo]; e != kNone; e = node_next_[e])
       if (node_hi_[e] == hi) return node_id_[e];
