@@ -131,6 +131,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   const size_t listed = keep_edges || input_edges ? nc : 0;
   EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
   std::vector<CollapsedTriangle> collapsed;
+  // about every triangle beyond the expected output collapses (mostly onto edges); reserving that
+  // saves the copies of the doublings
+  if (compute_thickness && keep_edges) collapsed.reserve(tn - std::min(tn, size_t(2) * nc));
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
