@@ -133,9 +133,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   const size_t listed = keep_edges || input_edges ? nc : 0;
   EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
   std::vector<CollapsedTriangle> collapsed;
-  // about every triangle beyond the expected output collapses (mostly onto edges); reserving that
-  // saves the copies of the doublings
-  if (compute_thickness && keep_edges) collapsed.reserve(tn - std::min(tn, size_t(2) * nc));
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
@@ -231,6 +228,10 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
     if (keep_points)
       for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
+    // grown by extrapolating the share of collapsed triangles seen so far rather than by doubling,
+    // so that it ends near its size (it is among the largest transients of a level)
+    if (compute_thickness && keep_edges && collapsed.size() + edge_count > collapsed.capacity())
+      collapsed.reserve(std::min(tn, (collapsed.size() + edge_count) * tn / t1 * 9 / 8 + kBlock));
     if (keep_edges)
       for (size_t j = 0; j < edge_count; ++j) {
         const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
