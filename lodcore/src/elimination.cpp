@@ -6,9 +6,95 @@
 // Input edges and points are mapped the same way.
 #include <algorithm>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "cluster_internal.h"
 
 namespace scenelod::detail {
+
+namespace {
+inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
+
+// Candidate edges listed under their lower cluster id. Where the clusters are few enough (below),
+// a cluster's first four edges are kept inline in a 32-byte block, their higher ids compared at
+// once, so that a lookup is one block read and a branch that is taken only for a new edge (the
+// walk of a list mispredicted about once per lookup at coarse levels, where a low id heads several
+// edges); later edges, and all edges where the blocks would be too large, are chained through
+// flat arrays under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle
+// wrote recently: the input order is spatially coherent, the cluster ids are not).
+class EdgeLists {
+ public:
+  EdgeLists(size_t clusters, bool use_blocks) {
+    if (use_blocks) blocks_.assign(clusters, Block{{kNone, kNone, kNone, kNone}, {kNone, kNone, kNone, kNone}});
+    head_.assign(clusters, kNone);
+  }
+  // the id of edge (lo, hi), lo < hi, or kNone
+  uint32_t find(uint32_t lo, uint32_t hi) const {
+    if (blocks_.empty()) return walk(lo, hi);
+    swapOwner(lo, hi);
+    const Block& b = blocks_[lo];
+#if defined(__SSE2__)
+    const __m128i eq =
+        _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(b.hi)), _mm_set1_epi32(int32_t(hi)));
+    const uint32_t found = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(eq)));
+#else
+    uint32_t found = 0;
+    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << k;
+#endif
+    // without a branch: the id when found inline, else kNone
+    const uint32_t id = b.id[__builtin_ctz(found | 8u)] | (0u - uint32_t(found == 0));
+    // not found in a full block: the rest are chained (one test, rarely taken)
+    if ((0u - uint32_t(found == 0)) & (b.hi[3] ^ kNone)) return walk(lo, hi);
+    return id;
+  }
+  // lists edge `id` = (lo, hi), not listed yet
+  void add(uint32_t lo, uint32_t hi, uint32_t id) {
+    if (!blocks_.empty()) {
+      swapOwner(lo, hi);
+      Block& b = blocks_[lo];
+      for (int k = 0; k < 4; ++k)
+        if (b.hi[k] == kNone) {
+          b.hi[k] = hi;
+          b.id[k] = id;
+          return;
+        }
+    }
+    node_hi_.push_back(hi);
+    if (!blocks_.empty()) node_id_.push_back(id);  // without blocks, every edge is a node: its index is its id
+    node_next_.push_back(head_[lo]);
+    head_[lo] = static_cast<uint32_t>(node_hi_.size() - 1);
+  }
+
+ private:
+  // with blocks, an edge is listed under its lower id when the ids' sum is odd, else under the
+  // higher one: the lowest ids (the heaviest clusters) would otherwise head all their edges,
+  // overfilling blocks. Without blocks the lower id is kept (on the 1 M sphere's 10 % level the
+  // parity made the walks slower: 14.5 -> 18 ms)
+  static void swapOwner(uint32_t& lo, uint32_t& hi) {
+    const uint32_t flip = (((lo ^ hi) & 1u) - 1u) & (lo ^ hi);  // lo ^ hi when the sum is even
+    lo ^= flip;
+    hi ^= flip;
+  }
+  uint32_t walk(uint32_t lo, uint32_t hi) const {
+    for (uint32_t e = head_[lo]; e != kNone; e = node_next_[e])
+      if (node_hi_[e] == hi) return blocks_.empty() ? e : node_id_[e];
+    return kNone;
+  }
+  struct Block {
+    uint32_t hi[4];  // higher ids of the first four edges, kNone where free (filled in order)
+    uint32_t id[4];
+  };
+  std::vector<Block> blocks_;
+  std::vector<uint32_t> head_;  // per cluster: its first chained edge
+  std::vector<uint32_t> node_hi_, node_id_, node_next_;
+};
+
+// the blocks above are used while they take at most this (the bunny's levels; not the 1 M sphere's
+// finer ones, where the heads alone keep the lists in cache)
+constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
+}  // namespace
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
@@ -37,17 +123,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
     return static_cast<size_t>(h ^ (h >> 31));
   };
-  // Candidate edges are found again through per-cluster lists, each edge listed under its lower id:
-  // a lookup is one load from an array of heads (4 bytes per cluster, in cache) and a walk of a
-  // node or two that a nearby input triangle wrote recently (the input order is spatially coherent,
-  // the cluster ids are not). The hash this replaces (16-byte slots, two per cluster) was larger
-  // than the cache at fine levels, where the coverage pass's lookups went to random slots of it.
+  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
+  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
+  // pass's lookups went to random slots of it.
   std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
-  std::vector<uint32_t> edge_next;      // per candidate edge: the next one listed under the same low id
   // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
   std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
-  std::vector<uint32_t> edge_head(keep_edges || input_edges ? nc : 0, kNone);
+  const size_t listed = keep_edges || input_edges ? nc : 0;
+  EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
   std::vector<CollapsedTriangle> collapsed;
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
@@ -59,61 +143,100 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     point_candidates.push_back(c);
   };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
-    const uint32_t lo = std::min(x, y), hi = std::max(x, y);
-    uint32_t e = edge_head[lo];
-    while (e != kNone && edges[2 * e + 1] != hi) e = edge_next[e];
+    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
+    uint32_t e = edge_lists.find(lo, hi);
     if (e == kNone) {
       e = static_cast<uint32_t>(edges.size() / 2);
       edges.push_back(lo);
       edges.push_back(hi);
-      edge_next.push_back(edge_head[lo]);
-      edge_head[lo] = e;
+      edge_lists.add(lo, hi, e);
       if (input_edges) input_thickness.push_back(0.0f);
     }
     return e;
   };
 
-  for (size_t t = 0; t < tn; ++t) {
-    uint32_t c0 = co[m.triangles[3 * t]], c1 = co[m.triangles[3 * t + 1]], c2 = co[m.triangles[3 * t + 2]];
-    if (c0 != c1 && c1 != c2 && c0 != c2) {
-      // rotate (keeping orientation) so the smallest id comes first
-      if (c1 < c0 && c1 < c2) { const uint32_t t0 = c0; c0 = c1; c1 = c2; c2 = t0; }
-      else if (c2 < c0 && c2 < c1) { const uint32_t t0 = c0; c0 = c2; c2 = c1; c1 = t0; }
-      for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
-        const uint32_t o = table[i];
-        if (o == kNone) {
-          table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
-          if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
-            cap <<= 1;
-            mask = cap - 1;
-            table.assign(cap, kNone);
-            for (size_t k = 0; k < out.triangles.size(); k += 3) {
-              size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
-              while (table[j] != kNone) j = (j + 1) & mask;
-              table[j] = static_cast<uint32_t>(k / 3);
-            }
-            size_t j = triangleHash(c0, c1, c2) & mask;
+  auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
+    for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
+      const uint32_t o = table[i];
+      if (o == kNone) {
+        table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
+        if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
+          cap <<= 1;
+          mask = cap - 1;
+          table.assign(cap, kNone);
+          for (size_t k = 0; k < out.triangles.size(); k += 3) {
+            size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
             while (table[j] != kNone) j = (j + 1) & mask;
-            table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
+            table[j] = static_cast<uint32_t>(k / 3);
           }
-          out.triangles.push_back(c0);
-          out.triangles.push_back(c1);
-          out.triangles.push_back(c2);
-          break;
+          size_t j = triangleHash(c0, c1, c2) & mask;
+          while (table[j] != kNone) j = (j + 1) & mask;
+          table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
         }
-        if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) break;
+        out.triangles.push_back(c0);
+        out.triangles.push_back(c1);
+        out.triangles.push_back(c2);
+        return;
       }
-      continue;
+      if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) return;
     }
-    ++out.collapsed_triangles;
-    if (c0 == c1 && c1 == c2) {
-      if (keep_points) addPoint(c0);
-      continue;
+  };
+
+  // The triangles are classified in blocks without a branch (kept, collapsed to an edge, collapsed
+  // to a point: at coarse levels the three are mixed at random, so a branch on the class
+  // mispredicted about once per triangle), each class into its own small list; the lists are then
+  // processed in input order, so ids and output order are those of a single pass.
+  constexpr size_t kBlock = 512;
+  uint32_t kept_block[3 * kBlock], edge_block[3 * kBlock], point_block[kBlock];
+  const uint32_t* tri = m.triangles.data();
+  // where nearly all triangles of the last block collapsed to a point, the next block tests for that
+  // first (a branch that is then predicted) and skips the rest of the classification
+  bool points_dominate = false;
+  for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
+    const size_t t1 = std::min(tn, t0 + kBlock);
+    size_t kept_count = 0, edge_count = 0, point_count = 0;
+    for (size_t t = t0; t < t1; ++t) {
+      const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
+      if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
+        point_block[point_count++] = c0;
+        continue;
+      }
+      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+      const bool kept = !(e01 | e12 | e02), point = e01 & e12;
+      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
+      // selects (which the compiler turned into branches)
+      const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
+      const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
+      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
+      uint32_t* k = kept_block + 3 * kept_count;
+      k[0] = lo;
+      k[1] = c[r + 1];
+      k[2] = c[r + 2];
+      kept_count += kept;
+      const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
+      uint32_t* e = edge_block + 3 * edge_count;
+      e[0] = c0;
+      e[1] = y;
+      e[2] = static_cast<uint32_t>(t);
+      edge_count += !kept & !point;
+      point_block[point_count] = c0;
+      point_count += point;
     }
-    if (!keep_edges) continue;
-    const uint32_t x = c0, y = c0 == c1 ? c2 : c1;
-    const uint32_t e = edgeSlot(x, y);
-    if (compute_thickness) collapsed.push_back({static_cast<uint32_t>(t), e});
+    out.collapsed_triangles += (t1 - t0) - kept_count;
+    points_dominate = point_count * 8 > (t1 - t0) * 7;  // for the next block: fine meshes at coarse widths
+    for (size_t j = 0; j < kept_count; ++j)
+      addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
+    if (keep_points)
+      for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
+    // grown by extrapolating the share of collapsed triangles seen so far rather than by doubling,
+    // so that it ends near its size (it is among the largest transients of a level)
+    if (compute_thickness && keep_edges && collapsed.size() + edge_count > collapsed.capacity())
+      collapsed.reserve(std::min(tn, (collapsed.size() + edge_count) * tn / t1 * 9 / 8 + kBlock));
+    if (keep_edges)
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+        if (compute_thickness) collapsed.push_back({edge_block[3 * j + 2], e});
+      }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
@@ -129,22 +252,18 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
 
   // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
   const size_t en = edges.size() / 2;
-  std::vector<uint8_t> covered(en, 0);
+  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
   std::vector<uint8_t> used(nc, 0);
   if (en > 0) {
-    for (size_t t = 0; t < out.triangles.size(); t += 3)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t x = out.triangles[t + k], y = out.triangles[t + (k + 1) % 3];
-        const uint32_t lo = std::min(x, y), hi = std::max(x, y);
-        for (uint32_t e = edge_head[lo]; e != kNone; e = edge_next[e])
-          if (edges[2 * e + 1] == hi) {
-            covered[e] = 1;
-            break;
-          }
-      }
+    for (size_t t = 0; t < out.triangles.size(); t += 3) {
+      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
+      const uint32_t a = branchlessMin(c0, c1), b = branchlessMin(c1, c2), c = branchlessMin(c2, c0);
+      covered[branchlessMin(edge_lists.find(a, c0 ^ c1 ^ a), uint32_t(en))] = 1;
+      covered[branchlessMin(edge_lists.find(b, c1 ^ c2 ^ b), uint32_t(en))] = 1;
+      covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
+    }
   }
-  std::vector<uint32_t>().swap(edge_head);
-  std::vector<uint32_t>().swap(edge_next);
+  { EdgeLists released(0, false); std::swap(released, edge_lists); }
   for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {

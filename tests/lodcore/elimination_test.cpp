@@ -1,5 +1,7 @@
 // Elimination (Low & Tan 1997 §2 step 5) and thick edges (§3.3.1) on constructed meshes.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -76,6 +78,35 @@ TEST(Elimination, EdgesCoveredByTrianglesAndPointsCoveredByEdgesAreRemoved) {
   EXPECT_EQ(out.triangleCount(), 1u);
   EXPECT_EQ(out.edgeCount(), 1u);   // 10-13 once; 0-3 is covered by the triangle
   EXPECT_EQ(out.pointCount(), 0u);  // vertex 0 is covered by the triangle
+}
+
+TEST(Elimination, AClusterWithManyCollapsedEdgesKeepsEachOnce) {
+  // 20 spokes from one hub, each made of two slivers that collapse onto the same edge: the hub's
+  // cluster heads more candidate edges than are kept inline per cluster
+  Mesh m;
+  m.positions = {{0, 0, 0}, {0.01f, 0, 0}};
+  const int spokes = 20;
+  for (int i = 0; i < spokes; ++i) {
+    const float a = 6.2831853f * float(i) / float(spokes);
+    const glm::vec3 tip(10.0f * std::cos(a), 10.0f * std::sin(a), 0.0f);
+    const uint32_t v = static_cast<uint32_t>(m.positions.size());
+    m.positions.insert(m.positions.end(), {tip, tip + glm::vec3(0, 0, 0.01f), tip + glm::vec3(0, 0, 0.02f)});
+    m.triangles.insert(m.triangles.end(), {0, v, v + 1, 1, v + 2, v});
+  }
+  const Mesh out = run(m, floating(0.2f));
+  EXPECT_EQ(out.triangleCount(), 0u);
+  ASSERT_EQ(out.edgeCount(), size_t(spokes));
+  EXPECT_EQ(out.pointCount(), 0u);
+  std::vector<float> angles;
+  for (size_t e = 0; e < out.edgeCount(); ++e) {
+    glm::vec3 a = out.positions[out.edges[2 * e]], b = out.positions[out.edges[2 * e + 1]];
+    if (glm::length(a) > glm::length(b)) std::swap(a, b);
+    EXPECT_LT(glm::length(a), 0.1f);  // one end at the hub
+    EXPECT_NEAR(glm::length(b), 10.0f, 0.1f);
+    angles.push_back(std::atan2(b.y, b.x));
+  }
+  std::sort(angles.begin(), angles.end());
+  for (size_t k = 1; k < angles.size(); ++k) EXPECT_GT(angles[k] - angles[k - 1], 0.2f);  // all spokes distinct
 }
 
 TEST(Elimination, InputEdgesAndPointsAreClusteredToo) {
