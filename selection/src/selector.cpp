@@ -508,6 +508,10 @@ struct WriteOutInput {
   const uint32_t* vert;
   const uint32_t* lines;
   float h1;
+  // null: the integer features gathered per slot; else `rows` counters, one per level-table row:
+  // the drawn slots per row are counted and the features summed per row at the end
+  uint32_t* row_drawn;
+  size_t rows;
 };
 
 // The frame's sums over the slots in slot order (addSlot's terms).
@@ -521,6 +525,9 @@ struct SlotSums {
 // order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
 // its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
 // the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
+// kCountRows: the integer features as Σ (drawn slots of the row) × feature over the rows instead of
+// three gathers per slot (fewer rows than slots); integer sums, so the same values in any order.
+template <bool kCountRows>
 __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t slot_count, double predicted0,
                                                  int8_t* level_of) {
   const uint8_t* const chosen = in.chosen;
@@ -538,10 +545,12 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
   const uint32_t* const tri = in.tri;
   const uint32_t* const vert = in.vert;
   const uint32_t* const lines = in.lines;
+  uint32_t* const row_drawn = in.row_drawn;
   const float h_mult[2] = {1.0f, in.h1};
   double predicted = predicted0, benefit = 0.0, pixels = 0.0;
   uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
   uint32_t dropped = 0, drawn = 0;
+  if (kCountRows) std::memset(row_drawn, 0, in.rows * sizeof(uint32_t));
   // blocks of kBlock slots in two loops: the levels, row gathers and integer sums (scalar); then the
   // float terms masked to +0 for slots not drawn, four slots at a time in vectors, and their double
   // sums lane by lane (slot order)
@@ -567,9 +576,13 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
       lriw[j] = row_inv_w[row];
       lh[j] = h_mult[level == static_cast<uint8_t>(prev)];
       std::memcpy(lkeep + j, &keep, sizeof(keep));  // the mask's bits
-      tri_sum += tri[row] & keep;
-      vert_sum += vert[row] & keep;
-      line_sum += lines[row] & keep;
+      if (kCountRows) {
+        row_drawn[row] += keep & 1u;  // a slot not drawn adds 0 to its chain's first row
+      } else {
+        tri_sum += tri[row] & keep;
+        vert_sum += vert[row] & keep;
+        line_sum += lines[row] & keep;
+      }
     }
     const float* const ba = slot_a + s0;
     const float* const bb = slot_b + s0;
@@ -629,7 +642,14 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
       benefit += maskFloat(b * acc, keep);
       pixels += maskFloat(bpx[j], keep);
     }
-
+  }
+  if (kCountRows) {
+    for (size_t r = 0; r < in.rows; ++r) {
+      const uint64_t k = row_drawn[r];
+      tri_sum += k * tri[r];
+      vert_sum += k * vert[r];
+      line_sum += k * lines[r];
+    }
   }
   return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
 }
@@ -670,6 +690,7 @@ class SelectorContext {
   // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
   float* row_cost = nullptr;
   float* row_inv_w = nullptr;
+  uint32_t* row_drawn = nullptr;  // per row: the drawn slots at it (the budget write-out's counters)
   size_t max_rows = 0;
   uint8_t* hull = nullptr;       // hull_stride bytes per slot: levels along the hull, kNotDrawn = -1
   uint8_t* hull_count = nullptr;
@@ -757,7 +778,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
   constexpr size_t kPerObjectParts = 15;
-  Part parts[21] = {
+  Part parts[22] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
@@ -766,9 +787,9 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}};
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 21; ++i) {
+  for (size_t i = 0; i < 22; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -804,6 +825,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
   c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
   c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[20].at);
+  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[21].at);
   c->max_rows = rows;
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
@@ -1831,9 +1853,14 @@ bool SelectionJob::run() {
       benefit = 0.0;
       dropped = 0;
       drawn = 0;
+      // counting per row pays when there are fewer rows than slots
+      const size_t rows = levels.cell_width.count;
+      const bool count_rows = rows <= slots;
       const WriteOutInput in{ctx.chosen, hull, hull_stride, slot_object, slot_a, slot_b, slot_q, slot_px,
-                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1};
-      const SlotSums sums = writeOutSlots(in, slots, predicted, level_of);
+                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1,
+                             count_rows ? ctx.row_drawn : nullptr, rows};
+      const SlotSums sums = count_rows ? writeOutSlots<true>(in, slots, predicted, level_of)
+                                       : writeOutSlots<false>(in, slots, predicted, level_of);
       predicted = sums.predicted;
       benefit = sums.benefit;
       f.pixels = sums.pixels;

@@ -537,6 +537,48 @@ void expectSameFrame(const SyntheticScene& s, SelectorContext* a, SelectorContex
 
 }  // namespace
 
+// The integer cost features of a budget frame are the sums of the drawn levels' counts, whether the
+// write-out counts drawn slots per level-table row (fewer rows than slots) or gathers every slot's
+// row (more rows than slots).
+TEST(Selector, BudgetFeaturesAreTheSumsOfTheDrawnLevels) {
+  struct Case { size_t objects, chains; };
+  for (const Case c : {Case{3000, 8}, Case{60, 40}}) {
+    SyntheticScene s = makeScene(21, c.objects, c.chains, 8, 100.0f, true);
+    const LevelTable t = s.table.view();
+    Owned ctx(makeContext(c.objects, 100));
+    size_t fewer_rows_than_slots = 0;
+    for (int frame = 0; frame < 8; ++frame) {
+      const Camera cam = makeCamera(glm::vec3(frame * 0.4f, 0.0f, 10.0f - frame * 0.8f));
+      std::vector<int8_t> levels;
+      SelectionStats st;
+      SelectionJob job = makeJob(s, ctx.ctx, &cam, levels, &st);
+      job.params.budget_ms = c.objects > 1000 ? 6.0f : 3.0f;
+      ASSERT_TRUE(job.run());
+      double tri = 0.0, vert = 0.0, lines = 0.0;
+      size_t drawn = 0;
+      for (size_t i = 0; i < levels.size(); ++i) {
+        if (levels[i] < 0) continue;
+        const uint32_t row = t.chain_level_offset[s.chains[i]] + static_cast<uint32_t>(levels[i]);
+        tri += t.triangle_count[row];
+        vert += t.vertex_count[row];
+        lines += t.line_point_count[row];
+        ++drawn;
+      }
+      EXPECT_GT(drawn, 0u) << "frame " << frame;
+      EXPECT_EQ(st.drawn_count, drawn) << "frame " << frame;
+      EXPECT_EQ(st.features.objects, static_cast<double>(drawn)) << "frame " << frame;
+      EXPECT_EQ(st.features.triangles, tri) << "frame " << frame;
+      EXPECT_EQ(st.features.vertices, vert) << "frame " << frame;
+      EXPECT_EQ(st.features.line_points, lines) << "frame " << frame;
+      const size_t slots = c.objects - st.culled_count;
+      fewer_rows_than_slots += t.rowCount() <= slots ? 1 : 0;
+    }
+    // both write-out forms are covered
+    if (c.objects > 1000) EXPECT_EQ(fewer_rows_than_slots, 8u);
+    else EXPECT_EQ(fewer_rows_than_slots, 0u);
+  }
+}
+
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
   Owned a(makeContext(2000, 100)), b(makeContext(2000, 100));
