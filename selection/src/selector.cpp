@@ -176,12 +176,29 @@ float floatAtMost(double v) {
   return f;
 }
 
+// A slot's settling key, written by pass 1c in budget mode: kSettleIneligible, or the lane-mask row
+// finest * (kLanes + 1) + level count in bits 4.. and the candidate (last frame's level) + 1 in bits 0..3.
+// Eligible: a chain of at most kLanes levels, a level-independent cost > 0, not must-draw, and the
+// candidate "not drawn" or a level in [finest, level count). Settling reads this one column instead
+// of four byte columns and the cost. m keys of a block from its columns, in a loop that vectorises
+// (16-bit lanes; the unsigned compare finest <= prev < level count as one, by wrap-around).
+constexpr uint16_t kSettleIneligible = 0x8000;
+inline void settleKeys(const float* ga, const uint8_t* glevels, const uint8_t* gfinest, const int8_t* gprev,
+                       size_t m, uint16_t* gkey) {
+  for (size_t j = 0; j < m; ++j) {
+    const uint16_t lc = glevels[j], fi = gfinest[j];
+    const uint16_t p1 = static_cast<uint16_t>(gprev[j] + 1);  // 0: "not drawn"
+    const bool eligible = (lc <= kLanes) & (ga[j] > 0.0f) &
+                          ((p1 == 0) | (static_cast<uint16_t>(p1 - 1 - fi) < static_cast<uint16_t>(lc - fi)));
+    const uint16_t key = static_cast<uint16_t>((fi * (kLanes + 1) + lc) << 4 | p1);
+    gkey[j] = eligible ? key : kSettleIneligible;
+  }
+}
+
 // What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
 // bracket ends.
 struct SettleInput {
-  const uint8_t* level_count;
-  const uint8_t* finest;
-  const int8_t* prev;
+  const uint16_t* key;     // settleKey per slot
   const uint32_t* row0;
   const float* a;
   const float* b;
@@ -202,15 +219,15 @@ struct SettleInput {
 // differences, exact to about 2^-22 relative, far inside the margin). A settled slot gets no hull:
 // its chosen step is kSettledAtPrev (its hull would be "not drawn", the level, and the write-out
 // reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
-// Must-draw slots and chains of more than kLanes levels are never settled.
+// Only slots with an eligible key (settleKey) may settle.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
 // both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
 // default target and take AVX vectors by value.
 template <typename VF, typename VI>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
-                                                             const uint8_t* must, uint8_t* chosen_step,
-                                                             uint32_t* unsettled, double* settled_cost) {
+                                                             uint8_t* chosen_step, uint32_t* unsettled,
+                                                             double* settled_cost) {
   constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
   static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
   size_t unsettled_count = 0;
@@ -224,9 +241,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
   alignas(32) float pc[kLanes + 1] = {}, pb[kLanes + 1] = {};
-  const uint8_t* const in_level_count = in.level_count;
-  const uint8_t* const in_finest = in.finest;
-  const int8_t* const in_prev = in.prev;
+  const uint16_t* const in_key = in.key;
   const uint32_t* const in_row0 = in.row0;
   const float* const in_a = in.a;
   const float* const in_b = in.b;
@@ -236,19 +251,14 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     // "not drawn", and the vector test are one mask (about half of the candidates are "not drawn",
     // in no predictable order, so a branch on it mispredicted). An ineligible slot's table indices
     // are clamped to harmless rows; its result is discarded.
-    const int level_count = in_level_count[s];
-    const int finest = in_finest[s];
-    const int cand0 = in_prev[s];
+    // sa > 0 (in the key) and row costs >= 0 (checked by the caller): "not drawn" is the cheapest
+    // point. An ineligible key reads the empty lane range and candidate "not drawn".
+    const uint32_t key = in_key[s];
+    const bool eligible = key < kSettleIneligible;
+    const int cand = static_cast<int>(key & 15u) - 1;
     const float sa = in_a[s], sb = in_b[s], sq = in_q[s];
-    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point; the
-    // candidate is "not drawn" or a level in [finest, level_count) (unsigned compares: one each)
-    const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) &
-                          ((cand0 == -1) | (static_cast<unsigned>(cand0 - finest) <
-                                            static_cast<unsigned>(level_count - finest)));
-    const int cand = eligible ? cand0 : -1;
-    const int fi = eligible ? finest : 0, lc = eligible ? level_count : 0;
     const uint32_t row0 = in_row0[s];
-    const int32_t* const range = kLaneMasks.range[fi][lc];
+    const int32_t* const range = kLaneMasks.range[0][0] + ((key >> 4) & 0x7FFu) * kLanes;
     const int32_t* const other = kLaneMasks.other[cand + 1];
     // the points as pointAt computes them, lane l at pc[l + 1] / pb[l + 1]; pc[0] = pb[0] = +0 is
     // "not drawn", so the candidate's point is pc[cand + 1], pb[cand + 1] without a branch
@@ -298,13 +308,13 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   *settled_cost = total;
   return unsettled_count;
 }
-size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* chosen_step,
-                       uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V4f, V4i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
+size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step, uint32_t* unsettled,
+                       double* settled_cost) {
+  return settleSlotsBody<V4f, V4i>(in, slot_count, chosen_step, unsettled, settled_cost);
 }
-SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
-                                            uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V8f, V8i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
+SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
+                                            uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V8f, V8i>(in, slot_count, chosen_step, unsettled, settled_cost);
 }
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
@@ -687,6 +697,7 @@ class SelectorContext {
   uint32_t* slot_row0 = nullptr;   // first level-table row of the slot's chain
   int8_t* slot_prev = nullptr;     // last frame's level of the slot's object
   uint8_t* slot_levels = nullptr;  // level count of the slot's chain
+  uint16_t* slot_key = nullptr;    // settleKey (the settling pass's eligibility, lane masks and candidate)
   // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
   float* row_cost = nullptr;
   float* row_inv_w = nullptr;
@@ -777,19 +788,20 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   struct Part { size_t bytes; size_t at; };
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
-  constexpr size_t kPerObjectParts = 15;
-  Part parts[22] = {
+  constexpr size_t kPerObjectParts = 16;
+  Part parts[23] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
+      {n * sizeof(uint16_t), 0},
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0},
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 22; ++i) {
+  for (size_t i = 0; i < 23; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -819,13 +831,14 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->slot_row0 = reinterpret_cast<uint32_t*>(base + parts[12].at);
   c->slot_prev = reinterpret_cast<int8_t*>(base + parts[13].at);
   c->slot_levels = base + parts[14].at;
-  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
-  c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
-  c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
-  c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
-  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
-  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[20].at);
-  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[21].at);
+  c->slot_key = reinterpret_cast<uint16_t*>(base + parts[15].at);
+  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[16].at);
+  c->row_cost = reinterpret_cast<float*>(base + parts[17].at);
+  c->row_inv_w = reinterpret_cast<float*>(base + parts[18].at);
+  c->hist_cost = reinterpret_cast<double*>(base + parts[19].at);
+  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[20].at);
+  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[21].at);
+  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[22].at);
   c->max_rows = rows;
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
@@ -1112,6 +1125,7 @@ bool SelectionJob::run() {
   uint32_t* const slot_row0 = ctx.slot_row0;
   int8_t* const slot_prev = ctx.slot_prev;
   uint8_t* const slot_levels = ctx.slot_levels;
+  uint16_t* const slot_key = ctx.slot_key;
   const glm::vec3 eye = cam.eye;
   const float* const importance_of = importance.count ? importance.data : nullptr;
   const float* const focus_of = focus.count ? focus.data : nullptr;
@@ -1252,6 +1266,7 @@ bool SelectionJob::run() {
         glevels[j] = static_cast<uint8_t>(level_count);
       }
     }
+    if (budget) settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
     } else if (budget) {
@@ -1260,6 +1275,7 @@ bool SelectionJob::run() {
         const bool must = must_of[gobj[j]] != 0;
         slot_must[s] = must ? 1 : 0;
         if (must) {
+          slot_key[s] = kSettleIneligible;
           float cheapest = std::numeric_limits<float>::infinity();
           for (int l = gfinest[j]; l < static_cast<int>(glevels[j]); ++l)
             cheapest = std::min(cheapest, ga[j] + row_cost[grow0[j] + static_cast<uint32_t>(l)]);  // ctx.pointCost
@@ -1392,6 +1408,7 @@ bool SelectionJob::run() {
       // local copies: the byte stores below may alias anything reached through the closure, so
       // captured values would be reloaded after each of them
       const auto slot_levels_ = slot_levels;
+      const auto slot_key_ = slot_key;
       const auto slot_a_ = slot_a;
       const auto slot_b_ = slot_b;
       const auto slot_q_ = slot_q;
@@ -1433,13 +1450,13 @@ bool SelectionJob::run() {
       uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
       size_t build_count = slots_;
       if (settle) {
-        const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_,
+        const SettleInput in{slot_key_, slot_row0_, slot_a_, slot_b_, slot_q_,
                              row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
                              static_cast<float>(plo_ / (1.0 + kSettleMargin)),
                              static_cast<float>(phi_ * (1.0 + kSettleMargin))};
         if (rows_nonnegative_) {
           build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
-              in, slots_, slot_must_, chosen_step_, unsettled, &ptotal);
+              in, slots_, chosen_step_, unsettled, &ptotal);
         } else {
           for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
