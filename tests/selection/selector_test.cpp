@@ -446,6 +446,42 @@ TEST(Selector, LagrangianMatchesGreedyOnDegenerateChainsAlongAPath) {
   }
 }
 
+TEST(Selector, MustDrawObjectsEnteringTheViewOnWarmFramesAreDrawn) {
+  // a camera panning sideways: must-draw objects come into view with last frame's level "not
+  // drawn", which the settling test must not keep; every frame must draw them and give the greedy's
+  // choice
+  SyntheticScene s = makeScene(61, 1500, 6, 8, 120.0f);
+  for (size_t i = 0; i < s.must_draw.size(); i += 10) s.must_draw[i] = 1;
+  Owned g(makeContext(1500)), l(makeContext(1500, 64));
+  size_t entering = 0;
+  std::vector<int8_t> last(s.centers.size(), -1);
+  for (int frame = 0; frame < 30; ++frame) {
+    const Camera cam = makeCamera(glm::vec3(-40.0f + 1.5f * frame, 1.0f, 20.0f));
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, l.ctx, &cam, levels, &st);
+    job.params.budget_ms = 3.0f;
+    ASSERT_TRUE(job.run());
+    std::vector<int8_t> greedy_levels;
+    SelectionStats greedy_st;
+    SelectionJob greedy_job = makeJob(s, g.ctx, &cam, greedy_levels, &greedy_st);
+    greedy_job.params.budget_ms = 3.0f;
+    greedy_job.params.algorithm = BudgetAlgorithm::kGreedy;
+    ASSERT_TRUE(greedy_job.run());
+    EXPECT_EQ(levels, greedy_levels) << "frame " << frame;
+    EXPECT_EQ(st.predicted_ms, greedy_st.predicted_ms) << "frame " << frame;
+    EXPECT_GT(st.dropped_count, 0u) << "frame " << frame;
+    const Frustum fr = computeFrustum(cam);
+    for (size_t i = 0; i < s.centers.size(); i += 10) {
+      if (!sphereInFrustum(fr, s.centers[i], s.radii[i])) continue;
+      EXPECT_GE(levels[i], 0) << "frame " << frame << " object " << i;
+      entering += frame > 0 && last[i] < 0;
+    }
+    last = levels;
+  }
+  EXPECT_GT(entering, 20u);
+}
+
 TEST(Selector, LagrangianMatchesGreedyWhenTheHalfFallbackWinsOnAWarmFrame) {
   // few objects and a budget that moves a little per frame: the first upgrade that does not fit,
   // alone, sometimes beats the greedy (kFlagSplitFallback), and on some frames it starts to. On
