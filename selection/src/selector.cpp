@@ -275,30 +275,46 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       std::memcpy(pb + 1 + k * kWidth, &b[k], sizeof(VF));
     }
     const float cc = pc[cand + 1], cb = pb[cand + 1];
-    // a drawn candidate must fit alone and beat "not drawn"
-    const bool cand_ok = (cand < 0) | ((cc <= avail) & (cb > hi * cc));
     VI fail = VI{};
     for (int k = 0; k < kParts; ++k) {
       VI in_range, not_cand;
       std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
       std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
-      const VI v = in_range & not_cand & (c[k] <= avail);  // the other points that fit alone
+      const VI fits = c[k] <= avail;
+      const VI v = in_range & not_cand & fits;  // the other points that fit alone
       // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
       const VF d = cc - c[k];
       const VF p = hi * d, q = lo * d;
       fail |= v & ~(cb - b[k] > (p > q ? p : q));
+      // a drawn candidate (its own lane, c[k] = cc and b[k] = cb there) must fit alone and beat
+      // "not drawn": cb > hi cc
+      fail |= ~not_cand & ~(fits & (b[k] > hi * c[k]));
     }
-    // any lane set: the vector's halves ORed down to 16 bytes, then two words
-    V4i fail4 = V4i{};
-    for (size_t k = 0; k < sizeof(VI) / sizeof(V4i); ++k) {
-      V4i part;
-      std::memcpy(&part, reinterpret_cast<const unsigned char*>(&fail) + k * sizeof(V4i), sizeof(part));
-      fail4 |= part;
+    // any lane set: one vptest in the AVX2 form; otherwise the vector's halves ORed down to 16 bytes,
+    // then two words
+    bool none;
+#if defined(__x86_64__) || defined(__i386__)
+    if constexpr (sizeof(VI) == 32) {
+      // the builtin, not _mm256_testz_si256: this body is compiled for the default target before it
+      // is inlined into the AVX2 function, and the builtin is checked only where it is expanded
+      typedef long long V4q __attribute__((vector_size(32)));
+      V4q f;
+      std::memcpy(&f, &fail, sizeof(f));
+      none = __builtin_ia32_ptestz256(f, f) != 0;
+    } else
+#endif
+    {
+      V4i fail4 = V4i{};
+      for (size_t k = 0; k < sizeof(VI) / sizeof(V4i); ++k) {
+        V4i part;
+        std::memcpy(&part, reinterpret_cast<const unsigned char*>(&fail) + k * sizeof(V4i), sizeof(part));
+        fail4 |= part;
+      }
+      uint64_t words[2];
+      std::memcpy(words, &fail4, sizeof(words));
+      none = (words[0] | words[1]) == 0;
     }
-    uint64_t words[2];
-    std::memcpy(words, &fail4, sizeof(words));
-    const uint64_t any = words[0] | words[1];
-    const bool settled = eligible & cand_ok & (any == 0);
+    const bool settled = eligible & none;
     // written for every slot: an unsettled slot's step is written again when its hull is built
     chosen_step[s] = kSettledAtPrev;
     total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
