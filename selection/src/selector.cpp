@@ -481,10 +481,12 @@ inline uint32_t finestBySearch(float q, const float* row_inv_w, uint32_t level_c
 // Pass 1c's per-slot chain terms for m slots, AVX2 (the SSE2 form is inline in SelectionJob::run):
 // first row, level count, previous level and the finest candidate, the count of accurate-enough
 // levels 1.. over the chain's 8 lanes in one vector (the same compares as the SSE2 form's two).
-SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
-                                         const uint32_t* chain_offset, const float* row_inv_w,
-                                         const int8_t* prev_level, uint8_t* gfinest, uint32_t* grow0,
-                                         int8_t* gprev, uint8_t* glevels) {
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx2,popcnt")))
+#endif
+void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
+                    const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
+                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels) {
   static_assert(kLanes == 8, "one AVX2 vector per chain");
   for (size_t j = 0; j < m; ++j) {
     const size_t i = gobj[j];
@@ -502,7 +504,7 @@ SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, 
 #if defined(__x86_64__) || defined(__i386__)
       V8f okf;
       std::memcpy(&okf, &ok, sizeof(okf));
-      finest = kBitCount8[__builtin_ia32_movmskps256(okf)];
+      finest = static_cast<uint32_t>(__builtin_popcount(static_cast<unsigned>(__builtin_ia32_movmskps256(okf))));
 #else
       finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3] + ok[4] + ok[5] + ok[6] + ok[7]));
 #endif
