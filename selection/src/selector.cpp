@@ -555,9 +555,11 @@ struct SlotSums {
 // the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
 // kCountRows: the integer features as Σ (drawn slots of the row) × feature over the rows instead of
 // three gathers per slot (fewer rows than slots); integer sums, so the same values in any order.
+// Compiled twice like the settling test: for SSE2 and with the AVX2 target (the same V4f
+// operations, VEX-encoded: three-operand forms, fewer register copies; the same bits).
 template <bool kCountRows>
-__attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t slot_count, double predicted0,
-                                                 int8_t* level_of) {
+inline __attribute__((always_inline)) SlotSums writeOutSlotsBody(const WriteOutInput& in, size_t slot_count,
+                                                                 double predicted0, int8_t* level_of) {
   const uint8_t* const chosen = in.chosen;
   const uint8_t* const hull = in.hull;
   const size_t hull_stride = in.hull_stride;
@@ -680,6 +682,16 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
     }
   }
   return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
+}
+template <bool kCountRows>
+__attribute__((noinline)) SlotSums writeOutSlotsSse2(const WriteOutInput& in, size_t slot_count, double predicted0,
+                                                     int8_t* level_of) {
+  return writeOutSlotsBody<kCountRows>(in, slot_count, predicted0, level_of);
+}
+template <bool kCountRows>
+SCENELOD_AVX2_TARGET __attribute__((noinline)) SlotSums writeOutSlotsAvx2(const WriteOutInput& in, size_t slot_count,
+                                                                          double predicted0, int8_t* level_of) {
+  return writeOutSlotsBody<kCountRows>(in, slot_count, predicted0, level_of);
 }
 
 struct PassResult {
@@ -1894,8 +1906,11 @@ bool SelectionJob::run() {
       const WriteOutInput in{ctx.chosen, hull, hull_stride, slot_object, slot_a, slot_b, slot_q, slot_px,
                              slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1,
                              count_rows ? ctx.row_drawn : nullptr, rows};
-      const SlotSums sums = count_rows ? writeOutSlots<true>(in, slots, predicted, level_of)
-                                       : writeOutSlots<false>(in, slots, predicted, level_of);
+      const SlotSums sums =
+          ctx.use_avx2 ? (count_rows ? writeOutSlotsAvx2<true>(in, slots, predicted, level_of)
+                                     : writeOutSlotsAvx2<false>(in, slots, predicted, level_of))
+                       : (count_rows ? writeOutSlotsSse2<true>(in, slots, predicted, level_of)
+                                     : writeOutSlotsSse2<false>(in, slots, predicted, level_of));
       predicted = sums.predicted;
       benefit = sums.benefit;
       f.pixels = sums.pixels;
