@@ -183,8 +183,9 @@ float floatAtMost(double v) {
 // of four byte columns and the cost. m keys of a block from its columns, in a loop that vectorises
 // (16-bit lanes; the unsigned compare finest <= prev < level count as one, by wrap-around).
 constexpr uint16_t kSettleIneligible = 0x8000;
-inline void settleKeys(const float* ga, const uint8_t* glevels, const uint8_t* gfinest, const int8_t* gprev,
-                       size_t m, uint16_t* gkey) {
+inline __attribute__((always_inline)) void settleKeys(const float* ga, const uint8_t* glevels,
+                                                      const uint8_t* gfinest, const int8_t* gprev, size_t m,
+                                                      uint16_t* gkey) {
   for (size_t j = 0; j < m; ++j) {
     const uint16_t lc = glevels[j], fi = gfinest[j];
     const uint16_t p1 = static_cast<uint16_t>(gprev[j] + 1);  // 0: "not drawn"
@@ -193,6 +194,10 @@ inline void settleKeys(const float* ga, const uint8_t* glevels, const uint8_t* g
     const uint16_t key = static_cast<uint16_t>((fi * (kLanes + 1) + lc) << 4 | p1);
     gkey[j] = eligible ? key : kSettleIneligible;
   }
+}
+SCENELOD_AVX2_TARGET void settleKeysAvx2(const float* ga, const uint8_t* glevels, const uint8_t* gfinest,
+                                         const int8_t* gprev, size_t m, uint16_t* gkey) {
+  settleKeys(ga, glevels, gfinest, gprev, m, gkey);
 }
 
 // What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
@@ -1296,7 +1301,10 @@ bool SelectionJob::run() {
         glevels[j] = static_cast<uint8_t>(level_count);
       }
     }
-    if (budget) settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
+    if (budget && use_avx2)
+      settleKeysAvx2(ga, glevels, gfinest, gprev, m, slot_key + s0);
+    else if (budget)
+      settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
     } else if (budget) {
