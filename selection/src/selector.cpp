@@ -345,11 +345,11 @@ SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_c
 // plane read the columns six times). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
 // products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
 // give the same bits (Selector.AvxAndSse2PathsGiveTheSameBits).
-inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
-                                                              const float* rad, size_t n, uint8_t* outside) {
-  constexpr size_t kBlock = 64;
-  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
-  alignas(32) uint32_t bo[kBlock];
+// One block of m <= 64 spheres: their centres into local columns bx, by, bz, minus their radii
+// into bnr, and bo[j] = 1 when sphere j is outside a plane.
+inline __attribute__((always_inline)) void frustumBlock(const Frustum& frustum, const float* p, const float* rad,
+                                                        size_t m, float* bx, float* by, float* bz, float* bnr,
+                                                        uint32_t* bo) {
   float pa[6], pb[6], pc[6], pd[6];
   for (int k = 0; k < 6; ++k) {
     pa[k] = frustum.planes[k].x;
@@ -357,22 +357,28 @@ inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& fru
     pc[k] = frustum.planes[k].z;
     pd[k] = frustum.planes[k].w;
   }
+  for (size_t j = 0; j < m; ++j) {
+    bx[j] = p[3 * j];
+    by[j] = p[3 * j + 1];
+    bz[j] = p[3 * j + 2];
+    bnr[j] = -rad[j];
+  }
+  // the six planes in one loop over the block (each element's coordinates loaded once)
+  for (size_t j = 0; j < m; ++j) {
+    const float x = bx[j], y = by[j], z = bz[j], nr = bnr[j];
+    uint32_t o = 0;
+    for (int k = 0; k < 6; ++k)
+      o |= pa[k] * x + pb[k] * y + pc[k] * z + pd[k] < nr ? 1u : 0u;
+    bo[j] = o;
+  }
+}
+inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
+                                                              const float* rad, size_t n, uint8_t* outside) {
+  constexpr size_t kBlock = 64;
+  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
+  alignas(32) uint32_t bo[kBlock];
   auto testBlock = [&](size_t i0, size_t m) {
-    const float* const p = xyz + 3 * i0;
-    for (size_t j = 0; j < m; ++j) {
-      bx[j] = p[3 * j];
-      by[j] = p[3 * j + 1];
-      bz[j] = p[3 * j + 2];
-      bnr[j] = -rad[i0 + j];
-    }
-    // the six planes in one loop over the block (each element's coordinates loaded once)
-    for (size_t j = 0; j < m; ++j) {
-      const float x = bx[j], y = by[j], z = bz[j], nr = bnr[j];
-      uint32_t o = 0;
-      for (int k = 0; k < 6; ++k)
-        o |= pa[k] * x + pb[k] * y + pc[k] * z + pd[k] < nr ? 1u : 0u;
-      bo[j] = o;
-    }
+    frustumBlock(frustum, xyz + 3 * i0, rad + i0, m, bx, by, bz, bnr, bo);
     for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
   };
   // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
@@ -387,17 +393,41 @@ SCENELOD_AVX2_TARGET void frustumOutsideAvx2(const Frustum& frustum, const float
                                              uint8_t* outside) {
   frustumOutsideBody(frustum, xyz, rad, n, outside);
 }
+// Where the frustum compaction queues the spheres in view (room for n more entries each): their
+// object indices, and their centres and radii, which pass 1c then reads in order instead of
+// gathering them again by object.
+struct SphereQueue {
+  uint32_t* object;
+  float* x;
+  float* y;
+  float* z;
+  float* r;
+};
 // The frustum test and the compaction of run()'s object blocks when no chain is empty (n <= 64):
-// the indices base + j of the spheres in view, in order, to dst (room for n entries); returns
+// the indices base + j of the spheres in view, in order, and their centres and radii to q; returns
 // their count.
 size_t frustumCompactSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
-                          uint32_t* dst) {
-  alignas(16) uint8_t outside[64];
-  frustumOutsideBody(frustum, xyz, rad, n, outside);
+                          const SphereQueue& q) {
+  alignas(16) float bx[64], by[64], bz[64], bnr[64];
+  alignas(16) uint32_t bo[64];
+  // a full block with a constant trip count (no loop-exit mispredictions)
+  if (n == 64)
+    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
+  else
+    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  uint32_t* const dst = q.object;
+  float* const qx = q.x;
+  float* const qy = q.y;
+  float* const qz = q.z;
+  float* const qr = q.r;
   size_t count = 0;
   for (size_t j = 0; j < n; ++j) {
     dst[count] = base + static_cast<uint32_t>(j);
-    count += 1u - static_cast<uint32_t>(outside[j]);
+    qx[count] = bx[j];
+    qy[count] = by[j];
+    qz[count] = bz[j];
+    qr[count] = -bnr[j];  // the radius again (a sign flip, exact)
+    count += 1u - bo[j];
   }
   return count;
 }
@@ -418,37 +448,56 @@ constexpr KeepPermutes makeKeepPermutes() {
   return t;
 }
 constexpr KeepPermutes kKeepPermutes = makeKeepPermutes();
-// eight objects at a time: the kept lanes' indices moved to the front of a vector (vpermd, its
-// lane numbers from the table) and stored whole; the next store starts after the kept ones, so
-// the result is frustumCompactSse2's (integers only)
+// eight objects at a time: the kept lanes' indices, centres and radii moved to the front of a
+// vector (vpermd / vpermps, the lane numbers from the table) and stored whole; the next store
+// starts after the kept ones, so the result is frustumCompactSse2's (moves only)
 __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz,
                                                                  const float* rad, size_t n, uint32_t base,
-                                                                 uint32_t* dst) {
-  alignas(32) uint8_t outside[64];
-  frustumOutsideBody(frustum, xyz, rad, n, outside);
+                                                                 const SphereQueue& q) {
+  alignas(32) float bx[64], by[64], bz[64], bnr[64];
+  alignas(32) uint32_t bo[64];
+  // a full block with a constant trip count (no loop-exit mispredictions)
+  if (n == 64)
+    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
+  else
+    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  uint32_t* const dst = q.object;
+  float* const qx = q.x;
+  float* const qy = q.y;
+  float* const qz = q.z;
+  float* const qr = q.r;
+  const __m256 sign = _mm256_set1_ps(-0.0f);
   size_t count = 0, j = 0;
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i shifts = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
   const __m256i seven = _mm256_set1_epi32(7);
   for (; j + 8 <= n; j += 8) {
-    const __m256i o = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(outside + j)));
+    const __m256i o = _mm256_load_si256(reinterpret_cast<const __m256i*>(bo + j));
     const int keep = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(o, _mm256_setzero_si256())));
     const __m256i perm = _mm256_and_si256(
         _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int32_t>(kKeepPermutes.lanes[keep])), shifts), seven);
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(base + j)), lane);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(idx, perm));
+    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bx + j), perm));
+    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(_mm256_load_ps(by + j), perm));
+    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bz + j), perm));
+    _mm256_storeu_ps(qr + count, _mm256_xor_ps(_mm256_permutevar8x32_ps(_mm256_load_ps(bnr + j), perm), sign));
     count += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(keep)));
   }
   for (; j < n; ++j) {
     dst[count] = base + static_cast<uint32_t>(j);
-    count += 1u - static_cast<uint32_t>(outside[j]);
+    qx[count] = bx[j];
+    qy[count] = by[j];
+    qz[count] = bz[j];
+    qr[count] = -bnr[j];
+    count += 1u - bo[j];
   }
   return count;
 }
 #else
 size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
-                          uint32_t* dst) {
-  return frustumCompactSse2(frustum, xyz, rad, n, base, dst);
+                          const SphereQueue& q) {
+  return frustumCompactSse2(frustum, xyz, rad, n, base, q);
 }
 #endif
 bool cpuHasAvx2() {
@@ -1161,6 +1210,12 @@ bool SelectionJob::run() {
   int8_t* const slot_prev = ctx.slot_prev;
   uint8_t* const slot_levels = ctx.slot_levels;
   uint16_t* const slot_key = ctx.slot_key;
+  // the spheres in view queue up in slot order: object index, centre and radius (these three in
+  // the columns that pass 1c overwrites for the same slots once it has read them)
+  float* const queue_x = slot_a;
+  float* const queue_y = slot_b;
+  float* const queue_z = slot_q;
+  float* const queue_r = slot_px;
   const glm::vec3 eye = cam.eye;
   const float* const importance_of = importance.count ? importance.data : nullptr;
   const float* const focus_of = focus.count ? focus.data : nullptr;
@@ -1227,14 +1282,15 @@ bool SelectionJob::run() {
     uint8_t* const gfinest = budget ? slot_finest + s0 : lfinest;
     uint8_t* const glevels = budget ? slot_levels + s0 : llevels;
     int8_t* const gprev = budget ? slot_prev + s0 : lprev;
+    // the centres and radii from the compaction's queue (in the columns of a, b, q and pixels, read
+    // here before this block's terms overwrite them)
     for (size_t j = 0; j < m; ++j) {
-      const size_t i = gobj[j];
-      gx[j] = center_of[i].x;
-      gy[j] = center_of[i].y;
-      gz[j] = center_of[i].z;
-      gr[j] = radius_of[i];
-      gs[j] = scale_of[i];
+      gx[j] = queue_x[s0 + j];
+      gy[j] = queue_y[s0 + j];
+      gz[j] = queue_z[s0 + j];
+      gr[j] = queue_r[s0 + j];
     }
+    for (size_t j = 0; j < m; ++j) gs[j] = scale_of[gobj[j]];
     // missing factors are 1 (b * 1.0f == b)
     for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[gobj[j]] : 1.0f;
     for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[gobj[j]] : 1.0f;
@@ -1354,11 +1410,16 @@ bool SelectionJob::run() {
         const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
         level_of[i0 + j] = -1;
         slot_object[slots] = static_cast<uint32_t>(i0 + j);
+        queue_x[slots] = xyz[3 * (i0 + j)];
+        queue_y[slots] = xyz[3 * (i0 + j) + 1];
+        queue_z[slots] = xyz[3 * (i0 + j) + 2];
+        queue_r[slots] = radius_of[i0 + j];
         slots += 1u - out;
       }
     } else {
       for (size_t j = 0; j < mo; ++j) level_of[i0 + j] = -1;
-      slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), slot_object + slots);
+      const SphereQueue queue{slot_object + slots, queue_x + slots, queue_y + slots, queue_z + slots, queue_r + slots};
+      slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), queue);
     }
     if (cost_out && !budget)
       for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
