@@ -648,20 +648,18 @@ inline __attribute__((always_inline)) SlotSums writeOutSlotsBody(const WriteOutI
       // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
       const uint8_t c = chosen[s];
       const int8_t prev = slot_prev[s];
-      uint8_t level;
-      if (c >= kSettledAtBase)
-        level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
-      else
-        level = hull[s * hull_stride + c];
+      uint8_t level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
+      if (c < kSettledAtBase) level = hull[s * hull_stride + c];
       level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
-      const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+      // all ones if drawn: levels are below 64, kNotDrawn is the one negative int8
+      const uint32_t keep = ~static_cast<uint32_t>(static_cast<int32_t>(static_cast<int8_t>(level)) >> 31);
       const uint32_t row = slot_row0[s] + (level & keep);
       lrc[j] = row_cost[row];
       lriw[j] = row_inv_w[row];
       lh[j] = h_mult[level == static_cast<uint8_t>(prev)];
       std::memcpy(lkeep + j, &keep, sizeof(keep));  // the mask's bits
       if (kCountRows) {
-        row_drawn[row] += keep & 1u;  // a slot not drawn adds 0 to its chain's first row
+        row_drawn[row] -= keep;  // + 1 (mod 2^32); a slot not drawn adds 0 to its chain's first row
       } else {
         tri_sum += tri[row] & keep;
         vert_sum += vert[row] & keep;
