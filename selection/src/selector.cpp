@@ -1176,8 +1176,10 @@ bool SelectionJob::run() {
   // Passes 1a-1c fused over blocks of kSlotBlock objects held in local columns: the frustum test,
   // the compaction of the objects in view (and with levels) into slots, and per slot the
   // level-independent terms and the finest candidate level, so that each object's inputs are read
-  // once. Budget mode stores the slots' terms in the slot columns for the hull passes; distance mode
-  // needs no column: it chooses the level and adds the slot to the frame's sums in the same block
+  // once (the compaction queues the centres and radii it has loaded for the frustum test beside
+  // the slots' object indices). Budget mode stores the slots' terms in the slot columns for the
+  // hull passes; distance mode needs no column but the queue: it chooses the level and adds the
+  // slot to the frame's sums in the same block
   // (slot order as in writeOut, so the same sums). The float terms run as plain loops over the local
   // columns that the compiler vectorises (sqrt and divisions 4 or 8 wide; the same IEEE operations
   // as one object at a time, so the same bits).
