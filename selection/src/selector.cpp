@@ -176,12 +176,34 @@ float floatAtMost(double v) {
   return f;
 }
 
+// A slot's settling key, written by pass 1c in budget mode: kSettleIneligible, or the lane-mask row
+// finest * (kLanes + 1) + level count in bits 4.. and the candidate (last frame's level) + 1 in bits 0..3.
+// Eligible: a chain of at most kLanes levels, a level-independent cost > 0, not must-draw, and the
+// candidate "not drawn" or a level in [finest, level count). Settling reads this one column instead
+// of four byte columns and the cost. m keys of a block from its columns, in a loop that vectorises
+// (16-bit lanes; the unsigned compare finest <= prev < level count as one, by wrap-around).
+constexpr uint16_t kSettleIneligible = 0x8000;
+inline __attribute__((always_inline)) void settleKeys(const float* ga, const uint8_t* glevels,
+                                                      const uint8_t* gfinest, const int8_t* gprev, size_t m,
+                                                      uint16_t* gkey) {
+  for (size_t j = 0; j < m; ++j) {
+    const uint16_t lc = glevels[j], fi = gfinest[j];
+    const uint16_t p1 = static_cast<uint16_t>(gprev[j] + 1);  // 0: "not drawn"
+    const bool eligible = (lc <= kLanes) & (ga[j] > 0.0f) &
+                          ((p1 == 0) | (static_cast<uint16_t>(p1 - 1 - fi) < static_cast<uint16_t>(lc - fi)));
+    const uint16_t key = static_cast<uint16_t>((fi * (kLanes + 1) + lc) << 4 | p1);
+    gkey[j] = eligible ? key : kSettleIneligible;
+  }
+}
+SCENELOD_AVX2_TARGET void settleKeysAvx2(const float* ga, const uint8_t* glevels, const uint8_t* gfinest,
+                                         const int8_t* gprev, size_t m, uint16_t* gkey) {
+  settleKeys(ga, glevels, gfinest, gprev, m, gkey);
+}
+
 // What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
 // bracket ends.
 struct SettleInput {
-  const uint8_t* level_count;
-  const uint8_t* finest;
-  const int8_t* prev;
+  const uint16_t* key;     // settleKey per slot
   const uint32_t* row0;
   const float* a;
   const float* b;
@@ -202,15 +224,15 @@ struct SettleInput {
 // differences, exact to about 2^-22 relative, far inside the margin). A settled slot gets no hull:
 // its chosen step is kSettledAtPrev (its hull would be "not drawn", the level, and the write-out
 // reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
-// Must-draw slots and chains of more than kLanes levels are never settled.
+// Only slots with an eligible key (settleKey) may settle.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
 // both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
 // default target and take AVX vectors by value.
 template <typename VF, typename VI>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
-                                                             const uint8_t* must, uint8_t* chosen_step,
-                                                             uint32_t* unsettled, double* settled_cost) {
+                                                             uint8_t* chosen_step, uint32_t* unsettled,
+                                                             double* settled_cost) {
   constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
   static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
   size_t unsettled_count = 0;
@@ -224,9 +246,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
   alignas(32) float pc[kLanes + 1] = {}, pb[kLanes + 1] = {};
-  const uint8_t* const in_level_count = in.level_count;
-  const uint8_t* const in_finest = in.finest;
-  const int8_t* const in_prev = in.prev;
+  const uint16_t* const in_key = in.key;
   const uint32_t* const in_row0 = in.row0;
   const float* const in_a = in.a;
   const float* const in_b = in.b;
@@ -236,19 +256,14 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     // "not drawn", and the vector test are one mask (about half of the candidates are "not drawn",
     // in no predictable order, so a branch on it mispredicted). An ineligible slot's table indices
     // are clamped to harmless rows; its result is discarded.
-    const int level_count = in_level_count[s];
-    const int finest = in_finest[s];
-    const int cand0 = in_prev[s];
+    // sa > 0 (in the key) and row costs >= 0 (checked by the caller): "not drawn" is the cheapest
+    // point. An ineligible key reads the empty lane range and candidate "not drawn".
+    const uint32_t key = in_key[s];
+    const bool eligible = key < kSettleIneligible;
+    const int cand = static_cast<int>(key & 15u) - 1;
     const float sa = in_a[s], sb = in_b[s], sq = in_q[s];
-    // sa > 0 and row costs >= 0 (checked by the caller): "not drawn" is the cheapest point; the
-    // candidate is "not drawn" or a level in [finest, level_count) (unsigned compares: one each)
-    const bool eligible = (must[s] == 0) & (level_count <= kLanes) & (sa > 0.0f) &
-                          ((cand0 == -1) | (static_cast<unsigned>(cand0 - finest) <
-                                            static_cast<unsigned>(level_count - finest)));
-    const int cand = eligible ? cand0 : -1;
-    const int fi = eligible ? finest : 0, lc = eligible ? level_count : 0;
     const uint32_t row0 = in_row0[s];
-    const int32_t* const range = kLaneMasks.range[fi][lc];
+    const int32_t* const range = kLaneMasks.range[0][0] + ((key >> 4) & 0x7FFu) * kLanes;
     const int32_t* const other = kLaneMasks.other[cand + 1];
     // the points as pointAt computes them, lane l at pc[l + 1] / pb[l + 1]; pc[0] = pb[0] = +0 is
     // "not drawn", so the candidate's point is pc[cand + 1], pb[cand + 1] without a branch
@@ -265,30 +280,46 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       std::memcpy(pb + 1 + k * kWidth, &b[k], sizeof(VF));
     }
     const float cc = pc[cand + 1], cb = pb[cand + 1];
-    // a drawn candidate must fit alone and beat "not drawn"
-    const bool cand_ok = (cand < 0) | ((cc <= avail) & (cb > hi * cc));
     VI fail = VI{};
     for (int k = 0; k < kParts; ++k) {
       VI in_range, not_cand;
       std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
       std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
-      const VI v = in_range & not_cand & (c[k] <= avail);  // the other points that fit alone
+      const VI fits = c[k] <= avail;
+      const VI v = in_range & not_cand & fits;  // the other points that fit alone
       // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
       const VF d = cc - c[k];
       const VF p = hi * d, q = lo * d;
       fail |= v & ~(cb - b[k] > (p > q ? p : q));
+      // a drawn candidate (its own lane, c[k] = cc and b[k] = cb there) must fit alone and beat
+      // "not drawn": cb > hi cc
+      fail |= ~not_cand & ~(fits & (b[k] > hi * c[k]));
     }
-    // any lane set: the vector's halves ORed down to 16 bytes, then two words
-    V4i fail4 = V4i{};
-    for (size_t k = 0; k < sizeof(VI) / sizeof(V4i); ++k) {
-      V4i part;
-      std::memcpy(&part, reinterpret_cast<const unsigned char*>(&fail) + k * sizeof(V4i), sizeof(part));
-      fail4 |= part;
+    // any lane set: one vptest in the AVX2 form; otherwise the vector's halves ORed down to 16 bytes,
+    // then two words
+    bool none;
+#if defined(__x86_64__) || defined(__i386__)
+    if constexpr (sizeof(VI) == 32) {
+      // the builtin, not _mm256_testz_si256: this body is compiled for the default target before it
+      // is inlined into the AVX2 function, and the builtin is checked only where it is expanded
+      typedef long long V4q __attribute__((vector_size(32)));
+      V4q f;
+      std::memcpy(&f, &fail, sizeof(f));
+      none = __builtin_ia32_ptestz256(f, f) != 0;
+    } else
+#endif
+    {
+      V4i fail4 = V4i{};
+      for (size_t k = 0; k < sizeof(VI) / sizeof(V4i); ++k) {
+        V4i part;
+        std::memcpy(&part, reinterpret_cast<const unsigned char*>(&fail) + k * sizeof(V4i), sizeof(part));
+        fail4 |= part;
+      }
+      uint64_t words[2];
+      std::memcpy(words, &fail4, sizeof(words));
+      none = (words[0] | words[1]) == 0;
     }
-    uint64_t words[2];
-    std::memcpy(words, &fail4, sizeof(words));
-    const uint64_t any = words[0] | words[1];
-    const bool settled = eligible & cand_ok & (any == 0);
+    const bool settled = eligible & none;
     // written for every slot: an unsettled slot's step is written again when its hull is built
     chosen_step[s] = kSettledAtPrev;
     total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
@@ -298,13 +329,13 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   *settled_cost = total;
   return unsettled_count;
 }
-size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, const uint8_t* must, uint8_t* chosen_step,
-                       uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V4f, V4i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
+size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step, uint32_t* unsettled,
+                       double* settled_cost) {
+  return settleSlotsBody<V4f, V4i>(in, slot_count, chosen_step, unsettled, settled_cost);
 }
-SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, const uint8_t* must,
-                                            uint8_t* chosen_step, uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V8f, V8i>(in, slot_count, must, chosen_step, unsettled, settled_cost);
+SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
+                                            uint32_t* unsettled, double* settled_cost) {
+  return settleSlotsBody<V8f, V8i>(in, slot_count, chosen_step, unsettled, settled_cost);
 }
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
@@ -314,11 +345,11 @@ SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_c
 // plane read the columns six times). Compiled twice, for SSE2 (4 wide) and AVX2 (8 wide): compares of the same
 // products and sums (no FMA: -ffp-contract=off, and the AVX2 target does not enable it), so both
 // give the same bits (Selector.AvxAndSse2PathsGiveTheSameBits).
-inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
-                                                              const float* rad, size_t n, uint8_t* outside) {
-  constexpr size_t kBlock = 64;
-  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
-  alignas(32) uint32_t bo[kBlock];
+// One block of m <= 64 spheres: their centres into local columns bx, by, bz, minus their radii
+// into bnr, and bo[j] = 1 when sphere j is outside a plane.
+inline __attribute__((always_inline)) void frustumBlock(const Frustum& frustum, const float* p, const float* rad,
+                                                        size_t m, float* bx, float* by, float* bz, float* bnr,
+                                                        uint32_t* bo) {
   float pa[6], pb[6], pc[6], pd[6];
   for (int k = 0; k < 6; ++k) {
     pa[k] = frustum.planes[k].x;
@@ -326,22 +357,28 @@ inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& fru
     pc[k] = frustum.planes[k].z;
     pd[k] = frustum.planes[k].w;
   }
+  for (size_t j = 0; j < m; ++j) {
+    bx[j] = p[3 * j];
+    by[j] = p[3 * j + 1];
+    bz[j] = p[3 * j + 2];
+    bnr[j] = -rad[j];
+  }
+  // the six planes in one loop over the block (each element's coordinates loaded once)
+  for (size_t j = 0; j < m; ++j) {
+    const float x = bx[j], y = by[j], z = bz[j], nr = bnr[j];
+    uint32_t o = 0;
+    for (int k = 0; k < 6; ++k)
+      o |= pa[k] * x + pb[k] * y + pc[k] * z + pd[k] < nr ? 1u : 0u;
+    bo[j] = o;
+  }
+}
+inline __attribute__((always_inline)) void frustumOutsideBody(const Frustum& frustum, const float* xyz,
+                                                              const float* rad, size_t n, uint8_t* outside) {
+  constexpr size_t kBlock = 64;
+  alignas(32) float bx[kBlock], by[kBlock], bz[kBlock], bnr[kBlock];
+  alignas(32) uint32_t bo[kBlock];
   auto testBlock = [&](size_t i0, size_t m) {
-    const float* const p = xyz + 3 * i0;
-    for (size_t j = 0; j < m; ++j) {
-      bx[j] = p[3 * j];
-      by[j] = p[3 * j + 1];
-      bz[j] = p[3 * j + 2];
-      bnr[j] = -rad[i0 + j];
-    }
-    // the six planes in one loop over the block (each element's coordinates loaded once)
-    for (size_t j = 0; j < m; ++j) {
-      const float x = bx[j], y = by[j], z = bz[j], nr = bnr[j];
-      uint32_t o = 0;
-      for (int k = 0; k < 6; ++k)
-        o |= pa[k] * x + pb[k] * y + pc[k] * z + pd[k] < nr ? 1u : 0u;
-      bo[j] = o;
-    }
+    frustumBlock(frustum, xyz + 3 * i0, rad + i0, m, bx, by, bz, bnr, bo);
     for (size_t j = 0; j < m; ++j) outside[i0 + j] = static_cast<uint8_t>(bo[j]);
   };
   // full blocks with a constant trip count (no loop-exit mispredictions), then the tail
@@ -356,17 +393,41 @@ SCENELOD_AVX2_TARGET void frustumOutsideAvx2(const Frustum& frustum, const float
                                              uint8_t* outside) {
   frustumOutsideBody(frustum, xyz, rad, n, outside);
 }
+// Where the frustum compaction queues the spheres in view (room for n more entries each): their
+// object indices, and their centres and radii, which pass 1c then reads in order instead of
+// gathering them again by object.
+struct SphereQueue {
+  uint32_t* object;
+  float* x;
+  float* y;
+  float* z;
+  float* r;
+};
 // The frustum test and the compaction of run()'s object blocks when no chain is empty (n <= 64):
-// the indices base + j of the spheres in view, in order, to dst (room for n entries); returns
+// the indices base + j of the spheres in view, in order, and their centres and radii to q; returns
 // their count.
 size_t frustumCompactSse2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
-                          uint32_t* dst) {
-  alignas(16) uint8_t outside[64];
-  frustumOutsideBody(frustum, xyz, rad, n, outside);
+                          const SphereQueue& q) {
+  alignas(16) float bx[64], by[64], bz[64], bnr[64];
+  alignas(16) uint32_t bo[64];
+  // a full block with a constant trip count (no loop-exit mispredictions)
+  if (n == 64)
+    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
+  else
+    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  uint32_t* const dst = q.object;
+  float* const qx = q.x;
+  float* const qy = q.y;
+  float* const qz = q.z;
+  float* const qr = q.r;
   size_t count = 0;
   for (size_t j = 0; j < n; ++j) {
     dst[count] = base + static_cast<uint32_t>(j);
-    count += 1u - static_cast<uint32_t>(outside[j]);
+    qx[count] = bx[j];
+    qy[count] = by[j];
+    qz[count] = bz[j];
+    qr[count] = -bnr[j];  // the radius again (a sign flip, exact)
+    count += 1u - bo[j];
   }
   return count;
 }
@@ -387,37 +448,56 @@ constexpr KeepPermutes makeKeepPermutes() {
   return t;
 }
 constexpr KeepPermutes kKeepPermutes = makeKeepPermutes();
-// eight objects at a time: the kept lanes' indices moved to the front of a vector (vpermd, its
-// lane numbers from the table) and stored whole; the next store starts after the kept ones, so
-// the result is frustumCompactSse2's (integers only)
+// eight objects at a time: the kept lanes' indices, centres and radii moved to the front of a
+// vector (vpermd / vpermps, the lane numbers from the table) and stored whole; the next store
+// starts after the kept ones, so the result is frustumCompactSse2's (moves only)
 __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz,
                                                                  const float* rad, size_t n, uint32_t base,
-                                                                 uint32_t* dst) {
-  alignas(32) uint8_t outside[64];
-  frustumOutsideBody(frustum, xyz, rad, n, outside);
+                                                                 const SphereQueue& q) {
+  alignas(32) float bx[64], by[64], bz[64], bnr[64];
+  alignas(32) uint32_t bo[64];
+  // a full block with a constant trip count (no loop-exit mispredictions)
+  if (n == 64)
+    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
+  else
+    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  uint32_t* const dst = q.object;
+  float* const qx = q.x;
+  float* const qy = q.y;
+  float* const qz = q.z;
+  float* const qr = q.r;
+  const __m256 sign = _mm256_set1_ps(-0.0f);
   size_t count = 0, j = 0;
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i shifts = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
   const __m256i seven = _mm256_set1_epi32(7);
   for (; j + 8 <= n; j += 8) {
-    const __m256i o = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(outside + j)));
+    const __m256i o = _mm256_load_si256(reinterpret_cast<const __m256i*>(bo + j));
     const int keep = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(o, _mm256_setzero_si256())));
     const __m256i perm = _mm256_and_si256(
         _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int32_t>(kKeepPermutes.lanes[keep])), shifts), seven);
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(base + j)), lane);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(idx, perm));
+    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bx + j), perm));
+    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(_mm256_load_ps(by + j), perm));
+    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bz + j), perm));
+    _mm256_storeu_ps(qr + count, _mm256_xor_ps(_mm256_permutevar8x32_ps(_mm256_load_ps(bnr + j), perm), sign));
     count += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(keep)));
   }
   for (; j < n; ++j) {
     dst[count] = base + static_cast<uint32_t>(j);
-    count += 1u - static_cast<uint32_t>(outside[j]);
+    qx[count] = bx[j];
+    qy[count] = by[j];
+    qz[count] = bz[j];
+    qr[count] = -bnr[j];
+    count += 1u - bo[j];
   }
   return count;
 }
 #else
 size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz, const float* rad, size_t n, uint32_t base,
-                          uint32_t* dst) {
-  return frustumCompactSse2(frustum, xyz, rad, n, base, dst);
+                          const SphereQueue& q) {
+  return frustumCompactSse2(frustum, xyz, rad, n, base, q);
 }
 #endif
 bool cpuHasAvx2() {
@@ -455,10 +535,12 @@ inline uint32_t finestBySearch(float q, const float* row_inv_w, uint32_t level_c
 // Pass 1c's per-slot chain terms for m slots, AVX2 (the SSE2 form is inline in SelectionJob::run):
 // first row, level count, previous level and the finest candidate, the count of accurate-enough
 // levels 1.. over the chain's 8 lanes in one vector (the same compares as the SSE2 form's two).
-SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
-                                         const uint32_t* chain_offset, const float* row_inv_w,
-                                         const int8_t* prev_level, uint8_t* gfinest, uint32_t* grow0,
-                                         int8_t* gprev, uint8_t* glevels) {
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx2,popcnt")))
+#endif
+void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
+                    const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
+                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels) {
   static_assert(kLanes == 8, "one AVX2 vector per chain");
   for (size_t j = 0; j < m; ++j) {
     const size_t i = gobj[j];
@@ -476,7 +558,7 @@ SCENELOD_AVX2_TARGET void chainTermsAvx2(const uint32_t* gobj, const float* gq, 
 #if defined(__x86_64__) || defined(__i386__)
       V8f okf;
       std::memcpy(&okf, &ok, sizeof(okf));
-      finest = kBitCount8[__builtin_ia32_movmskps256(okf)];
+      finest = static_cast<uint32_t>(__builtin_popcount(static_cast<unsigned>(__builtin_ia32_movmskps256(okf))));
 #else
       finest = static_cast<uint32_t>(-(ok[0] + ok[1] + ok[2] + ok[3] + ok[4] + ok[5] + ok[6] + ok[7]));
 #endif
@@ -508,6 +590,10 @@ struct WriteOutInput {
   const uint32_t* vert;
   const uint32_t* lines;
   float h1;
+  // null: the integer features gathered per slot; else `rows` counters, one per level-table row:
+  // the drawn slots per row are counted and the features summed per row at the end
+  uint32_t* row_drawn;
+  size_t rows;
 };
 
 // The frame's sums over the slots in slot order (addSlot's terms).
@@ -521,8 +607,13 @@ struct SlotSums {
 // order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
 // its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
 // the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
-__attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t slot_count, double predicted0,
-                                                 int8_t* level_of) {
+// kCountRows: the integer features as Σ (drawn slots of the row) × feature over the rows instead of
+// three gathers per slot (fewer rows than slots); integer sums, so the same values in any order.
+// Compiled twice like the settling test: for SSE2 and with the AVX2 target (the same V4f
+// operations, VEX-encoded: three-operand forms, fewer register copies; the same bits).
+template <bool kCountRows>
+inline __attribute__((always_inline)) SlotSums writeOutSlotsBody(const WriteOutInput& in, size_t slot_count,
+                                                                 double predicted0, int8_t* level_of) {
   const uint8_t* const chosen = in.chosen;
   const uint8_t* const hull = in.hull;
   const size_t hull_stride = in.hull_stride;
@@ -538,10 +629,12 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
   const uint32_t* const tri = in.tri;
   const uint32_t* const vert = in.vert;
   const uint32_t* const lines = in.lines;
+  uint32_t* const row_drawn = in.row_drawn;
   const float h_mult[2] = {1.0f, in.h1};
   double predicted = predicted0, benefit = 0.0, pixels = 0.0;
   uint64_t tri_sum = 0, vert_sum = 0, line_sum = 0;
   uint32_t dropped = 0, drawn = 0;
+  if (kCountRows) std::memset(row_drawn, 0, in.rows * sizeof(uint32_t));
   // blocks of kBlock slots in two loops: the levels, row gathers and integer sums (scalar); then the
   // float terms masked to +0 for slots not drawn, four slots at a time in vectors, and their double
   // sums lane by lane (slot order)
@@ -555,21 +648,23 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
       // settled slots (about 97 % on a smooth camera, a predictable branch) have no hull
       const uint8_t c = chosen[s];
       const int8_t prev = slot_prev[s];
-      uint8_t level;
-      if (c >= kSettledAtBase)
-        level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
-      else
-        level = hull[s * hull_stride + c];
+      uint8_t level = c == kSettledAtPrev ? static_cast<uint8_t>(prev) : kNotDrawn;
+      if (c < kSettledAtBase) level = hull[s * hull_stride + c];
       level_of[slot_object[s]] = static_cast<int8_t>(level);  // kNotDrawn is -1
-      const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+      // all ones if drawn: levels are below 64, kNotDrawn is the one negative int8
+      const uint32_t keep = ~static_cast<uint32_t>(static_cast<int32_t>(static_cast<int8_t>(level)) >> 31);
       const uint32_t row = slot_row0[s] + (level & keep);
       lrc[j] = row_cost[row];
       lriw[j] = row_inv_w[row];
       lh[j] = h_mult[level == static_cast<uint8_t>(prev)];
       std::memcpy(lkeep + j, &keep, sizeof(keep));  // the mask's bits
-      tri_sum += tri[row] & keep;
-      vert_sum += vert[row] & keep;
-      line_sum += lines[row] & keep;
+      if (kCountRows) {
+        row_drawn[row] -= keep;  // + 1 (mod 2^32); a slot not drawn adds 0 to its chain's first row
+      } else {
+        tri_sum += tri[row] & keep;
+        vert_sum += vert[row] & keep;
+        line_sum += lines[row] & keep;
+      }
     }
     const float* const ba = slot_a + s0;
     const float* const bb = slot_b + s0;
@@ -629,9 +724,26 @@ __attribute__((noinline)) SlotSums writeOutSlots(const WriteOutInput& in, size_t
       benefit += maskFloat(b * acc, keep);
       pixels += maskFloat(bpx[j], keep);
     }
-
+  }
+  if (kCountRows) {
+    for (size_t r = 0; r < in.rows; ++r) {
+      const uint64_t k = row_drawn[r];
+      tri_sum += k * tri[r];
+      vert_sum += k * vert[r];
+      line_sum += k * lines[r];
+    }
   }
   return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
+}
+template <bool kCountRows>
+__attribute__((noinline)) SlotSums writeOutSlotsSse2(const WriteOutInput& in, size_t slot_count, double predicted0,
+                                                     int8_t* level_of) {
+  return writeOutSlotsBody<kCountRows>(in, slot_count, predicted0, level_of);
+}
+template <bool kCountRows>
+SCENELOD_AVX2_TARGET __attribute__((noinline)) SlotSums writeOutSlotsAvx2(const WriteOutInput& in, size_t slot_count,
+                                                                          double predicted0, int8_t* level_of) {
+  return writeOutSlotsBody<kCountRows>(in, slot_count, predicted0, level_of);
 }
 
 struct PassResult {
@@ -667,9 +779,11 @@ class SelectorContext {
   uint32_t* slot_row0 = nullptr;   // first level-table row of the slot's chain
   int8_t* slot_prev = nullptr;     // last frame's level of the slot's object
   uint8_t* slot_levels = nullptr;  // level count of the slot's chain
+  uint16_t* slot_key = nullptr;    // settleKey (the settling pass's eligibility, lane masks and candidate)
   // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
   float* row_cost = nullptr;
   float* row_inv_w = nullptr;
+  uint32_t* row_drawn = nullptr;  // per row: the drawn slots at it (the budget write-out's counters)
   size_t max_rows = 0;
   uint8_t* hull = nullptr;       // hull_stride bytes per slot: levels along the hull, kNotDrawn = -1
   uint8_t* hull_count = nullptr;
@@ -756,19 +870,20 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   struct Part { size_t bytes; size_t at; };
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
-  constexpr size_t kPerObjectParts = 15;
-  Part parts[21] = {
+  constexpr size_t kPerObjectParts = 16;
+  Part parts[23] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
+      {n * sizeof(uint16_t), 0},
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}};
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 21; ++i) {
+  for (size_t i = 0; i < 23; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -798,12 +913,14 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->slot_row0 = reinterpret_cast<uint32_t*>(base + parts[12].at);
   c->slot_prev = reinterpret_cast<int8_t*>(base + parts[13].at);
   c->slot_levels = base + parts[14].at;
-  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[15].at);
-  c->row_cost = reinterpret_cast<float*>(base + parts[16].at);
-  c->row_inv_w = reinterpret_cast<float*>(base + parts[17].at);
-  c->hist_cost = reinterpret_cast<double*>(base + parts[18].at);
-  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[19].at);
-  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[20].at);
+  c->slot_key = reinterpret_cast<uint16_t*>(base + parts[15].at);
+  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[16].at);
+  c->row_cost = reinterpret_cast<float*>(base + parts[17].at);
+  c->row_inv_w = reinterpret_cast<float*>(base + parts[18].at);
+  c->hist_cost = reinterpret_cast<double*>(base + parts[19].at);
+  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[20].at);
+  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[21].at);
+  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[22].at);
   c->max_rows = rows;
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
@@ -1059,8 +1176,10 @@ bool SelectionJob::run() {
   // Passes 1a-1c fused over blocks of kSlotBlock objects held in local columns: the frustum test,
   // the compaction of the objects in view (and with levels) into slots, and per slot the
   // level-independent terms and the finest candidate level, so that each object's inputs are read
-  // once. Budget mode stores the slots' terms in the slot columns for the hull passes; distance mode
-  // needs no column: it chooses the level and adds the slot to the frame's sums in the same block
+  // once (the compaction queues the centres and radii it has loaded for the frustum test beside
+  // the slots' object indices). Budget mode stores the slots' terms in the slot columns for the
+  // hull passes; distance mode needs no column but the queue: it chooses the level and adds the
+  // slot to the frame's sums in the same block
   // (slot order as in writeOut, so the same sums). The float terms run as plain loops over the local
   // columns that the compiler vectorises (sqrt and divisions 4 or 8 wide; the same IEEE operations
   // as one object at a time, so the same bits).
@@ -1090,6 +1209,13 @@ bool SelectionJob::run() {
   uint32_t* const slot_row0 = ctx.slot_row0;
   int8_t* const slot_prev = ctx.slot_prev;
   uint8_t* const slot_levels = ctx.slot_levels;
+  uint16_t* const slot_key = ctx.slot_key;
+  // the spheres in view queue up in slot order: object index, centre and radius (these three in
+  // the columns that pass 1c overwrites for the same slots once it has read them)
+  float* const queue_x = slot_a;
+  float* const queue_y = slot_b;
+  float* const queue_z = slot_q;
+  float* const queue_r = slot_px;
   const glm::vec3 eye = cam.eye;
   const float* const importance_of = importance.count ? importance.data : nullptr;
   const float* const focus_of = focus.count ? focus.data : nullptr;
@@ -1156,14 +1282,15 @@ bool SelectionJob::run() {
     uint8_t* const gfinest = budget ? slot_finest + s0 : lfinest;
     uint8_t* const glevels = budget ? slot_levels + s0 : llevels;
     int8_t* const gprev = budget ? slot_prev + s0 : lprev;
+    // the centres and radii from the compaction's queue (in the columns of a, b, q and pixels, read
+    // here before this block's terms overwrite them)
     for (size_t j = 0; j < m; ++j) {
-      const size_t i = gobj[j];
-      gx[j] = center_of[i].x;
-      gy[j] = center_of[i].y;
-      gz[j] = center_of[i].z;
-      gr[j] = radius_of[i];
-      gs[j] = scale_of[i];
+      gx[j] = queue_x[s0 + j];
+      gy[j] = queue_y[s0 + j];
+      gz[j] = queue_z[s0 + j];
+      gr[j] = queue_r[s0 + j];
     }
+    for (size_t j = 0; j < m; ++j) gs[j] = scale_of[gobj[j]];
     // missing factors are 1 (b * 1.0f == b)
     for (size_t j = 0; j < m; ++j) gi[j] = importance_of ? importance_of[gobj[j]] : 1.0f;
     for (size_t j = 0; j < m; ++j) gf[j] = focus_of ? focus_of[gobj[j]] : 1.0f;
@@ -1230,6 +1357,10 @@ bool SelectionJob::run() {
         glevels[j] = static_cast<uint8_t>(level_count);
       }
     }
+    if (budget && use_avx2)
+      settleKeysAvx2(ga, glevels, gfinest, gprev, m, slot_key + s0);
+    else if (budget)
+      settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
     } else if (budget) {
@@ -1238,6 +1369,7 @@ bool SelectionJob::run() {
         const bool must = must_of[gobj[j]] != 0;
         slot_must[s] = must ? 1 : 0;
         if (must) {
+          slot_key[s] = kSettleIneligible;
           float cheapest = std::numeric_limits<float>::infinity();
           for (int l = gfinest[j]; l < static_cast<int>(glevels[j]); ++l)
             cheapest = std::min(cheapest, ga[j] + row_cost[grow0[j] + static_cast<uint32_t>(l)]);  // ctx.pointCost
@@ -1278,11 +1410,16 @@ bool SelectionJob::run() {
         const uint32_t out = static_cast<uint32_t>(gout[j]) | static_cast<uint32_t>(chain_offset[chain + 1] == chain_offset[chain]);
         level_of[i0 + j] = -1;
         slot_object[slots] = static_cast<uint32_t>(i0 + j);
+        queue_x[slots] = xyz[3 * (i0 + j)];
+        queue_y[slots] = xyz[3 * (i0 + j) + 1];
+        queue_z[slots] = xyz[3 * (i0 + j) + 2];
+        queue_r[slots] = radius_of[i0 + j];
         slots += 1u - out;
       }
     } else {
       for (size_t j = 0; j < mo; ++j) level_of[i0 + j] = -1;
-      slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), slot_object + slots);
+      const SphereQueue queue{slot_object + slots, queue_x + slots, queue_y + slots, queue_z + slots, queue_r + slots};
+      slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), queue);
     }
     if (cost_out && !budget)
       for (size_t j = 0; j < mo; ++j) cost_out[i0 + j] = 0.0f;
@@ -1370,6 +1507,7 @@ bool SelectionJob::run() {
       // local copies: the byte stores below may alias anything reached through the closure, so
       // captured values would be reloaded after each of them
       const auto slot_levels_ = slot_levels;
+      const auto slot_key_ = slot_key;
       const auto slot_a_ = slot_a;
       const auto slot_b_ = slot_b;
       const auto slot_q_ = slot_q;
@@ -1411,13 +1549,13 @@ bool SelectionJob::run() {
       uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
       size_t build_count = slots_;
       if (settle) {
-        const SettleInput in{slot_levels_, slot_finest_, slot_prev_, slot_row0_, slot_a_, slot_b_, slot_q_,
+        const SettleInput in{slot_key_, slot_row0_, slot_a_, slot_b_, slot_q_,
                              row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
                              static_cast<float>(plo_ / (1.0 + kSettleMargin)),
                              static_cast<float>(phi_ * (1.0 + kSettleMargin))};
         if (rows_nonnegative_) {
           build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
-              in, slots_, slot_must_, chosen_step_, unsettled, &ptotal);
+              in, slots_, chosen_step_, unsettled, &ptotal);
         } else {
           for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
@@ -1831,9 +1969,17 @@ bool SelectionJob::run() {
       benefit = 0.0;
       dropped = 0;
       drawn = 0;
+      // counting per row pays when there are fewer rows than slots
+      const size_t rows = levels.cell_width.count;
+      const bool count_rows = rows <= slots;
       const WriteOutInput in{ctx.chosen, hull, hull_stride, slot_object, slot_a, slot_b, slot_q, slot_px,
-                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1};
-      const SlotSums sums = writeOutSlots(in, slots, predicted, level_of);
+                             slot_row0, slot_prev, row_cost, row_inv_w, tri, vert, lines, h1,
+                             count_rows ? ctx.row_drawn : nullptr, rows};
+      const SlotSums sums =
+          ctx.use_avx2 ? (count_rows ? writeOutSlotsAvx2<true>(in, slots, predicted, level_of)
+                                     : writeOutSlotsAvx2<false>(in, slots, predicted, level_of))
+                       : (count_rows ? writeOutSlotsSse2<true>(in, slots, predicted, level_of)
+                                     : writeOutSlotsSse2<false>(in, slots, predicted, level_of));
       predicted = sums.predicted;
       benefit = sums.benefit;
       f.pixels = sums.pixels;

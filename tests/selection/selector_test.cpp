@@ -446,6 +446,42 @@ TEST(Selector, LagrangianMatchesGreedyOnDegenerateChainsAlongAPath) {
   }
 }
 
+TEST(Selector, MustDrawObjectsEnteringTheViewOnWarmFramesAreDrawn) {
+  // a camera panning sideways: must-draw objects come into view with last frame's level "not
+  // drawn", which the settling test must not keep; every frame must draw them and give the greedy's
+  // choice
+  SyntheticScene s = makeScene(61, 1500, 6, 8, 120.0f);
+  for (size_t i = 0; i < s.must_draw.size(); i += 10) s.must_draw[i] = 1;
+  Owned g(makeContext(1500)), l(makeContext(1500, 64));
+  size_t entering = 0;
+  std::vector<int8_t> last(s.centers.size(), -1);
+  for (int frame = 0; frame < 30; ++frame) {
+    const Camera cam = makeCamera(glm::vec3(-40.0f + 1.5f * frame, 1.0f, 20.0f));
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, l.ctx, &cam, levels, &st);
+    job.params.budget_ms = 3.0f;
+    ASSERT_TRUE(job.run());
+    std::vector<int8_t> greedy_levels;
+    SelectionStats greedy_st;
+    SelectionJob greedy_job = makeJob(s, g.ctx, &cam, greedy_levels, &greedy_st);
+    greedy_job.params.budget_ms = 3.0f;
+    greedy_job.params.algorithm = BudgetAlgorithm::kGreedy;
+    ASSERT_TRUE(greedy_job.run());
+    EXPECT_EQ(levels, greedy_levels) << "frame " << frame;
+    EXPECT_EQ(st.predicted_ms, greedy_st.predicted_ms) << "frame " << frame;
+    EXPECT_GT(st.dropped_count, 0u) << "frame " << frame;
+    const Frustum fr = computeFrustum(cam);
+    for (size_t i = 0; i < s.centers.size(); i += 10) {
+      if (!sphereInFrustum(fr, s.centers[i], s.radii[i])) continue;
+      EXPECT_GE(levels[i], 0) << "frame " << frame << " object " << i;
+      entering += frame > 0 && last[i] < 0;
+    }
+    last = levels;
+  }
+  EXPECT_GT(entering, 20u);
+}
+
 TEST(Selector, LagrangianMatchesGreedyWhenTheHalfFallbackWinsOnAWarmFrame) {
   // few objects and a budget that moves a little per frame: the first upgrade that does not fit,
   // alone, sometimes beats the greedy (kFlagSplitFallback), and on some frames it starts to. On
@@ -536,6 +572,48 @@ void expectSameFrame(const SyntheticScene& s, SelectorContext* a, SelectorContex
 }
 
 }  // namespace
+
+// The integer cost features of a budget frame are the sums of the drawn levels' counts, whether the
+// write-out counts drawn slots per level-table row (fewer rows than slots) or gathers every slot's
+// row (more rows than slots).
+TEST(Selector, BudgetFeaturesAreTheSumsOfTheDrawnLevels) {
+  struct Case { size_t objects, chains; };
+  for (const Case c : {Case{3000, 8}, Case{60, 40}}) {
+    SyntheticScene s = makeScene(21, c.objects, c.chains, 8, 100.0f, true);
+    const LevelTable t = s.table.view();
+    Owned ctx(makeContext(c.objects, 100));
+    size_t fewer_rows_than_slots = 0;
+    for (int frame = 0; frame < 8; ++frame) {
+      const Camera cam = makeCamera(glm::vec3(frame * 0.4f, 0.0f, 10.0f - frame * 0.8f));
+      std::vector<int8_t> levels;
+      SelectionStats st;
+      SelectionJob job = makeJob(s, ctx.ctx, &cam, levels, &st);
+      job.params.budget_ms = c.objects > 1000 ? 6.0f : 3.0f;
+      ASSERT_TRUE(job.run());
+      double tri = 0.0, vert = 0.0, lines = 0.0;
+      size_t drawn = 0;
+      for (size_t i = 0; i < levels.size(); ++i) {
+        if (levels[i] < 0) continue;
+        const uint32_t row = t.chain_level_offset[s.chains[i]] + static_cast<uint32_t>(levels[i]);
+        tri += t.triangle_count[row];
+        vert += t.vertex_count[row];
+        lines += t.line_point_count[row];
+        ++drawn;
+      }
+      EXPECT_GT(drawn, 0u) << "frame " << frame;
+      EXPECT_EQ(st.drawn_count, drawn) << "frame " << frame;
+      EXPECT_EQ(st.features.objects, static_cast<double>(drawn)) << "frame " << frame;
+      EXPECT_EQ(st.features.triangles, tri) << "frame " << frame;
+      EXPECT_EQ(st.features.vertices, vert) << "frame " << frame;
+      EXPECT_EQ(st.features.line_points, lines) << "frame " << frame;
+      const size_t slots = c.objects - st.culled_count;
+      fewer_rows_than_slots += t.rowCount() <= slots ? 1 : 0;
+    }
+    // both write-out forms are covered
+    if (c.objects > 1000) EXPECT_EQ(fewer_rows_than_slots, 8u);
+    else EXPECT_EQ(fewer_rows_than_slots, 0u);
+  }
+}
 
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
