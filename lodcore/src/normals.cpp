@@ -66,6 +66,28 @@ void cornerNormals(const ClusterFaces& f, size_t k, float cos_crease, glm::vec3*
 #endif
 }
 
+// A cluster whose faces all lie within the crease angle of each other gives every corner the same
+// sum in cornerNormals: each lane adds every face, in order, to +0. This computes that sum once,
+// normalised as the corner loop does, and returns true if the faces pass a sufficient test for
+// "all within the crease angle": each face's unit normal u_j within alpha of the normalised sum m
+// (float dot(u_j, m) >= cos_ref = cos alpha + 1e-5), so any two are within 2 alpha, whose cosine
+// is cos_crease + 1e-4. The margins exceed the rounding of the float dot products (a few 1e-7 for
+// normals of length 1 +- 4e-7; faces or sums shorter than 1e-18, whose normalisation could be less
+// exact, fail the test), so a pass means the lanes' d >= cos_crease for every pair.
+bool smoothCluster(const ClusterFaces& f, size_t k, float cos_ref, glm::vec3& n) {
+  glm::vec3 s(0.0f);
+  for (size_t j = 0; j < k; ++j) {
+    const float wj = f.w[j];
+    s.x += f.x[j] * wj, s.y += f.y[j] * wj, s.z += f.z[j] * wj;
+  }
+  const float l = glm::length(s);
+  if (!(l >= 1e-18f)) return false;
+  n = s / l;
+  bool all = true;
+  for (size_t j = 0; j < k; ++j) all &= (f.w[j] >= 1e-18f) & (f.x[j] * n.x + f.y[j] * n.y + f.z[j] * n.z >= cos_ref);
+  return all;
+}
+
 }  // namespace
 
 void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
@@ -110,6 +132,12 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
     if (colors) out.colors.push_back(r.colors[c]);
     return static_cast<uint32_t>(out.positions.size() - 1);
   };
+  // the sufficient test of smoothCluster: faces within alpha of their mean direction are within
+  // 2 alpha of each other; 2 alpha is the crease angle less a margin that covers the rounding of
+  // the float dot products (see smoothCluster)
+  const double cos_2alpha = double(cos_crease) + 1e-4;
+  const bool fast = cos_2alpha < 1.0;
+  const float cos_ref = fast ? float(std::cos(0.5 * std::acos(std::max(-1.0, cos_2alpha))) + 1e-5) : 2.0f;
   ClusterFaces cf;
   std::vector<glm::vec3> sums;  // per corner of the current cluster
   for (uint32_t c = 0; c < nc; ++c) {
@@ -121,6 +149,17 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
     for (size_t j = 0; j < k; ++j) {
       const glm::vec4& fj = face[corners[b + j] / 3];
       cf.x[j] = fj.x, cf.y[j] = fj.y, cf.z[j] = fj.z, cf.w[j] = fj.w;
+    }
+    if (k > 0 && fast) {
+      // the cluster's faces all within the crease angle of each other: every corner's sum is the
+      // same ordered sum (see smoothCluster), so the cluster takes one vertex
+      glm::vec3 n;
+      if (smoothCluster(cf, k, cos_ref, n)) {
+        const uint32_t v = addVertex(c, n);
+        for (uint32_t i = b; i < en; ++i) e.triangles[corners[i]] = v;
+        base_vertex[c] = v;
+        continue;
+      }
     }
     cornerNormals(cf, k, cos_crease, sums.data());
     for (uint32_t i = b; i < en; ++i) {
