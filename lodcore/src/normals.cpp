@@ -32,23 +32,31 @@ struct ClusterFaces {
 // face i itself). Four corners at a time, one per SIMD lane: each lane does the scalar loop's
 // operations in the scalar loop's order (a skipped face adds +0, which never changes a sum that
 // starts at +0), so the sums are bit-identical to it, without its unpredictable branch per pair.
+#if defined(__SSE2__)
+// the sums of corners i0 .. i0 + 3 over faces 0 .. k - 1, one corner per lane
+inline void laneSums(const ClusterFaces& f, size_t i0, size_t k, __m128 cosv, __m128& nx, __m128& ny, __m128& nz) {
+  const __m128 tx = _mm_loadu_ps(&f.x[i0]), ty = _mm_loadu_ps(&f.y[i0]), tz = _mm_loadu_ps(&f.z[i0]);
+  const __m128i lane = _mm_add_epi32(_mm_set1_epi32(int(i0)), _mm_set_epi32(3, 2, 1, 0));
+  nx = _mm_setzero_ps(), ny = _mm_setzero_ps(), nz = _mm_setzero_ps();
+  for (size_t j = 0; j < k; ++j) {
+    const __m128 ux = _mm_set1_ps(f.x[j]), uy = _mm_set1_ps(f.y[j]), uz = _mm_set1_ps(f.z[j]);
+    const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(tx, ux), _mm_mul_ps(ty, uy)), _mm_mul_ps(tz, uz));
+    const __m128 self = _mm_castsi128_ps(_mm_cmpeq_epi32(lane, _mm_set1_epi32(int(j))));
+    const __m128 take = _mm_or_ps(self, _mm_cmpge_ps(d, cosv));
+    const float wj = f.w[j];
+    nx = _mm_add_ps(nx, _mm_and_ps(take, _mm_set1_ps(f.x[j] * wj)));
+    ny = _mm_add_ps(ny, _mm_and_ps(take, _mm_set1_ps(f.y[j] * wj)));
+    nz = _mm_add_ps(nz, _mm_and_ps(take, _mm_set1_ps(f.z[j] * wj)));
+  }
+}
+#endif
+
 void cornerNormals(const ClusterFaces& f, size_t k, float cos_crease, glm::vec3* n) {
 #if defined(__SSE2__)
   const __m128 cosv = _mm_set1_ps(cos_crease);
   for (size_t i0 = 0; i0 < k; i0 += 4) {
-    const __m128 tx = _mm_loadu_ps(&f.x[i0]), ty = _mm_loadu_ps(&f.y[i0]), tz = _mm_loadu_ps(&f.z[i0]);
-    const __m128i lane = _mm_add_epi32(_mm_set1_epi32(int(i0)), _mm_set_epi32(3, 2, 1, 0));
-    __m128 nx = _mm_setzero_ps(), ny = _mm_setzero_ps(), nz = _mm_setzero_ps();
-    for (size_t j = 0; j < k; ++j) {
-      const __m128 ux = _mm_set1_ps(f.x[j]), uy = _mm_set1_ps(f.y[j]), uz = _mm_set1_ps(f.z[j]);
-      const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(tx, ux), _mm_mul_ps(ty, uy)), _mm_mul_ps(tz, uz));
-      const __m128 self = _mm_castsi128_ps(_mm_cmpeq_epi32(lane, _mm_set1_epi32(int(j))));
-      const __m128 take = _mm_or_ps(self, _mm_cmpge_ps(d, cosv));
-      const float wj = f.w[j];
-      nx = _mm_add_ps(nx, _mm_and_ps(take, _mm_set1_ps(f.x[j] * wj)));
-      ny = _mm_add_ps(ny, _mm_and_ps(take, _mm_set1_ps(f.y[j] * wj)));
-      nz = _mm_add_ps(nz, _mm_and_ps(take, _mm_set1_ps(f.z[j] * wj)));
-    }
+    __m128 nx, ny, nz;
+    laneSums(f, i0, k, cosv, nx, ny, nz);
     alignas(16) float ox[4], oy[4], oz[4];
     _mm_store_ps(ox, nx), _mm_store_ps(oy, ny), _mm_store_ps(oz, nz);
     for (size_t l = 0; l < 4 && i0 + l < k; ++l) n[i0 + l] = glm::vec3(ox[l], oy[l], oz[l]);
@@ -116,6 +124,48 @@ bool smoothSmall(const __m128 row[kSmall], __m128 x0, __m128 y0, __m128 z0, __m1
   const __m128 ok0 = _mm_or_ps(past0, _mm_and_ps(_mm_cmpge_ps(w0, min_w), _mm_cmpge_ps(d0, ref)));
   const __m128 ok1 = _mm_or_ps(past1, _mm_and_ps(_mm_cmpge_ps(w1, min_w), _mm_cmpge_ps(d1, ref)));
   return _mm_movemask_ps(_mm_and_ps(ok0, ok1)) == 0xf;
+}
+
+// The corner loop of buildOutputMesh for a cluster of k <= kSmall faces held in f, zero-padded to
+// kSmall: writes each corner's output vertex to local[0 .. kSmall) (indices from the cluster's first
+// vertex; entries past k repeat corner k - 1's) and the normals of the new vertices, in order, to
+// new_normals; returns their count. The same values as that loop: the sums of cornerNormals over
+// all kSmall faces (a zero face adds +0), normalised lane by lane as glm::length and the division
+// do (the fallback where the length is 0), and each corner takes the vertex of the first earlier
+// corner with an equal normal (== is transitive away from NaN, which equals nothing), else a new
+// one; the pairs are compared in lanes, without a branch per pair.
+uint32_t smallCorners(const ClusterFaces& f, size_t k, float cos_crease, const glm::vec3& fallback,
+                      uint32_t local[kSmall], glm::vec3 new_normals[kSmall]) {
+  const __m128 cosv = _mm_set1_ps(cos_crease);
+  const __m128 fx = _mm_set1_ps(fallback.x), fy = _mm_set1_ps(fallback.y), fz = _mm_set1_ps(fallback.z);
+  __m128 gx[2], gy[2], gz[2];
+  for (int g = 0; g < 2; ++g) {
+    __m128 nx, ny, nz;
+    laneSums(f, 4 * size_t(g), kSmall, cosv, nx, ny, nz);
+    const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
+    const __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
+    gx[g] = _mm_or_ps(_mm_and_ps(pos, _mm_div_ps(nx, l)), _mm_andnot_ps(pos, fx));
+    gy[g] = _mm_or_ps(_mm_and_ps(pos, _mm_div_ps(ny, l)), _mm_andnot_ps(pos, fy));
+    gz[g] = _mm_or_ps(_mm_and_ps(pos, _mm_div_ps(nz, l)), _mm_andnot_ps(pos, fz));
+  }
+  alignas(16) float x[kSmall], y[kSmall], z[kSmall];
+  _mm_store_ps(x, gx[0]), _mm_store_ps(x + 4, gx[1]);
+  _mm_store_ps(y, gy[0]), _mm_store_ps(y + 4, gy[1]);
+  _mm_store_ps(z, gz[0]), _mm_store_ps(z + 4, gz[1]);
+  uint32_t v[kSmall + 1] = {};
+  uint32_t count = 0;
+  for (uint32_t i = 0; i < kSmall; ++i) {
+    const __m128 xi = _mm_set1_ps(x[i]), yi = _mm_set1_ps(y[i]), zi = _mm_set1_ps(z[i]);
+    const __m128 e0 = _mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(gx[0], xi), _mm_cmpeq_ps(gy[0], yi)), _mm_cmpeq_ps(gz[0], zi));
+    const __m128 e1 = _mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(gx[1], xi), _mm_cmpeq_ps(gy[1], yi)), _mm_cmpeq_ps(gz[1], zi));
+    const uint32_t earlier = uint32_t(_mm_movemask_ps(e0) | (_mm_movemask_ps(e1) << 4)) & ((1u << i) - 1u);
+    const uint32_t fresh = uint32_t(earlier == 0) & uint32_t(i < k);
+    new_normals[count] = glm::vec3(x[i], y[i], z[i]);  // kept only when fresh
+    v[i] = fresh ? count : v[__builtin_ctz(earlier | (1u << kSmall))];
+    count += fresh;
+  }
+  for (uint32_t j = 0; j < kSmall; ++j) local[j] = v[std::min<uint32_t>(j, uint32_t(k) - 1)];
+  return count;
 }
 #endif
 
@@ -206,6 +256,13 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
       cf.resize(kSmall);
       _mm_storeu_ps(&cf.x[0], x0), _mm_storeu_ps(&cf.y[0], y0), _mm_storeu_ps(&cf.z[0], z0), _mm_storeu_ps(&cf.w[0], w0);
       _mm_storeu_ps(&cf.x[4], x1), _mm_storeu_ps(&cf.y[4], y1), _mm_storeu_ps(&cf.z[4], z1), _mm_storeu_ps(&cf.w[4], w1);
+      uint32_t local[kSmall];
+      glm::vec3 new_normals[kSmall];
+      const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, new_normals);
+      for (uint32_t q = 0; q < fresh; ++q) addVertex(c, new_normals[q]);
+      for (uint32_t j = 0; j < kSmall; ++j) e.triangles[corner_of[j]] = first_vertex + local[j];
+      base_vertex[c] = first_vertex;
+      continue;
     } else
 #endif
     {
