@@ -179,7 +179,41 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
   const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
 
   std::vector<glm::vec4> face(tn);  // xyz: unit face normal (0 when degenerate), w: twice the area
-  for (size_t t = 0; t < tn; ++t) {
+  size_t t0 = 0;
+#if defined(__SSE2__)
+  // four faces at a time, one per lane, with the scalar loop's operations (glm::cross, glm::length,
+  // the division): bit-identical, and the divider does a quarter of the divisions and roots
+  {
+    const glm::vec3* rp = r.positions.data();
+    const uint32_t* tri = e.triangles.data();
+    auto load = [&](uint32_t i) {  // (x, y, z, 0) without reading past the array
+      return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&rp[i].x)),
+                           _mm_load_ss(&rp[i].z));
+    };
+    for (; t0 + 4 <= tn; t0 += 4) {
+      const uint32_t* c = tri + 3 * t0;
+      __m128 ax = load(c[0]), ay = load(c[3]), az = load(c[6]), aw = load(c[9]);
+      __m128 bx = load(c[1]), by = load(c[4]), bz = load(c[7]), bw = load(c[10]);
+      __m128 cx = load(c[2]), cy = load(c[5]), cz = load(c[8]), cw = load(c[11]);
+      _MM_TRANSPOSE4_PS(ax, ay, az, aw);
+      _MM_TRANSPOSE4_PS(bx, by, bz, bw);
+      _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
+      const __m128 ux = _mm_sub_ps(bx, ax), uy = _mm_sub_ps(by, ay), uz = _mm_sub_ps(bz, az);
+      const __m128 vx = _mm_sub_ps(cx, ax), vy = _mm_sub_ps(cy, ay), vz = _mm_sub_ps(cz, az);
+      const __m128 nx = _mm_sub_ps(_mm_mul_ps(uy, vz), _mm_mul_ps(vy, uz));
+      const __m128 ny = _mm_sub_ps(_mm_mul_ps(uz, vx), _mm_mul_ps(vz, ux));
+      const __m128 nz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(vx, uy));
+      const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
+      const __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
+      __m128 fx = _mm_and_ps(pos, _mm_div_ps(nx, l)), fy = _mm_and_ps(pos, _mm_div_ps(ny, l));
+      __m128 fz = _mm_and_ps(pos, _mm_div_ps(nz, l)), fw = _mm_and_ps(pos, l);
+      _MM_TRANSPOSE4_PS(fx, fy, fz, fw);
+      _mm_storeu_ps(&face[t0].x, fx), _mm_storeu_ps(&face[t0 + 1].x, fy);
+      _mm_storeu_ps(&face[t0 + 2].x, fz), _mm_storeu_ps(&face[t0 + 3].x, fw);
+    }
+  }
+#endif
+  for (size_t t = t0; t < tn; ++t) {
     const glm::vec3& a = r.positions[e.triangles[3 * t]];
     const glm::vec3 n = glm::cross(r.positions[e.triangles[3 * t + 1]] - a, r.positions[e.triangles[3 * t + 2]] - a);
     const float l = glm::length(n);
