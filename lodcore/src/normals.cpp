@@ -27,11 +27,6 @@ struct ClusterFaces {
   }
 };
 
-// Corner normals of one cluster: for each corner i, the sum over the cluster's faces j, in order, of
-// face j's unit normal times its double area, over the faces within the crease angle of face i (and
-// face i itself). Four corners at a time, one per SIMD lane: each lane does the scalar loop's
-// operations in the scalar loop's order (a skipped face adds +0, which never changes a sum that
-// starts at +0), so the sums are bit-identical to it, without its unpredictable branch per pair.
 #if defined(__SSE2__)
 // the sums of corners i0 .. i0 + 3 over faces 0 .. k - 1, one corner per lane
 inline void laneSums(const ClusterFaces& f, size_t i0, size_t k, __m128 cosv, __m128& nx, __m128& ny, __m128& nz) {
@@ -51,6 +46,11 @@ inline void laneSums(const ClusterFaces& f, size_t i0, size_t k, __m128 cosv, __
 }
 #endif
 
+// Corner normals of one cluster: for each corner i, the sum over the cluster's faces j, in order, of
+// face j's unit normal times its double area, over the faces within the crease angle of face i (and
+// face i itself). Four corners at a time, one per SIMD lane: each lane does the scalar loop's
+// operations in the scalar loop's order (a skipped face adds +0, which never changes a sum that
+// starts at +0), so the sums are bit-identical to it, without its unpredictable branch per pair.
 void cornerNormals(const ClusterFaces& f, size_t k, float cos_crease, glm::vec3* n) {
 #if defined(__SSE2__)
   const __m128 cosv = _mm_set1_ps(cos_crease);
