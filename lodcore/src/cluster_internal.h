@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 #include "scenelod/lodcore/cluster.h"
@@ -93,8 +94,18 @@ struct Assignment {
   CellShape shape = CellShape::kCube;
 
   // the box a representative of the cluster whose heaviest vertex lies at `p` is clamped to (a
-  // sphere cell clamps in synthesis); taking the position, not the cluster, spares a random read
-  void cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const;
+  // sphere cell clamps in synthesis); taking the position, not the cluster, spares a random read.
+  // Inline: synthesis calls it once per cluster.
+  void cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const {
+    if (uniform) {
+      const glm::vec3 q = (p - grid_origin) * (1.0f / cell_width);
+      lo = grid_origin + glm::floor(q) * cell_width;
+      hi = lo + glm::vec3(cell_width);
+    } else {
+      lo = p - glm::vec3(0.5f * cell_width);
+      hi = p + glm::vec3(0.5f * cell_width);
+    }
+  }
 
   // starts a level over `vertex_count` vertices, none assigned yet
   void reset(size_t vertex_count, float width, bool is_uniform, CellShape cell_shape) {

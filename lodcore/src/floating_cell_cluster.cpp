@@ -474,17 +474,6 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-void Assignment::cellBox(const glm::vec3& p, glm::vec3& lo, glm::vec3& hi) const {
-  if (uniform) {
-    const glm::vec3 q = (p - grid_origin) * (1.0f / cell_width);
-    lo = grid_origin + glm::floor(q) * cell_width;
-    hi = lo + glm::vec3(cell_width);
-  } else {
-    lo = p - glm::vec3(0.5f * cell_width);
-    hi = p + glm::vec3(0.5f * cell_width);
-  }
-}
-
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))
     return {Status::kInvalidArgument, "cell width " + std::to_string(cell_width) + " is not a finite positive number"};

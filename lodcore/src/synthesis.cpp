@@ -11,6 +11,9 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "cluster_internal.h"
 
@@ -215,16 +218,15 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
+  // Laid out for four-wide adds: each group of four floats below gets one vector add per vertex,
+  // lane by lane the same additions (and products) as the scalar form in the #else branch.
   struct Sums {          // 92 bytes per cluster
     glm::vec3 centre;    // the heaviest vertex, the local origin
-    float w = 0.0f;      // sum of weights
-    glm::vec3 wsum{0.0f};  // sum of weight x offset
-    float count = 0.0f;
-    glm::vec3 sum{0.0f};   // sum of offsets
-    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n; one
-    // array so that the per-vertex adds go four at a time
-    float a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-    float b[3] = {0, 0, 0};  // quadric: sum of area n d, planes relative to the centre
+    float ws[4] = {0, 0, 0, 0};  // sum of weight x offset (x, y, z), then the sum of weights
+    float sc[4] = {0, 0, 0, 0};  // sum of offsets (x, y, z), then the vertex count
+    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n (x, y,
+    // z), then the quadric's linear part: sum of area n d, planes relative to the centre (x, y, z)
+    float q[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     explicit Sums(const glm::vec3& c) : centre(c) {}
   };
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
@@ -240,47 +242,153 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const bool have_face_sums = p.face_sums.size() == m.vertexCount();
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
+#if defined(__SSE2__)
+  const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
+  const __m128 sign = _mm_set1_ps(-0.0f);
+#endif
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t c = cluster_of[v];
     if (c == kNone) continue;
     Sums& s = sums[c];
     const float w = p.weights[v];
+#if defined(__SSE2__)
+    // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The 16-byte load of the centre takes
+    // ws[0] in its last lane, masked off; the position is loaded as 8 + 4 bytes (the last vertex ends
+    // the array).
+    const __m128 pv = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&pos[v].x)),
+                                    _mm_load_ss(&pos[v].z));
+    const __m128 d = _mm_sub_ps(pv, _mm_loadu_ps(&s.centre.x));
+    const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
+    _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), _mm_mul_ps(d4, _mm_set1_ps(w))));
+    _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), d4));
+    if (have_face_sums) {
+      // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
+      const VertexFaceSums& f = p.face_sums[v];
+      const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
+      const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
+      const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
+      const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
+      const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
+      _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), lo));
+      _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), hi));
+      // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
+      // (the quadric part is unused but harmless for mean)
+      __m128 last = _mm_set_ss(fa8);
+      if (quadric) {
+        const __m128 col0 = _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(lo), 4));  // (_, xx, xy, xz)
+        const __m128 t34 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(0, 0, 3, 3));               // (yy, yy, yz, yz)
+        const __m128 col1 = _mm_shuffle_ps(lo, t34, _MM_SHUFFLE(2, 0, 1, 1));             // (_, xy, yy, yz)
+        const __m128 col2 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(1, 0, 2, 2));              // (_, xz, yz, zz)
+        const __m128 dx = _mm_shuffle_ps(d, d, 0x00), dy = _mm_shuffle_ps(d, d, 0x55), dz = _mm_shuffle_ps(d, d, 0xaa);
+        const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, dx), _mm_mul_ps(col1, dy)), _mm_mul_ps(col2, dz));
+        last = _mm_move_ss(_mm_xor_ps(t, sign), last);
+      }
+      _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), last));
+    }
+#else
     const glm::vec3 d = pos[v] - s.centre;
-    s.wsum += d * w;
-    s.w += w;
-    s.sum += d;
-    s.count += 1.0f;
+    s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
+    s.ws[3] += w;
+    s.sc[0] += d.x, s.sc[1] += d.y, s.sc[2] += d.z;
+    s.sc[3] += 1.0f;
     if (have_face_sums) {
       float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
       decodeFaceSums(p.face_sums[v], fa);
-      for (int k = 0; k < 9; ++k) s.a[k] += fa[k];  // (the quadric part is unused but harmless for mean)
+      for (int k = 0; k < 9; ++k) s.q[k] += fa[k];  // (the quadric part is unused but harmless for mean)
       if (quadric) {
         // the vertex lies on all its faces' planes: relative to the centre, b = -A d
-        s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
-        s.b[1] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
-        s.b[2] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
+        s.q[9] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
+        s.q[10] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
+        s.q[11] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
       }
     }
+#endif
     if (colors) {
       face_color[c] += p.face_colors[v];
       vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
     }
   }
 
-  const float half = 0.5f * a.cell_width;
-  for (uint32_t c = 0; c < nc; ++c) {
+  // First the weighted mean (relative to the centre; the representative itself when there is no
+  // quadric) and the normal of every cluster, four clusters at a time where SSE2 is there: the
+  // scalar form's operations lane by lane, both sides of its selects computed and chosen by mask,
+  // so bit-identical, with a quarter of the divisions and roots. Then the quadric solve per cluster.
+  const bool mean = synthesis != Synthesis::kHeaviest;
+  auto meanAndNormal = [&](uint32_t c) {
     const Sums& s = sums[c];
     glm::vec3 x(0.0f);  // relative to centre
-    if (synthesis != Synthesis::kHeaviest) {
+    if (mean) {
       const float floor_w = kMeanWeightFloor * p.weights[a.heaviest[c]];
-      const float total = s.w + floor_w * s.count;
-      x = total > 0.0f ? (s.wsum + floor_w * s.sum) / total : s.sum / s.count;
+      const glm::vec3 wsum(s.ws[0], s.ws[1], s.ws[2]), sum(s.sc[0], s.sc[1], s.sc[2]);
+      const float total = s.ws[3] + floor_w * s.sc[3];
+      x = total > 0.0f ? (wsum + floor_w * sum) / total : sum / s.sc[3];
     }
-    if (quadric) {
+    out.positions[c] = quadric ? x : s.centre + x;
+    const glm::vec3 normal(s.q[6], s.q[7], s.q[8]);
+    const float nl = glm::length(normal);
+    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+  };
+  uint32_t c0 = 0;
+#if defined(__SSE2__)
+  {
+    auto store3 = [](glm::vec3& dst, __m128 v) {  // 12 bytes, not past the array's end
+      _mm_storel_pi(reinterpret_cast<__m64*>(&dst.x), v);
+      _mm_store_ss(&dst.z, _mm_movehl_ps(v, v));
+    };
+    const __m128 zero = _mm_setzero_ps(), floor_scale = _mm_set1_ps(kMeanWeightFloor);
+    for (; c0 + 4 <= nc; c0 += 4) {
+      const Sums* s = &sums[c0];
+      __m128 wx = _mm_loadu_ps(s[0].ws), wy = _mm_loadu_ps(s[1].ws), wz = _mm_loadu_ps(s[2].ws), wt = _mm_loadu_ps(s[3].ws);
+      __m128 sx = _mm_loadu_ps(s[0].sc), sy = _mm_loadu_ps(s[1].sc), sz = _mm_loadu_ps(s[2].sc), n = _mm_loadu_ps(s[3].sc);
+      __m128 cx = _mm_loadu_ps(&s[0].centre.x), cy = _mm_loadu_ps(&s[1].centre.x);
+      __m128 cz = _mm_loadu_ps(&s[2].centre.x), cw = _mm_loadu_ps(&s[3].centre.x);
+      __m128 nx = _mm_loadu_ps(s[0].q + 6), ny = _mm_loadu_ps(s[1].q + 6), nz = _mm_loadu_ps(s[2].q + 6);
+      __m128 nw = _mm_loadu_ps(s[3].q + 6);
+      _MM_TRANSPOSE4_PS(wx, wy, wz, wt);
+      _MM_TRANSPOSE4_PS(sx, sy, sz, n);
+      _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
+      _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
+      __m128 xx = zero, xy = zero, xz = zero;
+      if (mean) {
+        const uint32_t* h = &a.heaviest[c0];
+        const __m128 fw = _mm_mul_ps(floor_scale, _mm_set_ps(p.weights[h[3]], p.weights[h[2]], p.weights[h[1]],
+                                                             p.weights[h[0]]));
+        const __m128 total = _mm_add_ps(wt, _mm_mul_ps(fw, n));
+        const __m128 pos = _mm_cmpgt_ps(total, zero);
+        auto sel = [&](__m128 w, __m128 sm) {
+          const __m128 weighted = _mm_div_ps(_mm_add_ps(w, _mm_mul_ps(fw, sm)), total);
+          return _mm_or_ps(_mm_and_ps(pos, weighted), _mm_andnot_ps(pos, _mm_div_ps(sm, n)));
+        };
+        xx = sel(wx, sx), xy = sel(wy, sy), xz = sel(wz, sz);
+      }
+      if (!quadric) xx = _mm_add_ps(cx, xx), xy = _mm_add_ps(cy, xy), xz = _mm_add_ps(cz, xz);
+      const __m128 nl = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
+      const __m128 npos = _mm_cmpgt_ps(nl, zero);
+      nx = _mm_and_ps(npos, _mm_div_ps(nx, nl));
+      ny = _mm_and_ps(npos, _mm_div_ps(ny, nl));
+      nz = _mm_or_ps(_mm_and_ps(npos, _mm_div_ps(nz, nl)), _mm_andnot_ps(npos, _mm_set1_ps(1.0f)));
+      __m128 xw = zero;
+      _MM_TRANSPOSE4_PS(xx, xy, xz, xw);
+      store3(out.positions[c0], xx), store3(out.positions[c0 + 1], xy);
+      store3(out.positions[c0 + 2], xz), store3(out.positions[c0 + 3], xw);
+      nw = zero;
+      _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
+      store3(out.normals[c0], nx), store3(out.normals[c0 + 1], ny);
+      store3(out.normals[c0 + 2], nz), store3(out.normals[c0 + 3], nw);
+    }
+  }
+#endif
+  for (uint32_t c = c0; c < nc; ++c) meanAndNormal(c);
+
+  const float half = 0.5f * a.cell_width;
+  if (quadric)
+    for (uint32_t c = 0; c < nc; ++c) {
+      const Sums& s = sums[c];
       Quadric q;
-      q.a00 = s.a[0], q.a01 = s.a[1], q.a02 = s.a[2], q.a11 = s.a[3], q.a12 = s.a[4], q.a22 = s.a[5];
-      q.b0 = s.b[0], q.b1 = s.b[1], q.b2 = s.b[2];
-      x = solveQuadric(q, x);
+      q.a00 = s.q[0], q.a01 = s.q[1], q.a02 = s.q[2], q.a11 = s.q[3], q.a12 = s.q[4], q.a22 = s.q[5];
+      q.b0 = s.q[9], q.b1 = s.q[10], q.b2 = s.q[11];
+      glm::vec3 x = solveQuadric(q, out.positions[c]);
       glm::vec3 lo, hi;
       a.cellBox(s.centre, lo, hi);
       x = glm::clamp(x, lo - s.centre, hi - s.centre);
@@ -288,16 +396,13 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
         const float l = glm::length(x);
         if (l > half) x *= half / l;
       }
+      out.positions[c] = s.centre + x;
     }
-    out.positions[c] = s.centre + x;
-    const glm::vec3 normal(s.a[6], s.a[7], s.a[8]);
-    const float nl = glm::length(normal);
-    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
-    if (colors) {
+  if (colors)
+    for (uint32_t c = 0; c < nc; ++c) {
       if (face_color[c].w > 0.0f) out.colors[c] = glm::vec3(face_color[c]) / face_color[c].w;
       else if (vertex_color[c].w > 0.0f) out.colors[c] = glm::vec3(vertex_color[c]) / vertex_color[c].w;
     }
-  }
 }
 
 }  // namespace detail
