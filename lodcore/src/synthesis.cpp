@@ -196,6 +196,118 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
   return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
 }
 
+// per-cluster sums of synthesize (see there)
+struct Sums {          // 92 bytes per cluster
+  glm::vec3 centre;    // the heaviest vertex, the local origin
+  float w = 0.0f;      // sum of weights
+  glm::vec3 wsum{0.0f};  // sum of weight x offset
+  float count = 0.0f;
+  glm::vec3 sum{0.0f};   // sum of offsets
+  // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n; one
+  // array so that the per-vertex adds go four at a time
+  float a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  float b[3] = {0, 0, 0};  // quadric: sum of area n d, planes relative to the centre
+  explicit Sums(const glm::vec3& c) : centre(c) {}
+};
+
+// the clusters are summed one at a time, from a list of their vertices, where the per-cluster sums
+// of synthesize's single pass would take more than this per vertex (fine levels)
+constexpr size_t kGroupedSumsBytesPerVertex = 16;
+constexpr size_t kGroupedPrefetch = 8;
+
+// synthesize at fine levels, where its per-cluster sums (92 bytes each: 46 per vertex at a level of
+// half the triangles) were the largest array of a level: the vertices are listed by cluster (a
+// stable counting sort, 4 bytes per vertex and per cluster) and each cluster is summed and finished
+// at once in locals, with synthesize's operations in synthesize's order (a cluster's vertices in
+// index order), so the results are bit-identical (add and finish below repeat synthesize's loops
+// and must stay in step with them). At coarse levels the single pass is faster (its sums stay in
+// cache while this reads the vertex arrays out of order).
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t nc = a.cluster_count;
+  const glm::vec3* pos = m.positions.data();
+  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
+  const bool quadric = synthesis == Synthesis::kQuadric;
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  const size_t vn = m.vertexCount();
+  const uint32_t* cluster_of = a.cluster_of.data();
+  std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
+  for (size_t v = 0; v < vn; ++v)
+    if (cluster_of[v] != kNone) ++first[cluster_of[v] + 1];
+  for (uint32_t c = 0; c < nc; ++c) first[c + 1] += first[c];
+  std::vector<uint32_t> members(first[nc]);
+  for (size_t v = 0; v < vn; ++v)
+    if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
+  auto add = [&](Sums& s, size_t v, glm::vec4* face_color, glm::vec4* vertex_color) {
+    const float w = p.weights[v];
+    const glm::vec3 d = pos[v] - s.centre;
+    s.wsum += d * w;
+    s.w += w;
+    s.sum += d;
+    s.count += 1.0f;
+    if (have_face_sums) {
+      float fa[9];
+      decodeFaceSums(p.face_sums[v], fa);
+      for (int k = 0; k < 9; ++k) s.a[k] += fa[k];
+      if (quadric) {
+        s.b[0] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
+        s.b[1] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
+        s.b[2] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
+      }
+    }
+    if (colors) {
+      *face_color += p.face_colors[v];
+      *vertex_color += glm::vec4(m.colors[v], 1.0f);
+    }
+  };
+  const float half = 0.5f * a.cell_width;
+  auto finish = [&](uint32_t c, const Sums& s, const glm::vec4& face_color, const glm::vec4& vertex_color) {
+    glm::vec3 x(0.0f);
+    if (synthesis != Synthesis::kHeaviest) {
+      const float floor_w = kMeanWeightFloor * p.weights[a.heaviest[c]];
+      const float total = s.w + floor_w * s.count;
+      x = total > 0.0f ? (s.wsum + floor_w * s.sum) / total : s.sum / s.count;
+    }
+    if (quadric) {
+      Quadric q;
+      q.a00 = s.a[0], q.a01 = s.a[1], q.a02 = s.a[2], q.a11 = s.a[3], q.a12 = s.a[4], q.a22 = s.a[5];
+      q.b0 = s.b[0], q.b1 = s.b[1], q.b2 = s.b[2];
+      x = solveQuadric(q, x);
+      glm::vec3 lo, hi;
+      a.cellBox(s.centre, lo, hi);
+      x = glm::clamp(x, lo - s.centre, hi - s.centre);
+      if (!a.uniform && a.shape == CellShape::kSphere) {
+        const float l = glm::length(x);
+        if (l > half) x *= half / l;
+      }
+    }
+    out.positions[c] = s.centre + x;
+    const glm::vec3 normal(s.a[6], s.a[7], s.a[8]);
+    const float nl = glm::length(normal);
+    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+    if (colors) {
+      if (face_color.w > 0.0f) out.colors[c] = glm::vec3(face_color) / face_color.w;
+      else if (vertex_color.w > 0.0f) out.colors[c] = glm::vec3(vertex_color) / vertex_color.w;
+    }
+  };
+  uint32_t begin = 0;  // first[c] is now where cluster c + 1 starts
+  for (uint32_t c = 0; c < nc; ++c) {
+    Sums s(pos[a.heaviest[c]]);
+    glm::vec4 face_color(0.0f), vertex_color(0.0f);
+    const uint32_t end = first[c];
+    for (uint32_t j = begin; j < end; ++j) {
+      // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
+      const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, members.size() - 1)];
+      __builtin_prefetch(&p.face_sums[ahead]);
+      __builtin_prefetch(&pos[ahead]);
+      __builtin_prefetch(&p.weights[ahead]);
+      add(s, members[j], &face_color, &vertex_color);
+    }
+    begin = end;
+    finish(c, s, face_color, vertex_color);
+  }
+}
+
 }  // namespace
 
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
@@ -215,18 +327,10 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
-  struct Sums {          // 92 bytes per cluster
-    glm::vec3 centre;    // the heaviest vertex, the local origin
-    float w = 0.0f;      // sum of weights
-    glm::vec3 wsum{0.0f};  // sum of weight x offset
-    float count = 0.0f;
-    glm::vec3 sum{0.0f};   // sum of offsets
-    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n; one
-    // array so that the per-vertex adds go four at a time
-    float a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-    float b[3] = {0, 0, 0};  // quadric: sum of area n d, planes relative to the centre
-    explicit Sums(const glm::vec3& c) : centre(c) {}
-  };
+  if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
+    synthesizeGrouped(p, a, synthesis, out);
+    return;
+  }
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
   sums.reserve(nc);
   for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
