@@ -36,11 +36,14 @@ Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params,
   detail::Assignment a;
   if (Error e = assign(prepared, params, a)) return e;
   const Mesh& m = *prepared.mesh;
-  detail::Representatives r;
-  detail::synthesize(prepared, a, params.synthesis, r);
-  std::vector<uint32_t>().swap(a.heaviest);  // only synthesis reads it: free it before elimination's peak
+  // elimination before synthesis (neither reads the other's result), so that the representatives
+  // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
+  // eliminated primitives (about 6 bytes per cluster at fine levels) are held through synthesis
   detail::Eliminated el;
   detail::eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
+  detail::Representatives r;
+  detail::synthesize(prepared, a, params.synthesis, r);
+  std::vector<uint32_t>().swap(a.heaviest);
   if (stats) {
     stats->cluster_count = a.cluster_count;
     stats->collapsed_triangles = el.collapsed_triangles;
