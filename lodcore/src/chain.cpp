@@ -13,6 +13,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include "cluster_internal.h"
 #include "scenelod/lodcore/scrooge.h"
@@ -148,6 +149,46 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   stats.level_seconds.assign(n, 0.0);
   std::mutex progress_mutex;
   std::atomic<size_t> done{0};
+  // The finest level's output pass (face normals, corner lists and the output arrays, on top of its
+  // eliminated primitives and representatives) was the chain's peak while the prepared mesh (44
+  // bytes per vertex) was still held for the other levels. So that level is held between its
+  // synthesis and its output pass until every level has passed synthesis; the level that passes
+  // last frees the prepared mesh's arrays (no level reads them after its synthesis) and hands the
+  // held output pass to the task group, where the thread that runs out of levels takes it.
+  detail::LevelParts held;
+  double held_seconds = 0.0;
+  std::atomic<size_t> synthesis_pending{n};
+  // the sort (order and sorted positions, 16 bytes per vertex) is read by assignments only: freed
+  // when every level has made its assignment, before the later levels' elimination and output
+  struct Release {
+    PreparedMesh* p;
+    std::atomic<size_t> pending;
+  } release{&p, {n}};
+  auto releaseSorted = [](void* context) {
+    Release& r = *static_cast<Release*>(context);
+    if (--r.pending == 0) {
+      std::vector<uint32_t>().swap(r.p->order);
+      std::vector<glm::vec3>().swap(r.p->sorted_positions);
+    }
+  };
+  tbb::task_group finish_group;
+  auto finishLevel = [&](size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds) {
+    const Clock::time_point start = Clock::now();
+    LodLevel& level = out.levels[k + 1];
+    detail::finishLevel(parts, cp, level.mesh);
+    level.bounds = computeBoundingSphere(level.mesh);
+    stats.level_seconds[k] = seconds + since(start);
+    const size_t d = ++done;
+    if (params.progress.fn) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
+    }
+  };
+  auto levelParams = [&](size_t k) {
+    ClusterParams cp = params.cluster;
+    cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+    return cp;
+  };
   // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
   // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
   // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
@@ -156,22 +197,29 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     const size_t claim = next_claim++;
     const size_t k = claim == 0 ? 0 : n - claim;
     const Clock::time_point start = Clock::now();
-    ClusterParams cp = params.cluster;
-    cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+    const ClusterParams cp = levelParams(k);
     LodLevel& level = out.levels[k + 1];
+    detail::LevelParts parts;
     ClusterStats cs;
-    errors[k] = clusterPrepared(p, cp, level.mesh, &cs);
+    errors[k] = detail::clusterLevelParts(p, cp, parts, &cs, releaseSorted, &release);
     level.cell_width = cp.cell_width;
     level.max_error = cs.max_error;
     level.method = cp.method;
-    level.bounds = computeBoundingSphere(level.mesh);
-    stats.level_seconds[k] = since(start);
-    const size_t d = ++done;
-    if (params.progress.fn) {
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
+    const double seconds = since(start);
+    if (k == 0) {
+      held = std::move(parts);
+      held_seconds = seconds;
     }
+    if (--synthesis_pending == 0) {
+      // every level is past synthesis (and assignment): only the mesh itself is read from here on
+      std::vector<float>().swap(p.weights);
+      std::vector<VertexFaceSums>().swap(p.face_sums);
+      std::vector<glm::vec4>().swap(p.face_colors);
+      if (!errors[0]) finish_group.run([&] { finishLevel(0, held, levelParams(0), held_seconds); });
+    }
+    if (k != 0 && !errors[k]) finishLevel(k, parts, cp, seconds);
   });
+  finish_group.wait();
   for (const Error& e : errors)
     if (e) {
       out.levels.clear();

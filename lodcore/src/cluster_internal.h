@@ -169,4 +169,16 @@ void computeThickness(const PreparedMesh& p, const Assignment& a, const std::vec
 // storage becomes the output's).
 void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out);
 
+// cluster_mesh.cpp: clusterPrepared in two steps, so that a chain can hold a level between them.
+// The first (assignment, elimination, synthesis) reads the prepared mesh: its order and sorted
+// positions only until the assignment is made, when `assigned` (if given) is called with `context`;
+// the second (buildOutputMesh) reads none of it, so it may run after the prepared arrays are freed.
+struct LevelParts {
+  Eliminated eliminated;
+  Representatives representatives;
+};
+Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
+                        ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr);
+void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out);  // frees parts
+
 }  // namespace scenelod::detail

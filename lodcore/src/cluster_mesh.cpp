@@ -30,30 +30,51 @@ Error assign(const PreparedMesh& p, const ClusterParams& params, detail::Assignm
 
 }  // namespace
 
-Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
-  out = Mesh();
+namespace detail {
+
+Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
+                        ClusterStats* stats, void (*assigned)(void*), void* context) {
+  parts = LevelParts();
   if (stats) *stats = ClusterStats();
-  detail::Assignment a;
-  if (Error e = assign(prepared, params, a)) return e;
+  Assignment a;
+  const Error assign_error = assign(prepared, params, a);
+  if (assigned) assigned(context);
+  if (assign_error) return assign_error;
   const Mesh& m = *prepared.mesh;
-  detail::Representatives r;
-  detail::synthesize(prepared, a, params.synthesis, r);
-  std::vector<uint32_t>().swap(a.heaviest);  // only synthesis reads it: free it before elimination's peak
-  detail::Eliminated el;
-  detail::eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
+  // elimination before synthesis (neither reads the other's result), so that the representatives
+  // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
+  // eliminated primitives (about 6 bytes per cluster at fine levels) are held through synthesis
+  Eliminated& el = parts.eliminated;
+  eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
+  Representatives& r = parts.representatives;
+  synthesize(prepared, a, params.synthesis, r);
+  std::vector<uint32_t>().swap(a.heaviest);
   if (stats) {
     stats->cluster_count = a.cluster_count;
     stats->collapsed_triangles = el.collapsed_triangles;
     float max_d2 = 0.0f;
     for (size_t v = 0; v < a.cluster_of.size(); ++v) {
-      if (a.cluster_of[v] == detail::kNone) continue;
+      if (a.cluster_of[v] == kNone) continue;
       const glm::vec3 d = m.positions[v] - r.positions[a.cluster_of[v]];
       max_d2 = std::max(max_d2, glm::dot(d, d));
     }
     stats->max_error = std::sqrt(max_d2);
   }
-  std::vector<uint32_t>().swap(a.cluster_of);
-  detail::buildOutputMesh(el, r, params.crease_angle_deg, out);
+  return {};
+}
+
+void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out) {
+  buildOutputMesh(parts.eliminated, parts.representatives, params.crease_angle_deg, out);
+  parts = LevelParts();
+}
+
+}  // namespace detail
+
+Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
+  out = Mesh();
+  detail::LevelParts parts;
+  if (Error e = detail::clusterLevelParts(prepared, params, parts, stats)) return e;
+  detail::finishLevel(parts, params, out);
   return {};
 }
 

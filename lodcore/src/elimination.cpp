@@ -110,12 +110,14 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   const size_t nc = a.cluster_count;
   // Triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
   // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
-  // input count) rather than the input, so that it stays in cache; grows at half load.
+  // input count) rather than the input, so that it stays in cache; grows at 2/3 load.
   // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output)
   const size_t expected = std::min(tn, size_t(2) * nc + nc / 16 + 64);
   out.triangles.reserve(3 * expected);
+  // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
+  // the power of two was about 4 x the output, the largest array of the main pass at fine levels
   size_t cap = 64;
-  while (cap < expected * 2) cap <<= 1;
+  while (cap * 2 < expected * 3) cap <<= 1;
   std::vector<uint32_t> table(cap, kNone);
   size_t mask = cap - 1;
   auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
@@ -126,13 +128,21 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
   // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
   // pass's lookups went to random slots of it.
-  std::vector<uint32_t> edges;          // candidate edges (cluster pairs, low id first)
+  // candidate edges (cluster pairs, low id first), in chunks of kEdgeChunk edges: only read in order,
+  // and a growing vector's copy (old and new buffers at once) came at the peak of a level
+  constexpr size_t kEdgeChunk = 8192;
+  std::vector<std::vector<uint32_t>> edges;
+  size_t edge_total = 0;
   // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
   std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
   const size_t listed = keep_edges || input_edges ? nc : 0;
   EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
-  std::vector<CollapsedTriangle> collapsed;
+  // triangles collapsed onto a candidate edge, in chunks of fixed capacity: a growing vector's copy
+  // (old and new buffers at once) at fine levels, or a reserve extrapolated from the first blocks, was
+  // among the largest transients of a level; only those of uncovered edges are kept at the end
+  constexpr size_t kCollapsedChunk = 8192;
+  std::vector<std::vector<CollapsedTriangle>> collapsed_chunks;
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
@@ -146,9 +156,13 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
     uint32_t e = edge_lists.find(lo, hi);
     if (e == kNone) {
-      e = static_cast<uint32_t>(edges.size() / 2);
-      edges.push_back(lo);
-      edges.push_back(hi);
+      e = static_cast<uint32_t>(edge_total++);
+      if (edges.empty() || edges.back().size() == edges.back().capacity()) {
+        edges.emplace_back();
+        edges.back().reserve(2 * kEdgeChunk);
+      }
+      edges.back().push_back(lo);
+      edges.back().push_back(hi);
       edge_lists.add(lo, hi, e);
       if (input_edges) input_thickness.push_back(0.0f);
     }
@@ -160,7 +174,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       const uint32_t o = table[i];
       if (o == kNone) {
         table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
-        if ((out.triangles.size() / 3 + 1) * 2 > cap) {  // keep the load at most 1/2
+        if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
           cap <<= 1;
           mask = cap - 1;
           table.assign(cap, kNone);
@@ -228,14 +242,18 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
     if (keep_points)
       for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
-    // grown by extrapolating the share of collapsed triangles seen so far rather than by doubling,
-    // so that it ends near its size (it is among the largest transients of a level)
-    if (compute_thickness && keep_edges && collapsed.size() + edge_count > collapsed.capacity())
-      collapsed.reserve(std::min(tn, (collapsed.size() + edge_count) * tn / t1 * 9 / 8 + kBlock));
+    std::vector<CollapsedTriangle>* collapsed = nullptr;
+    if (compute_thickness && keep_edges && edge_count > 0) {
+      if (collapsed_chunks.empty() || collapsed_chunks.back().size() + edge_count > collapsed_chunks.back().capacity()) {
+        collapsed_chunks.emplace_back();
+        collapsed_chunks.back().reserve(std::max(edge_count, std::min(kCollapsedChunk, tn - t0)));
+      }
+      collapsed = &collapsed_chunks.back();
+    }
     if (keep_edges)
       for (size_t j = 0; j < edge_count; ++j) {
         const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
-        if (compute_thickness) collapsed.push_back({edge_block[3 * j + 2], e});
+        if (collapsed) collapsed->push_back({edge_block[3 * j + 2], e});
       }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
@@ -251,7 +269,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   std::vector<uint32_t>().swap(table);
 
   // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
-  const size_t en = edges.size() / 2;
+  const size_t en = edge_total;
   std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
   std::vector<uint8_t> used(nc, 0);
   if (en > 0) {
@@ -268,11 +286,13 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
     if (covered[e]) continue;
+    const uint32_t* pair = edges[e / kEdgeChunk].data() + 2 * (e % kEdgeChunk);
     remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
-    out.edges.push_back(edges[2 * e]);
-    out.edges.push_back(edges[2 * e + 1]);
-    used[edges[2 * e]] = used[edges[2 * e + 1]] = 1;
+    out.edges.push_back(pair[0]);
+    out.edges.push_back(pair[1]);
+    used[pair[0]] = used[pair[1]] = 1;
   }
+  std::vector<std::vector<uint32_t>>().swap(edges);
   for (uint32_t c : point_candidates)
     if (!used[c]) {
       used[c] = 1;
@@ -282,9 +302,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   if (!compute_thickness) return;
   out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
   size_t kept = 0;
-  for (const CollapsedTriangle& ct : collapsed)
-    if (remap[ct.edge] != kNone) collapsed[kept++] = {ct.triangle, remap[ct.edge]};
-  collapsed.resize(kept);
+  for (const std::vector<CollapsedTriangle>& chunk : collapsed_chunks)
+    for (const CollapsedTriangle& ct : chunk) kept += remap[ct.edge] != kNone;
+  std::vector<CollapsedTriangle> collapsed;
+  collapsed.reserve(kept);
+  for (std::vector<CollapsedTriangle>& chunk : collapsed_chunks) {
+    for (const CollapsedTriangle& ct : chunk)
+      if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
+    std::vector<CollapsedTriangle>().swap(chunk);
+  }
   computeThickness(p, a, collapsed, out);
   if (input_edges)
     for (size_t e = 0; e < en; ++e)

@@ -199,6 +199,174 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
   return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
 }
 
+// Laid out for four-wide adds: each group of four floats below gets one vector add per vertex,
+// lane by lane the same additions (and products) as the scalar form in the #else branch.
+struct Sums {          // 92 bytes per cluster
+  glm::vec3 centre;    // the heaviest vertex, the local origin
+  float ws[4] = {0, 0, 0, 0};  // sum of weight x offset (x, y, z), then the sum of weights
+  float sc[4] = {0, 0, 0, 0};  // sum of offsets (x, y, z), then the vertex count
+  // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n (x, y,
+  // z), then the quadric's linear part: sum of area n d, planes relative to the centre (x, y, z)
+  float q[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  explicit Sums(const glm::vec3& c) : centre(c) {}
+};
+
+// adds vertex v to its cluster's sums (the single pass and the grouped one share it, so that both
+// make the same operations in the same order)
+inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, bool have_face_sums, bool quadric,
+                      Sums& s) {
+#if defined(__SSE2__)
+  const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
+  const __m128 sign = _mm_set1_ps(-0.0f);
+#endif
+  const float w = p.weights[v];
+#if defined(__SSE2__)
+  // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The 16-byte load of the centre takes
+  // ws[0] in its last lane, masked off; the position is loaded as 8 + 4 bytes (the last vertex ends
+  // the array).
+  const __m128 pv = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&pos[v].x)),
+                                  _mm_load_ss(&pos[v].z));
+  const __m128 d = _mm_sub_ps(pv, _mm_loadu_ps(&s.centre.x));
+  const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
+  _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), _mm_mul_ps(d4, _mm_set1_ps(w))));
+  _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), d4));
+  if (have_face_sums) {
+    // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
+    const VertexFaceSums& f = p.face_sums[v];
+    const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
+    const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
+    const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
+    const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
+    const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
+    _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), lo));
+    _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), hi));
+    // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
+    // (the quadric part is unused but harmless for mean)
+    __m128 last = _mm_set_ss(fa8);
+    if (quadric) {
+      const __m128 col0 = _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(lo), 4));  // (_, xx, xy, xz)
+      const __m128 t34 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(0, 0, 3, 3));               // (yy, yy, yz, yz)
+      const __m128 col1 = _mm_shuffle_ps(lo, t34, _MM_SHUFFLE(2, 0, 1, 1));             // (_, xy, yy, yz)
+      const __m128 col2 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(1, 0, 2, 2));              // (_, xz, yz, zz)
+      const __m128 dx = _mm_shuffle_ps(d, d, 0x00), dy = _mm_shuffle_ps(d, d, 0x55), dz = _mm_shuffle_ps(d, d, 0xaa);
+      const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, dx), _mm_mul_ps(col1, dy)), _mm_mul_ps(col2, dz));
+      last = _mm_move_ss(_mm_xor_ps(t, sign), last);
+    }
+    _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), last));
+  }
+#else
+  const glm::vec3 d = pos[v] - s.centre;
+  s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
+  s.ws[3] += w;
+  s.sc[0] += d.x, s.sc[1] += d.y, s.sc[2] += d.z;
+  s.sc[3] += 1.0f;
+  if (have_face_sums) {
+    float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
+    decodeFaceSums(p.face_sums[v], fa);
+    for (int k = 0; k < 9; ++k) s.q[k] += fa[k];  // (the quadric part is unused but harmless for mean)
+    if (quadric) {
+      // the vertex lies on all its faces' planes: relative to the centre, b = -A d
+      s.q[9] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
+      s.q[10] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
+      s.q[11] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
+    }
+  }
+#endif
+}
+
+// one cluster's weighted mean (relative to the centre; the representative itself without a
+// quadric) and unit normal: the scalar form of the four-lane code in synthesize
+inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool quadric, glm::vec3& position,
+                          glm::vec3& normal_out) {
+  glm::vec3 x(0.0f);  // relative to centre
+  if (mean) {
+    const float floor_w = kMeanWeightFloor * heaviest_weight;
+    const glm::vec3 wsum(s.ws[0], s.ws[1], s.ws[2]), sum(s.sc[0], s.sc[1], s.sc[2]);
+    const float total = s.ws[3] + floor_w * s.sc[3];
+    x = total > 0.0f ? (wsum + floor_w * sum) / total : sum / s.sc[3];
+  }
+  position = quadric ? x : s.centre + x;
+  const glm::vec3 normal(s.q[6], s.q[7], s.q[8]);
+  const float nl = glm::length(normal);
+  normal_out = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
+}
+
+// the quadric's minimiser from x0 (relative to the centre), clamped to the cell: the representative
+inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const Assignment& a, float half) {
+  Quadric q;
+  q.a00 = s.q[0], q.a01 = s.q[1], q.a02 = s.q[2], q.a11 = s.q[3], q.a12 = s.q[4], q.a22 = s.q[5];
+  q.b0 = s.q[9], q.b1 = s.q[10], q.b2 = s.q[11];
+  glm::vec3 x = solveQuadric(q, x0);
+  glm::vec3 lo, hi;
+  a.cellBox(s.centre, lo, hi);
+  x = glm::clamp(x, lo - s.centre, hi - s.centre);
+  if (!a.uniform && a.shape == CellShape::kSphere) {
+    const float l = glm::length(x);
+    if (l > half) x *= half / l;
+  }
+  return s.centre + x;
+}
+
+inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_color, glm::vec3& out) {
+  if (face_color.w > 0.0f) out = glm::vec3(face_color) / face_color.w;
+  else if (vertex_color.w > 0.0f) out = glm::vec3(vertex_color) / vertex_color.w;
+}
+
+// the clusters are summed one at a time, from a list of their vertices, where the per-cluster sums
+// of synthesize's single pass would take more than this per vertex (fine levels)
+constexpr size_t kGroupedSumsBytesPerVertex = 16;
+constexpr size_t kGroupedPrefetch = 8;
+
+// synthesize at fine levels, where its per-cluster sums (92 bytes each: 46 per vertex at a level of
+// half the triangles) were the largest array of a level: the vertices are listed by cluster (a
+// stable counting sort, 4 bytes per vertex and per cluster) and each cluster is summed and finished
+// at once in locals with the single pass's functions, its vertices in index order, so the results
+// are bit-identical. At coarse levels the single pass is faster (its sums stay in cache while this
+// reads the vertex arrays out of order).
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t nc = a.cluster_count;
+  const glm::vec3* pos = m.positions.data();
+  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
+  const bool quadric = synthesis == Synthesis::kQuadric;
+  const bool mean = synthesis != Synthesis::kHeaviest;
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  const size_t vn = m.vertexCount();
+  const uint32_t* cluster_of = a.cluster_of.data();
+  std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
+  for (size_t v = 0; v < vn; ++v)
+    if (cluster_of[v] != kNone) ++first[cluster_of[v] + 1];
+  for (uint32_t c = 0; c < nc; ++c) first[c + 1] += first[c];
+  std::vector<uint32_t> members(first[nc]);
+  for (size_t v = 0; v < vn; ++v)
+    if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
+  const float half = 0.5f * a.cell_width;
+  uint32_t begin = 0;  // first[c] is now where cluster c + 1 starts
+  for (uint32_t c = 0; c < nc; ++c) {
+    Sums s(pos[a.heaviest[c]]);
+    glm::vec4 face_color(0.0f), vertex_color(0.0f);
+    const uint32_t end = first[c];
+    for (uint32_t j = begin; j < end; ++j) {
+      // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
+      const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, members.size() - 1)];
+      __builtin_prefetch(&p.face_sums[ahead]);
+      __builtin_prefetch(&pos[ahead]);
+      __builtin_prefetch(&p.weights[ahead]);
+      const uint32_t v = members[j];
+      addVertex(p, pos, v, have_face_sums, quadric, s);
+      if (colors) {
+        face_color += p.face_colors[v];
+        vertex_color += glm::vec4(m.colors[v], 1.0f);
+      }
+    }
+    begin = end;
+    meanAndNormal(s, p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
+    if (quadric) out.positions[c] = quadricRepresentative(s, out.positions[c], a, half);
+    if (colors) finishColor(face_color, vertex_color, out.colors[c]);
+  }
+}
+
 }  // namespace
 
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
@@ -218,17 +386,10 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
-  // Laid out for four-wide adds: each group of four floats below gets one vector add per vertex,
-  // lane by lane the same additions (and products) as the scalar form in the #else branch.
-  struct Sums {          // 92 bytes per cluster
-    glm::vec3 centre;    // the heaviest vertex, the local origin
-    float ws[4] = {0, 0, 0, 0};  // sum of weight x offset (x, y, z), then the sum of weights
-    float sc[4] = {0, 0, 0, 0};  // sum of offsets (x, y, z), then the vertex count
-    // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n (x, y,
-    // z), then the quadric's linear part: sum of area n d, planes relative to the centre (x, y, z)
-    float q[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-    explicit Sums(const glm::vec3& c) : centre(c) {}
-  };
+  if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
+    synthesizeGrouped(p, a, synthesis, out);
+    return;
+  }
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
   sums.reserve(nc);
   for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
@@ -242,68 +403,11 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const bool have_face_sums = p.face_sums.size() == m.vertexCount();
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
-#if defined(__SSE2__)
-  const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
-  const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
-  const __m128 sign = _mm_set1_ps(-0.0f);
-#endif
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t c = cluster_of[v];
     if (c == kNone) continue;
     Sums& s = sums[c];
-    const float w = p.weights[v];
-#if defined(__SSE2__)
-    // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The 16-byte load of the centre takes
-    // ws[0] in its last lane, masked off; the position is loaded as 8 + 4 bytes (the last vertex ends
-    // the array).
-    const __m128 pv = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&pos[v].x)),
-                                    _mm_load_ss(&pos[v].z));
-    const __m128 d = _mm_sub_ps(pv, _mm_loadu_ps(&s.centre.x));
-    const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
-    _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), _mm_mul_ps(d4, _mm_set1_ps(w))));
-    _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), d4));
-    if (have_face_sums) {
-      // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
-      const VertexFaceSums& f = p.face_sums[v];
-      const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
-      const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
-      const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
-      const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
-      const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
-      _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), lo));
-      _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), hi));
-      // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
-      // (the quadric part is unused but harmless for mean)
-      __m128 last = _mm_set_ss(fa8);
-      if (quadric) {
-        const __m128 col0 = _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(lo), 4));  // (_, xx, xy, xz)
-        const __m128 t34 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(0, 0, 3, 3));               // (yy, yy, yz, yz)
-        const __m128 col1 = _mm_shuffle_ps(lo, t34, _MM_SHUFFLE(2, 0, 1, 1));             // (_, xy, yy, yz)
-        const __m128 col2 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(1, 0, 2, 2));              // (_, xz, yz, zz)
-        const __m128 dx = _mm_shuffle_ps(d, d, 0x00), dy = _mm_shuffle_ps(d, d, 0x55), dz = _mm_shuffle_ps(d, d, 0xaa);
-        const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, dx), _mm_mul_ps(col1, dy)), _mm_mul_ps(col2, dz));
-        last = _mm_move_ss(_mm_xor_ps(t, sign), last);
-      }
-      _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), last));
-    }
-#else
-    const glm::vec3 d = pos[v] - s.centre;
-    s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
-    s.ws[3] += w;
-    s.sc[0] += d.x, s.sc[1] += d.y, s.sc[2] += d.z;
-    s.sc[3] += 1.0f;
-    if (have_face_sums) {
-      float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
-      decodeFaceSums(p.face_sums[v], fa);
-      for (int k = 0; k < 9; ++k) s.q[k] += fa[k];  // (the quadric part is unused but harmless for mean)
-      if (quadric) {
-        // the vertex lies on all its faces' planes: relative to the centre, b = -A d
-        s.q[9] -= fa[0] * d.x + fa[1] * d.y + fa[2] * d.z;
-        s.q[10] -= fa[1] * d.x + fa[3] * d.y + fa[4] * d.z;
-        s.q[11] -= fa[2] * d.x + fa[4] * d.y + fa[5] * d.z;
-      }
-    }
-#endif
+    addVertex(p, pos, v, have_face_sums, quadric, s);
     if (colors) {
       face_color[c] += p.face_colors[v];
       vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
@@ -315,20 +419,6 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // scalar form's operations lane by lane, both sides of its selects computed and chosen by mask,
   // so bit-identical, with a quarter of the divisions and roots. Then the quadric solve per cluster.
   const bool mean = synthesis != Synthesis::kHeaviest;
-  auto meanAndNormal = [&](uint32_t c) {
-    const Sums& s = sums[c];
-    glm::vec3 x(0.0f);  // relative to centre
-    if (mean) {
-      const float floor_w = kMeanWeightFloor * p.weights[a.heaviest[c]];
-      const glm::vec3 wsum(s.ws[0], s.ws[1], s.ws[2]), sum(s.sc[0], s.sc[1], s.sc[2]);
-      const float total = s.ws[3] + floor_w * s.sc[3];
-      x = total > 0.0f ? (wsum + floor_w * sum) / total : sum / s.sc[3];
-    }
-    out.positions[c] = quadric ? x : s.centre + x;
-    const glm::vec3 normal(s.q[6], s.q[7], s.q[8]);
-    const float nl = glm::length(normal);
-    out.normals[c] = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
-  };
   uint32_t c0 = 0;
 #if defined(__SSE2__)
   {
@@ -379,30 +469,14 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     }
   }
 #endif
-  for (uint32_t c = c0; c < nc; ++c) meanAndNormal(c);
+  for (uint32_t c = c0; c < nc; ++c)
+    meanAndNormal(sums[c], p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
 
   const float half = 0.5f * a.cell_width;
   if (quadric)
-    for (uint32_t c = 0; c < nc; ++c) {
-      const Sums& s = sums[c];
-      Quadric q;
-      q.a00 = s.q[0], q.a01 = s.q[1], q.a02 = s.q[2], q.a11 = s.q[3], q.a12 = s.q[4], q.a22 = s.q[5];
-      q.b0 = s.q[9], q.b1 = s.q[10], q.b2 = s.q[11];
-      glm::vec3 x = solveQuadric(q, out.positions[c]);
-      glm::vec3 lo, hi;
-      a.cellBox(s.centre, lo, hi);
-      x = glm::clamp(x, lo - s.centre, hi - s.centre);
-      if (!a.uniform && a.shape == CellShape::kSphere) {
-        const float l = glm::length(x);
-        if (l > half) x *= half / l;
-      }
-      out.positions[c] = s.centre + x;
-    }
+    for (uint32_t c = 0; c < nc; ++c) out.positions[c] = quadricRepresentative(sums[c], out.positions[c], a, half);
   if (colors)
-    for (uint32_t c = 0; c < nc; ++c) {
-      if (face_color[c].w > 0.0f) out.colors[c] = glm::vec3(face_color[c]) / face_color[c].w;
-      else if (vertex_color[c].w > 0.0f) out.colors[c] = glm::vec3(vertex_color[c]) / vertex_color[c].w;
-    }
+    for (uint32_t c = 0; c < nc; ++c) finishColor(face_color[c], vertex_color[c], out.colors[c]);
 }
 
 }  // namespace detail

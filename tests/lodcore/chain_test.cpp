@@ -79,6 +79,36 @@ TEST(Chain, ResultIsIdenticalForAnyThreadCount) {
   }
 }
 
+// the chain frees the prepared arrays while levels are still being finished and holds the finest
+// level's output pass until the others are past synthesis: every level must still be what
+// clusterPrepared makes at its width, for one level or several, one thread or several, with colours
+TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
+  Mesh m = testMesh();
+  m.colors.resize(m.positions.size());
+  for (size_t i = 0; i < m.positions.size(); ++i)
+    m.colors[i] = glm::vec3(float(i % 5) / 4.0f, 0.5f + 0.5f * std::sin(3.0f * m.positions[i].x), 0.25f);
+  ChainParams cp;
+  PreparedMesh prepared;
+  ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
+  for (size_t levels : {size_t(1), size_t(2), size_t(6)})
+    for (int threads : {1, 4}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      cp.level_count = levels;
+      LodChain chain;
+      ASSERT_TRUE(buildChain(m, cp, chain).ok());
+      ASSERT_EQ(chain.levelCount(), levels + 1);
+      for (size_t k = 1; k <= levels; ++k) {
+        ClusterParams params = cp.cluster;
+        params.cell_width = chain.levels[k].cell_width;
+        Mesh single;
+        ClusterStats stats;
+        ASSERT_TRUE(clusterPrepared(prepared, params, single, &stats).ok());
+        EXPECT_TRUE(sameMesh(chain.levels[k].mesh, single)) << levels << " levels, " << threads << " threads, level " << k;
+        EXPECT_EQ(chain.levels[k].max_error, stats.max_error);
+      }
+    }
+}
+
 TEST(Chain, ProgressIsReportedUpToOne) {
   const Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 16, 24);
   struct Seen {
