@@ -14,6 +14,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
 
 #include "cluster_internal.h"
@@ -127,40 +128,56 @@ struct GradeOutput {
   Aabb* bounds = nullptr;        // may be null: of the vertices triangles or edges use (min > max if none)
 };
 
-// Grades every vertex and, when asked, sums its incident faces. One counting sort builds the
-// vertex -> incidence rows, each holding the two other corners of the triangle in winding order (or
-// the other end of an input edge), so the per-vertex pass reads its rows contiguously, recomputes
-// the face normal from the corner positions it reads anyway, and writes only its own vertex: no
-// scattered writes, parallel over vertices.
-void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOutput out) {
+struct Incidence {
+  uint32_t a, b;  // triangle corner: the next two corners (winding order); edge end: other end, kNone
+};
+
+// vertex -> incidence rows: row v is incidence[offsets[v] .. offsets[v + 1]), its triangle corners
+// in triangle order, then its input-edge ends in edge order
+struct IncidenceTable {
+  std::vector<uint32_t> offsets;
+  std::vector<Incidence> incidence;
+};
+
+// One counting sort builds the rows, each holding the two other corners of the triangle in winding
+// order (or the other end of an input edge). Serial (scattered writes); prepareMesh runs it next to
+// the surface sums.
+void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
-  struct Incidence {
-    uint32_t a, b;  // triangle corner: the next two corners (winding order); edge end: other end, kNone
-  };
-  std::vector<uint32_t> offsets(vn + 1, 0);
+  std::vector<uint32_t>& offsets = table.offsets;
+  offsets.assign(vn + 1, 0);
   for (uint32_t v : mesh.triangles) ++offsets[v + 1];
   for (uint32_t v : mesh.edges) ++offsets[v + 1];
   for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
-  std::vector<Incidence> incidence(offsets[vn]);
-  {
-    // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
-    // the end of row v again, so no separate cursor array is needed
-    uint32_t* fill = offsets.data() + 1;
-    for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
-    const uint32_t* tri = mesh.triangles.data();
-    for (size_t t = 0; t < tn; ++t) {
-      const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
-      incidence[fill[i0]++] = {i1, i2};
-      incidence[fill[i1]++] = {i2, i0};
-      incidence[fill[i2]++] = {i0, i1};
-    }
-    for (size_t e = 0; e < mesh.edgeCount(); ++e) {
-      const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
-      incidence[fill[x]++] = {y, detail::kNone};
-      incidence[fill[y]++] = {x, detail::kNone};
-    }
-    offsets[0] = 0;
+  std::vector<Incidence>& incidence = table.incidence;
+  incidence.resize(offsets[vn]);
+  // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
+  // the end of row v again, so no separate cursor array is needed
+  uint32_t* fill = offsets.data() + 1;
+  for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
+  const uint32_t* tri = mesh.triangles.data();
+  for (size_t t = 0; t < tn; ++t) {
+    const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+    incidence[fill[i0]++] = {i1, i2};
+    incidence[fill[i1]++] = {i2, i0};
+    incidence[fill[i2]++] = {i0, i1};
   }
+  for (size_t e = 0; e < mesh.edgeCount(); ++e) {
+    const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
+    incidence[fill[x]++] = {y, detail::kNone};
+    incidence[fill[y]++] = {x, detail::kNone};
+  }
+  offsets[0] = 0;
+}
+
+// Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
+// of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
+// and writes only its own vertex: no scattered writes, parallel over vertices.
+void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading, bool boost_features,
+                 GradeOutput out) {
+  const size_t vn = mesh.vertexCount();
+  const uint32_t* offsets = table.offsets.data();
+  const Incidence* incidence = table.incidence.data();
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
@@ -322,6 +339,31 @@ void sortByWeight(const std::vector<float>& raw, const std::vector<uint8_t>& ref
   }
 }
 
+// Surface area and summed length of the triangles' edges, in double per fixed chunk of triangles
+// and then over the chunks in order: the same sums whatever the number of threads.
+void surfaceSums(const Mesh& in, double& area_out, double& length_out) {
+  const glm::vec3* pos = in.positions.data();
+  const size_t tn = in.triangleCount();
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (tn + kChunk - 1) / kChunk;
+  std::vector<double> chunk_length(chunks), chunk_area(chunks);
+  const uint32_t* tri = in.triangles.data();
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    double sum = 0.0, area = 0.0;
+    for (size_t t = c * kChunk, end = std::min(tn, t + kChunk); t < end; ++t) {
+      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
+      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
+      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
+    }
+    chunk_length[c] = sum;
+    chunk_area[c] = area;
+  });
+  double sum = 0.0, area = 0.0;
+  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
+  area_out = area;
+  length_out = sum;
+}
+
 }  // namespace
 
 void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::vector<float>& weights,
@@ -335,7 +377,9 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
   }
   std::vector<float> raw(vn), angular(vn);
   float longest_edge = 0.0f;
-  gradeAndSum(mesh, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
+  IncidenceTable table;
+  buildIncidence(mesh, table);
+  gradeAndSum(mesh, table, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   // weights = raw * inv: rounding is monotone, so the normalised weights keep the raw order
   for (size_t v = 0; v < vn; ++v) weights[v] = raw[v] * inv;
@@ -362,9 +406,14 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   float longest_edge = 0.0f;
   std::vector<uint8_t> referenced(vn);
   Aabb rows_box;
-  gradeAndSum(in, params.grading, params.boost_features,
+  // the surface sums need only the mesh: they run next to the serial counting sort
+  IncidenceTable table;
+  double area = 0.0, sum = 0.0;
+  tbb::parallel_invoke([&] { buildIncidence(in, table); }, [&] { surfaceSums(in, area, sum); });
+  gradeAndSum(in, table, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
                in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
+  table = IncidenceTable();  // 8 bytes per corner, not needed any more
   out.longest_edge = longest_edge;
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
@@ -388,29 +437,10 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
     for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
   });
 
-  // surface area and summed edge length in double, per fixed chunk of triangles and then over the
-  // chunks in order: the same sums whatever the number of threads
-  const size_t tn = in.triangleCount();
-  constexpr size_t kChunk = 4096;
-  const size_t chunks = (tn + kChunk - 1) / kChunk;
-  std::vector<double> chunk_length(chunks), chunk_area(chunks);
-  const uint32_t* tri = in.triangles.data();
-  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-    double sum = 0.0, area = 0.0;
-    for (size_t t = c * kChunk, end = std::min(tn, t + kChunk); t < end; ++t) {
-      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
-      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
-      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
-    }
-    chunk_length[c] = sum;
-    chunk_area[c] = area;
-  });
-  double sum = 0.0, area = 0.0;
-  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);
-  const size_t count_e = 3 * tn + in.edgeCount();
+  const size_t count_e = 3 * in.triangleCount() + in.edgeCount();
   out.mean_edge_length = count_e ? static_cast<float>(sum / double(count_e)) : 0.0f;
   return {};
 }
