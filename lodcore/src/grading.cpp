@@ -11,6 +11,10 @@
 #include <limits>
 #include <mutex>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -133,7 +137,9 @@ struct Incidence {
 };
 
 // vertex -> incidence rows: row v is incidence[offsets[v] .. offsets[v + 1]), its triangle corners
-// in triangle order, then its input-edge ends in edge order
+// in triangle order, then its input-edge ends in edge order; kRowPad more entries follow the last
+// row, so that the lane path can read a row in whole blocks of 4
+constexpr size_t kRowPad = 4;
 struct IncidenceTable {
   std::vector<uint32_t> offsets;
   std::vector<Incidence> incidence;
@@ -150,7 +156,7 @@ void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   for (uint32_t v : mesh.edges) ++offsets[v + 1];
   for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
   std::vector<Incidence>& incidence = table.incidence;
-  incidence.resize(offsets[vn]);
+  incidence.resize(offsets[vn] + kRowPad);
   // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
   // the end of row v again, so no separate cursor array is needed
   uint32_t* fill = offsets.data() + 1;
@@ -170,6 +176,246 @@ void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   offsets[0] = 0;
 }
 
+#if defined(__SSE2__)
+// Rows of up to kLaneRow triangle corners and no input edge (all but a few vertices of a typical
+// mesh) take a four-lane path: the same float operations as the scalar pass in gradeAndSum, in
+// the same order where the order matters, four incidences or neighbours per SSE2 operation. Every
+// lane does the scalar code's arithmetic (mulps / addps / divps / sqrtps round like their scalar
+// forms; no FMA without -mfma), so the results are bit-identical:
+// - the face sums add, in row order, the products of every incidence; a skipped face (zero area)
+//   adds +0.0, which leaves a sum unchanged (a sum that starts at +0.0 is never -0.0);
+// - the distinct neighbours come from comparing every candidate (the two other corners of each
+//   incidence) with the later ones; their order does not matter here: the widest pair is the exact
+//   minimum over pairs for up to 2 x kLaneRow <= kExactPairLimit directions, and min and max do not
+//   depend on the order (up to the sign of a zero dot product, which 1 +- cos makes the same);
+// - unused lanes (padding, repeated neighbours, zero-length edges, zero-area faces) hold NaN in the
+//   direction and normal columns: their dot products are NaN, which the minimum skips.
+constexpr size_t kLaneRow = 16;
+static_assert(2 * kLaneRow <= kExactPairLimit, "the lane path needs the exact pair minimum");
+
+struct alignas(16) LaneScratch {
+  float nrm[3][kLaneRow];         // unit face normals (x, y, z columns) per incidence; NaN if not a face
+  float dir[3][2 * kLaneRow];     // unit directions per candidate; NaN unless a distinct non-zero edge
+};
+
+// the lanes of bits 0..3 of `bits` set, as a float mask
+inline __m128 bitLanes(uint32_t bits) {
+  const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
+  return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(static_cast<int>(bits)), bit), bit));
+}
+
+// bit c set when some lane of block c is set in `lanes`
+inline uint32_t blocksOf(uint32_t lanes) {
+  uint32_t blocks = 0;
+  for (int c = 0; lanes; ++c, lanes >>= 4) blocks |= static_cast<uint32_t>((lanes & 0xfu) != 0) << c;
+  return blocks;
+}
+
+// lanes of `keep` take x, the others NaN (all bits set)
+inline __m128 orNan(__m128 keep, __m128 x) { return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1)))); }
+
+// lane l of the result holds lane (l + k) % 4 of x
+#define SCENELOD_ROT_PS(x, k) _mm_shuffle_ps(x, x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+#define SCENELOD_ROT_EPI32(x, k) _mm_shuffle_epi32(x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+
+// min(dot, best) for the four pairs (lane l of p, lane l of q): dot if dot < best, so a NaN dot keeps
+// best (minps returns its second operand unless the first is less), as std::min(best, dot) does
+inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
+  const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(px, qx), _mm_mul_ps(py, qy)), _mm_mul_ps(pz, qz));
+  return _mm_min_ps(d, best);
+}
+
+// minPairDot over the vectors in columns x, y, z, blocks of 4 lanes; only the blocks in
+// `live_blocks` hold vectors, and their unused lanes are NaN. Every pair of lanes meets in some
+// rotation: within a block rotations by 1 and 2, between two blocks all four.
+float minPairDotBlocks(const float* x, const float* y, const float* z, uint32_t live_blocks) {
+  // four running minima, so that the minps do not wait on each other (the minimum does not depend
+  // on the order, up to the sign of a zero)
+  const __m128 one = _mm_set1_ps(1.0f);
+  __m128 b0 = one, b1 = one, b2 = one, b3 = one;
+  for (uint32_t bp = live_blocks; bp;) {
+    const int p = __builtin_ctz(bp);
+    bp &= bp - 1;
+    const __m128 px = _mm_load_ps(x + 4 * p), py = _mm_load_ps(y + 4 * p), pz = _mm_load_ps(z + 4 * p);
+    b0 = minDot(b0, px, py, pz, SCENELOD_ROT_PS(px, 1), SCENELOD_ROT_PS(py, 1), SCENELOD_ROT_PS(pz, 1));
+    b1 = minDot(b1, px, py, pz, SCENELOD_ROT_PS(px, 2), SCENELOD_ROT_PS(py, 2), SCENELOD_ROT_PS(pz, 2));
+    for (uint32_t bq = bp; bq;) {
+      const int q = __builtin_ctz(bq);
+      bq &= bq - 1;
+      const __m128 qx = _mm_load_ps(x + 4 * q), qy = _mm_load_ps(y + 4 * q), qz = _mm_load_ps(z + 4 * q);
+      b0 = minDot(b0, px, py, pz, qx, qy, qz);
+      b1 = minDot(b1, px, py, pz, SCENELOD_ROT_PS(qx, 1), SCENELOD_ROT_PS(qy, 1), SCENELOD_ROT_PS(qz, 1));
+      b2 = minDot(b2, px, py, pz, SCENELOD_ROT_PS(qx, 2), SCENELOD_ROT_PS(qy, 2), SCENELOD_ROT_PS(qz, 2));
+      b3 = minDot(b3, px, py, pz, SCENELOD_ROT_PS(qx, 3), SCENELOD_ROT_PS(qy, 3), SCENELOD_ROT_PS(qz, 3));
+    }
+  }
+  __m128 best = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));  // none is NaN
+  best = _mm_min_ps(best, SCENELOD_ROT_PS(best, 2));
+  best = _mm_min_ps(best, SCENELOD_ROT_PS(best, 1));
+  return _mm_cvtss_f32(best);
+}
+
+struct LaneRow {
+  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area
+  float longest;       // longest incident edge
+  float cos_dirs;      // minPairDot of the directions (1 when fewer than two)
+  float cos_normals;   // minPairDot of the face normals, when asked
+  bool any_dir;        // some incident edge has non-zero length
+  bool boundary;       // some neighbour is shared by only one incident triangle
+};
+
+// Grades one row of r (1 <= r <= kLaneRow) triangle corners; false (and nothing computed) when the
+// row holds an input edge. `row` may be read up to the next multiple of 4.
+// NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
+// candidate block c < NB: the a of incidence block c, else the b of block c - NB.
+template <size_t NB>
+bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                   LaneScratch& s, LaneRow& out) {
+  constexpr size_t nb = NB;
+  __m128i cand[2 * NB];
+  const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
+  const __m128i none = _mm_set1_epi32(-1);  // detail::kNone
+  __m128i edge = _mm_setzero_si128();
+  for (size_t k = 0; k < nb; ++k) {
+    const __m128 lo = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k));      // a0 b0 a1 b1
+    const __m128 hi = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k + 2));  // a2 b2 a3 b3
+    const __m128i valid = _mm_cmplt_epi32(_mm_add_epi32(lane, _mm_set1_epi32(static_cast<int>(4 * k))),
+                                          _mm_set1_epi32(static_cast<int>(r)));
+    const __m128i a = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128i b = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
+    edge = _mm_or_si128(edge, _mm_and_si128(valid, _mm_cmpeq_epi32(b, none)));
+    // padding lanes get kNone, which no vertex index equals
+    cand[k] = _mm_or_si128(a, _mm_andnot_si128(valid, none));
+    cand[nb + k] = _mm_or_si128(b, _mm_andnot_si128(valid, none));
+  }
+  if (_mm_movemask_epi8(edge)) return false;
+
+  // distinct neighbours: a candidate equal to an earlier one is a repeat; one equal to no other is
+  // held by one triangle only (each incidence holds two different candidates of its triangle).
+  // Blocks are compared in all rotations; lane l of a block against lane (l + k) % 4 of itself is
+  // a comparison with an earlier candidate when l + k >= 4 (the rotation wrapped).
+  constexpr size_t nc = 2 * nb;
+  __m128i other[nc], earlier[nc];
+  for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm_setzero_si128();
+  const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1), wrap3 = _mm_setr_epi32(0, -1, -1, -1);
+  for (size_t p = 0; p < nc; ++p) {
+    const __m128i cp = cand[p];
+    const __m128i e1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 1));
+    const __m128i e2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 2));
+    const __m128i e3 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 3));
+    __m128i op = _mm_or_si128(other[p], _mm_or_si128(e1, _mm_or_si128(e2, e3)));
+    earlier[p] = _mm_or_si128(earlier[p], _mm_or_si128(_mm_and_si128(e1, wrap1),
+                                                       _mm_or_si128(_mm_and_si128(e2, wrap2), _mm_and_si128(e3, wrap3))));
+    for (size_t q = p + 1; q < nc; ++q) {  // every lane of q is later than every lane of p
+      const __m128i cq = cand[q];
+      const __m128i f0 = _mm_cmpeq_epi32(cp, cq);
+      const __m128i f1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 1));
+      const __m128i f2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 2));
+      const __m128i f3 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 3));
+      op = _mm_or_si128(op, _mm_or_si128(_mm_or_si128(f0, f1), _mm_or_si128(f2, f3)));
+      // lane m of q met lane (m - k) % 4 of p in f_k: rotate back by 4 - k
+      const __m128i fq = _mm_or_si128(_mm_or_si128(f0, SCENELOD_ROT_EPI32(f1, 3)),
+                                      _mm_or_si128(SCENELOD_ROT_EPI32(f2, 2), SCENELOD_ROT_EPI32(f3, 1)));
+      other[q] = _mm_or_si128(other[q], fq);
+      earlier[q] = _mm_or_si128(earlier[q], fq);
+    }
+    other[p] = op;
+  }
+  const uint32_t row_bits = (1u << r) - 1;
+  const uint32_t valid_bits = row_bits | (row_bits << (4 * nb));
+  uint32_t repeat = 0, shared = 0;
+  for (size_t c = 0; c < nc; ++c) {
+    repeat |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(earlier[c]))) << (4 * c);
+    shared |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(other[c]))) << (4 * c);
+  }
+  const uint32_t first = valid_bits & ~repeat;
+  out.boundary = (first & ~shared) != 0;
+
+  const __m128 vx = _mm_set1_ps(pos[v].x), vy = _mm_set1_ps(pos[v].y), vz = _mm_set1_ps(pos[v].z);
+  const __m128 zero = _mm_setzero_ps();
+  __m128 q0 = zero, q1 = zero, q2 = zero;  // quadric xx xy xz yy; yz zz, normal x y; normal z, area
+  __m128 longest = zero;
+  uint32_t normal_bits = 0, dir_bits = 0;
+  for (size_t k = 0; k < nb; ++k) {
+    // padding lanes read the vertex itself: zero edges, zero area
+    glm::vec3 pa[4], pb[4];
+    for (int l = 0; l < 4; ++l) {
+      const bool in = 4 * k + l < r;
+      pa[l] = pos[in ? row[4 * k + l].a : v];
+      pb[l] = pos[in ? row[4 * k + l].b : v];
+    }
+    const __m128 ux = _mm_sub_ps(_mm_setr_ps(pa[0].x, pa[1].x, pa[2].x, pa[3].x), vx);
+    const __m128 uy = _mm_sub_ps(_mm_setr_ps(pa[0].y, pa[1].y, pa[2].y, pa[3].y), vy);
+    const __m128 uz = _mm_sub_ps(_mm_setr_ps(pa[0].z, pa[1].z, pa[2].z, pa[3].z), vz);
+    const __m128 wx = _mm_sub_ps(_mm_setr_ps(pb[0].x, pb[1].x, pb[2].x, pb[3].x), vx);
+    const __m128 wy = _mm_sub_ps(_mm_setr_ps(pb[0].y, pb[1].y, pb[2].y, pb[3].y), vy);
+    const __m128 wz = _mm_sub_ps(_mm_setr_ps(pb[0].z, pb[1].z, pb[2].z, pb[3].z), vz);
+    // glm::cross(u, w), glm::length, / as in the scalar pass
+    const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, wz), _mm_mul_ps(wy, uz));
+    const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, wx), _mm_mul_ps(wz, ux));
+    const __m128 cz = _mm_sub_ps(_mm_mul_ps(ux, wy), _mm_mul_ps(wx, uy));
+    const __m128 nl = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, cx), _mm_mul_ps(cy, cy)), _mm_mul_ps(cz, cz)));
+    const __m128 face = _mm_cmpgt_ps(nl, zero);  // false for NaN, as !(nl > 0) in the scalar pass
+    const __m128 nx = _mm_div_ps(cx, nl), ny = _mm_div_ps(cy, nl), nz = _mm_div_ps(cz, nl);
+    const __m128 area = _mm_mul_ps(_mm_set1_ps(0.5f), nl);
+    const __m128 anx = _mm_mul_ps(area, nx), any = _mm_mul_ps(area, ny), anz = _mm_mul_ps(area, nz);
+    // per incidence (row) the ten addends, zero where not a face; transposed to add in row order
+    __m128 t0 = _mm_and_ps(face, _mm_mul_ps(anx, nx)), t1 = _mm_and_ps(face, _mm_mul_ps(anx, ny));
+    __m128 t2 = _mm_and_ps(face, _mm_mul_ps(anx, nz)), t3 = _mm_and_ps(face, _mm_mul_ps(any, ny));
+    _MM_TRANSPOSE4_PS(t0, t1, t2, t3);
+    __m128 t4 = _mm_and_ps(face, _mm_mul_ps(any, nz)), t5 = _mm_and_ps(face, _mm_mul_ps(anz, nz));
+    __m128 t6 = _mm_and_ps(face, anx), t7 = _mm_and_ps(face, any);
+    _MM_TRANSPOSE4_PS(t4, t5, t6, t7);
+    __m128 t8 = _mm_and_ps(face, anz), t9 = _mm_and_ps(face, area), t10 = zero, t11 = zero;
+    _MM_TRANSPOSE4_PS(t8, t9, t10, t11);
+    q0 = _mm_add_ps(q0, t0), q1 = _mm_add_ps(q1, t4), q2 = _mm_add_ps(q2, t8);
+    q0 = _mm_add_ps(q0, t1), q1 = _mm_add_ps(q1, t5), q2 = _mm_add_ps(q2, t9);
+    q0 = _mm_add_ps(q0, t2), q1 = _mm_add_ps(q1, t6), q2 = _mm_add_ps(q2, t10);
+    q0 = _mm_add_ps(q0, t3), q1 = _mm_add_ps(q1, t7), q2 = _mm_add_ps(q2, t11);
+    if (want_normals) {
+      _mm_store_ps(s.nrm[0] + 4 * k, orNan(face, nx));
+      _mm_store_ps(s.nrm[1] + 4 * k, orNan(face, ny));
+      _mm_store_ps(s.nrm[2] + 4 * k, orNan(face, nz));
+      normal_bits |= static_cast<uint32_t>(_mm_movemask_ps(face)) << (4 * k);
+    }
+    // directions to the distinct neighbours: the a of block k (candidate block k), the b (nb + k)
+    for (int side = 0; side < 2; ++side) {
+      const size_t c = side ? nb + k : k;
+      if (!((first >> (4 * c)) & 0xfu)) continue;  // all repeats (the b of a closed fan)
+      const __m128 dx = side ? wx : ux, dy = side ? wy : uy, dz = side ? wz : uz;
+      const __m128 len = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+      const __m128 use = _mm_and_ps(bitLanes(first >> (4 * c)), _mm_cmpgt_ps(len, zero));
+      longest = _mm_max_ps(longest, _mm_and_ps(use, len));
+      _mm_store_ps(s.dir[0] + 4 * c, orNan(use, _mm_div_ps(dx, len)));
+      _mm_store_ps(s.dir[1] + 4 * c, orNan(use, _mm_div_ps(dy, len)));
+      _mm_store_ps(s.dir[2] + 4 * c, orNan(use, _mm_div_ps(dz, len)));
+      dir_bits |= static_cast<uint32_t>(_mm_movemask_ps(use)) << (4 * c);
+    }
+  }
+  _mm_storeu_ps(out.sums, q0);
+  _mm_storeu_ps(out.sums + 4, q1);
+  _mm_storeu_ps(out.sums + 8, q2);
+  longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(1, 0, 3, 2)));
+  longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
+  out.longest = _mm_cvtss_f32(longest);
+  out.any_dir = dir_bits != 0;
+  out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], blocksOf(dir_bits));
+  out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], blocksOf(normal_bits)) : 1.0f;
+  return true;
+}
+
+bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                   LaneScratch& s, LaneRow& out) {
+  static_assert(kLaneRow == 16, "one instance per block count");
+  switch ((r + 3) / 4) {
+    case 1: return gradeRowLanes<1>(pos, v, row, r, want_normals, s, out);
+    case 2: return gradeRowLanes<2>(pos, v, row, r, want_normals, s, out);
+    case 3: return gradeRowLanes<3>(pos, v, row, r, want_normals, s, out);
+    default: return gradeRowLanes<4>(pos, v, row, r, want_normals, s, out);
+  }
+}
+#endif
+
 // Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
 // of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
 // and writes only its own vertex: no scattered writes, parallel over vertices.
@@ -181,6 +427,28 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
+  const bool want_normals = grading == Grading::kLowTan && boost_features;  // the crease term
+  // the angular factor and the weight of vertex v from its longest edge, whether some edge has a
+  // direction, the widest pair of directions, the boundary flag and (called only when needed) the
+  // widest pair of face normals
+  auto finish = [&](size_t v, float longest_v, bool any_dir, float cos_dirs, bool boundary, auto cos_normals) {
+    float a = 0.0f;
+    if (any_dir) {  // else only zero-length edges: no direction, weight 0
+      const float cos_theta = std::clamp(cos_dirs, -1.0f, 1.0f);
+      if (grading == Grading::kLowTan) {
+        a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
+        if (boost_features) {
+          if (boundary) a = std::max(a, kBoundaryFactor);
+          const float crease = (1.0f - std::clamp(cos_normals(), -1.0f, 1.0f)) * 0.5f;
+          a = std::max(a, crease);
+        }
+      } else {
+        a = kPi / std::max(std::acos(cos_theta), kMinTheta);
+      }
+    }
+    if (out.angular) out.angular[v] = a;
+    out.raw[v] = longest_v * a;
+  };
   std::mutex longest_mutex;
   float longest_edge = 0.0f;
   glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
@@ -191,6 +459,10 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+#if defined(__SSE2__)
+    LaneScratch lanes;
+    LaneRow lr;
+#endif
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
       if (out.in_rows) out.in_rows[v] = b != e;
@@ -202,6 +474,17 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         continue;
       }
       const size_t row = e - b;
+      const glm::vec3 pv = pos[v];
+      lo = glm::min(lo, pv);
+      hi = glm::max(hi, pv);
+#if defined(__SSE2__)
+      if (!colors && row <= kLaneRow && gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
+        if (out.sums) out.sums[v].encode(lr.sums[9], lr.sums);
+        range_longest = std::max(range_longest, lr.longest);
+        finish(v, lr.longest, lr.any_dir, lr.cos_dirs, lr.boundary, [&] { return lr.cos_normals; });
+        continue;
+      }
+#endif
       if (nb.size() < 2 * row) {
         nb.resize(2 * row);
         nb_tris.resize(2 * row);
@@ -229,9 +512,6 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
       };
       float qs[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, area_sum = 0.0f;  // quadric xx..zz, normal x, y, z
       glm::vec4 cs(0.0f);
-      const glm::vec3 pv = pos[v];
-      lo = glm::min(lo, pv);
-      hi = glm::max(hi, pv);
       for (uint32_t i = b; i < e; ++i) {
         const Incidence inc = incidence[i];
         if (inc.b == detail::kNone) {
@@ -274,22 +554,8 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         }
       }
       range_longest = std::max(range_longest, longest_v);
-      float a = 0.0f;
-      if (ndirs > 0) {  // else only zero-length edges: no direction, weight 0
-        const float cos_theta = std::clamp(minPairDot(dirs.data(), ndirs), -1.0f, 1.0f);
-        if (grading == Grading::kLowTan) {
-          a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
-          if (boost_features) {
-            if (boundary) a = std::max(a, kBoundaryFactor);
-            const float crease = (1.0f - std::clamp(minPairDot(normals.data(), nnormals), -1.0f, 1.0f)) * 0.5f;
-            a = std::max(a, crease);
-          }
-        } else {
-          a = kPi / std::max(std::acos(cos_theta), kMinTheta);
-        }
-      }
-      if (out.angular) out.angular[v] = a;
-      out.raw[v] = longest_v * a;
+      finish(v, longest_v, ndirs > 0, ndirs > 0 ? minPairDot(dirs.data(), ndirs) : 1.0f, boundary,
+             [&] { return minPairDot(normals.data(), nnormals); });
     }
     // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
