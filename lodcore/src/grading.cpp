@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
 
 #if defined(__SSE2__)
@@ -20,6 +21,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "cluster_internal.h"
 
@@ -142,37 +144,62 @@ struct Incidence {
 constexpr size_t kRowPad = 4;
 struct IncidenceTable {
   std::vector<uint32_t> offsets;
-  std::vector<Incidence> incidence;
+  std::unique_ptr<Incidence[]> incidence;  // offsets[vn] + kRowPad entries
 };
 
 // One counting sort builds the rows, each holding the two other corners of the triangle in winding
-// order (or the other end of an input edge). Serial (scattered writes); prepareMesh runs it next to
-// the surface sums.
+// order (or the other end of an input edge). With more than one thread the triangles are split in
+// two halves, counted and filled side by side: the second half's part of row v starts after the
+// first half's count, so the rows are the same as the serial fill's (4 bytes per vertex more for
+// the first half's counts, then its cursors). The table is not zeroed: every entry is written.
 void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
+  const uint32_t* tri = mesh.triangles.data();
+  const size_t half = tbb::this_task_arena::max_concurrency() > 1 ? tn / 2 : 0;
   std::vector<uint32_t>& offsets = table.offsets;
   offsets.assign(vn + 1, 0);
-  for (uint32_t v : mesh.triangles) ++offsets[v + 1];
-  for (uint32_t v : mesh.edges) ++offsets[v + 1];
-  for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
-  std::vector<Incidence>& incidence = table.incidence;
-  incidence.resize(offsets[vn] + kRowPad);
-  // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
-  // the end of row v again, so no separate cursor array is needed
-  uint32_t* fill = offsets.data() + 1;
-  for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
-  const uint32_t* tri = mesh.triangles.data();
-  for (size_t t = 0; t < tn; ++t) {
-    const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
-    incidence[fill[i0]++] = {i1, i2};
-    incidence[fill[i1]++] = {i2, i0};
-    incidence[fill[i2]++] = {i0, i1};
+  std::vector<uint32_t> first(half > 0 ? vn : 0);  // first half: counts, then cursors
+  // second half and edges counted into offsets[v + 1], the first half into first[v]
+  auto countSecond = [&] {
+    for (size_t i = 3 * half; i < 3 * tn; ++i) ++offsets[tri[i] + 1];
+    for (uint32_t v : mesh.edges) ++offsets[v + 1];
+  };
+  auto countFirst = [&] {
+    for (size_t i = 0; i < 3 * half; ++i) ++first[tri[i]];
+  };
+  if (half > 0) tbb::parallel_invoke(countFirst, countSecond);
+  else countSecond();
+  // fill row v through offsets[v + 1], first set to where the second half's part of row v starts:
+  // afterwards it holds the end of row v, so no separate cursor array is needed for that half
+  uint32_t running = 0;
+  for (size_t v = 0; v < vn; ++v) {
+    const uint32_t c0 = half > 0 ? first[v] : 0, total = c0 + offsets[v + 1];
+    if (half > 0) first[v] = running;
+    offsets[v + 1] = running + c0;
+    running += total;
   }
-  for (size_t e = 0; e < mesh.edgeCount(); ++e) {
-    const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
-    incidence[fill[x]++] = {y, detail::kNone};
-    incidence[fill[y]++] = {x, detail::kNone};
-  }
+  table.incidence.reset(new Incidence[running + kRowPad]);
+  Incidence* incidence = table.incidence.get();
+  for (size_t i = 0; i < kRowPad; ++i) incidence[running + i] = {0, 0};
+  auto fillTriangles = [&](uint32_t* fill, size_t begin, size_t end) {
+    for (size_t t = begin; t < end; ++t) {
+      const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+      incidence[fill[i0]++] = {i1, i2};
+      incidence[fill[i1]++] = {i2, i0};
+      incidence[fill[i2]++] = {i0, i1};
+    }
+  };
+  auto fillSecond = [&] {
+    uint32_t* fill = offsets.data() + 1;
+    fillTriangles(fill, half, tn);
+    for (size_t e = 0; e < mesh.edgeCount(); ++e) {
+      const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
+      incidence[fill[x]++] = {y, detail::kNone};
+      incidence[fill[y]++] = {x, detail::kNone};
+    }
+  };
+  if (half > 0) tbb::parallel_invoke([&] { fillTriangles(first.data(), 0, half); }, fillSecond);
+  else fillSecond();
   offsets[0] = 0;
 }
 
@@ -422,7 +449,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
                  GradeOutput out) {
   const size_t vn = mesh.vertexCount();
   const uint32_t* offsets = table.offsets.data();
-  const Incidence* incidence = table.incidence.data();
+  const Incidence* incidence = table.incidence.get();
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
@@ -568,40 +595,49 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 
 // Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
 // floats, whose bit patterns sort like the values); stability keeps ties in vertex-index order.
+// Key and vertex travel packed in one 64-bit word (key high), one scatter per element and pass;
+// the last pass writes the vertices straight into `order`.
 void sortByWeight(const std::vector<float>& raw, const std::vector<uint8_t>& referenced, size_t count,
                   std::vector<uint32_t>& order) {
-  std::vector<uint32_t> keys(count), keys2(count), idx2(count);
   order.resize(count);
-  size_t n = 0;
-  for (size_t v = 0; v < raw.size(); ++v) {
-    if (!referenced[v]) continue;
-    uint32_t bits;
-    std::memcpy(&bits, &raw[v], sizeof bits);
-    keys[n] = ~bits;
-    order[n] = static_cast<uint32_t>(v);
-    ++n;
-  }
+  if (count == 0) return;
+  // one spare entry: the key build writes an unreferenced vertex at src[n] before dropping it
+  std::unique_ptr<uint64_t[]> buf_a(new uint64_t[count + 1]), buf_b(new uint64_t[count]);
+  uint64_t* src = buf_a.get();
+  uint64_t* dst = buf_b.get();
   constexpr int kBits = 11, kBuckets = 1 << kBits;
   std::vector<uint32_t> hist(3 * kBuckets, 0);
-  for (uint32_t k : keys)
-    for (int pass = 0; pass < 3; ++pass) ++hist[pass * kBuckets + ((k >> (pass * kBits)) & (kBuckets - 1))];
-  for (int pass = 0; pass < 3; ++pass) {
+  size_t n = 0;
+  for (size_t v = 0; v < raw.size(); ++v) {
+    uint32_t bits;
+    std::memcpy(&bits, &raw[v], sizeof bits);
+    const uint32_t key = ~bits;
+    src[n] = (uint64_t(key) << 32) | v;  // written always, kept only when referenced (no branch)
+    if (referenced[v])
+      for (int pass = 0; pass < 3; ++pass) ++hist[pass * kBuckets + ((key >> (pass * kBits)) & (kBuckets - 1))];
+    n += referenced[v] != 0;
+  }
+  int last = -1;  // the last pass that moves anything (a pass whose digit is the same for all is skipped)
+  for (int pass = 0; pass < 3; ++pass)
+    if (hist[pass * kBuckets + ((uint32_t(src[0] >> 32) >> (pass * kBits)) & (kBuckets - 1))] != count) last = pass;
+  for (int pass = 0; pass <= last; ++pass) {
     uint32_t* h = hist.data() + pass * kBuckets;
-    if (h[(keys.empty() ? 0 : (keys[0] >> (pass * kBits))) & (kBuckets - 1)] == count) continue;  // one bucket: skip
+    if (h[(uint32_t(src[0] >> 32) >> (pass * kBits)) & (kBuckets - 1)] == count) continue;
     uint32_t sum = 0;
     for (int b = 0; b < kBuckets; ++b) {
       const uint32_t c = h[b];
       h[b] = sum;
       sum += c;
     }
-    for (size_t i = 0; i < count; ++i) {
-      const uint32_t slot = h[(keys[i] >> (pass * kBits)) & (kBuckets - 1)]++;
-      keys2[slot] = keys[i];
-      idx2[slot] = order[i];
+    const int shift = 32 + pass * kBits;
+    if (pass == last) {
+      for (size_t i = 0; i < count; ++i) order[h[(src[i] >> shift) & (kBuckets - 1)]++] = static_cast<uint32_t>(src[i]);
+      return;
     }
-    keys.swap(keys2);
-    order.swap(idx2);
+    for (size_t i = 0; i < count; ++i) dst[h[(src[i] >> shift) & (kBuckets - 1)]++] = src[i];
+    std::swap(src, dst);
   }
+  for (size_t i = 0; i < count; ++i) order[i] = static_cast<uint32_t>(src[i]);  // nothing moved
 }
 
 // Surface area and summed length of the triangles' edges, in double per fixed chunk of triangles
