@@ -298,6 +298,7 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   const __m128i none = _mm_set1_epi32(-1);  // detail::kNone
   const __m128i self = _mm_set1_epi32(static_cast<int>(v));
   __m128i edge = _mm_setzero_si128();
+  #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
     const __m128 lo = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k));      // a0 b0 a1 b1
     const __m128 hi = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k + 2));  // a2 b2 a3 b3
@@ -321,8 +322,10 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   // a comparison with an earlier candidate when l + k >= 4 (the rotation wrapped).
   constexpr size_t nc = 2 * nb;
   __m128i other[nc], earlier[nc];
+  #pragma GCC unroll 8
   for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm_setzero_si128();
   const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1), wrap3 = _mm_setr_epi32(0, -1, -1, -1);
+  #pragma GCC unroll 8
   for (size_t p = 0; p < nc; ++p) {
     const __m128i cp = cand[p];
     const __m128i e1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 1));
@@ -331,6 +334,7 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
     __m128i op = _mm_or_si128(other[p], _mm_or_si128(e1, _mm_or_si128(e2, e3)));
     earlier[p] = _mm_or_si128(earlier[p], _mm_or_si128(_mm_and_si128(e1, wrap1),
                                                        _mm_or_si128(_mm_and_si128(e2, wrap2), _mm_and_si128(e3, wrap3))));
+    #pragma GCC unroll 8
     for (size_t q = p + 1; q < nc; ++q) {  // every lane of q is later than every lane of p
       const __m128i cq = cand[q];
       const __m128i f0 = _mm_cmpeq_epi32(cp, cq);
@@ -349,6 +353,7 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   const uint32_t row_bits = (1u << r) - 1;
   const uint32_t valid_bits = row_bits | (row_bits << (4 * nb));
   uint32_t repeat = 0, shared = 0;
+  #pragma GCC unroll 8
   for (size_t c = 0; c < nc; ++c) {
     repeat |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(earlier[c]))) << (4 * c);
     shared |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(other[c]))) << (4 * c);
@@ -362,8 +367,10 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   __m128 longest = zero;
   uint32_t normal_blocks = 0, dir_blocks = 0;  // the blocks holding some normal, some direction
   int any_dir = 0;
+  #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
     glm::vec3 pa[4], pb[4];
+    #pragma GCC unroll 8
     for (int l = 0; l < 4; ++l) {
       pa[l] = pos[s.ia[4 * k + l]];
       pb[l] = pos[s.ib[4 * k + l]];
@@ -403,6 +410,7 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
       normal_blocks |= static_cast<uint32_t>(_mm_movemask_ps(face) != 0) << k;
     }
     // directions to the distinct neighbours: the a of block k (candidate block k), the b (nb + k)
+    #pragma GCC unroll 8
     for (int side = 0; side < 2; ++side) {
       const size_t c = side ? nb + k : k;
       if (!((first >> (4 * c)) & 0xfu)) continue;  // all repeats (the b of a closed fan)
@@ -745,10 +753,8 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   float longest_edge = 0.0f;
   std::vector<uint8_t> referenced(vn);
   Aabb rows_box;
-  // the surface sums need only the mesh: they run next to the serial counting sort
   IncidenceTable table;
-  double area = 0.0, sum = 0.0;
-  tbb::parallel_invoke([&] { buildIncidence(in, table); }, [&] { surfaceSums(in, area, sum); });
+  buildIncidence(in, table);
   gradeAndSum(in, table, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
                in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
@@ -757,24 +763,32 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
 
-  // referenced: used by a triangle or an edge (the grading rows) or by a point
-  glm::vec3 lo = rows_box.min, hi = rows_box.max;
-  for (uint32_t v : in.points) {
-    referenced[v] = 1;
-    lo = glm::min(lo, in.positions[v]);
-    hi = glm::max(hi, in.positions[v]);
-  }
-  size_t count = 0;
-  for (size_t v = 0; v < vn; ++v) count += referenced[v];
-  if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
-  sortByWeight(raw, referenced, count, out.order);
-  out.sorted_positions.resize(count);
-  const glm::vec3* pos = in.positions.data();
-  const uint32_t* order = out.order.data();
-  glm::vec3* sorted = out.sorted_positions.data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 8192), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
-  });
+  // referenced: used by a triangle or an edge (the grading rows) or by a point; then the order
+  // and the sorted positions. The sort is serial: the surface sums (which need only the mesh) run
+  // next to it.
+  auto orderVertices = [&] {
+    glm::vec3 lo = rows_box.min, hi = rows_box.max;
+    for (uint32_t v : in.points) {
+      referenced[v] = 1;
+      lo = glm::min(lo, in.positions[v]);
+      hi = glm::max(hi, in.positions[v]);
+    }
+    size_t count = 0;
+    for (size_t v = 0; v < vn; ++v) count += referenced[v];
+    if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
+    sortByWeight(raw, referenced, count, out.order);
+    out.sorted_positions.resize(count);
+    const glm::vec3* pos = in.positions.data();
+    const uint32_t* order = out.order.data();
+    glm::vec3* sorted = out.sorted_positions.data();
+    // a copy at memory speed: split only in large pieces (a small mesh's gather is quicker on the
+    // calling thread than handed to another)
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 65536), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
+    });
+  };
+  double area = 0.0, sum = 0.0;
+  tbb::parallel_invoke(orderVertices, [&] { surfaceSums(in, area, sum); });
 
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
