@@ -325,8 +325,8 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   #pragma GCC unroll 8
   for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm_setzero_si128();
   const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1), wrap3 = _mm_setr_epi32(0, -1, -1, -1);
-  #pragma GCC unroll 8
-  for (size_t p = 0; p < nc; ++p) {
+  // block p against itself and the later blocks q
+  auto compare = [&](size_t p) {
     const __m128i cp = cand[p];
     const __m128i e1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 1));
     const __m128i e2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 2));
@@ -349,9 +349,21 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
       earlier[q] = _mm_or_si128(earlier[q], fq);
     }
     other[p] = op;
-  }
+  };
+  #pragma GCC unroll 8
+  for (size_t p = 0; p < nb; ++p) compare(p);
+  // the b blocks among themselves decide only for a b equal to no a: in a closed fan every b is
+  // some a (already a repeat, already shared), so they are skipped then
   const uint32_t row_bits = (1u << r) - 1;
   const uint32_t valid_bits = row_bits | (row_bits << (4 * nb));
+  uint32_t b_matched = 0;
+  #pragma GCC unroll 8
+  for (size_t c = nb; c < nc; ++c)
+    b_matched |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(earlier[c]))) << (4 * (c - nb));
+  if ((b_matched & row_bits) != row_bits) {
+    #pragma GCC unroll 8
+    for (size_t p = nb; p < nc; ++p) compare(p);
+  }
   uint32_t repeat = 0, shared = 0;
   #pragma GCC unroll 8
   for (size_t c = 0; c < nc; ++c) {
