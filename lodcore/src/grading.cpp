@@ -21,7 +21,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "cluster_internal.h"
 
@@ -148,58 +147,36 @@ struct IncidenceTable {
 };
 
 // One counting sort builds the rows, each holding the two other corners of the triangle in winding
-// order (or the other end of an input edge). With more than one thread the triangles are split in
-// two halves, counted and filled side by side: the second half's part of row v starts after the
-// first half's count, so the rows are the same as the serial fill's (4 bytes per vertex more for
-// the first half's counts, then its cursors). The table is not zeroed: every entry is written.
+// order (or the other end of an input edge). Serial (two halves of the triangles filled side by
+// side share the rows' cache lines and took as long as one, bunny); prepareMesh runs the surface
+// sums next to it. The table is not zeroed: every entry is written.
 void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
-  const uint32_t* tri = mesh.triangles.data();
-  const size_t half = tbb::this_task_arena::max_concurrency() > 1 ? tn / 2 : 0;
   std::vector<uint32_t>& offsets = table.offsets;
   offsets.assign(vn + 1, 0);
-  std::vector<uint32_t> first(half > 0 ? vn : 0);  // first half: counts, then cursors
-  // second half and edges counted into offsets[v + 1], the first half into first[v]
-  auto countSecond = [&] {
-    for (size_t i = 3 * half; i < 3 * tn; ++i) ++offsets[tri[i] + 1];
-    for (uint32_t v : mesh.edges) ++offsets[v + 1];
-  };
-  auto countFirst = [&] {
-    for (size_t i = 0; i < 3 * half; ++i) ++first[tri[i]];
-  };
-  if (half > 0) tbb::parallel_invoke(countFirst, countSecond);
-  else countSecond();
-  // fill row v through offsets[v + 1], first set to where the second half's part of row v starts:
-  // afterwards it holds the end of row v, so no separate cursor array is needed for that half
-  uint32_t running = 0;
-  for (size_t v = 0; v < vn; ++v) {
-    const uint32_t c0 = half > 0 ? first[v] : 0, total = c0 + offsets[v + 1];
-    if (half > 0) first[v] = running;
-    offsets[v + 1] = running + c0;
-    running += total;
-  }
-  table.incidence.reset(new Incidence[running + kRowPad]);
+  for (uint32_t v : mesh.triangles) ++offsets[v + 1];
+  for (uint32_t v : mesh.edges) ++offsets[v + 1];
+  for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
+  const size_t n = offsets[vn];
+  table.incidence.reset(new Incidence[n + kRowPad]);
   Incidence* incidence = table.incidence.get();
-  for (size_t i = 0; i < kRowPad; ++i) incidence[running + i] = {0, 0};
-  auto fillTriangles = [&](uint32_t* fill, size_t begin, size_t end) {
-    for (size_t t = begin; t < end; ++t) {
-      const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
-      incidence[fill[i0]++] = {i1, i2};
-      incidence[fill[i1]++] = {i2, i0};
-      incidence[fill[i2]++] = {i0, i1};
-    }
-  };
-  auto fillSecond = [&] {
-    uint32_t* fill = offsets.data() + 1;
-    fillTriangles(fill, half, tn);
-    for (size_t e = 0; e < mesh.edgeCount(); ++e) {
-      const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
-      incidence[fill[x]++] = {y, detail::kNone};
-      incidence[fill[y]++] = {x, detail::kNone};
-    }
-  };
-  if (half > 0) tbb::parallel_invoke([&] { fillTriangles(first.data(), 0, half); }, fillSecond);
-  else fillSecond();
+  for (size_t i = 0; i < kRowPad; ++i) incidence[n + i] = {0, 0};
+  // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
+  // the end of row v again, so no separate cursor array is needed
+  uint32_t* fill = offsets.data() + 1;
+  for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
+  const uint32_t* tri = mesh.triangles.data();
+  for (size_t t = 0; t < tn; ++t) {
+    const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+    incidence[fill[i0]++] = {i1, i2};
+    incidence[fill[i1]++] = {i2, i0};
+    incidence[fill[i2]++] = {i0, i1};
+  }
+  for (size_t e = 0; e < mesh.edgeCount(); ++e) {
+    const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
+    incidence[fill[x]++] = {y, detail::kNone};
+    incidence[fill[y]++] = {x, detail::kNone};
+  }
   offsets[0] = 0;
 }
 
@@ -765,8 +742,11 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   float longest_edge = 0.0f;
   std::vector<uint8_t> referenced(vn);
   Aabb rows_box;
+  // the surface sums need only the mesh: they run next to the serial counting sort (which takes
+  // longer, so they cost no time with two threads)
   IncidenceTable table;
-  buildIncidence(in, table);
+  double area = 0.0, sum = 0.0;
+  tbb::parallel_invoke([&] { buildIncidence(in, table); }, [&] { surfaceSums(in, area, sum); });
   gradeAndSum(in, table, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
                in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
@@ -775,32 +755,26 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
 
-  // referenced: used by a triangle or an edge (the grading rows) or by a point; then the order
-  // and the sorted positions. The sort is serial: the surface sums (which need only the mesh) run
-  // next to it.
-  auto orderVertices = [&] {
-    glm::vec3 lo = rows_box.min, hi = rows_box.max;
-    for (uint32_t v : in.points) {
-      referenced[v] = 1;
-      lo = glm::min(lo, in.positions[v]);
-      hi = glm::max(hi, in.positions[v]);
-    }
-    size_t count = 0;
-    for (size_t v = 0; v < vn; ++v) count += referenced[v];
-    if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
-    sortByWeight(raw, referenced, count, out.order);
-    out.sorted_positions.resize(count);
-    const glm::vec3* pos = in.positions.data();
-    const uint32_t* order = out.order.data();
-    glm::vec3* sorted = out.sorted_positions.data();
-    // a copy at memory speed: split only in large pieces (a small mesh's gather is quicker on the
-    // calling thread than handed to another)
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 65536), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
-    });
-  };
-  double area = 0.0, sum = 0.0;
-  tbb::parallel_invoke(orderVertices, [&] { surfaceSums(in, area, sum); });
+  // referenced: used by a triangle or an edge (the grading rows) or by a point
+  glm::vec3 lo = rows_box.min, hi = rows_box.max;
+  for (uint32_t v : in.points) {
+    referenced[v] = 1;
+    lo = glm::min(lo, in.positions[v]);
+    hi = glm::max(hi, in.positions[v]);
+  }
+  size_t count = 0;
+  for (size_t v = 0; v < vn; ++v) count += referenced[v];
+  if (count > 0) out.bounds.min = lo, out.bounds.max = hi;
+  sortByWeight(raw, referenced, count, out.order);
+  out.sorted_positions.resize(count);
+  const glm::vec3* pos = in.positions.data();
+  const uint32_t* order = out.order.data();
+  glm::vec3* sorted = out.sorted_positions.data();
+  // a copy at memory speed: split only in large pieces (a small mesh's gather is quicker on the
+  // calling thread than handed to another)
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 65536), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
+  });
 
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
