@@ -226,7 +226,9 @@ inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __
 // minPairDot over the vectors in columns x, y, z, blocks of 4 lanes; only the blocks in
 // `live_blocks` hold vectors, and their unused lanes are NaN. Every pair of lanes meets in some
 // rotation: within a block rotations by 1 and 2, between two blocks all four.
-float minPairDotBlocks(const float* x, const float* y, const float* z, uint32_t live_blocks) {
+// inlined at both calls (directions, normals), which the compiler may then interleave
+inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, const float* y, const float* z,
+                                                           uint32_t live_blocks) {
   // four running minima, so that the minps do not wait on each other (the minimum does not depend
   // on the order, up to the sign of a zero)
   const __m128 one = _mm_set1_ps(1.0f);
