@@ -2,9 +2,9 @@
 // area-weighted vertex normals.
 #include "scenelod/lodcore/mesh.h"
 
-#include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
 
 #include <glm/geometric.hpp>
 
@@ -21,11 +21,14 @@ Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_c
   if (idx.size() % per != 0)
     return {Status::kInvalidMesh, what + ": " + kind + " index count " + std::to_string(idx.size()) +
                                       " is not a multiple of " + std::to_string(per)};
-  // the common case, every index in range, by a maximum the compiler vectorises (no early exit);
-  // the first bad index is looked for only when there is one
-  uint32_t largest = 0;
-  for (uint32_t i : idx) largest = std::max(largest, i);
-  if (idx.empty() || largest < vertex_count) return {};
+  // the common case, every index in range, by comparisons the compiler vectorises (no early exit;
+  // a running unsigned maximum costs twice as many SSE2 operations); the first bad index is looked
+  // for only when there is one
+  if (vertex_count > UINT32_MAX) return {};
+  const uint32_t limit = static_cast<uint32_t>(vertex_count);
+  uint32_t bad = 0;
+  for (uint32_t i : idx) bad |= i >= limit;
+  if (!bad) return {};
   for (size_t i = 0; i < idx.size(); ++i)
     if (idx[i] >= vertex_count)
       return {Status::kInvalidMesh, what + ": " + kind + " " +
