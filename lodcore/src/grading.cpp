@@ -181,11 +181,12 @@ void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
 }
 
 #if defined(__SSE2__)
-// Rows of up to kLaneRow triangle corners and no input edge (all but a few vertices of a typical
-// mesh) take a four-lane path: the same float operations as the scalar pass in gradeAndSum, in
-// the same order where the order matters, four incidences or neighbours per SSE2 operation. Every
-// lane does the scalar code's arithmetic (mulps / addps / divps / sqrtps round like their scalar
-// forms; no FMA without -mfma), so the results are bit-identical:
+// Rows of up to kLaneRow triangle corners and no input edge, on meshes without colours (all but
+// a few vertices of a typical mesh), take a four-lane path: the same float operations as the
+// scalar pass in gradeAndSum, in the same order where the order matters, four incidences or
+// neighbours per SSE2 operation. Every lane does the scalar code's arithmetic (mulps / addps /
+// divps / sqrtps round like their scalar forms; no FMA without -mfma), so the results are
+// bit-identical:
 // - the face sums add, in row order, the products of every incidence; a skipped face (zero area)
 //   adds +0.0, which leaves a sum unchanged (a sum that starts at +0.0 is never -0.0);
 // - the distinct neighbours come from comparing every candidate (the two other corners of each
@@ -203,6 +204,9 @@ struct alignas(16) LaneScratch {
   float dir[3][2 * kLaneRow];     // unit directions per candidate; NaN unless a distinct non-zero edge
 };
 
+// coordinate c of four points, one per lane
+inline __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
+
 // the lanes of bits 0..3 of `bits` set, as a float mask
 inline __m128 bitLanes(uint32_t bits) {
   const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
@@ -210,7 +214,9 @@ inline __m128 bitLanes(uint32_t bits) {
 }
 
 // lanes of `keep` take x, the others NaN (all bits set)
-inline __m128 orNan(__m128 keep, __m128 x) { return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1)))); }
+inline __m128 orNan(__m128 keep, __m128 x) {
+  return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1))));
+}
 
 // lane l of the result holds lane (l + k) % 4 of x
 #define SCENELOD_ROT_PS(x, k) _mm_shuffle_ps(x, x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
@@ -290,8 +296,9 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
     cand[k] = _mm_or_si128(a, _mm_andnot_si128(valid, none));
     cand[nb + k] = _mm_or_si128(b, _mm_andnot_si128(valid, none));
     // the corners whose positions are read: the vertex itself in padding lanes (zero edges, zero area)
-    _mm_store_si128(reinterpret_cast<__m128i*>(s.ia + 4 * k), _mm_or_si128(_mm_and_si128(valid, a), _mm_andnot_si128(valid, self)));
-    _mm_store_si128(reinterpret_cast<__m128i*>(s.ib + 4 * k), _mm_or_si128(_mm_and_si128(valid, b), _mm_andnot_si128(valid, self)));
+    const __m128i pad = _mm_andnot_si128(valid, self);
+    _mm_store_si128(reinterpret_cast<__m128i*>(s.ia + 4 * k), _mm_or_si128(_mm_and_si128(valid, a), pad));
+    _mm_store_si128(reinterpret_cast<__m128i*>(s.ib + 4 * k), _mm_or_si128(_mm_and_si128(valid, b), pad));
   }
   if (_mm_movemask_epi8(edge)) return false;
 
@@ -303,7 +310,8 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   __m128i other[nc], earlier[nc];
   #pragma GCC unroll 8
   for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm_setzero_si128();
-  const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1), wrap3 = _mm_setr_epi32(0, -1, -1, -1);
+  const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1);
+  const __m128i wrap3 = _mm_setr_epi32(0, -1, -1, -1);
   // block p against itself and the later blocks q
   auto compare = [&](size_t p) {
     const __m128i cp = cand[p];
@@ -311,8 +319,9 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
     const __m128i e2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 2));
     const __m128i e3 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 3));
     __m128i op = _mm_or_si128(other[p], _mm_or_si128(e1, _mm_or_si128(e2, e3)));
-    earlier[p] = _mm_or_si128(earlier[p], _mm_or_si128(_mm_and_si128(e1, wrap1),
-                                                       _mm_or_si128(_mm_and_si128(e2, wrap2), _mm_and_si128(e3, wrap3))));
+    const __m128i wrapped =
+        _mm_or_si128(_mm_and_si128(e1, wrap1), _mm_or_si128(_mm_and_si128(e2, wrap2), _mm_and_si128(e3, wrap3)));
+    earlier[p] = _mm_or_si128(earlier[p], wrapped);
     #pragma GCC unroll 8
     for (size_t q = p + 1; q < nc; ++q) {  // every lane of q is later than every lane of p
       const __m128i cq = cand[q];
@@ -366,12 +375,10 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
       pa[l] = pos[s.ia[4 * k + l]];
       pb[l] = pos[s.ib[4 * k + l]];
     }
-    const __m128 ux = _mm_sub_ps(_mm_setr_ps(pa[0].x, pa[1].x, pa[2].x, pa[3].x), vx);
-    const __m128 uy = _mm_sub_ps(_mm_setr_ps(pa[0].y, pa[1].y, pa[2].y, pa[3].y), vy);
-    const __m128 uz = _mm_sub_ps(_mm_setr_ps(pa[0].z, pa[1].z, pa[2].z, pa[3].z), vz);
-    const __m128 wx = _mm_sub_ps(_mm_setr_ps(pb[0].x, pb[1].x, pb[2].x, pb[3].x), vx);
-    const __m128 wy = _mm_sub_ps(_mm_setr_ps(pb[0].y, pb[1].y, pb[2].y, pb[3].y), vy);
-    const __m128 wz = _mm_sub_ps(_mm_setr_ps(pb[0].z, pb[1].z, pb[2].z, pb[3].z), vz);
+    const __m128 ux = _mm_sub_ps(column(pa, 0), vx), uy = _mm_sub_ps(column(pa, 1), vy);
+    const __m128 uz = _mm_sub_ps(column(pa, 2), vz);
+    const __m128 wx = _mm_sub_ps(column(pb, 0), vx), wy = _mm_sub_ps(column(pb, 1), vy);
+    const __m128 wz = _mm_sub_ps(column(pb, 2), vz);
     // glm::cross(u, w), glm::length, / as in the scalar pass
     const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, wz), _mm_mul_ps(wy, uz));
     const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, wx), _mm_mul_ps(wz, ux));
@@ -406,7 +413,8 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
       const size_t c = side ? nb + k : k;
       if (!((first >> (4 * c)) & 0xfu)) continue;  // all repeats (the b of a closed fan)
       const __m128 dx = side ? wx : ux, dy = side ? wy : uy, dz = side ? wz : uz;
-      const __m128 len = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+      const __m128 len2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128 len = _mm_sqrt_ps(len2);
       const __m128 use = _mm_and_ps(bitLanes(first >> (4 * c)), _mm_cmpgt_ps(len, zero));
       longest = _mm_max_ps(longest, _mm_and_ps(use, len));
       _mm_store_ps(s.dir[0] + 4 * c, orNan(use, _mm_div_ps(dx, len)));
@@ -503,7 +511,8 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
       lo = glm::min(lo, pv);
       hi = glm::max(hi, pv);
 #if defined(__SSE2__)
-      if (!colors && row <= kLaneRow && gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
+      if (!colors && row <= kLaneRow &&
+          gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
         if (out.sums) out.sums[v].encode(lr.sums[9], lr.sums);
         range_longest = std::max(range_longest, lr.longest);
         finish(v, lr.longest, lr.any_dir, lr.cos_dirs, lr.boundary, [&] { return lr.cos_normals; });
@@ -657,13 +666,13 @@ void surfaceSums(const Mesh& in, double& area_out, double& length_out) {
     // double and added to the sums in triangle order, as the scalar loop below does
     for (; t + 4 <= end; t += 4) {
       glm::vec3 a[4], b[4], cc[4];
-      for (int l = 0; l < 4; ++l) a[l] = pos[tri[3 * (t + l)]], b[l] = pos[tri[3 * (t + l) + 1]], cc[l] = pos[tri[3 * (t + l) + 2]];
-      const __m128 ax = _mm_setr_ps(a[0].x, a[1].x, a[2].x, a[3].x), ay = _mm_setr_ps(a[0].y, a[1].y, a[2].y, a[3].y),
-                   az = _mm_setr_ps(a[0].z, a[1].z, a[2].z, a[3].z);
-      const __m128 bx = _mm_setr_ps(b[0].x, b[1].x, b[2].x, b[3].x), by = _mm_setr_ps(b[0].y, b[1].y, b[2].y, b[3].y),
-                   bz = _mm_setr_ps(b[0].z, b[1].z, b[2].z, b[3].z);
-      const __m128 cx = _mm_setr_ps(cc[0].x, cc[1].x, cc[2].x, cc[3].x), cy = _mm_setr_ps(cc[0].y, cc[1].y, cc[2].y, cc[3].y),
-                   cz = _mm_setr_ps(cc[0].z, cc[1].z, cc[2].z, cc[3].z);
+      for (int l = 0; l < 4; ++l) {
+        const uint32_t* corner = tri + 3 * (t + l);
+        a[l] = pos[corner[0]], b[l] = pos[corner[1]], cc[l] = pos[corner[2]];
+      }
+      const __m128 ax = column(a, 0), ay = column(a, 1), az = column(a, 2);
+      const __m128 bx = column(b, 0), by = column(b, 1), bz = column(b, 2);
+      const __m128 cx = column(cc, 0), cy = column(cc, 1), cz = column(cc, 2);
       auto length = [](__m128 x, __m128 y, __m128 z) {
         return _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(z, z)));
       };

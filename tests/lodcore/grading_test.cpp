@@ -165,7 +165,8 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
       } else if (seed % 2) {
         m.positions.push_back({float(rng() % 5), float(rng() % 5), float(rng() % 3)});  // exact zeros
       } else {
-        m.positions.push_back({float(rng() % 1000) / 999.0f, float(rng() % 1000) / 999.0f, float(rng() % 1000) / 999.0f});
+        auto unit = [&] { return float(rng() % 1000) / 999.0f; };
+        m.positions.push_back({unit(), unit(), unit()});
       }
     }
     const uint32_t tn = 1 + rng() % (4 * vn), window = 2 + rng() % vn;
