@@ -9,11 +9,17 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
 
 #include "cluster_internal.h"
@@ -127,43 +133,355 @@ struct GradeOutput {
   Aabb* bounds = nullptr;        // may be null: of the vertices triangles or edges use (min > max if none)
 };
 
-// Grades every vertex and, when asked, sums its incident faces. One counting sort builds the
-// vertex -> incidence rows, each holding the two other corners of the triangle in winding order (or
-// the other end of an input edge), so the per-vertex pass reads its rows contiguously, recomputes
-// the face normal from the corner positions it reads anyway, and writes only its own vertex: no
-// scattered writes, parallel over vertices.
-void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOutput out) {
+struct Incidence {
+  uint32_t a, b;  // triangle corner: the next two corners (winding order); edge end: other end, kNone
+};
+
+// vertex -> incidence rows: row v is incidence[offsets[v] .. offsets[v + 1]), its triangle corners
+// in triangle order, then its input-edge ends in edge order; kRowPad more entries follow the last
+// row, so that the lane path can read a row in whole blocks of 4
+constexpr size_t kRowPad = 4;
+struct IncidenceTable {
+  std::vector<uint32_t> offsets;
+  std::unique_ptr<Incidence[]> incidence;  // offsets[vn] + kRowPad entries
+};
+
+// One counting sort builds the rows, each holding the two other corners of the triangle in winding
+// order (or the other end of an input edge). Serial (two halves of the triangles filled side by
+// side share the rows' cache lines and took as long as one, bunny); prepareMesh runs the surface
+// sums next to it. The table is not zeroed: every entry is written.
+void buildIncidence(const Mesh& mesh, IncidenceTable& table) {
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
-  struct Incidence {
-    uint32_t a, b;  // triangle corner: the next two corners (winding order); edge end: other end, kNone
-  };
-  std::vector<uint32_t> offsets(vn + 1, 0);
+  std::vector<uint32_t>& offsets = table.offsets;
+  offsets.assign(vn + 1, 0);
   for (uint32_t v : mesh.triangles) ++offsets[v + 1];
   for (uint32_t v : mesh.edges) ++offsets[v + 1];
   for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
-  std::vector<Incidence> incidence(offsets[vn]);
-  {
-    // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
-    // the end of row v again, so no separate cursor array is needed
-    uint32_t* fill = offsets.data() + 1;
-    for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
-    const uint32_t* tri = mesh.triangles.data();
-    for (size_t t = 0; t < tn; ++t) {
-      const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
-      incidence[fill[i0]++] = {i1, i2};
-      incidence[fill[i1]++] = {i2, i0};
-      incidence[fill[i2]++] = {i0, i1};
-    }
-    for (size_t e = 0; e < mesh.edgeCount(); ++e) {
-      const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
-      incidence[fill[x]++] = {y, detail::kNone};
-      incidence[fill[y]++] = {x, detail::kNone};
-    }
-    offsets[0] = 0;
+  const size_t n = offsets[vn];
+  table.incidence.reset(new Incidence[n + kRowPad]);
+  Incidence* incidence = table.incidence.get();
+  for (size_t i = 0; i < kRowPad; ++i) incidence[n + i] = {0, 0};
+  // fill row v through offsets[v + 1] (first shifted to the start of row v): afterwards it holds
+  // the end of row v again, so no separate cursor array is needed
+  uint32_t* fill = offsets.data() + 1;
+  for (size_t v = vn; v > 0; --v) offsets[v] = offsets[v - 1];  // fill[v] = start of row v
+  const uint32_t* tri = mesh.triangles.data();
+  for (size_t t = 0; t < tn; ++t) {
+    const uint32_t i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+    incidence[fill[i0]++] = {i1, i2};
+    incidence[fill[i1]++] = {i2, i0};
+    incidence[fill[i2]++] = {i0, i1};
   }
+  for (size_t e = 0; e < mesh.edgeCount(); ++e) {
+    const uint32_t x = mesh.edges[2 * e], y = mesh.edges[2 * e + 1];
+    incidence[fill[x]++] = {y, detail::kNone};
+    incidence[fill[y]++] = {x, detail::kNone};
+  }
+  offsets[0] = 0;
+}
+
+#if defined(__SSE2__)
+// Rows of up to kLaneRow triangle corners and no input edge, on meshes without colours (all but
+// a few vertices of a typical mesh), take a four-lane path: the same float operations as the
+// scalar pass in gradeAndSum, in the same order where the order matters, four incidences or
+// neighbours per SSE2 operation. Every lane does the scalar code's arithmetic (mulps / addps /
+// divps / sqrtps round like their scalar forms; no FMA without -mfma), so the results are
+// bit-identical:
+// - the face sums add, in row order, the products of every incidence; a skipped face (zero area)
+//   adds +0.0, which leaves a sum unchanged (a sum that starts at +0.0 is never -0.0);
+// - the distinct neighbours come from comparing every candidate (the two other corners of each
+//   incidence) with the later ones; their order does not matter here: the widest pair is the exact
+//   minimum over pairs for up to 2 x kLaneRow <= kExactPairLimit directions, and min and max do not
+//   depend on the order (up to the sign of a zero dot product, which 1 +- cos makes the same);
+// - unused lanes (padding, repeated neighbours, zero-length edges, zero-area faces) hold NaN in the
+//   direction and normal columns: their dot products are NaN, which the minimum skips.
+constexpr size_t kLaneRow = 16;
+static_assert(2 * kLaneRow <= kExactPairLimit, "the lane path needs the exact pair minimum");
+
+struct alignas(16) LaneScratch {
+  uint32_t ia[kLaneRow], ib[kLaneRow];  // per incidence the corners a and b (the vertex itself in padding lanes)
+  float nrm[3][kLaneRow];         // unit face normals (x, y, z columns) per incidence; NaN if not a face
+  float dir[3][2 * kLaneRow];     // unit directions per candidate; NaN unless a distinct non-zero edge
+};
+
+// coordinate c of four points, one per lane
+inline __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
+
+// the lanes of bits 0..3 of `bits` set, as a float mask
+inline __m128 bitLanes(uint32_t bits) {
+  const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
+  return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(static_cast<int>(bits)), bit), bit));
+}
+
+// lanes of `keep` take x, the others NaN (all bits set)
+inline __m128 orNan(__m128 keep, __m128 x) {
+  return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1))));
+}
+
+// lane l of the result holds lane (l + k) % 4 of x
+#define SCENELOD_ROT_PS(x, k) _mm_shuffle_ps(x, x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+#define SCENELOD_ROT_EPI32(x, k) _mm_shuffle_epi32(x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+
+// min(dot, best) for the four pairs (lane l of p, lane l of q): dot if dot < best, so a NaN dot keeps
+// best (minps returns its second operand unless the first is less), as std::min(best, dot) does
+inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
+  const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(px, qx), _mm_mul_ps(py, qy)), _mm_mul_ps(pz, qz));
+  return _mm_min_ps(d, best);
+}
+
+// minPairDot over the vectors in columns x, y, z, blocks of 4 lanes; only the blocks in
+// `live_blocks` hold vectors, and their unused lanes are NaN. Every pair of lanes meets in some
+// rotation: within a block rotations by 1 and 2, between two blocks all four.
+// inlined at both calls (directions, normals), which the compiler may then interleave
+inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, const float* y, const float* z,
+                                                           uint32_t live_blocks) {
+  // four running minima, so that the minps do not wait on each other (the minimum does not depend
+  // on the order, up to the sign of a zero)
+  const __m128 one = _mm_set1_ps(1.0f);
+  __m128 b0 = one, b1 = one, b2 = one, b3 = one;
+  for (uint32_t bp = live_blocks; bp;) {
+    const int p = __builtin_ctz(bp);
+    bp &= bp - 1;
+    const __m128 px = _mm_load_ps(x + 4 * p), py = _mm_load_ps(y + 4 * p), pz = _mm_load_ps(z + 4 * p);
+    b0 = minDot(b0, px, py, pz, SCENELOD_ROT_PS(px, 1), SCENELOD_ROT_PS(py, 1), SCENELOD_ROT_PS(pz, 1));
+    b1 = minDot(b1, px, py, pz, SCENELOD_ROT_PS(px, 2), SCENELOD_ROT_PS(py, 2), SCENELOD_ROT_PS(pz, 2));
+    for (uint32_t bq = bp; bq;) {
+      const int q = __builtin_ctz(bq);
+      bq &= bq - 1;
+      const __m128 qx = _mm_load_ps(x + 4 * q), qy = _mm_load_ps(y + 4 * q), qz = _mm_load_ps(z + 4 * q);
+      b0 = minDot(b0, px, py, pz, qx, qy, qz);
+      b1 = minDot(b1, px, py, pz, SCENELOD_ROT_PS(qx, 1), SCENELOD_ROT_PS(qy, 1), SCENELOD_ROT_PS(qz, 1));
+      b2 = minDot(b2, px, py, pz, SCENELOD_ROT_PS(qx, 2), SCENELOD_ROT_PS(qy, 2), SCENELOD_ROT_PS(qz, 2));
+      b3 = minDot(b3, px, py, pz, SCENELOD_ROT_PS(qx, 3), SCENELOD_ROT_PS(qy, 3), SCENELOD_ROT_PS(qz, 3));
+    }
+  }
+  __m128 best = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));  // none is NaN
+  best = _mm_min_ps(best, SCENELOD_ROT_PS(best, 2));
+  best = _mm_min_ps(best, SCENELOD_ROT_PS(best, 1));
+  return _mm_cvtss_f32(best);
+}
+
+struct LaneRow {
+  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area
+  float longest;       // longest incident edge
+  float cos_dirs;      // minPairDot of the directions (1 when fewer than two)
+  float cos_normals;   // minPairDot of the face normals, when asked
+  bool any_dir;        // some incident edge has non-zero length
+  bool boundary;       // some neighbour is shared by only one incident triangle
+};
+
+// Grades one row of r (1 <= r <= kLaneRow) triangle corners; false (and nothing computed) when the
+// row holds an input edge. `row` may be read up to the next multiple of 4.
+// NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
+// candidate block c < NB: the a of incidence block c, else the b of block c - NB.
+template <size_t NB>
+bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                   LaneScratch& s, LaneRow& out) {
+  constexpr size_t nb = NB;
+  __m128i cand[2 * NB];
+  const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
+  const __m128i none = _mm_set1_epi32(-1);  // detail::kNone
+  const __m128i self = _mm_set1_epi32(static_cast<int>(v));
+  __m128i edge = _mm_setzero_si128();
+  #pragma GCC unroll 8
+  for (size_t k = 0; k < nb; ++k) {
+    const __m128 lo = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k));      // a0 b0 a1 b1
+    const __m128 hi = _mm_loadu_ps(reinterpret_cast<const float*>(row + 4 * k + 2));  // a2 b2 a3 b3
+    const __m128i valid = _mm_cmplt_epi32(_mm_add_epi32(lane, _mm_set1_epi32(static_cast<int>(4 * k))),
+                                          _mm_set1_epi32(static_cast<int>(r)));
+    const __m128i a = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128i b = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
+    edge = _mm_or_si128(edge, _mm_and_si128(valid, _mm_cmpeq_epi32(b, none)));
+    // padding lanes get kNone, which no vertex index equals
+    cand[k] = _mm_or_si128(a, _mm_andnot_si128(valid, none));
+    cand[nb + k] = _mm_or_si128(b, _mm_andnot_si128(valid, none));
+    // the corners whose positions are read: the vertex itself in padding lanes (zero edges, zero area)
+    const __m128i pad = _mm_andnot_si128(valid, self);
+    _mm_store_si128(reinterpret_cast<__m128i*>(s.ia + 4 * k), _mm_or_si128(_mm_and_si128(valid, a), pad));
+    _mm_store_si128(reinterpret_cast<__m128i*>(s.ib + 4 * k), _mm_or_si128(_mm_and_si128(valid, b), pad));
+  }
+  if (_mm_movemask_epi8(edge)) return false;
+
+  // distinct neighbours: a candidate equal to an earlier one is a repeat; one equal to no other is
+  // held by one triangle only (each incidence holds two different candidates of its triangle).
+  // Blocks are compared in all rotations; lane l of a block against lane (l + k) % 4 of itself is
+  // a comparison with an earlier candidate when l + k >= 4 (the rotation wrapped).
+  constexpr size_t nc = 2 * nb;
+  __m128i other[nc], earlier[nc];
+  #pragma GCC unroll 8
+  for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm_setzero_si128();
+  const __m128i wrap1 = _mm_setr_epi32(0, 0, 0, -1), wrap2 = _mm_setr_epi32(0, 0, -1, -1);
+  const __m128i wrap3 = _mm_setr_epi32(0, -1, -1, -1);
+  // block p against itself and the later blocks q
+  auto compare = [&](size_t p) {
+    const __m128i cp = cand[p];
+    const __m128i e1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 1));
+    const __m128i e2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 2));
+    const __m128i e3 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cp, 3));
+    __m128i op = _mm_or_si128(other[p], _mm_or_si128(e1, _mm_or_si128(e2, e3)));
+    const __m128i wrapped =
+        _mm_or_si128(_mm_and_si128(e1, wrap1), _mm_or_si128(_mm_and_si128(e2, wrap2), _mm_and_si128(e3, wrap3)));
+    earlier[p] = _mm_or_si128(earlier[p], wrapped);
+    #pragma GCC unroll 8
+    for (size_t q = p + 1; q < nc; ++q) {  // every lane of q is later than every lane of p
+      const __m128i cq = cand[q];
+      const __m128i f0 = _mm_cmpeq_epi32(cp, cq);
+      const __m128i f1 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 1));
+      const __m128i f2 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 2));
+      const __m128i f3 = _mm_cmpeq_epi32(cp, SCENELOD_ROT_EPI32(cq, 3));
+      op = _mm_or_si128(op, _mm_or_si128(_mm_or_si128(f0, f1), _mm_or_si128(f2, f3)));
+      // lane m of q met lane (m - k) % 4 of p in f_k: rotate back by 4 - k
+      const __m128i fq = _mm_or_si128(_mm_or_si128(f0, SCENELOD_ROT_EPI32(f1, 3)),
+                                      _mm_or_si128(SCENELOD_ROT_EPI32(f2, 2), SCENELOD_ROT_EPI32(f3, 1)));
+      other[q] = _mm_or_si128(other[q], fq);
+      earlier[q] = _mm_or_si128(earlier[q], fq);
+    }
+    other[p] = op;
+  };
+  #pragma GCC unroll 8
+  for (size_t p = 0; p < nb; ++p) compare(p);
+  // the b blocks among themselves decide only for a b equal to no a: in a closed fan every b is
+  // some a (already a repeat, already shared), so they are skipped then
+  const uint32_t row_bits = (1u << r) - 1;
+  const uint32_t valid_bits = row_bits | (row_bits << (4 * nb));
+  uint32_t b_matched = 0;
+  #pragma GCC unroll 8
+  for (size_t c = nb; c < nc; ++c)
+    b_matched |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(earlier[c]))) << (4 * (c - nb));
+  if ((b_matched & row_bits) != row_bits) {
+    #pragma GCC unroll 8
+    for (size_t p = nb; p < nc; ++p) compare(p);
+  }
+  uint32_t repeat = 0, shared = 0;
+  #pragma GCC unroll 8
+  for (size_t c = 0; c < nc; ++c) {
+    repeat |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(earlier[c]))) << (4 * c);
+    shared |= static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(other[c]))) << (4 * c);
+  }
+  const uint32_t first = valid_bits & ~repeat;
+  out.boundary = (first & ~shared) != 0;
+
+  const __m128 vx = _mm_set1_ps(pos[v].x), vy = _mm_set1_ps(pos[v].y), vz = _mm_set1_ps(pos[v].z);
+  const __m128 zero = _mm_setzero_ps();
+  __m128 q0 = zero, q1 = zero, q2 = zero;  // quadric xx xy xz yy; yz zz, normal x y; normal z, area
+  __m128 longest = zero;
+  uint32_t normal_blocks = 0, dir_blocks = 0;  // the blocks holding some normal, some direction
+  int any_dir = 0;
+  #pragma GCC unroll 8
+  for (size_t k = 0; k < nb; ++k) {
+    glm::vec3 pa[4], pb[4];
+    #pragma GCC unroll 8
+    for (int l = 0; l < 4; ++l) {
+      pa[l] = pos[s.ia[4 * k + l]];
+      pb[l] = pos[s.ib[4 * k + l]];
+    }
+    const __m128 ux = _mm_sub_ps(column(pa, 0), vx), uy = _mm_sub_ps(column(pa, 1), vy);
+    const __m128 uz = _mm_sub_ps(column(pa, 2), vz);
+    const __m128 wx = _mm_sub_ps(column(pb, 0), vx), wy = _mm_sub_ps(column(pb, 1), vy);
+    const __m128 wz = _mm_sub_ps(column(pb, 2), vz);
+    // glm::cross(u, w), glm::length, / as in the scalar pass
+    const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, wz), _mm_mul_ps(wy, uz));
+    const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, wx), _mm_mul_ps(wz, ux));
+    const __m128 cz = _mm_sub_ps(_mm_mul_ps(ux, wy), _mm_mul_ps(wx, uy));
+    const __m128 nl = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, cx), _mm_mul_ps(cy, cy)), _mm_mul_ps(cz, cz)));
+    const __m128 face = _mm_cmpgt_ps(nl, zero);  // false for NaN, as !(nl > 0) in the scalar pass
+    const __m128 nx = _mm_div_ps(cx, nl), ny = _mm_div_ps(cy, nl), nz = _mm_div_ps(cz, nl);
+    const __m128 area = _mm_mul_ps(_mm_set1_ps(0.5f), nl);
+    const __m128 anx = _mm_mul_ps(area, nx), any = _mm_mul_ps(area, ny), anz = _mm_mul_ps(area, nz);
+    // per incidence (row) the ten addends, zero where not a face; transposed to add in row order
+    __m128 t0 = _mm_and_ps(face, _mm_mul_ps(anx, nx)), t1 = _mm_and_ps(face, _mm_mul_ps(anx, ny));
+    __m128 t2 = _mm_and_ps(face, _mm_mul_ps(anx, nz)), t3 = _mm_and_ps(face, _mm_mul_ps(any, ny));
+    _MM_TRANSPOSE4_PS(t0, t1, t2, t3);
+    __m128 t4 = _mm_and_ps(face, _mm_mul_ps(any, nz)), t5 = _mm_and_ps(face, _mm_mul_ps(anz, nz));
+    __m128 t6 = _mm_and_ps(face, anx), t7 = _mm_and_ps(face, any);
+    _MM_TRANSPOSE4_PS(t4, t5, t6, t7);
+    __m128 t8 = _mm_and_ps(face, anz), t9 = _mm_and_ps(face, area), t10 = zero, t11 = zero;
+    _MM_TRANSPOSE4_PS(t8, t9, t10, t11);
+    q0 = _mm_add_ps(q0, t0), q1 = _mm_add_ps(q1, t4), q2 = _mm_add_ps(q2, t8);
+    q0 = _mm_add_ps(q0, t1), q1 = _mm_add_ps(q1, t5), q2 = _mm_add_ps(q2, t9);
+    q0 = _mm_add_ps(q0, t2), q1 = _mm_add_ps(q1, t6), q2 = _mm_add_ps(q2, t10);
+    q0 = _mm_add_ps(q0, t3), q1 = _mm_add_ps(q1, t7), q2 = _mm_add_ps(q2, t11);
+    if (want_normals) {
+      _mm_store_ps(s.nrm[0] + 4 * k, orNan(face, nx));
+      _mm_store_ps(s.nrm[1] + 4 * k, orNan(face, ny));
+      _mm_store_ps(s.nrm[2] + 4 * k, orNan(face, nz));
+      normal_blocks |= static_cast<uint32_t>(_mm_movemask_ps(face) != 0) << k;
+    }
+    // directions to the distinct neighbours: the a of block k (candidate block k), the b (nb + k)
+    #pragma GCC unroll 8
+    for (int side = 0; side < 2; ++side) {
+      const size_t c = side ? nb + k : k;
+      if (!((first >> (4 * c)) & 0xfu)) continue;  // all repeats (the b of a closed fan)
+      const __m128 dx = side ? wx : ux, dy = side ? wy : uy, dz = side ? wz : uz;
+      const __m128 len2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128 len = _mm_sqrt_ps(len2);
+      const __m128 use = _mm_and_ps(bitLanes(first >> (4 * c)), _mm_cmpgt_ps(len, zero));
+      longest = _mm_max_ps(longest, _mm_and_ps(use, len));
+      _mm_store_ps(s.dir[0] + 4 * c, orNan(use, _mm_div_ps(dx, len)));
+      _mm_store_ps(s.dir[1] + 4 * c, orNan(use, _mm_div_ps(dy, len)));
+      _mm_store_ps(s.dir[2] + 4 * c, orNan(use, _mm_div_ps(dz, len)));
+      const int used = _mm_movemask_ps(use);
+      any_dir |= used;
+      dir_blocks |= static_cast<uint32_t>(used != 0) << c;
+    }
+  }
+  _mm_storeu_ps(out.sums, q0);
+  _mm_storeu_ps(out.sums + 4, q1);
+  _mm_storeu_ps(out.sums + 8, q2);
+  longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(1, 0, 3, 2)));
+  longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
+  out.longest = _mm_cvtss_f32(longest);
+  out.any_dir = any_dir != 0;
+  out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
+  out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
+  return true;
+}
+
+bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                   LaneScratch& s, LaneRow& out) {
+  static_assert(kLaneRow == 16, "one instance per block count");
+  switch ((r + 3) / 4) {
+    case 1: return gradeRowLanes<1>(pos, v, row, r, want_normals, s, out);
+    case 2: return gradeRowLanes<2>(pos, v, row, r, want_normals, s, out);
+    case 3: return gradeRowLanes<3>(pos, v, row, r, want_normals, s, out);
+    default: return gradeRowLanes<4>(pos, v, row, r, want_normals, s, out);
+  }
+}
+#endif
+
+// Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
+// of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
+// and writes only its own vertex: no scattered writes, parallel over vertices.
+void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading, bool boost_features,
+                 GradeOutput out) {
+  const size_t vn = mesh.vertexCount();
+  const uint32_t* offsets = table.offsets.data();
+  const Incidence* incidence = table.incidence.get();
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
+  const bool want_normals = grading == Grading::kLowTan && boost_features;  // the crease term
+  // the angular factor and the weight of vertex v from its longest edge, whether some edge has a
+  // direction, the widest pair of directions, the boundary flag and (called only when needed) the
+  // widest pair of face normals
+  auto finish = [&](size_t v, float longest_v, bool any_dir, float cos_dirs, bool boundary, auto cos_normals) {
+    float a = 0.0f;
+    if (any_dir) {  // else only zero-length edges: no direction, weight 0
+      const float cos_theta = std::clamp(cos_dirs, -1.0f, 1.0f);
+      if (grading == Grading::kLowTan) {
+        a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
+        if (boost_features) {
+          if (boundary) a = std::max(a, kBoundaryFactor);
+          const float crease = (1.0f - std::clamp(cos_normals(), -1.0f, 1.0f)) * 0.5f;
+          a = std::max(a, crease);
+        }
+      } else {
+        a = kPi / std::max(std::acos(cos_theta), kMinTheta);
+      }
+    }
+    if (out.angular) out.angular[v] = a;
+    out.raw[v] = longest_v * a;
+  };
   std::mutex longest_mutex;
   float longest_edge = 0.0f;
   glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
@@ -174,6 +492,10 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+#if defined(__SSE2__)
+    LaneScratch lanes;
+    LaneRow lr;
+#endif
     for (size_t v = range.begin(); v != range.end(); ++v) {
       const uint32_t b = offsets[v], e = offsets[v + 1];
       if (out.in_rows) out.in_rows[v] = b != e;
@@ -185,6 +507,18 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
         continue;
       }
       const size_t row = e - b;
+      const glm::vec3 pv = pos[v];
+      lo = glm::min(lo, pv);
+      hi = glm::max(hi, pv);
+#if defined(__SSE2__)
+      if (!colors && row <= kLaneRow &&
+          gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
+        if (out.sums) out.sums[v].encode(lr.sums[9], lr.sums);
+        range_longest = std::max(range_longest, lr.longest);
+        finish(v, lr.longest, lr.any_dir, lr.cos_dirs, lr.boundary, [&] { return lr.cos_normals; });
+        continue;
+      }
+#endif
       if (nb.size() < 2 * row) {
         nb.resize(2 * row);
         nb_tris.resize(2 * row);
@@ -212,9 +546,6 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
       };
       float qs[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, area_sum = 0.0f;  // quadric xx..zz, normal x, y, z
       glm::vec4 cs(0.0f);
-      const glm::vec3 pv = pos[v];
-      lo = glm::min(lo, pv);
-      hi = glm::max(hi, pv);
       for (uint32_t i = b; i < e; ++i) {
         const Incidence inc = incidence[i];
         if (inc.b == detail::kNone) {
@@ -257,22 +588,8 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
         }
       }
       range_longest = std::max(range_longest, longest_v);
-      float a = 0.0f;
-      if (ndirs > 0) {  // else only zero-length edges: no direction, weight 0
-        const float cos_theta = std::clamp(minPairDot(dirs.data(), ndirs), -1.0f, 1.0f);
-        if (grading == Grading::kLowTan) {
-          a = std::sqrt(std::max(0.0f, (1.0f + cos_theta) * 0.5f));  // cos(theta/2)
-          if (boost_features) {
-            if (boundary) a = std::max(a, kBoundaryFactor);
-            const float crease = (1.0f - std::clamp(minPairDot(normals.data(), nnormals), -1.0f, 1.0f)) * 0.5f;
-            a = std::max(a, crease);
-          }
-        } else {
-          a = kPi / std::max(std::acos(cos_theta), kMinTheta);
-        }
-      }
-      if (out.angular) out.angular[v] = a;
-      out.raw[v] = longest_v * a;
+      finish(v, longest_v, ndirs > 0, ndirs > 0 ? minPairDot(dirs.data(), ndirs) : 1.0f, boundary,
+             [&] { return minPairDot(normals.data(), nnormals); });
     }
     // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
@@ -286,40 +603,112 @@ void gradeAndSum(const Mesh& mesh, Grading grading, bool boost_features, GradeOu
 
 // Stable LSD radix sort of the referenced vertices by descending raw weight (weights are >= 0
 // floats, whose bit patterns sort like the values); stability keeps ties in vertex-index order.
+// Key and vertex travel packed in one 64-bit word (key high), one scatter per element and pass;
+// the last pass writes the vertices straight into `order`.
 void sortByWeight(const std::vector<float>& raw, const std::vector<uint8_t>& referenced, size_t count,
                   std::vector<uint32_t>& order) {
-  std::vector<uint32_t> keys(count), keys2(count), idx2(count);
   order.resize(count);
-  size_t n = 0;
-  for (size_t v = 0; v < raw.size(); ++v) {
-    if (!referenced[v]) continue;
-    uint32_t bits;
-    std::memcpy(&bits, &raw[v], sizeof bits);
-    keys[n] = ~bits;
-    order[n] = static_cast<uint32_t>(v);
-    ++n;
-  }
+  if (count == 0) return;
+  // one spare entry: the key build writes an unreferenced vertex at src[n] before dropping it
+  std::unique_ptr<uint64_t[]> buf_a(new uint64_t[count + 1]), buf_b(new uint64_t[count]);
+  uint64_t* src = buf_a.get();
+  uint64_t* dst = buf_b.get();
   constexpr int kBits = 11, kBuckets = 1 << kBits;
   std::vector<uint32_t> hist(3 * kBuckets, 0);
-  for (uint32_t k : keys)
-    for (int pass = 0; pass < 3; ++pass) ++hist[pass * kBuckets + ((k >> (pass * kBits)) & (kBuckets - 1))];
-  for (int pass = 0; pass < 3; ++pass) {
+  size_t n = 0;
+  for (size_t v = 0; v < raw.size(); ++v) {
+    uint32_t bits;
+    std::memcpy(&bits, &raw[v], sizeof bits);
+    const uint32_t key = ~bits;
+    src[n] = (uint64_t(key) << 32) | v;  // written always, kept only when referenced (no branch)
+    if (referenced[v])
+      for (int pass = 0; pass < 3; ++pass) ++hist[pass * kBuckets + ((key >> (pass * kBits)) & (kBuckets - 1))];
+    n += referenced[v] != 0;
+  }
+  int last = -1;  // the last pass that moves anything (a pass whose digit is the same for all is skipped)
+  for (int pass = 0; pass < 3; ++pass)
+    if (hist[pass * kBuckets + ((uint32_t(src[0] >> 32) >> (pass * kBits)) & (kBuckets - 1))] != count) last = pass;
+  for (int pass = 0; pass <= last; ++pass) {
     uint32_t* h = hist.data() + pass * kBuckets;
-    if (h[(keys.empty() ? 0 : (keys[0] >> (pass * kBits))) & (kBuckets - 1)] == count) continue;  // one bucket: skip
+    if (h[(uint32_t(src[0] >> 32) >> (pass * kBits)) & (kBuckets - 1)] == count) continue;
     uint32_t sum = 0;
     for (int b = 0; b < kBuckets; ++b) {
       const uint32_t c = h[b];
       h[b] = sum;
       sum += c;
     }
-    for (size_t i = 0; i < count; ++i) {
-      const uint32_t slot = h[(keys[i] >> (pass * kBits)) & (kBuckets - 1)]++;
-      keys2[slot] = keys[i];
-      idx2[slot] = order[i];
+    const int shift = 32 + pass * kBits;
+    if (pass == last) {
+      for (size_t i = 0; i < count; ++i) order[h[(src[i] >> shift) & (kBuckets - 1)]++] = static_cast<uint32_t>(src[i]);
+      return;
     }
-    keys.swap(keys2);
-    order.swap(idx2);
+    for (size_t i = 0; i < count; ++i) dst[h[(src[i] >> shift) & (kBuckets - 1)]++] = src[i];
+    std::swap(src, dst);
   }
+  for (size_t i = 0; i < count; ++i) order[i] = static_cast<uint32_t>(src[i]);  // nothing moved
+}
+
+// Surface area and summed length of the triangles' edges, in double per fixed chunk of triangles
+// and then over the chunks in order: the same sums whatever the number of threads.
+void surfaceSums(const Mesh& in, double& area_out, double& length_out) {
+  const glm::vec3* pos = in.positions.data();
+  const size_t tn = in.triangleCount();
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (tn + kChunk - 1) / kChunk;
+  std::vector<double> chunk_length(chunks), chunk_area(chunks);
+  const uint32_t* tri = in.triangles.data();
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    double sum = 0.0, area = 0.0;
+    size_t t = c * kChunk;
+    const size_t end = std::min(tn, t + kChunk);
+#if defined(__SSE2__)
+    // four triangles at a time: the float lengths in lanes (sqrtps rounds like sqrtss), widened to
+    // double and added to the sums in triangle order, as the scalar loop below does
+    for (; t + 4 <= end; t += 4) {
+      glm::vec3 a[4], b[4], cc[4];
+      for (int l = 0; l < 4; ++l) {
+        const uint32_t* corner = tri + 3 * (t + l);
+        a[l] = pos[corner[0]], b[l] = pos[corner[1]], cc[l] = pos[corner[2]];
+      }
+      const __m128 ax = column(a, 0), ay = column(a, 1), az = column(a, 2);
+      const __m128 bx = column(b, 0), by = column(b, 1), bz = column(b, 2);
+      const __m128 cx = column(cc, 0), cy = column(cc, 1), cz = column(cc, 2);
+      auto length = [](__m128 x, __m128 y, __m128 z) {
+        return _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(z, z)));
+      };
+      const __m128 ux = _mm_sub_ps(bx, ax), uy = _mm_sub_ps(by, ay), uz = _mm_sub_ps(bz, az);  // b - a
+      const __m128 wx = _mm_sub_ps(cx, ax), wy = _mm_sub_ps(cy, ay), wz = _mm_sub_ps(cz, az);  // cc - a
+      const __m128 l0 = length(ux, uy, uz);
+      const __m128 l1 = length(_mm_sub_ps(cx, bx), _mm_sub_ps(cy, by), _mm_sub_ps(cz, bz));
+      const __m128 l2 = length(_mm_sub_ps(ax, cx), _mm_sub_ps(ay, cy), _mm_sub_ps(az, cz));
+      // glm::cross(b - a, cc - a)
+      const __m128 nl = length(_mm_sub_ps(_mm_mul_ps(uy, wz), _mm_mul_ps(wy, uz)),
+                               _mm_sub_ps(_mm_mul_ps(uz, wx), _mm_mul_ps(wz, ux)),
+                               _mm_sub_ps(_mm_mul_ps(ux, wy), _mm_mul_ps(wx, uy)));
+      const __m128d half = _mm_set1_pd(0.5);
+      for (int h = 0; h < 2; ++h) {  // triangles t + 2h, t + 2h + 1
+        auto wide = [h](__m128 x) { return _mm_cvtps_pd(h ? _mm_movehl_ps(x, x) : x); };
+        const __m128d len = _mm_add_pd(_mm_add_pd(wide(l0), wide(l1)), wide(l2));
+        const __m128d ar = _mm_mul_pd(half, wide(nl));
+        sum += _mm_cvtsd_f64(len);
+        area += _mm_cvtsd_f64(ar);
+        sum += _mm_cvtsd_f64(_mm_unpackhi_pd(len, len));
+        area += _mm_cvtsd_f64(_mm_unpackhi_pd(ar, ar));
+      }
+    }
+#endif
+    for (; t < end; ++t) {
+      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
+      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
+      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
+    }
+    chunk_length[c] = sum;
+    chunk_area[c] = area;
+  });
+  double sum = 0.0, area = 0.0;
+  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
+  area_out = area;
+  length_out = sum;
 }
 
 }  // namespace
@@ -335,7 +724,9 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
   }
   std::vector<float> raw(vn), angular(vn);
   float longest_edge = 0.0f;
-  gradeAndSum(mesh, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
+  IncidenceTable table;
+  buildIncidence(mesh, table);
+  gradeAndSum(mesh, table, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   // weights = raw * inv: rounding is monotone, so the normalised weights keep the raw order
   for (size_t v = 0; v < vn; ++v) weights[v] = raw[v] * inv;
@@ -362,9 +753,15 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   float longest_edge = 0.0f;
   std::vector<uint8_t> referenced(vn);
   Aabb rows_box;
-  gradeAndSum(in, params.grading, params.boost_features,
+  // the surface sums need only the mesh: they run next to the serial counting sort (which takes
+  // longer, so they cost no time with two threads)
+  IncidenceTable table;
+  double area = 0.0, sum = 0.0;
+  tbb::parallel_invoke([&] { buildIncidence(in, table); }, [&] { surfaceSums(in, area, sum); });
+  gradeAndSum(in, table, params.grading, params.boost_features,
               {raw.data(), nullptr, &longest_edge, out.face_sums.data(),
                in.colors.empty() ? nullptr : out.face_colors.data(), referenced.data(), &rows_box});
+  table = IncidenceTable();  // 8 bytes per corner, not needed any more
   out.longest_edge = longest_edge;
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   for (size_t v = 0; v < vn; ++v) out.weights[v] = raw[v] * inv;
@@ -384,33 +781,16 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   const glm::vec3* pos = in.positions.data();
   const uint32_t* order = out.order.data();
   glm::vec3* sorted = out.sorted_positions.data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 8192), [&](const tbb::blocked_range<size_t>& r) {
+  // a copy at memory speed: split only in large pieces (a small mesh's gather is quicker on the
+  // calling thread than handed to another)
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 65536), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = pos[order[i]];
   });
 
-  // surface area and summed edge length in double, per fixed chunk of triangles and then over the
-  // chunks in order: the same sums whatever the number of threads
-  const size_t tn = in.triangleCount();
-  constexpr size_t kChunk = 4096;
-  const size_t chunks = (tn + kChunk - 1) / kChunk;
-  std::vector<double> chunk_length(chunks), chunk_area(chunks);
-  const uint32_t* tri = in.triangles.data();
-  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-    double sum = 0.0, area = 0.0;
-    for (size_t t = c * kChunk, end = std::min(tn, t + kChunk); t < end; ++t) {
-      const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], cc = pos[tri[3 * t + 2]];
-      sum += double(glm::length(b - a)) + double(glm::length(cc - b)) + double(glm::length(a - cc));
-      area += 0.5 * double(glm::length(glm::cross(b - a, cc - a)));
-    }
-    chunk_length[c] = sum;
-    chunk_area[c] = area;
-  });
-  double sum = 0.0, area = 0.0;
-  for (size_t c = 0; c < chunks; ++c) sum += chunk_length[c], area += chunk_area[c];
   out.surface_area = area;
   for (size_t e = 0; e < in.edgeCount(); ++e)
     sum += glm::length(in.positions[in.edges[2 * e]] - in.positions[in.edges[2 * e + 1]]);
-  const size_t count_e = 3 * tn + in.edgeCount();
+  const size_t count_e = 3 * in.triangleCount() + in.edgeCount();
   out.mean_edge_length = count_e ? static_cast<float>(sum / double(count_e)) : 0.0f;
   return {};
 }

@@ -1,5 +1,7 @@
 // Grading (Low & Tan 1997 §3.1; Rossignac & Borrel 1993) on constructed vertices.
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -145,4 +147,55 @@ TEST(Grading, PreparedBoundsAndOrderIncludePointOnlyVertices) {
   EXPECT_EQ(p.bounds.min.y, -6.0f);
   EXPECT_EQ(p.bounds.max.z, 7.0f);
   EXPECT_NEAR(p.bounds.min.x, -1.0f, 1e-5f);
+}
+
+TEST(Grading, PreparedMeshDoesNotDependOnColours) {
+  // colours only add face_colors; a mesh with them is graded by the one-incidence-at-a-time pass,
+  // one without by the four-lane pass (rows of up to 16 triangle corners): weights, order and face
+  // sums must agree bit for bit, also on degenerate input (repeated and zero-area triangles,
+  // coincident vertices, non-manifold fans, rows longer than 16)
+  std::vector<Mesh> meshes = {test::makeSphere({0, 0, 0}, 1.0f, 9, 14), test::makeCadPart()};
+  for (uint32_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937 rng(seed);
+    Mesh m;
+    const uint32_t vn = 4 + rng() % 60;
+    for (uint32_t i = 0; i < vn; ++i) {
+      if (i > 0 && rng() % 8 == 0) {
+        m.positions.push_back(m.positions[rng() % i]);  // coincident
+      } else if (seed % 2) {
+        m.positions.push_back({float(rng() % 5), float(rng() % 5), float(rng() % 3)});  // exact zeros
+      } else {
+        auto unit = [&] { return float(rng() % 1000) / 999.0f; };
+        m.positions.push_back({unit(), unit(), unit()});
+      }
+    }
+    const uint32_t tn = 1 + rng() % (4 * vn), window = 2 + rng() % vn;
+    for (uint32_t t = 0; t < tn; ++t) {
+      const uint32_t base = rng() % vn;
+      for (int k = 0; k < 3; ++k) m.triangles.push_back((base + rng() % window) % vn);
+    }
+    meshes.push_back(m);
+  }
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    Mesh plain = meshes[i], coloured = meshes[i];
+    coloured.colors.assign(coloured.positions.size(), glm::vec3(0.25f, 0.5f, 0.75f));
+    for (Grading g : {Grading::kLowTan, Grading::kRossignac})
+      for (bool boost : {true, false}) {
+        ClusterParams params;
+        params.grading = g;
+        params.boost_features = boost;
+        PreparedMesh a, b;
+        ASSERT_TRUE(prepareMesh(plain, params, a).ok());
+        ASSERT_TRUE(prepareMesh(coloured, params, b).ok());
+        ASSERT_EQ(a.weights.size(), b.weights.size());
+        for (size_t v = 0; v < a.weights.size(); ++v) {
+          ASSERT_EQ(std::memcmp(&a.weights[v], &b.weights[v], sizeof(float)), 0) << "mesh " << i << " vertex " << v;
+          ASSERT_EQ(std::memcmp(&a.face_sums[v].area, &b.face_sums[v].area, sizeof(float)), 0) << i << " " << v;
+          for (int k = 0; k < 9; ++k) ASSERT_EQ(a.face_sums[v].q[k], b.face_sums[v].q[k]) << i << " " << v << " " << k;
+        }
+        EXPECT_EQ(a.order, b.order) << i;
+        EXPECT_EQ(a.longest_edge, b.longest_edge) << i;
+        EXPECT_EQ(a.surface_area, b.surface_area) << i;
+      }
+  }
 }
