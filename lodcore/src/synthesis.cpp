@@ -211,26 +211,30 @@ struct Sums {          // 92 bytes per cluster
   explicit Sums(const glm::vec3& c) : centre(c) {}
 };
 
-// adds vertex v to its cluster's sums (the single pass and the grouped one share it, so that both
-// make the same operations in the same order)
-inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, bool have_face_sums, bool quadric,
-                      Sums& s) {
 #if defined(__SSE2__)
+// one vertex's terms of its cluster's sums, one register per four-float group of Sums (ws, sc,
+// q[0..3], q[4..7], q[8..11]); q0, q4 and q8 are zero without face sums
+struct Terms {
+  __m128 ws, sc, q0, q4, q8;
+};
+
+// `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
+inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, __m128 centre, bool have_face_sums,
+                         bool quadric) {
   const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
   const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
   const __m128 sign = _mm_set1_ps(-0.0f);
-#endif
   const float w = p.weights[v];
-#if defined(__SSE2__)
-  // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The 16-byte load of the centre takes
-  // ws[0] in its last lane, masked off; the position is loaded as 8 + 4 bytes (the last vertex ends
-  // the array).
+  Terms t;
+  // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The position is loaded as 8 + 4 bytes
+  // (the last vertex ends the array).
   const __m128 pv = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&pos[v].x)),
                                   _mm_load_ss(&pos[v].z));
-  const __m128 d = _mm_sub_ps(pv, _mm_loadu_ps(&s.centre.x));
+  const __m128 d = _mm_sub_ps(pv, centre);
   const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
-  _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), _mm_mul_ps(d4, _mm_set1_ps(w))));
-  _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), d4));
+  t.ws = _mm_mul_ps(d4, _mm_set1_ps(w));
+  t.sc = d4;
+  t.q0 = t.q4 = t.q8 = _mm_setzero_ps();
   if (have_face_sums) {
     // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
     const VertexFaceSums& f = p.face_sums[v];
@@ -239,8 +243,7 @@ inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, boo
     const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
     const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
     const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
-    _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), lo));
-    _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), hi));
+    t.q0 = lo, t.q4 = hi;
     // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
     // (the quadric part is unused but harmless for mean)
     __m128 last = _mm_set_ss(fa8);
@@ -250,12 +253,34 @@ inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, boo
       const __m128 col1 = _mm_shuffle_ps(lo, t34, _MM_SHUFFLE(2, 0, 1, 1));             // (_, xy, yy, yz)
       const __m128 col2 = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(1, 0, 2, 2));              // (_, xz, yz, zz)
       const __m128 dx = _mm_shuffle_ps(d, d, 0x00), dy = _mm_shuffle_ps(d, d, 0x55), dz = _mm_shuffle_ps(d, d, 0xaa);
-      const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, dx), _mm_mul_ps(col1, dy)), _mm_mul_ps(col2, dz));
-      last = _mm_move_ss(_mm_xor_ps(t, sign), last);
+      const __m128 tb = _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, dx), _mm_mul_ps(col1, dy)), _mm_mul_ps(col2, dz));
+      last = _mm_move_ss(_mm_xor_ps(tb, sign), last);
     }
-    _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), last));
+    t.q8 = last;
+  }
+  return t;
+}
+#endif
+
+// adds vertex v to its cluster's sums (the single pass and the grouped one make the same
+// operations in the same order)
+inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, bool have_face_sums, bool quadric,
+                      Sums& s) {
+#if defined(__SSE2__)
+  // the centre is loaded as 8 + 4 bytes: a 16-byte load would take in ws[0], which the previous
+  // vertex may just have stored (a load straddling a pending store waits for it to retire)
+  const __m128 centre = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&s.centre.x)),
+                                      _mm_load_ss(&s.centre.z));
+  const Terms t = vertexTerms(p, pos, v, centre, have_face_sums, quadric);
+  _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), t.ws));
+  _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), t.sc));
+  if (have_face_sums) {
+    _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), t.q0));
+    _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), t.q4));
+    _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), t.q8));
   }
 #else
+  const float w = p.weights[v];
   const glm::vec3 d = pos[v] - s.centre;
   s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
   s.ws[3] += w;
@@ -291,6 +316,53 @@ inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool 
   const float nl = glm::length(normal);
   normal_out = nl > 0.0f ? normal / nl : glm::vec3(0.0f, 0.0f, 1.0f);
 }
+
+#if defined(__SSE2__)
+// meanAndNormal for the four clusters s[0..3] (heaviest vertices h[0..3]), in lanes: its operations
+// lane by lane, both sides of its selects computed and chosen by mask, so bit-identical, with a
+// quarter of the divisions and roots
+inline void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* h, bool mean, bool quadric,
+                           glm::vec3* positions, glm::vec3* normals) {
+  auto store3 = [](glm::vec3& dst, __m128 v) {  // 12 bytes, not past the array's end
+    _mm_storel_pi(reinterpret_cast<__m64*>(&dst.x), v);
+    _mm_store_ss(&dst.z, _mm_movehl_ps(v, v));
+  };
+  const __m128 zero = _mm_setzero_ps(), floor_scale = _mm_set1_ps(kMeanWeightFloor);
+  __m128 wx = _mm_loadu_ps(s[0].ws), wy = _mm_loadu_ps(s[1].ws), wz = _mm_loadu_ps(s[2].ws), wt = _mm_loadu_ps(s[3].ws);
+  __m128 sx = _mm_loadu_ps(s[0].sc), sy = _mm_loadu_ps(s[1].sc), sz = _mm_loadu_ps(s[2].sc), n = _mm_loadu_ps(s[3].sc);
+  __m128 cx = _mm_loadu_ps(&s[0].centre.x), cy = _mm_loadu_ps(&s[1].centre.x);
+  __m128 cz = _mm_loadu_ps(&s[2].centre.x), cw = _mm_loadu_ps(&s[3].centre.x);
+  __m128 nx = _mm_loadu_ps(s[0].q + 6), ny = _mm_loadu_ps(s[1].q + 6), nz = _mm_loadu_ps(s[2].q + 6);
+  __m128 nw = _mm_loadu_ps(s[3].q + 6);
+  _MM_TRANSPOSE4_PS(wx, wy, wz, wt);
+  _MM_TRANSPOSE4_PS(sx, sy, sz, n);
+  _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
+  _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
+  __m128 xx = zero, xy = zero, xz = zero;
+  if (mean) {
+    const __m128 fw = _mm_mul_ps(floor_scale, _mm_set_ps(weights[h[3]], weights[h[2]], weights[h[1]], weights[h[0]]));
+    const __m128 total = _mm_add_ps(wt, _mm_mul_ps(fw, n));
+    const __m128 pos = _mm_cmpgt_ps(total, zero);
+    auto sel = [&](__m128 w, __m128 sm) {
+      const __m128 weighted = _mm_div_ps(_mm_add_ps(w, _mm_mul_ps(fw, sm)), total);
+      return _mm_or_ps(_mm_and_ps(pos, weighted), _mm_andnot_ps(pos, _mm_div_ps(sm, n)));
+    };
+    xx = sel(wx, sx), xy = sel(wy, sy), xz = sel(wz, sz);
+  }
+  if (!quadric) xx = _mm_add_ps(cx, xx), xy = _mm_add_ps(cy, xy), xz = _mm_add_ps(cz, xz);
+  const __m128 nl = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
+  const __m128 npos = _mm_cmpgt_ps(nl, zero);
+  nx = _mm_and_ps(npos, _mm_div_ps(nx, nl));
+  ny = _mm_and_ps(npos, _mm_div_ps(ny, nl));
+  nz = _mm_or_ps(_mm_and_ps(npos, _mm_div_ps(nz, nl)), _mm_andnot_ps(npos, _mm_set1_ps(1.0f)));
+  __m128 xw = zero;
+  _MM_TRANSPOSE4_PS(xx, xy, xz, xw);
+  store3(positions[0], xx), store3(positions[1], xy), store3(positions[2], xz), store3(positions[3], xw);
+  nw = zero;
+  _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
+  store3(normals[0], nx), store3(normals[1], ny), store3(normals[2], nz), store3(normals[3], nw);
+}
+#endif
 
 // the quadric's minimiser from x0 (relative to the centre), clamped to the cell: the representative
 inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const Assignment& a, float half) {
@@ -342,28 +414,54 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
   for (size_t v = 0; v < vn; ++v)
     if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
   const float half = 0.5f * a.cell_width;
+  const uint32_t* heaviest = a.heaviest.data();
+  // Four clusters at a time: their vertices are one run of `members`, each added to its cluster's
+  // sums by where it lies against the clusters' ends (no branch on a cluster's end, which a short,
+  // varying list mispredicts), then the four are finished in lanes as the single pass does.
+  Sums s[4] = {Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f))};
+  glm::vec4 face_color[4], vertex_color[4];
   uint32_t begin = 0;  // first[c] is now where cluster c + 1 starts
-  for (uint32_t c = 0; c < nc; ++c) {
-    Sums s(pos[a.heaviest[c]]);
-    glm::vec4 face_color(0.0f), vertex_color(0.0f);
-    const uint32_t end = first[c];
-    for (uint32_t j = begin; j < end; ++j) {
+  for (uint32_t c0 = 0; c0 < nc; c0 += 4) {
+    const uint32_t k_n = std::min<uint32_t>(4, nc - c0);  // fewer in the last group
+    // the centres are read out of order too: fetch those of the group after next
+    if (c0 + 12 <= nc)
+      for (uint32_t k = 8; k < 12; ++k) __builtin_prefetch(&pos[heaviest[c0 + k]]);
+    uint32_t h[4], end[4];
+    for (uint32_t k = 0; k < 4; ++k) {
+      const uint32_t c = c0 + std::min(k, k_n - 1);  // a short group repeats its last cluster's end
+      h[k] = heaviest[c];
+      end[k] = first[c];
+      s[k].centre = pos[h[k]];
+      std::memset(s[k].ws, 0, sizeof s[k].ws + sizeof s[k].sc + sizeof s[k].q);
+      face_color[k] = vertex_color[k] = glm::vec4(0.0f);
+    }
+    for (uint32_t j = begin; j < end[3]; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
       const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, members.size() - 1)];
       __builtin_prefetch(&p.face_sums[ahead]);
       __builtin_prefetch(&pos[ahead]);
       __builtin_prefetch(&p.weights[ahead]);
       const uint32_t v = members[j];
-      addVertex(p, pos, v, have_face_sums, quadric, s);
+      const uint32_t k = uint32_t(j >= end[0]) + uint32_t(j >= end[1]) + uint32_t(j >= end[2]);
+      addVertex(p, pos, v, have_face_sums, quadric, s[k]);
       if (colors) {
-        face_color += p.face_colors[v];
-        vertex_color += glm::vec4(m.colors[v], 1.0f);
+        face_color[k] += p.face_colors[v];
+        vertex_color[k] += glm::vec4(m.colors[v], 1.0f);
       }
     }
-    begin = end;
-    meanAndNormal(s, p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
-    if (quadric) out.positions[c] = quadricRepresentative(s, out.positions[c], a, half);
-    if (colors) finishColor(face_color, vertex_color, out.colors[c]);
+    begin = end[3];
+    glm::vec3 position[4], normal[4];
+#if defined(__SSE2__)
+    meanAndNormal4(s, p.weights.data(), h, mean, quadric, position, normal);
+#else
+    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], p.weights[h[k]], mean, quadric, position[k], normal[k]);
+#endif
+    for (uint32_t k = 0; k < k_n; ++k) {
+      const uint32_t c = c0 + k;
+      out.positions[c] = quadric ? quadricRepresentative(s[k], position[k], a, half) : position[k];
+      out.normals[c] = normal[k];
+      if (colors) finishColor(face_color[k], vertex_color[k], out.colors[c]);
+    }
   }
 }
 
@@ -421,53 +519,8 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const bool mean = synthesis != Synthesis::kHeaviest;
   uint32_t c0 = 0;
 #if defined(__SSE2__)
-  {
-    auto store3 = [](glm::vec3& dst, __m128 v) {  // 12 bytes, not past the array's end
-      _mm_storel_pi(reinterpret_cast<__m64*>(&dst.x), v);
-      _mm_store_ss(&dst.z, _mm_movehl_ps(v, v));
-    };
-    const __m128 zero = _mm_setzero_ps(), floor_scale = _mm_set1_ps(kMeanWeightFloor);
-    for (; c0 + 4 <= nc; c0 += 4) {
-      const Sums* s = &sums[c0];
-      __m128 wx = _mm_loadu_ps(s[0].ws), wy = _mm_loadu_ps(s[1].ws), wz = _mm_loadu_ps(s[2].ws), wt = _mm_loadu_ps(s[3].ws);
-      __m128 sx = _mm_loadu_ps(s[0].sc), sy = _mm_loadu_ps(s[1].sc), sz = _mm_loadu_ps(s[2].sc), n = _mm_loadu_ps(s[3].sc);
-      __m128 cx = _mm_loadu_ps(&s[0].centre.x), cy = _mm_loadu_ps(&s[1].centre.x);
-      __m128 cz = _mm_loadu_ps(&s[2].centre.x), cw = _mm_loadu_ps(&s[3].centre.x);
-      __m128 nx = _mm_loadu_ps(s[0].q + 6), ny = _mm_loadu_ps(s[1].q + 6), nz = _mm_loadu_ps(s[2].q + 6);
-      __m128 nw = _mm_loadu_ps(s[3].q + 6);
-      _MM_TRANSPOSE4_PS(wx, wy, wz, wt);
-      _MM_TRANSPOSE4_PS(sx, sy, sz, n);
-      _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
-      _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
-      __m128 xx = zero, xy = zero, xz = zero;
-      if (mean) {
-        const uint32_t* h = &a.heaviest[c0];
-        const __m128 fw = _mm_mul_ps(floor_scale, _mm_set_ps(p.weights[h[3]], p.weights[h[2]], p.weights[h[1]],
-                                                             p.weights[h[0]]));
-        const __m128 total = _mm_add_ps(wt, _mm_mul_ps(fw, n));
-        const __m128 pos = _mm_cmpgt_ps(total, zero);
-        auto sel = [&](__m128 w, __m128 sm) {
-          const __m128 weighted = _mm_div_ps(_mm_add_ps(w, _mm_mul_ps(fw, sm)), total);
-          return _mm_or_ps(_mm_and_ps(pos, weighted), _mm_andnot_ps(pos, _mm_div_ps(sm, n)));
-        };
-        xx = sel(wx, sx), xy = sel(wy, sy), xz = sel(wz, sz);
-      }
-      if (!quadric) xx = _mm_add_ps(cx, xx), xy = _mm_add_ps(cy, xy), xz = _mm_add_ps(cz, xz);
-      const __m128 nl = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
-      const __m128 npos = _mm_cmpgt_ps(nl, zero);
-      nx = _mm_and_ps(npos, _mm_div_ps(nx, nl));
-      ny = _mm_and_ps(npos, _mm_div_ps(ny, nl));
-      nz = _mm_or_ps(_mm_and_ps(npos, _mm_div_ps(nz, nl)), _mm_andnot_ps(npos, _mm_set1_ps(1.0f)));
-      __m128 xw = zero;
-      _MM_TRANSPOSE4_PS(xx, xy, xz, xw);
-      store3(out.positions[c0], xx), store3(out.positions[c0 + 1], xy);
-      store3(out.positions[c0 + 2], xz), store3(out.positions[c0 + 3], xw);
-      nw = zero;
-      _MM_TRANSPOSE4_PS(nx, ny, nz, nw);
-      store3(out.normals[c0], nx), store3(out.normals[c0 + 1], ny);
-      store3(out.normals[c0 + 2], nz), store3(out.normals[c0 + 3], nw);
-    }
-  }
+  for (; c0 + 4 <= nc; c0 += 4)
+    meanAndNormal4(&sums[c0], p.weights.data(), &a.heaviest[c0], mean, quadric, &out.positions[c0], &out.normals[c0]);
 #endif
   for (uint32_t c = c0; c < nc; ++c)
     meanAndNormal(sums[c], p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
