@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -407,10 +408,13 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
   std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
-  for (size_t v = 0; v < vn; ++v)
-    if (cluster_of[v] != kNone) ++first[cluster_of[v] + 1];
+  // counted without a test: an unreferenced vertex (kNone + 1 wraps to 0) counts in first[0], reset after
+#pragma GCC unroll 4
+  for (size_t v = 0; v < vn; ++v) ++first[uint32_t(cluster_of[v] + 1)];
+  first[0] = 0;
   for (uint32_t c = 0; c < nc; ++c) first[c + 1] += first[c];
-  std::vector<uint32_t> members(first[nc]);
+  const size_t member_count = first[nc];
+  std::unique_ptr<uint32_t[]> members(new uint32_t[member_count]);  // every entry is written below: not zeroed
   for (size_t v = 0; v < vn; ++v)
     if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
   const float half = 0.5f * a.cell_width;
@@ -437,7 +441,7 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
     }
     for (uint32_t j = begin; j < end[3]; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
-      const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, members.size() - 1)];
+      const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
       __builtin_prefetch(&p.face_sums[ahead]);
       __builtin_prefetch(&pos[ahead]);
       __builtin_prefetch(&p.weights[ahead]);
@@ -456,7 +460,11 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
 #else
     for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], p.weights[h[k]], mean, quadric, position[k], normal[k]);
 #endif
-    for (uint32_t k = 0; k < k_n; ++k) {
+    // a fixed count, each cluster under a test that only the last group fails (a loop to k_n
+    // mispredicted its exit once per group)
+#pragma GCC unroll 4
+    for (uint32_t k = 0; k < 4; ++k) {
+      if (k >= k_n) break;
       const uint32_t c = c0 + k;
       out.positions[c] = quadric ? quadricRepresentative(s[k], position[k], a, half) : position[k];
       out.normals[c] = normal[k];
