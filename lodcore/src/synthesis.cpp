@@ -210,6 +210,10 @@ struct Sums {          // 92 bytes per cluster
   // z), then the quadric's linear part: sum of area n d, planes relative to the centre (x, y, z)
   float q[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
   explicit Sums(const glm::vec3& c) : centre(c) {}
+  void reset(const glm::vec3& c) {  // as constructed from c (assigning a new Sums made a copy)
+    centre = c;
+    std::fill(ws, ws + 4, 0.0f), std::fill(sc, sc + 4, 0.0f), std::fill(q, q + 12, 0.0f);
+  }
 };
 
 #if defined(__SSE2__)
@@ -393,10 +397,10 @@ constexpr size_t kGroupedPrefetch = 8;
 
 // synthesize at fine levels, where its per-cluster sums (92 bytes each: 46 per vertex at a level of
 // half the triangles) were the largest array of a level: the vertices are listed by cluster (a
-// stable counting sort, 4 bytes per vertex and per cluster) and each cluster is summed and finished
-// at once in locals with the single pass's functions, its vertices in index order, so the results
-// are bit-identical. At coarse levels the single pass is faster (its sums stay in cache while this
-// reads the vertex arrays out of order).
+// stable counting sort, 4 bytes per vertex and per cluster) and clusters are summed four at a time
+// in locals and finished with the single pass's functions (meanAndNormal4 included), each cluster's
+// vertices in index order, so the results are bit-identical. At coarse levels the single pass is
+// faster (its sums stay in cache while this reads the vertex arrays out of order).
 void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
@@ -435,8 +439,7 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
       const uint32_t c = c0 + std::min(k, k_n - 1);  // a short group repeats its last cluster's end
       h[k] = heaviest[c];
       end[k] = first[c];
-      s[k].centre = pos[h[k]];
-      std::memset(s[k].ws, 0, sizeof s[k].ws + sizeof s[k].sc + sizeof s[k].q);
+      s[k].reset(pos[h[k]]);
       face_color[k] = vertex_color[k] = glm::vec4(0.0f);
     }
     for (uint32_t j = begin; j < end[3]; ++j) {
