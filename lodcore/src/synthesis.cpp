@@ -424,8 +424,8 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
   const float half = 0.5f * a.cell_width;
   const uint32_t* heaviest = a.heaviest.data();
   // Four clusters at a time: their vertices are one run of `members`, each added to its cluster's
-  // sums by where it lies against the clusters' ends (no branch on a cluster's end, which a short,
-  // varying list mispredicts), then the four are finished in lanes as the single pass does.
+  // sums (slot cluster_of[v] - c0, no branch on a cluster's end, which a short, varying list
+  // mispredicts), then the four are finished in lanes as the single pass does.
   Sums s[4] = {Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f))};
   glm::vec4 face_color[4], vertex_color[4];
   uint32_t begin = 0;  // first[c] is now where cluster c + 1 starts
@@ -434,29 +434,28 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
     // the centres are read out of order too: fetch those of the group after next
     if (c0 + 12 <= nc)
       for (uint32_t k = 8; k < 12; ++k) __builtin_prefetch(&pos[heaviest[c0 + k]]);
-    uint32_t h[4], end[4];
+    const uint32_t end = first[c0 + k_n - 1];
+    uint32_t h[4];
     for (uint32_t k = 0; k < 4; ++k) {
-      const uint32_t c = c0 + std::min(k, k_n - 1);  // a short group repeats its last cluster's end
-      h[k] = heaviest[c];
-      end[k] = first[c];
+      h[k] = heaviest[c0 + std::min(k, k_n - 1)];  // a short group repeats its last cluster (unused lanes)
       s[k].reset(pos[h[k]]);
       face_color[k] = vertex_color[k] = glm::vec4(0.0f);
     }
-    for (uint32_t j = begin; j < end[3]; ++j) {
+    for (uint32_t j = begin; j < end; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
       const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
       __builtin_prefetch(&p.face_sums[ahead]);
       __builtin_prefetch(&pos[ahead]);
       __builtin_prefetch(&p.weights[ahead]);
       const uint32_t v = members[j];
-      const uint32_t k = uint32_t(j >= end[0]) + uint32_t(j >= end[1]) + uint32_t(j >= end[2]);
+      const uint32_t k = cluster_of[v] - c0;
       addVertex(p, pos, v, have_face_sums, quadric, s[k]);
       if (colors) {
         face_color[k] += p.face_colors[v];
         vertex_color[k] += glm::vec4(m.colors[v], 1.0f);
       }
     }
-    begin = end[3];
+    begin = end;
     glm::vec3 position[4], normal[4];
 #if defined(__SSE2__)
     meanAndNormal4(s, p.weights.data(), h, mean, quadric, position, normal);
