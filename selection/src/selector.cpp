@@ -183,9 +183,13 @@ float floatAtMost(double v) {
 // of four byte columns and the cost. m keys of a block from its columns, in a loop that vectorises
 // (16-bit lanes; the unsigned compare finest <= prev < level count as one, by wrap-around).
 constexpr uint16_t kSettleIneligible = 0x8000;
-inline __attribute__((always_inline)) void settleKeys(const float* ga, const uint8_t* glevels,
-                                                      const uint8_t* gfinest, const int8_t* gprev, size_t m,
-                                                      uint16_t* gkey) {
+// Returns the count of slots with last frame's level "not drawn" and a benefit > 0: the settled
+// slots' part of the dropped count comes from it (the write-out of the unsettled slots corrects it).
+inline __attribute__((always_inline)) uint32_t settleKeys(const float* ga, const float* gb, const uint8_t* glevels,
+                                                          const uint8_t* gfinest, const int8_t* gprev, size_t m,
+                                                          uint16_t* gkey) {
+  uint32_t dropped = 0;
+  for (size_t j = 0; j < m; ++j) dropped += (gprev[j] < 0) & (gb[j] > 0.0f) ? 1u : 0u;
   for (size_t j = 0; j < m; ++j) {
     const uint16_t lc = glevels[j], fi = gfinest[j];
     const uint16_t p1 = static_cast<uint16_t>(gprev[j] + 1);  // 0: "not drawn"
@@ -194,10 +198,11 @@ inline __attribute__((always_inline)) void settleKeys(const float* ga, const uin
     const uint16_t key = static_cast<uint16_t>((fi * (kLanes + 1) + lc) << 4 | p1);
     gkey[j] = eligible ? key : kSettleIneligible;
   }
+  return dropped;
 }
-SCENELOD_AVX2_TARGET void settleKeysAvx2(const float* ga, const uint8_t* glevels, const uint8_t* gfinest,
-                                         const int8_t* gprev, size_t m, uint16_t* gkey) {
-  settleKeys(ga, glevels, gfinest, gprev, m, gkey);
+SCENELOD_AVX2_TARGET uint32_t settleKeysAvx2(const float* ga, const float* gb, const uint8_t* glevels,
+                                             const uint8_t* gfinest, const int8_t* gprev, size_t m, uint16_t* gkey) {
+  return settleKeys(ga, gb, glevels, gfinest, gprev, m, gkey);
 }
 
 // What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
@@ -213,6 +218,15 @@ struct SettleInput {
   float h1;
   float avail;             // largest float <= the budget left after the mandatory part
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
+  // the fused write-out's (settleSlots*<true> only): pixels per slot and the per-row counters of
+  // drawn slots (zeroed here)
+  const float* px;
+  uint32_t* row_drawn;
+  size_t rows;
+};
+// The settled slots' share of the frame's sums, in slot order (with kFuse; else only cost).
+struct SettleSums {
+  double cost, benefit, pixels;
 };
 
 // Settled objects (incremental case, Lagrangian form): an object whose hull point is the unique
@@ -229,14 +243,19 @@ struct SettleInput {
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
 // both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
 // default target and take AVX vectors by value.
-template <typename VF, typename VI>
+template <typename VF, typename VI, bool kFuse>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
                                                              uint8_t* chosen_step, uint32_t* unsettled,
-                                                             double* settled_cost) {
+                                                             SettleSums* settled_sums) {
   constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
   static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
   size_t unsettled_count = 0;
-  double total = 0.0;
+  double total = 0.0, benefit = 0.0, pixels = 0.0;
+  const float* const in_px = in.px;
+  uint32_t* const row_drawn = in.row_drawn;
+  if (kFuse) std::memset(row_drawn, 0, in.rows * sizeof(uint32_t));
+  // every slot's step (an unsettled slot's is written again when its hull is built)
+  std::memset(chosen_step, kSettledAtPrev, slot_count);
   const VF ones = VF{} + 1.0f;
   // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
   alignas(32) float hyst[kLanes + 1][kLanes];
@@ -320,22 +339,33 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       none = (words[0] | words[1]) == 0;
     }
     const bool settled = eligible & none;
-    // written for every slot: an unsettled slot's step is written again when its hull is built
-    chosen_step[s] = kSettledAtPrev;
-    total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
+    const int pick = (cand + 1) & -static_cast<int>(settled);  // cand + 1, or 0 for an unsettled slot
+    total += pc[pick];  // cc, or pc[0] = +0
+    if (kFuse) {
+      // the write-out's terms of a settled slot (writeOutSlotsBody's operations on the same values:
+      // cc and cb are its cost and benefit at its level); an unsettled slot adds +0 and its level is
+      // written again by the write-out of the unsettled slots (the dropped count is settleKeys')
+      const uint32_t drawn = pick != 0 ? 1u : 0u;
+      benefit += pb[pick];
+      pixels += maskFloat(in_px[s], 0u - drawn);
+      row_drawn[row0 + static_cast<uint32_t>(pick) - drawn] += drawn;  // row0 + cand, or + 0 adding 0
+      // (its level, cand = last frame's, is already in the levels out: pass 1c wrote it)
+    }
     unsettled[unsettled_count] = static_cast<uint32_t>(s);
     unsettled_count += settled ? 0u : 1u;
   }
-  *settled_cost = total;
+  *settled_sums = SettleSums{total, benefit, pixels};
   return unsettled_count;
 }
+template <bool kFuse>
 size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step, uint32_t* unsettled,
-                       double* settled_cost) {
-  return settleSlotsBody<V4f, V4i>(in, slot_count, chosen_step, unsettled, settled_cost);
+                       SettleSums* settled_sums) {
+  return settleSlotsBody<V4f, V4i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
+template <bool kFuse>
 SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
-                                            uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V8f, V8i>(in, slot_count, chosen_step, unsettled, settled_cost);
+                                            uint32_t* unsettled, SettleSums* settled_sums) {
+  return settleSlotsBody<V8f, V8i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
@@ -514,6 +544,11 @@ struct HullSums {
   size_t segments, pcount;
   size_t pwanted;  // the upgrades inside the predicted bracket, stored or not (>= pcount)
   bool poverflow;
+  // fused: the settling pass wrote the settled slots' levels and summed their write-out terms
+  // (settled); the unsettled slots, in slot order, are the first unsettled_count of ctx.heap's list
+  bool fused;
+  size_t unsettled_count;
+  SettleSums settled;
 };
 
 // The coarsest level of accuracy 1 of a chain of more than kLanes levels (row_inv_w from its first
@@ -540,7 +575,7 @@ __attribute__((target("avx2,popcnt")))
 #endif
 void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
                     const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
-                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels) {
+                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels, int8_t* level_of) {
   static_assert(kLanes == 8, "one AVX2 vector per chain");
   for (size_t j = 0; j < m; ++j) {
     const size_t i = gobj[j];
@@ -567,8 +602,10 @@ void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint3
     }
     gfinest[j] = static_cast<uint8_t>(finest);
     grow0[j] = row0;
-    gprev[j] = prev_level[i];
+    const int8_t prev = prev_level[i];
+    gprev[j] = prev;
     glevels[j] = static_cast<uint8_t>(level_count);
+    level_of[i] = prev;  // a settled slot's level (the others' are written again)
   }
 }
 
@@ -1195,6 +1232,7 @@ bool SelectionJob::run() {
   int8_t* const level_of = levels_out.data;
   uint32_t* const slot_object = ctx.slot_object;
   double mandatory = coef.per_frame_ms;
+  uint32_t prev_dropped = 0;  // budget mode: slots last frame "not drawn" with a benefit > 0 (settleKeys)
   const glm::vec3* const center_of = centers.data;
   const float* const radius_of = radii.data;
   const float* const scale_of = max_scales.data;
@@ -1316,7 +1354,8 @@ bool SelectionJob::run() {
       gpx[j] = px;
     }
     if (use_avx2) {
-      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels);
+      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
+                     level_of);
     } else {
       for (size_t j = 0; j < m; ++j) {
         const size_t i = gobj[j];
@@ -1353,14 +1392,18 @@ bool SelectionJob::run() {
         }
         gfinest[j] = static_cast<uint8_t>(finest);
         grow0[j] = row0;
-        gprev[j] = prev_level[i];
+        const int8_t prev = prev_level[i];
+        gprev[j] = prev;
         glevels[j] = static_cast<uint8_t>(level_count);
+        // the slot's level starts at last frame's: a settled slot's in the fused write-out (the
+        // settling pass does not write it); every other path writes every slot's level again
+        level_of[i] = prev;
       }
     }
     if (budget && use_avx2)
-      settleKeysAvx2(ga, glevels, gfinest, gprev, m, slot_key + s0);
+      prev_dropped += settleKeysAvx2(ga, gb, glevels, gfinest, gprev, m, slot_key + s0);
     else if (budget)
-      settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
+      prev_dropped += settleKeys(ga, gb, glevels, gfinest, gprev, m, slot_key + s0);
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
     } else if (budget) {
@@ -1436,6 +1479,10 @@ bool SelectionJob::run() {
   st.culled_count = culled;
   st.mandatory_ms = budget ? mandatory : 0.0;
   const double cap = static_cast<double>(params.budget_ms);
+  // the last settling pass's fused write-out (HullSums)
+  bool fused = false;
+  size_t unsettled_count = 0;
+  SettleSums settled_sums{};
   int64_t half_slot = -1;  // the 1/2 guarantee's alternative: this slot at hull step half_step,
   uint32_t half_step = 0;  // every other slot at its base, with this benefit
   double half_alt_benefit = 0.0;
@@ -1536,6 +1583,9 @@ bool SelectionJob::run() {
       const auto h1_ = h1;
       const auto rows_nonnegative_ = rows_nonnegative;
       const size_t slots_ = slots;
+      const float* const slot_px_ = slot_px;
+      uint32_t* const row_drawn_ = ctx.row_drawn;
+      const size_t rows_ = levels.cell_width.count;
       uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
       Pt pts[65];
       double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
@@ -1548,14 +1598,21 @@ bool SelectionJob::run() {
       // settled slots first, then the hulls of the others (all slots when not settling)
       uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
       size_t build_count = slots_;
+      SettleSums settled{};
+      bool fused = false;
       if (settle) {
         const SettleInput in{slot_key_, slot_row0_, slot_a_, slot_b_, slot_q_,
                              row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
                              static_cast<float>(plo_ / (1.0 + kSettleMargin)),
-                             static_cast<float>(phi_ * (1.0 + kSettleMargin))};
+                             static_cast<float>(phi_ * (1.0 + kSettleMargin)),
+                             slot_px_, row_drawn_, rows_};
         if (rows_nonnegative_) {
-          build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
-              in, slots_, chosen_step_, unsettled, &ptotal);
+          // the write-out's sums fused in when it counts per row (fewer rows than slots)
+          fused = rows_ <= slots_;
+          build_count = (ctx.use_avx2 ? (fused ? settleSlotsAvx2<true> : settleSlotsAvx2<false>)
+                                      : (fused ? settleSlotsSse2<true> : settleSlotsSse2<false>))(
+              in, slots_, chosen_step_, unsettled, &settled);
+          ptotal = settled.cost;
         } else {
           for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
@@ -1673,9 +1730,13 @@ bool SelectionJob::run() {
           }
         }
       }
-      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, pwanted, poverflow};
+      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, pwanted, poverflow,
+                      fused, build_count, settled};
     };
     auto storeSums = [&](const HullSums& h) {
+      fused = h.fused;
+      unsettled_count = h.unsettled_count;
+      settled_sums = h.settled;
       top_cost = h.top_cost;
       base_total = h.base_total;
       base_benefit = h.base_benefit;
@@ -1989,7 +2050,52 @@ bool SelectionJob::run() {
       dropped = sums.dropped;
       drawn = sums.drawn;
     };
-    writeOut();
+    // the fused form: the settled slots' levels and sums are in (the settling pass), the unsettled
+    // slots' are added in slot order (addSlot's operations), and the features summed per row
+    auto writeOutUnsettled = [&]() {
+      f = CostFeatures();
+      predicted = coef.per_frame_ms + settled_sums.cost;
+      benefit = settled_sums.benefit;
+      double pixels = settled_sums.pixels;
+      // settleKeys counted the slots last frame "not drawn" with a benefit: the settled ones are
+      // dropped again, the unsettled ones are counted by their level here instead
+      uint32_t dropped_ = prev_dropped;
+      const uint32_t* const list = reinterpret_cast<const uint32_t*>(ctx.heap);
+      const uint8_t* const chosen = ctx.chosen;
+      uint32_t* const row_drawn = ctx.row_drawn;
+      for (size_t u = 0; u < unsettled_count; ++u) {
+        const size_t s = list[u];
+        const uint8_t level = hull[s * hull_stride + chosen[s]];
+        level_of[slot_object[s]] = static_cast<int8_t>(level);
+        const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+        const float b = slot_b[s];
+        dropped_ += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+        dropped_ -= slot_prev[s] < 0 && b > 0.0f ? 1u : 0u;
+        const uint32_t row = slot_row0[s] + (level & keep);
+        row_drawn[row] -= keep;
+        const float cost = slot_a[s] + row_cost[row];
+        const bool current = level == static_cast<uint8_t>(slot_prev[s]);
+        const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
+        predicted += maskFloat(cost, keep);
+        benefit += maskFloat(b * acc, keep);
+        pixels += maskFloat(slot_px[s], keep);
+      }
+      f.pixels = pixels;
+      tri_sum = vert_sum = line_sum = 0;
+      drawn = 0;
+      for (size_t r = 0, rows = levels.cell_width.count; r < rows; ++r) {
+        const uint64_t k = row_drawn[r];
+        drawn += static_cast<uint32_t>(k);
+        tri_sum += k * tri[r];
+        vert_sum += k * vert[r];
+        line_sum += k * lines[r];
+      }
+      dropped = dropped_;
+    };
+    if (fused)
+      writeOutUnsettled();
+    else
+      writeOut();
     // the sum of benefits over slots in slot order is what the greedy's choice scores
     if (half_slot >= 0 && half_alt_benefit > benefit) {
       const size_t js = static_cast<size_t>(half_slot);
