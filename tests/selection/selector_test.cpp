@@ -615,6 +615,68 @@ TEST(Selector, BudgetFeaturesAreTheSumsOfTheDrawnLevels) {
   }
 }
 
+// On warm frames along a smooth path most objects settle, and the settling pass writes their share
+// of the frame's statistics (the write-out visits only the others): every statistic must still be
+// what the levels out give, with must-draw objects and objects without benefit (importance 0) mixed
+// in. The sums are compared exactly with the sums in object order (the write-out's order).
+TEST(Selector, StatisticsOfWarmFramesAreTheSumsOverTheLevelsOut) {
+  SyntheticScene s = makeScene(61, 2000, 6, 8, 120.0f, true);
+  for (size_t i = 0; i < s.importance.size(); i += 7) s.importance[i] = 0.0f;
+  for (size_t i = 3; i < s.must_draw.size(); i += 50) s.must_draw[i] = 1;
+  const LevelTable t = s.table.view();
+  Owned ctx(makeContext(2000, 64));
+  const double per_frame = selectorCostModel(ctx.ctx).per_frame_ms;
+  size_t warm = 0, with_dropped_zero_benefit = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    const Camera cam = makeCamera(glm::vec3(0.05f * frame, 1.0f, 20.0f - 0.2f * frame));
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, ctx.ctx, &cam, levels, &st);
+    job.params.budget_ms = 1.5f;
+    job.params.calibrate = false;
+    ASSERT_TRUE(job.run());
+    double predicted = per_frame, benefit = 0.0, tri = 0.0, vert = 0.0, lines = 0.0;
+    uint32_t drawn = 0, dropped = 0, culled = 0, not_drawn_without_benefit = 0;
+    for (size_t i = 0; i < levels.size(); ++i) {
+      double c0 = 0.0, b0 = 0.0;
+      if (!selectorLastPoint(ctx.ctx, i, 0, &c0, &b0)) {
+        ++culled;
+        EXPECT_EQ(levels[i], -1) << "frame " << frame << " object " << i;
+        continue;
+      }
+      if (levels[i] < 0) {
+        EXPECT_EQ(s.must_draw[i], 0) << "frame " << frame << " object " << i;
+        dropped += b0 > 0.0 ? 1u : 0u;
+        not_drawn_without_benefit += b0 > 0.0 ? 0u : 1u;
+        continue;
+      }
+      double c = 0.0, b = 0.0;
+      ASSERT_TRUE(selectorLastPoint(ctx.ctx, i, levels[i], &c, &b));
+      predicted += c;
+      benefit += b;
+      const uint32_t row = t.chain_level_offset[s.chains[i]] + static_cast<uint32_t>(levels[i]);
+      tri += t.triangle_count[row];
+      vert += t.vertex_count[row];
+      lines += t.line_point_count[row];
+      ++drawn;
+    }
+    EXPECT_EQ(st.culled_count, culled) << "frame " << frame;
+    EXPECT_EQ(st.drawn_count, drawn) << "frame " << frame;
+    EXPECT_EQ(st.dropped_count, dropped) << "frame " << frame;
+    EXPECT_EQ(st.predicted_ms, predicted) << "frame " << frame;
+    EXPECT_EQ(st.total_benefit, benefit) << "frame " << frame;
+    EXPECT_EQ(st.features.objects, static_cast<double>(drawn)) << "frame " << frame;
+    EXPECT_EQ(st.features.triangles, tri) << "frame " << frame;
+    EXPECT_EQ(st.features.vertices, vert) << "frame " << frame;
+    EXPECT_EQ(st.features.line_points, lines) << "frame " << frame;
+    EXPECT_GT(dropped, 0u) << "the budget should bind, frame " << frame;
+    warm += frame > 0 && st.switch_count * 10 < drawn ? 1 : 0;
+    with_dropped_zero_benefit += not_drawn_without_benefit > 0 ? 1 : 0;
+  }
+  EXPECT_GT(warm, 20u) << "most frames should keep most levels (and settle most objects)";
+  EXPECT_GT(with_dropped_zero_benefit, 20u) << "objects without benefit in view, not counted as dropped";
+}
+
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
   Owned a(makeContext(2000, 100)), b(makeContext(2000, 100));
