@@ -216,6 +216,7 @@ struct SettleInput {
   const float* row_cost;   // kLanes readable past the last row
   const float* row_inv_w;
   float h1;
+  float one;               // 1.0f (from the caller: GCC lowers t < 1 ? t : 1 to minps only when 1 is not a constant)
   float avail;             // largest float <= the budget left after the mandatory part
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
   // the fused write-out's (settleSlots*<true> only): pixels per slot and the per-row counters of
@@ -256,7 +257,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   if (kFuse) std::memset(row_drawn, 0, in.rows * sizeof(uint32_t));
   // every slot's step (an unsettled slot's is written again when its hull is built)
   std::memset(chosen_step, kSettledAtPrev, slot_count);
-  const VF ones = VF{} + 1.0f;
+  const VF ones = VF{} + in.one;
   // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
   alignas(32) float hyst[kLanes + 1][kLanes];
   for (int r = 0; r <= kLanes; ++r)
@@ -1602,7 +1603,7 @@ bool SelectionJob::run() {
       bool fused = false;
       if (settle) {
         const SettleInput in{slot_key_, slot_row0_, slot_a_, slot_b_, slot_q_,
-                             row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
+                             row_cost_, row_inv_w_, h1_, 1.0f, floatAtMost(avail_),
                              static_cast<float>(plo_ / (1.0 + kSettleMargin)),
                              static_cast<float>(phi_ * (1.0 + kSettleMargin)),
                              slot_px_, row_drawn_, rows_};
