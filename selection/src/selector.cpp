@@ -74,26 +74,34 @@ struct BracketEntry {
 // descending (bracket ratios are above the bracket's lower end >= 0: positive floats, whose bits
 // are in their order), four passes of 8 bits through `scratch` (as many entries), a pass skipped
 // when all keys share its byte. The order std::sort gave with that comparison, without an
-// unpredictable branch per comparison.
+// unpredictable branch per comparison. The four bytes' histograms are counted in one pass (a
+// histogram does not depend on the entries' order); in the bracket's narrow range of ratios most
+// of them hold a single byte value, and their passes cost nothing more.
 void sortBracket(BracketEntry* entries, BracketEntry* scratch, size_t count) {
+  if (count == 0) return;
+  uint32_t histogram[4][256] = {};
+  for (size_t e = 0; e < count; ++e) {
+    uint32_t bits;
+    std::memcpy(&bits, &entries[e].ratio, sizeof(bits));
+    bits = ~bits;
+    ++histogram[0][bits & 0xFF];
+    ++histogram[1][(bits >> 8) & 0xFF];
+    ++histogram[2][(bits >> 16) & 0xFF];
+    ++histogram[3][bits >> 24];
+  }
+  uint32_t first_bits;
+  std::memcpy(&first_bits, &entries[0].ratio, sizeof(first_bits));
   BracketEntry* from = entries;
   BracketEntry* to = scratch;
   for (int shift = 0; shift < 32; shift += 8) {
-    uint32_t offsets[256] = {};
-    for (size_t e = 0; e < count; ++e) {
-      uint32_t bits;
-      std::memcpy(&bits, &from[e].ratio, sizeof(bits));
-      ++offsets[(~bits >> shift) & 0xFF];
-    }
+    uint32_t* const offsets = histogram[shift / 8];
+    if (offsets[(~first_bits >> shift) & 0xFF] == count) continue;  // every key has this byte
     uint32_t first = 0;
-    bool single = false;
     for (int b = 0; b < 256; ++b) {
       const uint32_t c = offsets[b];
-      single |= c == count;
       offsets[b] = first;
       first += c;
     }
-    if (single) continue;
     for (size_t e = 0; e < count; ++e) {
       uint32_t bits;
       std::memcpy(&bits, &from[e].ratio, sizeof(bits));
