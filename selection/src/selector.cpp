@@ -377,6 +377,37 @@ SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_c
   return settleSlotsBody<V8f, V8i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
 
+// Nonzero when one of the n chain indices is above last_chain (validate's check, no early exit: the
+// valid case reads the whole column anyway): two vectors at a time, unsigned order as signed order
+// after flipping the sign bit (SSE2 has no unsigned compare). Compiled for SSE2 and AVX2.
+template <typename VI>
+inline __attribute__((always_inline)) uint32_t chainsAboveBody(const uint32_t* chain_of, size_t n,
+                                                               uint32_t last_chain) {
+  constexpr size_t kWidth = sizeof(VI) / sizeof(int32_t);
+  const VI flip = VI{} + std::numeric_limits<int32_t>::min();
+  const VI last = flip ^ static_cast<int32_t>(last_chain);
+  VI bad0 = VI{}, bad1 = VI{};
+  size_t i = 0;
+  for (; i + 2 * kWidth <= n; i += 2 * kWidth) {
+    VI v0, v1;
+    std::memcpy(&v0, chain_of + i, sizeof(v0));
+    std::memcpy(&v1, chain_of + i + kWidth, sizeof(v1));
+    bad0 |= (v0 ^ flip) > last;
+    bad1 |= (v1 ^ flip) > last;
+  }
+  bad0 |= bad1;
+  uint32_t bad = 0;
+  for (size_t l = 0; l < kWidth; ++l) bad |= static_cast<uint32_t>(bad0[l]);
+  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
+  return bad;
+}
+uint32_t chainsAboveSse2(const uint32_t* chain_of, size_t n, uint32_t last_chain) {
+  return chainsAboveBody<V4i>(chain_of, n, last_chain);
+}
+SCENELOD_AVX2_TARGET uint32_t chainsAboveAvx2(const uint32_t* chain_of, size_t n, uint32_t last_chain) {
+  return chainsAboveBody<V8i>(chain_of, n, last_chain);
+}
+
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
 // outside one of the frustum's planes (sphereInFrustum's six tests without early exits). Blocks of
 // 64 objects are first copied into local columns, so the six planes' tests are one plain loop over
@@ -1060,23 +1091,8 @@ bool SelectionJob::validate() const {
   }
   // no early exit: an OR over the whole column vectorises (the valid case reads it all anyway)
   if (n > 0 && chain_count == 0) return false;
-  uint32_t bad = 0;
-  const uint32_t* const chain_of = chains.data;
   const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
-  // four at a time; unsigned order as signed order after flipping the sign bit (SSE2 has no
-  // unsigned compare)
-  constexpr int32_t kSign = std::numeric_limits<int32_t>::min();
-  const V4i flip = {kSign, kSign, kSign, kSign};
-  const V4i last4 = flip ^ static_cast<int32_t>(last_chain);
-  V4i bad4 = {0, 0, 0, 0};
-  size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    V4i v;
-    std::memcpy(&v, chain_of + i, sizeof(v));
-    bad4 |= (v ^ flip) > last4;
-  }
-  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
-  return bad == 0 && !anyLane(bad4);
+  return (context->use_avx2 ? chainsAboveAvx2 : chainsAboveSse2)(chains.data, n, last_chain) == 0;
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {

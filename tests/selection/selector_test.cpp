@@ -88,6 +88,35 @@ TEST(Selector, ContextCreationRefusesBadConfigs) {
   EXPECT_EQ(createSelectorContext(cfg), nullptr);  // out of memory is reported, not thrown
 }
 
+// validate's chain check runs two vectors at a time (SSE2: 8 objects, AVX2: 16) and the rest one
+// by one: a chain id out of range is found at every position, also ids with the top bit set (the
+// unsigned compare is a signed one after a sign flip), on both code paths.
+TEST(Selector, ValidateFindsAChainIdOutOfRangeAtEveryPosition) {
+  SyntheticScene s = makeScene(2, 45, 3, 5);
+  SelectorConfig cfg;
+  cfg.max_object_count = 45;
+  for (const bool sse2_only : {false, true}) {
+    cfg.sse2_only = sse2_only;
+    Owned o(createSelectorContext(cfg));
+    const Camera cam = makeCamera();
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
+    ASSERT_TRUE(job.validate());
+    std::vector<uint32_t> chains = s.chains;
+    job.chains = Span<const uint32_t>(chains.data(), chains.size());
+    for (size_t i = 0; i < chains.size(); ++i) {
+      for (const uint32_t bad : {3u, 0x7fffffffu, 0x80000000u, 0xffffffffu}) {
+        chains[i] = bad;
+        EXPECT_FALSE(job.validate()) << "object " << i << " chain " << bad << " sse2 " << sse2_only;
+      }
+      chains[i] = 2;  // the last chain: valid
+      EXPECT_TRUE(job.validate()) << "object " << i << " sse2 " << sse2_only;
+      chains[i] = s.chains[i];
+    }
+  }
+}
+
 TEST(Selector, ValidateRefusesEachInvalidField) {
   SyntheticScene s = makeScene(1, 20, 3, 5);
   Owned o(makeContext(20));
