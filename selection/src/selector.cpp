@@ -246,7 +246,11 @@ struct SettleSums {
 // by a ratio above the top end and every costlier point by a ratio below the bottom end (float
 // differences, exact to about 2^-22 relative, far inside the margin). A settled slot gets no hull:
 // its chosen step is kSettledAtPrev (its hull would be "not drawn", the level, and the write-out
-// reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
+// reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their
+// count; settled_sums->cost sums the settled slots' costs (in slot order). kFuse (the write-out
+// fused in, when the features are counted per row): also their benefits and pixels, and each
+// drawn settled slot counted at its row in row_drawn; their levels (last frame's) are already in
+// the levels out (pass 1c writes every slot's), so the write-out visits only the unsettled slots.
 // Only slots with an eligible key (settleKey) may settle.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
@@ -680,8 +684,10 @@ struct SlotSums {
   uint32_t dropped, drawn;
 };
 
-// The budget write-out: each slot's level into level_of and its share of the frame's sums, in slot
-// order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
+// The budget write-out when the settling pass did not sum the settled slots (a cold frame, a miss
+// of the predicted bracket, more rows than slots, the ½ guarantee's fallback): each slot's level
+// into level_of and its share of the frame's sums, in slot order, with the same operations as
+// addSlot in SelectionJob::run (so the same bits). A function of
 // its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
 // the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
 // kCountRows: the integer features as Σ (drawn slots of the row) × feature over the rows instead of
@@ -2081,8 +2087,11 @@ bool SelectionJob::run() {
       dropped = sums.dropped;
       drawn = sums.drawn;
     };
-    // the fused form: the settled slots' levels and sums are in (the settling pass), the unsettled
-    // slots' are added in slot order (addSlot's operations), and the features summed per row
+    // the fused form: the settled slots' levels and sums are in (pass 1c and the settling pass),
+    // the unsettled slots' are added after them in slot order (addSlot's operations), and the
+    // features summed per row. The float sums are then in another order than writeOut's (settled
+    // slots first): the same values whenever every partial double sum is exact (no more than
+    // 53 significant bits), as on every scene checked (docs/bench/selection.md)
     auto writeOutUnsettled = [&]() {
       f = CostFeatures();
       predicted = coef.per_frame_ms + settled_sums.cost;
