@@ -525,16 +525,22 @@ constexpr KeepPermutes kKeepPermutes = makeKeepPermutes();
 // eight objects at a time: the kept lanes' indices, centres and radii moved to the front of a
 // vector (vpermd / vpermps, the lane numbers from the table) and stored whole; the next store
 // starts after the kept ones, so the result is frustumCompactSse2's (moves only)
+// The centres are de-interleaved in registers (three loads, two blends and a lane permutation per
+// coordinate: the three coordinates of 8 packed centres sit in distinct lanes of the three vectors),
+// tested against the six planes there (frustumBlock's operations in its order: ((a x + b y) + c z)
+// + d < -r, so the same bits) and moved to the queue from there; the tail of fewer than 8 spheres
+// goes through frustumBlock.
 __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz,
                                                                  const float* rad, size_t n, uint32_t base,
                                                                  const SphereQueue& q) {
-  alignas(32) float bx[64], by[64], bz[64], bnr[64];
-  alignas(32) uint32_t bo[64];
-  // a full block with a constant trip count (no loop-exit mispredictions)
-  if (n == 64)
-    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
-  else
-    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  alignas(32) float plane[4][6][8];  // each coefficient on all lanes
+  for (int k = 0; k < 6; ++k)
+    for (int l = 0; l < 8; ++l) {
+      plane[0][k][l] = frustum.planes[k].x;
+      plane[1][k][l] = frustum.planes[k].y;
+      plane[2][k][l] = frustum.planes[k].z;
+      plane[3][k][l] = frustum.planes[k].w;
+    }
   uint32_t* const dst = q.object;
   float* const qx = q.x;
   float* const qy = q.y;
@@ -545,26 +551,52 @@ __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& 
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i shifts = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
   const __m256i seven = _mm256_set1_epi32(7);
+  // after the blends, lane l holds the coordinate of centre (x) 0 3 6 1 4 7 2 5, (y) 5 0 3 6 1 4 7 2,
+  // (z) 2 5 0 3 6 1 4 7; these put centre i in lane i
+  const __m256i order_x = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+  const __m256i order_y = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
+  const __m256i order_z = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
   for (; j + 8 <= n; j += 8) {
-    const __m256i o = _mm256_load_si256(reinterpret_cast<const __m256i*>(bo + j));
-    const int keep = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(o, _mm256_setzero_si256())));
+    const __m256 v0 = _mm256_loadu_ps(xyz + 3 * j), v1 = _mm256_loadu_ps(xyz + 3 * j + 8),
+                 v2 = _mm256_loadu_ps(xyz + 3 * j + 16);
+    const __m256 x = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x92), v2, 0x24), order_x);
+    const __m256 y = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x24), v2, 0x49), order_y);
+    const __m256 z = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x49), v2, 0x92), order_z);
+    const __m256 r = _mm256_loadu_ps(rad + j);
+    const __m256 nr = _mm256_xor_ps(r, sign);
+    __m256 out = _mm256_setzero_ps();
+    for (int k = 0; k < 6; ++k) {
+      const __m256 d = _mm256_add_ps(
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_load_ps(plane[0][k]), x),
+                                      _mm256_mul_ps(_mm256_load_ps(plane[1][k]), y)),
+                        _mm256_mul_ps(_mm256_load_ps(plane[2][k]), z)),
+          _mm256_load_ps(plane[3][k]));
+      out = _mm256_or_ps(out, _mm256_cmp_ps(d, nr, _CMP_LT_OQ));
+    }
+    const int keep = ~_mm256_movemask_ps(out) & 0xFF;
     const __m256i perm = _mm256_and_si256(
         _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int32_t>(kKeepPermutes.lanes[keep])), shifts), seven);
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(base + j)), lane);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(idx, perm));
-    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bx + j), perm));
-    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(_mm256_load_ps(by + j), perm));
-    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bz + j), perm));
-    _mm256_storeu_ps(qr + count, _mm256_xor_ps(_mm256_permutevar8x32_ps(_mm256_load_ps(bnr + j), perm), sign));
+    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(x, perm));
+    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(y, perm));
+    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(z, perm));
+    _mm256_storeu_ps(qr + count, _mm256_permutevar8x32_ps(r, perm));
     count += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(keep)));
   }
-  for (; j < n; ++j) {
-    dst[count] = base + static_cast<uint32_t>(j);
-    qx[count] = bx[j];
-    qy[count] = by[j];
-    qz[count] = bz[j];
-    qr[count] = -bnr[j];
-    count += 1u - bo[j];
+  if (j < n) {
+    alignas(32) float bx[8], by[8], bz[8], bnr[8];
+    alignas(32) uint32_t bo[8];
+    const size_t m = n - j;
+    frustumBlock(frustum, xyz + 3 * j, rad + j, m, bx, by, bz, bnr, bo);
+    for (size_t t = 0; t < m; ++t) {
+      dst[count] = base + static_cast<uint32_t>(j + t);
+      qx[count] = bx[t];
+      qy[count] = by[t];
+      qz[count] = bz[t];
+      qr[count] = -bnr[t];  // the radius again (a sign flip, exact)
+      count += 1u - bo[t];
+    }
   }
   return count;
 }
