@@ -74,26 +74,34 @@ struct BracketEntry {
 // descending (bracket ratios are above the bracket's lower end >= 0: positive floats, whose bits
 // are in their order), four passes of 8 bits through `scratch` (as many entries), a pass skipped
 // when all keys share its byte. The order std::sort gave with that comparison, without an
-// unpredictable branch per comparison.
+// unpredictable branch per comparison. The four bytes' histograms are counted in one pass (a
+// histogram does not depend on the entries' order); in the bracket's narrow range of ratios most
+// of them hold a single byte value, and their passes cost nothing more.
 void sortBracket(BracketEntry* entries, BracketEntry* scratch, size_t count) {
+  if (count == 0) return;
+  uint32_t histogram[4][256] = {};
+  for (size_t e = 0; e < count; ++e) {
+    uint32_t bits;
+    std::memcpy(&bits, &entries[e].ratio, sizeof(bits));
+    bits = ~bits;
+    ++histogram[0][bits & 0xFF];
+    ++histogram[1][(bits >> 8) & 0xFF];
+    ++histogram[2][(bits >> 16) & 0xFF];
+    ++histogram[3][bits >> 24];
+  }
+  uint32_t first_bits;
+  std::memcpy(&first_bits, &entries[0].ratio, sizeof(first_bits));
   BracketEntry* from = entries;
   BracketEntry* to = scratch;
   for (int shift = 0; shift < 32; shift += 8) {
-    uint32_t offsets[256] = {};
-    for (size_t e = 0; e < count; ++e) {
-      uint32_t bits;
-      std::memcpy(&bits, &from[e].ratio, sizeof(bits));
-      ++offsets[(~bits >> shift) & 0xFF];
-    }
+    uint32_t* const offsets = histogram[shift / 8];
+    if (offsets[(~first_bits >> shift) & 0xFF] == count) continue;  // every key has this byte
     uint32_t first = 0;
-    bool single = false;
     for (int b = 0; b < 256; ++b) {
       const uint32_t c = offsets[b];
-      single |= c == count;
       offsets[b] = first;
       first += c;
     }
-    if (single) continue;
     for (size_t e = 0; e < count; ++e) {
       uint32_t bits;
       std::memcpy(&bits, &from[e].ratio, sizeof(bits));
@@ -183,9 +191,13 @@ float floatAtMost(double v) {
 // of four byte columns and the cost. m keys of a block from its columns, in a loop that vectorises
 // (16-bit lanes; the unsigned compare finest <= prev < level count as one, by wrap-around).
 constexpr uint16_t kSettleIneligible = 0x8000;
-inline __attribute__((always_inline)) void settleKeys(const float* ga, const uint8_t* glevels,
-                                                      const uint8_t* gfinest, const int8_t* gprev, size_t m,
-                                                      uint16_t* gkey) {
+// Returns the count of slots with last frame's level "not drawn" and a benefit > 0: the settled
+// slots' part of the dropped count comes from it (the write-out of the unsettled slots corrects it).
+inline __attribute__((always_inline)) uint32_t settleKeys(const float* ga, const float* gb, const uint8_t* glevels,
+                                                          const uint8_t* gfinest, const int8_t* gprev, size_t m,
+                                                          uint16_t* gkey) {
+  uint32_t dropped = 0;
+  for (size_t j = 0; j < m; ++j) dropped += (gprev[j] < 0) & (gb[j] > 0.0f) ? 1u : 0u;
   for (size_t j = 0; j < m; ++j) {
     const uint16_t lc = glevels[j], fi = gfinest[j];
     const uint16_t p1 = static_cast<uint16_t>(gprev[j] + 1);  // 0: "not drawn"
@@ -194,10 +206,11 @@ inline __attribute__((always_inline)) void settleKeys(const float* ga, const uin
     const uint16_t key = static_cast<uint16_t>((fi * (kLanes + 1) + lc) << 4 | p1);
     gkey[j] = eligible ? key : kSettleIneligible;
   }
+  return dropped;
 }
-SCENELOD_AVX2_TARGET void settleKeysAvx2(const float* ga, const uint8_t* glevels, const uint8_t* gfinest,
-                                         const int8_t* gprev, size_t m, uint16_t* gkey) {
-  settleKeys(ga, glevels, gfinest, gprev, m, gkey);
+SCENELOD_AVX2_TARGET uint32_t settleKeysAvx2(const float* ga, const float* gb, const uint8_t* glevels,
+                                             const uint8_t* gfinest, const int8_t* gprev, size_t m, uint16_t* gkey) {
+  return settleKeys(ga, gb, glevels, gfinest, gprev, m, gkey);
 }
 
 // What settleSlotsSse2 / settleSlotsAvx2 read: the slot columns of pass 1c, this frame's row terms and the widened
@@ -211,8 +224,18 @@ struct SettleInput {
   const float* row_cost;   // kLanes readable past the last row
   const float* row_inv_w;
   float h1;
+  float one;               // 1.0f (from the caller: GCC lowers t < 1 ? t : 1 to minps only when 1 is not a constant)
   float avail;             // largest float <= the budget left after the mandatory part
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
+  // the fused write-out's (settleSlots*<true> only): pixels per slot and the per-row counters of
+  // drawn slots (zeroed here)
+  const float* px;
+  uint32_t* row_drawn;
+  size_t rows;
+};
+// The settled slots' share of the frame's sums, in slot order (with kFuse; else only cost).
+struct SettleSums {
+  double cost, benefit, pixels;
 };
 
 // Settled objects (incremental case, Lagrangian form): an object whose hull point is the unique
@@ -223,21 +246,30 @@ struct SettleInput {
 // by a ratio above the top end and every costlier point by a ratio below the bottom end (float
 // differences, exact to about 2^-22 relative, far inside the margin). A settled slot gets no hull:
 // its chosen step is kSettledAtPrev (its hull would be "not drawn", the level, and the write-out
-// reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their count; *settled_cost sums the settled slots' costs (in slot order).
+// reads the level from slot_prev); the others go, in slot order, to `unsettled`. Returns their
+// count; settled_sums->cost sums the settled slots' costs (in slot order). kFuse (the write-out
+// fused in, when the features are counted per row): also their benefits and pixels, and each
+// drawn settled slot counted at its row in row_drawn; their levels (last frame's) are already in
+// the levels out (pass 1c writes every slot's), so the write-out visits only the unsettled slots.
 // Only slots with an eligible key (settleKey) may settle.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
 // both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
 // default target and take AVX vectors by value.
-template <typename VF, typename VI>
+template <typename VF, typename VI, bool kFuse>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
                                                              uint8_t* chosen_step, uint32_t* unsettled,
-                                                             double* settled_cost) {
+                                                             SettleSums* settled_sums) {
   constexpr int kWidth = static_cast<int>(sizeof(VF) / sizeof(float)), kParts = kLanes / kWidth;
   static_assert(sizeof(VI) == sizeof(VF) && kParts * kWidth == kLanes, "lanes");
   size_t unsettled_count = 0;
-  double total = 0.0;
-  const VF ones = VF{} + 1.0f;
+  double total = 0.0, benefit = 0.0, pixels = 0.0;
+  const float* const in_px = in.px;
+  uint32_t* const row_drawn = in.row_drawn;
+  if (kFuse) std::memset(row_drawn, 0, in.rows * sizeof(uint32_t));
+  // every slot's step (an unsettled slot's is written again when its hull is built)
+  std::memset(chosen_step, kSettledAtPrev, slot_count);
+  const VF ones = VF{} + in.one;
   // the hysteresis factor per lane, row prev + 1 (row 0: no lane is the current level)
   alignas(32) float hyst[kLanes + 1][kLanes];
   for (int r = 0; r <= kLanes; ++r)
@@ -320,22 +352,64 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       none = (words[0] | words[1]) == 0;
     }
     const bool settled = eligible & none;
-    // written for every slot: an unsettled slot's step is written again when its hull is built
-    chosen_step[s] = kSettledAtPrev;
-    total += pc[(cand + 1) & -static_cast<int>(settled)];  // cc, or pc[0] = +0 for an unsettled slot
+    const int pick = (cand + 1) & -static_cast<int>(settled);  // cand + 1, or 0 for an unsettled slot
+    total += pc[pick];  // cc, or pc[0] = +0
+    if (kFuse) {
+      // the write-out's terms of a settled slot (writeOutSlotsBody's operations on the same values:
+      // cc and cb are its cost and benefit at its level); an unsettled slot adds +0 and its level is
+      // written again by the write-out of the unsettled slots (the dropped count is settleKeys')
+      const uint32_t drawn = pick != 0 ? 1u : 0u;
+      benefit += pb[pick];
+      pixels += maskFloat(in_px[s], 0u - drawn);
+      row_drawn[row0 + static_cast<uint32_t>(pick) - drawn] += drawn;  // row0 + cand, or + 0 adding 0
+      // (its level, cand = last frame's, is already in the levels out: pass 1c wrote it)
+    }
     unsettled[unsettled_count] = static_cast<uint32_t>(s);
     unsettled_count += settled ? 0u : 1u;
   }
-  *settled_cost = total;
+  *settled_sums = SettleSums{total, benefit, pixels};
   return unsettled_count;
 }
+template <bool kFuse>
 size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step, uint32_t* unsettled,
-                       double* settled_cost) {
-  return settleSlotsBody<V4f, V4i>(in, slot_count, chosen_step, unsettled, settled_cost);
+                       SettleSums* settled_sums) {
+  return settleSlotsBody<V4f, V4i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
+template <bool kFuse>
 SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
-                                            uint32_t* unsettled, double* settled_cost) {
-  return settleSlotsBody<V8f, V8i>(in, slot_count, chosen_step, unsettled, settled_cost);
+                                            uint32_t* unsettled, SettleSums* settled_sums) {
+  return settleSlotsBody<V8f, V8i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
+}
+
+// Nonzero when one of the n chain indices is above last_chain (validate's check, no early exit: the
+// valid case reads the whole column anyway): two vectors at a time, unsigned order as signed order
+// after flipping the sign bit (SSE2 has no unsigned compare). Compiled for SSE2 and AVX2.
+template <typename VI>
+inline __attribute__((always_inline)) uint32_t chainsAboveBody(const uint32_t* chain_of, size_t n,
+                                                               uint32_t last_chain) {
+  constexpr size_t kWidth = sizeof(VI) / sizeof(int32_t);
+  const VI flip = VI{} + std::numeric_limits<int32_t>::min();
+  const VI last = flip ^ static_cast<int32_t>(last_chain);
+  VI bad0 = VI{}, bad1 = VI{};
+  size_t i = 0;
+  for (; i + 2 * kWidth <= n; i += 2 * kWidth) {
+    VI v0, v1;
+    std::memcpy(&v0, chain_of + i, sizeof(v0));
+    std::memcpy(&v1, chain_of + i + kWidth, sizeof(v1));
+    bad0 |= (v0 ^ flip) > last;
+    bad1 |= (v1 ^ flip) > last;
+  }
+  bad0 |= bad1;
+  uint32_t bad = 0;
+  for (size_t l = 0; l < kWidth; ++l) bad |= static_cast<uint32_t>(bad0[l]);
+  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
+  return bad;
+}
+uint32_t chainsAboveSse2(const uint32_t* chain_of, size_t n, uint32_t last_chain) {
+  return chainsAboveBody<V4i>(chain_of, n, last_chain);
+}
+SCENELOD_AVX2_TARGET uint32_t chainsAboveAvx2(const uint32_t* chain_of, size_t n, uint32_t last_chain) {
+  return chainsAboveBody<V8i>(chain_of, n, last_chain);
 }
 
 // The frustum test of run()'s fused object blocks (n <= 64 there): outside[i] = 1 when sphere i is
@@ -451,16 +525,22 @@ constexpr KeepPermutes kKeepPermutes = makeKeepPermutes();
 // eight objects at a time: the kept lanes' indices, centres and radii moved to the front of a
 // vector (vpermd / vpermps, the lane numbers from the table) and stored whole; the next store
 // starts after the kept ones, so the result is frustumCompactSse2's (moves only)
+// The centres are de-interleaved in registers (three loads, two blends and a lane permutation per
+// coordinate: the three coordinates of 8 packed centres sit in distinct lanes of the three vectors),
+// tested against the six planes there (frustumBlock's operations in its order: ((a x + b y) + c z)
+// + d < -r, so the same bits) and moved to the queue from there; the tail of fewer than 8 spheres
+// goes through frustumBlock.
 __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& frustum, const float* xyz,
                                                                  const float* rad, size_t n, uint32_t base,
                                                                  const SphereQueue& q) {
-  alignas(32) float bx[64], by[64], bz[64], bnr[64];
-  alignas(32) uint32_t bo[64];
-  // a full block with a constant trip count (no loop-exit mispredictions)
-  if (n == 64)
-    frustumBlock(frustum, xyz, rad, 64, bx, by, bz, bnr, bo);
-  else
-    frustumBlock(frustum, xyz, rad, n, bx, by, bz, bnr, bo);
+  alignas(32) float plane[4][6][8];  // each coefficient on all lanes
+  for (int k = 0; k < 6; ++k)
+    for (int l = 0; l < 8; ++l) {
+      plane[0][k][l] = frustum.planes[k].x;
+      plane[1][k][l] = frustum.planes[k].y;
+      plane[2][k][l] = frustum.planes[k].z;
+      plane[3][k][l] = frustum.planes[k].w;
+    }
   uint32_t* const dst = q.object;
   float* const qx = q.x;
   float* const qy = q.y;
@@ -471,26 +551,52 @@ __attribute__((target("avx2,popcnt"))) size_t frustumCompactAvx2(const Frustum& 
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i shifts = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
   const __m256i seven = _mm256_set1_epi32(7);
+  // after the blends, lane l holds the coordinate of centre (x) 0 3 6 1 4 7 2 5, (y) 5 0 3 6 1 4 7 2,
+  // (z) 2 5 0 3 6 1 4 7; these put centre i in lane i
+  const __m256i order_x = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+  const __m256i order_y = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
+  const __m256i order_z = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
   for (; j + 8 <= n; j += 8) {
-    const __m256i o = _mm256_load_si256(reinterpret_cast<const __m256i*>(bo + j));
-    const int keep = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(o, _mm256_setzero_si256())));
+    const __m256 v0 = _mm256_loadu_ps(xyz + 3 * j), v1 = _mm256_loadu_ps(xyz + 3 * j + 8),
+                 v2 = _mm256_loadu_ps(xyz + 3 * j + 16);
+    const __m256 x = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x92), v2, 0x24), order_x);
+    const __m256 y = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x24), v2, 0x49), order_y);
+    const __m256 z = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0x49), v2, 0x92), order_z);
+    const __m256 r = _mm256_loadu_ps(rad + j);
+    const __m256 nr = _mm256_xor_ps(r, sign);
+    __m256 out = _mm256_setzero_ps();
+    for (int k = 0; k < 6; ++k) {
+      const __m256 d = _mm256_add_ps(
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_load_ps(plane[0][k]), x),
+                                      _mm256_mul_ps(_mm256_load_ps(plane[1][k]), y)),
+                        _mm256_mul_ps(_mm256_load_ps(plane[2][k]), z)),
+          _mm256_load_ps(plane[3][k]));
+      out = _mm256_or_ps(out, _mm256_cmp_ps(d, nr, _CMP_LT_OQ));
+    }
+    const int keep = ~_mm256_movemask_ps(out) & 0xFF;
     const __m256i perm = _mm256_and_si256(
         _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int32_t>(kKeepPermutes.lanes[keep])), shifts), seven);
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(base + j)), lane);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(idx, perm));
-    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bx + j), perm));
-    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(_mm256_load_ps(by + j), perm));
-    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(_mm256_load_ps(bz + j), perm));
-    _mm256_storeu_ps(qr + count, _mm256_xor_ps(_mm256_permutevar8x32_ps(_mm256_load_ps(bnr + j), perm), sign));
+    _mm256_storeu_ps(qx + count, _mm256_permutevar8x32_ps(x, perm));
+    _mm256_storeu_ps(qy + count, _mm256_permutevar8x32_ps(y, perm));
+    _mm256_storeu_ps(qz + count, _mm256_permutevar8x32_ps(z, perm));
+    _mm256_storeu_ps(qr + count, _mm256_permutevar8x32_ps(r, perm));
     count += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(keep)));
   }
-  for (; j < n; ++j) {
-    dst[count] = base + static_cast<uint32_t>(j);
-    qx[count] = bx[j];
-    qy[count] = by[j];
-    qz[count] = bz[j];
-    qr[count] = -bnr[j];
-    count += 1u - bo[j];
+  if (j < n) {
+    alignas(32) float bx[8], by[8], bz[8], bnr[8];
+    alignas(32) uint32_t bo[8];
+    const size_t m = n - j;
+    frustumBlock(frustum, xyz + 3 * j, rad + j, m, bx, by, bz, bnr, bo);
+    for (size_t t = 0; t < m; ++t) {
+      dst[count] = base + static_cast<uint32_t>(j + t);
+      qx[count] = bx[t];
+      qy[count] = by[t];
+      qz[count] = bz[t];
+      qr[count] = -bnr[t];  // the radius again (a sign flip, exact)
+      count += 1u - bo[t];
+    }
   }
   return count;
 }
@@ -514,6 +620,11 @@ struct HullSums {
   size_t segments, pcount;
   size_t pwanted;  // the upgrades inside the predicted bracket, stored or not (>= pcount)
   bool poverflow;
+  // fused: the settling pass wrote the settled slots' levels and summed their write-out terms
+  // (settled); the unsettled slots, in slot order, are the first unsettled_count of ctx.heap's list
+  bool fused;
+  size_t unsettled_count;
+  SettleSums settled;
 };
 
 // The coarsest level of accuracy 1 of a chain of more than kLanes levels (row_inv_w from its first
@@ -540,7 +651,7 @@ __attribute__((target("avx2,popcnt")))
 #endif
 void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
                     const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
-                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels) {
+                    uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels, int8_t* level_of) {
   static_assert(kLanes == 8, "one AVX2 vector per chain");
   for (size_t j = 0; j < m; ++j) {
     const size_t i = gobj[j];
@@ -567,8 +678,10 @@ void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint3
     }
     gfinest[j] = static_cast<uint8_t>(finest);
     grow0[j] = row0;
-    gprev[j] = prev_level[i];
+    const int8_t prev = prev_level[i];
+    gprev[j] = prev;
     glevels[j] = static_cast<uint8_t>(level_count);
+    level_of[i] = prev;  // a settled slot's level (the others' are written again)
   }
 }
 
@@ -603,8 +716,10 @@ struct SlotSums {
   uint32_t dropped, drawn;
 };
 
-// The budget write-out: each slot's level into level_of and its share of the frame's sums, in slot
-// order, with the same operations as addSlot in SelectionJob::run (so the same bits). A function of
+// The budget write-out when the settling pass did not sum the settled slots (a cold frame, a miss
+// of the predicted bracket, more rows than slots, the ½ guarantee's fallback): each slot's level
+// into level_of and its share of the frame's sums, in slot order, with the same operations as
+// addSlot in SelectionJob::run (so the same bits). A function of
 // its own with every pointer and sum in a local: inside run() the loop ran out of registers and kept
 // the integer sums and the column pointers on the stack (a load or a read-modify-write each per slot).
 // kCountRows: the integer features as Σ (drawn slots of the row) × feature over the rows instead of
@@ -1014,23 +1129,8 @@ bool SelectionJob::validate() const {
   }
   // no early exit: an OR over the whole column vectorises (the valid case reads it all anyway)
   if (n > 0 && chain_count == 0) return false;
-  uint32_t bad = 0;
-  const uint32_t* const chain_of = chains.data;
   const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
-  // four at a time; unsigned order as signed order after flipping the sign bit (SSE2 has no
-  // unsigned compare)
-  constexpr int32_t kSign = std::numeric_limits<int32_t>::min();
-  const V4i flip = {kSign, kSign, kSign, kSign};
-  const V4i last4 = flip ^ static_cast<int32_t>(last_chain);
-  V4i bad4 = {0, 0, 0, 0};
-  size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    V4i v;
-    std::memcpy(&v, chain_of + i, sizeof(v));
-    bad4 |= (v ^ flip) > last4;
-  }
-  for (; i < n; ++i) bad |= chain_of[i] > last_chain ? 1u : 0u;
-  return bad == 0 && !anyLane(bad4);
+  return (context->use_avx2 ? chainsAboveAvx2 : chainsAboveSse2)(chains.data, n, last_chain) == 0;
 }
 
 PassResult SelectorContext::pass(size_t slot_count, double lambda, double lo, double hi) const {
@@ -1195,6 +1295,7 @@ bool SelectionJob::run() {
   int8_t* const level_of = levels_out.data;
   uint32_t* const slot_object = ctx.slot_object;
   double mandatory = coef.per_frame_ms;
+  uint32_t prev_dropped = 0;  // budget mode: slots last frame "not drawn" with a benefit > 0 (settleKeys)
   const glm::vec3* const center_of = centers.data;
   const float* const radius_of = radii.data;
   const float* const scale_of = max_scales.data;
@@ -1316,7 +1417,8 @@ bool SelectionJob::run() {
       gpx[j] = px;
     }
     if (use_avx2) {
-      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels);
+      chainTermsAvx2(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
+                     level_of);
     } else {
       for (size_t j = 0; j < m; ++j) {
         const size_t i = gobj[j];
@@ -1353,14 +1455,18 @@ bool SelectionJob::run() {
         }
         gfinest[j] = static_cast<uint8_t>(finest);
         grow0[j] = row0;
-        gprev[j] = prev_level[i];
+        const int8_t prev = prev_level[i];
+        gprev[j] = prev;
         glevels[j] = static_cast<uint8_t>(level_count);
+        // the slot's level starts at last frame's: a settled slot's in the fused write-out (the
+        // settling pass does not write it); every other path writes every slot's level again
+        level_of[i] = prev;
       }
     }
     if (budget && use_avx2)
-      settleKeysAvx2(ga, glevels, gfinest, gprev, m, slot_key + s0);
+      prev_dropped += settleKeysAvx2(ga, gb, glevels, gfinest, gprev, m, slot_key + s0);
     else if (budget)
-      settleKeys(ga, glevels, gfinest, gprev, m, slot_key + s0);
+      prev_dropped += settleKeys(ga, gb, glevels, gfinest, gprev, m, slot_key + s0);
     if (budget && !must_of) {
       std::memset(slot_must + s0, 0, m);
     } else if (budget) {
@@ -1417,7 +1523,13 @@ bool SelectionJob::run() {
         slots += 1u - out;
       }
     } else {
-      for (size_t j = 0; j < mo; ++j) level_of[i0 + j] = -1;
+      if (mo == kSlotBlock) {
+        // a full block by four 16-byte stores (the byte loop was about 56 instructions a block)
+        const uint64_t ones[2] = {~uint64_t(0), ~uint64_t(0)};
+        for (size_t k = 0; k < kSlotBlock; k += 16) std::memcpy(level_of + i0 + k, ones, sizeof(ones));
+      } else {
+        for (size_t j = 0; j < mo; ++j) level_of[i0 + j] = -1;
+      }
       const SphereQueue queue{slot_object + slots, queue_x + slots, queue_y + slots, queue_z + slots, queue_r + slots};
       slots += frustum_compact(frustum, xyz + 3 * i0, radius_of + i0, mo, static_cast<uint32_t>(i0), queue);
     }
@@ -1436,6 +1548,10 @@ bool SelectionJob::run() {
   st.culled_count = culled;
   st.mandatory_ms = budget ? mandatory : 0.0;
   const double cap = static_cast<double>(params.budget_ms);
+  // the last settling pass's fused write-out (HullSums)
+  bool fused = false;
+  size_t unsettled_count = 0;
+  SettleSums settled_sums{};
   int64_t half_slot = -1;  // the 1/2 guarantee's alternative: this slot at hull step half_step,
   uint32_t half_step = 0;  // every other slot at its base, with this benefit
   double half_alt_benefit = 0.0;
@@ -1536,6 +1652,9 @@ bool SelectionJob::run() {
       const auto h1_ = h1;
       const auto rows_nonnegative_ = rows_nonnegative;
       const size_t slots_ = slots;
+      const float* const slot_px_ = slot_px;
+      uint32_t* const row_drawn_ = ctx.row_drawn;
+      const size_t rows_ = levels.cell_width.count;
       uint32_t* const unsettled_list_ = reinterpret_cast<uint32_t*>(ctx.heap);
       Pt pts[65];
       double top_cost = 0.0, base_total = 0.0, base_benefit = 0.0, ptotal = 0.0;
@@ -1548,14 +1667,21 @@ bool SelectionJob::run() {
       // settled slots first, then the hulls of the others (all slots when not settling)
       uint32_t* const unsettled = unsettled_list_;  // the heap is free until the greedy
       size_t build_count = slots_;
+      SettleSums settled{};
+      bool fused = false;
       if (settle) {
         const SettleInput in{slot_key_, slot_row0_, slot_a_, slot_b_, slot_q_,
-                             row_cost_, row_inv_w_, h1_, floatAtMost(avail_),
+                             row_cost_, row_inv_w_, h1_, 1.0f, floatAtMost(avail_),
                              static_cast<float>(plo_ / (1.0 + kSettleMargin)),
-                             static_cast<float>(phi_ * (1.0 + kSettleMargin))};
+                             static_cast<float>(phi_ * (1.0 + kSettleMargin)),
+                             slot_px_, row_drawn_, rows_};
         if (rows_nonnegative_) {
-          build_count = (ctx.use_avx2 ? settleSlotsAvx2 : settleSlotsSse2)(
-              in, slots_, chosen_step_, unsettled, &ptotal);
+          // the write-out's sums fused in when it counts per row (fewer rows than slots)
+          fused = rows_ <= slots_;
+          build_count = (ctx.use_avx2 ? (fused ? settleSlotsAvx2<true> : settleSlotsAvx2<false>)
+                                      : (fused ? settleSlotsSse2<true> : settleSlotsSse2<false>))(
+              in, slots_, chosen_step_, unsettled, &settled);
+          ptotal = settled.cost;
         } else {
           for (size_t s = 0; s < slots_; ++s) unsettled[s] = static_cast<uint32_t>(s);
         }
@@ -1673,9 +1799,13 @@ bool SelectionJob::run() {
           }
         }
       }
-      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, pwanted, poverflow};
+      return HullSums{top_cost, base_total, base_benefit, ptotal, segments, pcount, pwanted, poverflow,
+                      fused, build_count, settled};
     };
     auto storeSums = [&](const HullSums& h) {
+      fused = h.fused;
+      unsettled_count = h.unsettled_count;
+      settled_sums = h.settled;
       top_cost = h.top_cost;
       base_total = h.base_total;
       base_benefit = h.base_benefit;
@@ -1989,7 +2119,55 @@ bool SelectionJob::run() {
       dropped = sums.dropped;
       drawn = sums.drawn;
     };
-    writeOut();
+    // the fused form: the settled slots' levels and sums are in (pass 1c and the settling pass),
+    // the unsettled slots' are added after them in slot order (addSlot's operations), and the
+    // features summed per row. The float sums are then in another order than writeOut's (settled
+    // slots first): the same values whenever every partial double sum is exact (no more than
+    // 53 significant bits), as on every scene checked (docs/bench/selection.md)
+    auto writeOutUnsettled = [&]() {
+      f = CostFeatures();
+      predicted = coef.per_frame_ms + settled_sums.cost;
+      benefit = settled_sums.benefit;
+      double pixels = settled_sums.pixels;
+      // settleKeys counted the slots last frame "not drawn" with a benefit: the settled ones are
+      // dropped again, the unsettled ones are counted by their level here instead
+      uint32_t dropped_ = prev_dropped;
+      const uint32_t* const list = reinterpret_cast<const uint32_t*>(ctx.heap);
+      const uint8_t* const chosen = ctx.chosen;
+      uint32_t* const row_drawn = ctx.row_drawn;
+      for (size_t u = 0; u < unsettled_count; ++u) {
+        const size_t s = list[u];
+        const uint8_t level = hull[s * hull_stride + chosen[s]];
+        level_of[slot_object[s]] = static_cast<int8_t>(level);
+        const uint32_t keep = 0u - static_cast<uint32_t>(level != kNotDrawn);  // all ones if drawn
+        const float b = slot_b[s];
+        dropped_ += (keep ^ 1u) & (b > 0.0f ? 1u : 0u);
+        dropped_ -= slot_prev[s] < 0 && b > 0.0f ? 1u : 0u;
+        const uint32_t row = slot_row0[s] + (level & keep);
+        row_drawn[row] -= keep;
+        const float cost = slot_a[s] + row_cost[row];
+        const bool current = level == static_cast<uint8_t>(slot_prev[s]);
+        const float acc = std::min(1.0f, slot_q[s] * row_inv_w[row]) * h_mult[current];
+        predicted += maskFloat(cost, keep);
+        benefit += maskFloat(b * acc, keep);
+        pixels += maskFloat(slot_px[s], keep);
+      }
+      f.pixels = pixels;
+      tri_sum = vert_sum = line_sum = 0;
+      drawn = 0;
+      for (size_t r = 0, rows = levels.cell_width.count; r < rows; ++r) {
+        const uint64_t k = row_drawn[r];
+        drawn += static_cast<uint32_t>(k);
+        tri_sum += k * tri[r];
+        vert_sum += k * vert[r];
+        line_sum += k * lines[r];
+      }
+      dropped = dropped_;
+    };
+    if (fused)
+      writeOutUnsettled();
+    else
+      writeOut();
     // the sum of benefits over slots in slot order is what the greedy's choice scores
     if (half_slot >= 0 && half_alt_benefit > benefit) {
       const size_t js = static_cast<size_t>(half_slot);
@@ -2007,9 +2185,26 @@ bool SelectionJob::run() {
       }
     }
   }
-  for (size_t i = 0; i < n; ++i) {
-    switches += level_of[i] != prev_level[i] ? 1u : 0u;
-    prev_level[i] = level_of[i];
+  {
+    // the switches counted 16 objects at a time in byte lanes (-1 per differing lane, at most 127
+    // vectors per count before it is widened), last frame's levels overwritten in the same loop
+    typedef int8_t V16b __attribute__((vector_size(16)));
+    size_t i = 0;
+    while (i + 16 <= n) {
+      V16b count = {};
+      for (const size_t end = std::min(n, i + 16 * 127); i + 16 <= end; i += 16) {
+        V16b now, before;
+        std::memcpy(&now, level_of + i, sizeof(now));
+        std::memcpy(&before, prev_level + i, sizeof(before));
+        count += now != before;
+        std::memcpy(prev_level + i, &now, sizeof(now));
+      }
+      for (int l = 0; l < 16; ++l) switches += static_cast<uint32_t>(-count[l]);
+    }
+    for (; i < n; ++i) {
+      switches += level_of[i] != prev_level[i] ? 1u : 0u;
+      prev_level[i] = level_of[i];
+    }
   }
   st.dropped_count = dropped;
   st.drawn_count = drawn;

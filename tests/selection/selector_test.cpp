@@ -88,6 +88,35 @@ TEST(Selector, ContextCreationRefusesBadConfigs) {
   EXPECT_EQ(createSelectorContext(cfg), nullptr);  // out of memory is reported, not thrown
 }
 
+// validate's chain check runs two vectors at a time (SSE2: 8 objects, AVX2: 16) and the rest one
+// by one: a chain id out of range is found at every position, also ids with the top bit set (the
+// unsigned compare is a signed one after a sign flip), on both code paths.
+TEST(Selector, ValidateFindsAChainIdOutOfRangeAtEveryPosition) {
+  SyntheticScene s = makeScene(2, 45, 3, 5);
+  SelectorConfig cfg;
+  cfg.max_object_count = 45;
+  for (const bool sse2_only : {false, true}) {
+    cfg.sse2_only = sse2_only;
+    Owned o(createSelectorContext(cfg));
+    const Camera cam = makeCamera();
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
+    ASSERT_TRUE(job.validate());
+    std::vector<uint32_t> chains = s.chains;
+    job.chains = Span<const uint32_t>(chains.data(), chains.size());
+    for (size_t i = 0; i < chains.size(); ++i) {
+      for (const uint32_t bad : {3u, 0x7fffffffu, 0x80000000u, 0xffffffffu}) {
+        chains[i] = bad;
+        EXPECT_FALSE(job.validate()) << "object " << i << " chain " << bad << " sse2 " << sse2_only;
+      }
+      chains[i] = 2;  // the last chain: valid
+      EXPECT_TRUE(job.validate()) << "object " << i << " sse2 " << sse2_only;
+      chains[i] = s.chains[i];
+    }
+  }
+}
+
 TEST(Selector, ValidateRefusesEachInvalidField) {
   SyntheticScene s = makeScene(1, 20, 3, 5);
   Owned o(makeContext(20));
@@ -615,6 +644,68 @@ TEST(Selector, BudgetFeaturesAreTheSumsOfTheDrawnLevels) {
   }
 }
 
+// On warm frames along a smooth path most objects settle, and the settling pass writes their share
+// of the frame's statistics (the write-out visits only the others): every statistic must still be
+// what the levels out give, with must-draw objects and objects without benefit (importance 0) mixed
+// in. The sums are compared exactly with the sums in object order (the write-out's order).
+TEST(Selector, StatisticsOfWarmFramesAreTheSumsOverTheLevelsOut) {
+  SyntheticScene s = makeScene(61, 2000, 6, 8, 120.0f, true);
+  for (size_t i = 0; i < s.importance.size(); i += 7) s.importance[i] = 0.0f;
+  for (size_t i = 3; i < s.must_draw.size(); i += 50) s.must_draw[i] = 1;
+  const LevelTable t = s.table.view();
+  Owned ctx(makeContext(2000, 64));
+  const double per_frame = selectorCostModel(ctx.ctx).per_frame_ms;
+  size_t warm = 0, with_dropped_zero_benefit = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    const Camera cam = makeCamera(glm::vec3(0.05f * frame, 1.0f, 20.0f - 0.2f * frame));
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, ctx.ctx, &cam, levels, &st);
+    job.params.budget_ms = 1.5f;
+    job.params.calibrate = false;
+    ASSERT_TRUE(job.run());
+    double predicted = per_frame, benefit = 0.0, tri = 0.0, vert = 0.0, lines = 0.0;
+    uint32_t drawn = 0, dropped = 0, culled = 0, not_drawn_without_benefit = 0;
+    for (size_t i = 0; i < levels.size(); ++i) {
+      double c0 = 0.0, b0 = 0.0;
+      if (!selectorLastPoint(ctx.ctx, i, 0, &c0, &b0)) {
+        ++culled;
+        EXPECT_EQ(levels[i], -1) << "frame " << frame << " object " << i;
+        continue;
+      }
+      if (levels[i] < 0) {
+        EXPECT_EQ(s.must_draw[i], 0) << "frame " << frame << " object " << i;
+        dropped += b0 > 0.0 ? 1u : 0u;
+        not_drawn_without_benefit += b0 > 0.0 ? 0u : 1u;
+        continue;
+      }
+      double c = 0.0, b = 0.0;
+      ASSERT_TRUE(selectorLastPoint(ctx.ctx, i, levels[i], &c, &b));
+      predicted += c;
+      benefit += b;
+      const uint32_t row = t.chain_level_offset[s.chains[i]] + static_cast<uint32_t>(levels[i]);
+      tri += t.triangle_count[row];
+      vert += t.vertex_count[row];
+      lines += t.line_point_count[row];
+      ++drawn;
+    }
+    EXPECT_EQ(st.culled_count, culled) << "frame " << frame;
+    EXPECT_EQ(st.drawn_count, drawn) << "frame " << frame;
+    EXPECT_EQ(st.dropped_count, dropped) << "frame " << frame;
+    EXPECT_EQ(st.predicted_ms, predicted) << "frame " << frame;
+    EXPECT_EQ(st.total_benefit, benefit) << "frame " << frame;
+    EXPECT_EQ(st.features.objects, static_cast<double>(drawn)) << "frame " << frame;
+    EXPECT_EQ(st.features.triangles, tri) << "frame " << frame;
+    EXPECT_EQ(st.features.vertices, vert) << "frame " << frame;
+    EXPECT_EQ(st.features.line_points, lines) << "frame " << frame;
+    EXPECT_GT(dropped, 0u) << "the budget should bind, frame " << frame;
+    warm += frame > 0 && st.switch_count * 10 < drawn ? 1 : 0;
+    with_dropped_zero_benefit += not_drawn_without_benefit > 0 ? 1 : 0;
+  }
+  EXPECT_GT(warm, 20u) << "most frames should keep most levels (and settle most objects)";
+  EXPECT_GT(with_dropped_zero_benefit, 20u) << "objects without benefit in view, not counted as dropped";
+}
+
 TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
   SyntheticScene s = makeScene(8, 2000, 8, 8, 100.0f, true);
   Owned a(makeContext(2000, 100)), b(makeContext(2000, 100));
@@ -627,17 +718,20 @@ TEST(Selector, OutputsAreBitIdenticalForTheSameInputs) {
 // The AVX2 paths (where the CPU has them) and the SSE2 ones give the same bits, in both modes and
 // along a path (incremental frames included); on a CPU without AVX2 both contexts run SSE2.
 TEST(Selector, AvxAndSse2PathsGiveTheSameBits) {
-  SyntheticScene s = makeScene(12, 3000, 8, 8, 100.0f, true);
-  SelectorConfig cfg;
-  cfg.max_object_count = 3000;
-  cfg.bracket_capacity = 100;
-  Owned a(createSelectorContext(cfg));
-  cfg.sse2_only = true;
-  Owned b(createSelectorContext(cfg));
-  for (int frame = 0; frame < 24; ++frame) {
-    const Camera cam = makeCamera(glm::vec3(frame * 0.3f, 0.0f, 10.0f - frame * 0.5f));
-    const SelectionMode mode = frame % 8 == 7 ? SelectionMode::kDistance : SelectionMode::kBudget;
-    expectSameFrame(s, a.ctx, b.ctx, cam, mode, -1.0f, frame);
+  // 3005 objects: the last block of 64 ends in a group of fewer than 8 (the AVX2 compaction's tail)
+  for (const size_t objects : {3000, 3005}) {
+    SyntheticScene s = makeScene(12, objects, 8, 8, 100.0f, true);
+    SelectorConfig cfg;
+    cfg.max_object_count = objects;
+    cfg.bracket_capacity = 100;
+    Owned a(createSelectorContext(cfg));
+    cfg.sse2_only = true;
+    Owned b(createSelectorContext(cfg));
+    for (int frame = 0; frame < 24; ++frame) {
+      const Camera cam = makeCamera(glm::vec3(frame * 0.3f, 0.0f, 10.0f - frame * 0.5f));
+      const SelectionMode mode = frame % 8 == 7 ? SelectionMode::kDistance : SelectionMode::kBudget;
+      expectSameFrame(s, a.ctx, b.ctx, cam, mode, -1.0f, frame);
+    }
   }
 }
 
