@@ -206,10 +206,24 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // where nearly all triangles of the last block collapsed to a point, the next block tests for that
   // first (a branch that is then predicted) and skips the rest of the classification
   bool points_dominate = false;
+  // Where the cluster ids (4 bytes per vertex) outgrow the cache, the ids of the triangles a little
+  // ahead are prefetched: the loop's three random reads are then no longer misses where the input
+  // order is not spatially coherent (the 1 M sphere with shuffled vertices and triangles, 10 %
+  // level: eliminate about 42 -> 36 ms; in its generator's ring order, where nearby triangles share
+  // cache lines, unchanged). Smaller meshes skip it (a test per block, unswitched out of the loop).
+  constexpr size_t kPrefetchTriangles = 16;
+  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
   for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
     const size_t t1 = std::min(tn, t0 + kBlock);
     size_t kept_count = 0, edge_count = 0, point_count = 0;
+    const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
     for (size_t t = t0; t < t1; ++t) {
+      if (prefetch_block) {
+        const uint32_t* ahead = tri + 3 * (t + kPrefetchTriangles);
+        __builtin_prefetch(co + ahead[0]);
+        __builtin_prefetch(co + ahead[1]);
+        __builtin_prefetch(co + ahead[2]);
+      }
       const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
       if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
         point_block[point_count++] = c0;
