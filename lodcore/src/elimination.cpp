@@ -5,6 +5,7 @@
 // Edges covered by a kept triangle, and points covered by a kept edge or triangle, are removed.
 // Input edges and points are mapped the same way.
 #include <algorithm>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -206,36 +207,55 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // where nearly all triangles of the last block collapsed to a point, the next block tests for that
   // first (a branch that is then predicted) and skips the rest of the classification
   bool points_dominate = false;
+  // Where the cluster ids (4 bytes per vertex) outgrow the cache, the ids of the triangles a little
+  // ahead are prefetched: the loop's three random reads are then no longer misses where the input
+  // order is not spatially coherent (the 1 M sphere with shuffled vertices and triangles, 10 %
+  // level: eliminate about 42 -> 36 ms; in its generator's ring order, where nearby triangles share
+  // cache lines, unchanged). Smaller meshes skip it (a test per block, unswitched out of the loop).
+  constexpr size_t kPrefetchTriangles = 16;
+  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
   for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
     const size_t t1 = std::min(tn, t0 + kBlock);
     size_t kept_count = 0, edge_count = 0, point_count = 0;
-    for (size_t t = t0; t < t1; ++t) {
-      const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
-      if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
-        point_block[point_count++] = c0;
-        continue;
+    const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
+    // the loop compiled twice, with and without the prefetch (a branch per triangle otherwise)
+    auto classify = [&](auto with_prefetch) {
+      for (size_t t = t0; t < t1; ++t) {
+        if (decltype(with_prefetch)::value) {
+          const uint32_t* ahead = tri + 3 * (t + kPrefetchTriangles);
+          __builtin_prefetch(co + ahead[0]);
+          __builtin_prefetch(co + ahead[1]);
+          __builtin_prefetch(co + ahead[2]);
+        }
+        const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
+        if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
+          point_block[point_count++] = c0;
+          continue;
+        }
+        const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+        const bool kept = !(e01 | e12 | e02), point = e01 & e12;
+        // rotation (keeping orientation) that puts the smallest id first, by index rather than by
+        // selects (which the compiler turned into branches)
+        const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
+        const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
+        const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
+        uint32_t* k = kept_block + 3 * kept_count;
+        k[0] = lo;
+        k[1] = c[r + 1];
+        k[2] = c[r + 2];
+        kept_count += kept;
+        const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
+        uint32_t* e = edge_block + 3 * edge_count;
+        e[0] = c0;
+        e[1] = y;
+        e[2] = static_cast<uint32_t>(t);
+        edge_count += !kept & !point;
+        point_block[point_count] = c0;
+        point_count += point;
       }
-      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
-      const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
-      // selects (which the compiler turned into branches)
-      const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
-      const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
-      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
-      uint32_t* k = kept_block + 3 * kept_count;
-      k[0] = lo;
-      k[1] = c[r + 1];
-      k[2] = c[r + 2];
-      kept_count += kept;
-      const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
-      uint32_t* e = edge_block + 3 * edge_count;
-      e[0] = c0;
-      e[1] = y;
-      e[2] = static_cast<uint32_t>(t);
-      edge_count += !kept & !point;
-      point_block[point_count] = c0;
-      point_count += point;
-    }
+    };
+    if (prefetch_block) classify(std::true_type());
+    else classify(std::false_type());
     out.collapsed_triangles += (t1 - t0) - kept_count;
     points_dominate = point_count * 8 > (t1 - t0) * 7;  // for the next block: fine meshes at coarse widths
     for (size_t j = 0; j < kept_count; ++j)

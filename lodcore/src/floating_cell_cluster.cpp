@@ -13,9 +13,11 @@
 // [q - 1/2, q + 1/2] are searched. When the mesh's box spans few enough grid cubes, the grid is a flat
 // array of list heads over that box (one load per cube, no hashing), preferably of cubes of side w/2
 // (3 x 3 x 3 of them searched: 2.4 times less volume than 2 x 2 x 2 cubes of side w, so fewer cells
-// to test; each lists at most one cube cell); otherwise a hash whose slots hold each grid cube's
-// first three cells inline (one cache line per cube), the slots of the next vertices in weight order
-// being prefetched. All give the same cells: the joining rule breaks ties by id.
+// to test; each lists at most one cube cell), else of cubes of side w whose cells are kept in
+// blocks of 4 where these fit too (one copy per cube instead of a walk along a list), else listed;
+// otherwise a hash whose slots hold each grid cube's first three cells inline (one cache line per
+// cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
+// the joining rule breaks ties by id.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -208,6 +210,74 @@ inline void testCellT(const JoinRule& r, const glm::vec3& pv, float cx, float cy
 constexpr double kDenseBaseBytes = 1 << 20;
 constexpr double kDenseBytesPerCell = 32.0;
 constexpr double kDenseBytesPerVertex = 8.0;
+// assignBlocksT's blocks of 4 cell ids and their links: reserved for 0.55 per expected cell (the
+// occupied cubes of side w were 0.549 and 0.45 per expected cell on the 1 M sphere's 10 % level and
+// the bunny's 50 % level; more only regrows the vectors)
+constexpr double kBlockBytes = 20.0;
+inline size_t expectedBlocks(size_t expected_cells) { return expected_cells * 11 / 20 + 16; }
+
+#if defined(__SSE2__)
+// Tests the cells list[0 .. count) four at a time, one per lane, without a branch per cell: each
+// lane computes d^2 and the containment with testCell's operations and keeps its least (d^2, id)
+// in (bd2, bid) under the same order, so that laneBest then gives the cell testCell would choose,
+// whatever the order of the list. `cells` are 16-byte records, centre first, the cell of cluster k
+// at k + 1 and a sentinel at NaN (never inside) at 0, which pads the list to a multiple of four (the
+// list needs 3 spare entries). Returns the OR of the records' fourth words (a grid's chain links).
+template <bool kCube, bool kNearest, typename CellRecord>
+inline __m128i testCellLanes(const CellRecord* cells, uint32_t* list, uint32_t count, __m128 px, __m128 py,
+                             __m128 pz, const JoinRule& rule, __m128& bd2, __m128i& bid) {
+  static_assert(sizeof(CellRecord) == 16, "a cell is read as one 16-byte lane");
+  list[count] = list[count + 1] = list[count + 2] = 0;  // pad with the sentinel
+  __m128i chained = _mm_setzero_si128();
+  for (uint32_t j = 0; j < count; j += 4) {
+    __m128 a0 = _mm_loadu_ps(&cells[list[j]].x), a1 = _mm_loadu_ps(&cells[list[j + 1]].x);
+    __m128 a2 = _mm_loadu_ps(&cells[list[j + 2]].x), a3 = _mm_loadu_ps(&cells[list[j + 3]].x);
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+    const __m128 dx = _mm_sub_ps(px, a0), dy = _mm_sub_ps(py, a1), dz = _mm_sub_ps(pz, a2);
+    const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    __m128 inside;
+    if (kCube) {
+      const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+      inside = _mm_cmple_ps(
+          _mm_max_ps(_mm_max_ps(_mm_and_ps(dx, absmask), _mm_and_ps(dy, absmask)), _mm_and_ps(dz, absmask)),
+          _mm_set1_ps(rule.half));
+    } else {
+      inside = _mm_cmple_ps(d2, _mm_set1_ps(rule.half2));
+    }
+    const __m128i id = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(list + j)), _mm_set1_epi32(1));
+    const __m128 id_less = _mm_castsi128_ps(_mm_cmplt_epi32(id, bid));
+    const __m128 better =
+        kNearest ? _mm_or_ps(_mm_cmplt_ps(d2, bd2), _mm_and_ps(_mm_cmpeq_ps(d2, bd2), id_less)) : id_less;
+    const __m128 take = _mm_and_ps(inside, better);
+    bd2 = _mm_or_ps(_mm_and_ps(take, d2), _mm_andnot_ps(take, bd2));
+    const __m128i takei = _mm_castps_si128(take);
+    bid = _mm_or_si128(_mm_and_si128(takei, id), _mm_andnot_si128(takei, bid));
+    chained = _mm_or_si128(chained, _mm_castps_si128(a3));
+  }
+  return chained;
+}
+
+// the least (d2, id) of the four lanes, without branches: the least d2, then the least id among the
+// lanes holding it (for the heaviest rule the least id); kNone when no lane holds a cell
+template <bool kNearest>
+inline uint32_t laneBest(__m128 bd2, __m128i bid) {
+  __m128i sel = bid;
+  if (kNearest) {
+    __m128 m = _mm_min_ps(bd2, _mm_shuffle_ps(bd2, bd2, _MM_SHUFFLE(2, 3, 0, 1)));
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    const __m128i at_min = _mm_castps_si128(_mm_cmpeq_ps(bd2, m));
+    sel = _mm_or_si128(_mm_and_si128(at_min, bid), _mm_andnot_si128(at_min, _mm_set1_epi32(0x7fffffff)));
+  }
+  __m128i t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(2, 3, 0, 1));
+  __m128i lt = _mm_cmplt_epi32(t, sel);
+  sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
+  t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(1, 0, 3, 2));
+  lt = _mm_cmplt_epi32(t, sel);
+  sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
+  const int32_t id0 = _mm_cvtsi128_si32(sel);
+  return id0 == 0x7fffffff ? kNone : uint32_t(id0);
+}
+#endif
 
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
@@ -356,12 +426,149 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   }
 }
 
+// The flat grid of cubes of side w (where cubes of side w/2 would not fit): such a cube lists up to
+// 8 cube cells and 64 sphere cells, so that chained lists took several rounds of dependent loads
+// and a mispredicted exit per vertex (the 1 M sphere's 10 % level: 2.5 rounds, 0.7 mispredicts and
+// 630 instructions per vertex). Here a cube's cells are kept in blocks of 4 ids; a vertex copies
+// the 2 x 2 x 2 cubes' first blocks, whole, into one list (an empty cube copies block 0, all
+// sentinels) and tests it in one pass. A head holds its first block's index and count (b << 3 | n,
+// n = 5 when more blocks follow: 11 of the 25 k occupied cubes of the 1 M sphere's 10 % level, none
+// of the bunny's 50 % level); such cubes, and vertices within the slack of a cube face (3 cubes
+// along an axis), take a general gather. 20 bytes per block (kBlockBytes), one block per occupied
+// cube: 1.4 to 2 cells per occupied cube on the bunny and the sphere.
+template <bool kCube, bool kNearest>
+void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half a cube*/, const int32_t lo_cube[3],
+                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t zero;  // no chain: testCellLanes' OR of these is unused
+  };
+  std::vector<Cell> cells;  // cells[k + 1] is cluster k's cell; cells[0] the sentinel at NaN
+  cells.reserve(expected + 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cells.push_back({nan, nan, nan, 0});
+  struct Block {
+    uint32_t id[4];  // cell indices, filled in order, 0 where free
+  };
+  std::vector<Block> blocks(1, Block{});  // blocks[0] stays empty
+  blocks.reserve(expectedBlocks(expected));
+  std::vector<uint32_t> more(1, 0);  // per block: the cube's next block once it is full, 0 for none
+  more.reserve(expectedBlocks(expected));
+  const size_t sy = dims[0], sz = dims[0] * dims[1];
+  std::vector<uint32_t> head(sz * dims[2], 0);
+  std::vector<uint32_t> scratch;  // the general gather's list
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack;  // the reach is half a cube
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const glm::vec3 q = pv * inv;
+    int32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = floorToInt(q[a] - 0.5f - slack) - lo_cube[a];
+      hi[a] = floorToInt(q[a] + 0.5f + slack) - lo_cube[a];
+    }
+    uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, 3 sentinels of padding
+    uint32_t* list = found;
+    uint32_t count = 0;
+    uint32_t chained = 0;
+    const bool narrow = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
+    if (narrow) {
+      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 2; ++y)
+          for (int x = 0; x < 2; ++x) {
+            const uint32_t h = base[size_t(z) * sz + size_t(y) * sy + size_t(x)];
+            const uint32_t* ids = blocks[h >> 3].id;
+#if defined(__SSE2__)
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
+                             _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids)));
+#else
+            for (int k = 0; k < 4; ++k) found[count + k] = ids[k];
+#endif
+            const uint32_t c = h & 7u;  // 5 when more blocks follow: the list is then made again below
+            count += c;
+            chained |= c + 3u;
+          }
+    }
+    if (!narrow || (chained & 8u)) {
+      scratch.clear();
+      for (int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (int32_t x = lo[0]; x <= hi[0]; ++x)
+            for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
+              for (uint32_t k = 0; k < 4; ++k)
+                if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
+      count = static_cast<uint32_t>(scratch.size());
+      scratch.resize(scratch.size() + 3);
+      list = scratch.data();
+    }
+    uint32_t best = kNone;
+#if defined(__SSE2__)
+    {
+      __m128 bd2 = _mm_set1_ps(std::numeric_limits<float>::infinity());
+      __m128i bid = _mm_set1_epi32(0x7fffffff);
+      testCellLanes<kCube, kNearest>(cells.data(), list, count, _mm_set1_ps(pv.x), _mm_set1_ps(pv.y),
+                                     _mm_set1_ps(pv.z), rule, bd2, bid);
+      best = laneBest<kNearest>(bd2, bid);
+    }
+#else
+    float best_d2 = std::numeric_limits<float>::infinity();
+    for (uint32_t j = 0; j < count; ++j) {
+      const Cell& c = cells[list[j]];
+      testCellT<kCube, kNearest>(rule, pv, c.x, c.y, c.z, list[j] - 1, best, best_d2);
+    }
+#endif
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const uint32_t id = best + 1;
+      cells.push_back({pv.x, pv.y, pv.z, 0});
+      uint32_t& h = head[size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
+                         size_t(floorToInt(q.x) - lo_cube[0])];
+      if (h == 0) {
+        h = uint32_t(blocks.size()) << 3 | 1u;
+        blocks.push_back(Block{});
+        more.push_back(0);
+        blocks.back().id[0] = id;
+      } else if ((h & 7u) < 4) {
+        blocks[h >> 3].id[h & 7u] = id;
+        ++h;
+      } else {  // the first block is full: the last block of the cube's chain, or a new one
+        h = (h & ~7u) | 5u;
+        uint32_t b = h >> 3;
+        while (more[b] != 0) b = more[b];
+        uint32_t k = 0;
+        while (k < 4 && blocks[b].id[k] != 0) ++k;
+        if (k == 4) {
+          more[b] = uint32_t(blocks.size());
+          b = more[b];
+          blocks.push_back(Block{});
+          more.push_back(0);
+          k = 0;
+        }
+        blocks[b].id[k] = id;
+      }
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, Assignment& out) {
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
   static constexpr Fn kFns[2][2] = {{assignDenseT<false, false>, assignDenseT<false, true>},
                                     {assignDenseT<true, false>, assignDenseT<true, true>}};
+  // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
+  // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
+  if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
+    static constexpr Fn kBlockFns[2][2] = {{assignBlocksT<false, false>, assignBlocksT<false, true>},
+                                           {assignBlocksT<true, false>, assignBlocksT<true, true>}};
+    kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    return;
+  }
   kFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
@@ -397,7 +604,11 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
                                          kDenseBytesPerVertex * double(p.order.size()));
     if (volume * sizeof(uint32_t) <= dense_budget) {
-      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, out);
+      // cubes of side w keep their cells in blocks where these fit the budget too (the 1 M sphere's
+      // 10 % level; not the bunny's 50 % level, where they would add 0.3 MB to the chain's peak)
+      const bool blocks =
+          sub == 1 && volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, out);
       return;
     }
   }

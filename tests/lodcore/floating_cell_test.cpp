@@ -44,7 +44,30 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
     test::appendMesh(m, t);
     return m;
   };
-  for (const Mesh& m : {test::makeCadPart(), withTriangleAt(20.0f), withTriangleAt(4000.0f)}) {
+  // pairs of points 0.0017 apart on a face-centred cubic lattice whose neighbours are just over 0.2
+  // apart, with a triangle at 20 (so w = 0.4 takes the flat grid of cubes of side w): every pair is
+  // a sphere cell at w = 0.4, about 10.5 per grid cube, so that cubes list more cells than one block
+  // of 8 holds, and the second point of each pair must find its cell there
+  auto lattice = [] {
+    Mesh m;
+    const float a = 0.29f;
+    for (int x = 0; x < 5; ++x)
+      for (int y = 0; y < 5; ++y)
+        for (int z = 0; z < 5; ++z)
+          for (glm::vec3 d : {glm::vec3(0.0f), glm::vec3(a / 2, a / 2, 0), glm::vec3(a / 2, 0, a / 2),
+                              glm::vec3(0, a / 2, a / 2)}) {
+            for (float e : {0.0f, 0.001f}) {
+              m.points.push_back(uint32_t(m.positions.size()));
+              m.positions.push_back(glm::vec3(float(x), float(y), float(z)) * a + d + glm::vec3(e));
+            }
+          }
+    Mesh t;
+    t.positions = {{20, 20, 20}, {20.5f, 20, 20}, {20, 20.5f, 20}};
+    t.triangles = {0, 1, 2};
+    test::appendMesh(m, t);
+    return m;
+  };
+  for (const Mesh& m : {test::makeCadPart(), withTriangleAt(20.0f), withTriangleAt(4000.0f), lattice()}) {
     SCOPED_TRACE(m.vertexCount());
     PreparedMesh p;
     ClusterParams params;
@@ -74,6 +97,7 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
           most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
         }
         EXPECT_LE(most, c.shape == CellShape::kCube ? 8 : 64);
+        if (!m.points.empty() && c.shape == CellShape::kSphere && w == 0.4f) EXPECT_GT(most, 8);  // see lattice()
         // every referenced vertex is assigned, lies in its cell, and is assigned by the variant's rule
         // among the cells that existed when it was visited (centres earlier in the weight order)
         std::vector<size_t> rank(m.positions.size());
