@@ -351,62 +351,20 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       uint32_t list_count = found_count;
       uint32_t successors[64 + 3];
       for (;;) {
-      list[list_count] = list[list_count + 1] = list[list_count + 2] = 0;  // pad with the sentinel
-      __m128i chained = _mm_setzero_si128();
-      for (uint32_t j = 0; j < list_count; j += 4) {
-        __m128 a0 = _mm_loadu_ps(&cells[list[j]].x), a1 = _mm_loadu_ps(&cells[list[j + 1]].x);
-        __m128 a2 = _mm_loadu_ps(&cells[list[j + 2]].x), a3 = _mm_loadu_ps(&cells[list[j + 3]].x);
-        _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
-        const __m128 dx = _mm_sub_ps(px, a0), dy = _mm_sub_ps(py, a1), dz = _mm_sub_ps(pz, a2);
-        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-        __m128 inside;
-        if (kCube) {
-          const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-          inside = _mm_cmple_ps(
-              _mm_max_ps(_mm_max_ps(_mm_and_ps(dx, absmask), _mm_and_ps(dy, absmask)), _mm_and_ps(dz, absmask)),
-              _mm_set1_ps(rule.half));
-        } else {
-          inside = _mm_cmple_ps(d2, _mm_set1_ps(rule.half2));
+        const __m128i chained =
+            testCellLanes<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
+        if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) == 0xffff) break;
+        uint32_t* next_list = list == found ? successors : found;
+        uint32_t next_count = 0;
+        for (uint32_t j = 0; j < list_count; ++j) {
+          const uint32_t c = cells[list[j]].next;
+          next_list[next_count] = c;
+          next_count += c != 0;
         }
-        const __m128i id =
-            _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(list + j)), _mm_set1_epi32(1));
-        const __m128 id_less = _mm_castsi128_ps(_mm_cmplt_epi32(id, bid));
-        const __m128 better =
-            kNearest ? _mm_or_ps(_mm_cmplt_ps(d2, bd2), _mm_and_ps(_mm_cmpeq_ps(d2, bd2), id_less)) : id_less;
-        const __m128 take = _mm_and_ps(inside, better);
-        bd2 = _mm_or_ps(_mm_and_ps(take, d2), _mm_andnot_ps(take, bd2));
-        const __m128i takei = _mm_castps_si128(take);
-        bid = _mm_or_si128(_mm_and_si128(takei, id), _mm_andnot_si128(takei, bid));
-        chained = _mm_or_si128(chained, _mm_castps_si128(a3));
+        list = next_list;
+        list_count = next_count;
       }
-      if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) == 0xffff) break;
-      uint32_t* next_list = list == found ? successors : found;
-      uint32_t next_count = 0;
-      for (uint32_t j = 0; j < list_count; ++j) {
-        const uint32_t c = cells[list[j]].next;
-        next_list[next_count] = c;
-        next_count += c != 0;
-      }
-      list = next_list;
-      list_count = next_count;
-      }
-      // the least (d2, id) of the four lanes, without branches: the least d2, then the least id
-      // among the lanes holding it (for the heaviest rule the least id)
-      __m128i sel = bid;
-      if (kNearest) {
-        __m128 m = _mm_min_ps(bd2, _mm_shuffle_ps(bd2, bd2, _MM_SHUFFLE(2, 3, 0, 1)));
-        m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
-        const __m128i at_min = _mm_castps_si128(_mm_cmpeq_ps(bd2, m));
-        sel = _mm_or_si128(_mm_and_si128(at_min, bid), _mm_andnot_si128(at_min, _mm_set1_epi32(0x7fffffff)));
-      }
-      __m128i t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(2, 3, 0, 1));
-      __m128i lt = _mm_cmplt_epi32(t, sel);
-      sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
-      t = _mm_shuffle_epi32(sel, _MM_SHUFFLE(1, 0, 3, 2));
-      lt = _mm_cmplt_epi32(t, sel);
-      sel = _mm_or_si128(_mm_and_si128(lt, t), _mm_andnot_si128(lt, sel));
-      const int32_t id0 = _mm_cvtsi128_si32(sel);
-      best = id0 == 0x7fffffff ? kNone : uint32_t(id0);
+      best = laneBest<kNearest>(bd2, bid);
     }
 #else
     float best_d2 = std::numeric_limits<float>::infinity();
