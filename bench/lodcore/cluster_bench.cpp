@@ -14,6 +14,7 @@
 #include <meshoptimizer.h>
 #include <tbb/global_control.h>
 
+#include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
@@ -81,28 +82,8 @@ const Mesh& bunny() {
   return m;
 }
 
-// UV sphere with bumps: rings x segments quads, about 2 x rings x segments triangles
-Mesh bumpySphere(int rings, int segments) {
-  Mesh m;
-  const float pi = 3.14159265358979f;
-  for (int r = 0; r <= rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const float th = pi * float(r) / float(rings), ph = 2.0f * pi * float(s) / float(segments);
-      const float rad = 1.0f + 0.05f * std::sin(9.0f * th) * std::cos(7.0f * ph);
-      m.positions.push_back(rad * glm::vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
-    }
-  for (int r = 0; r < rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const uint32_t a = uint32_t(r * segments + s), b = uint32_t(r * segments + (s + 1) % segments);
-      const uint32_t c = b + uint32_t(segments), d = a + uint32_t(segments);
-      if (r > 0) m.triangles.insert(m.triangles.end(), {a, d, b});
-      if (r + 1 < rings) m.triangles.insert(m.triangles.end(), {b, d, c});
-    }
-  return m;
-}
-
 const Mesh& bigMesh() {
-  static Mesh m = bumpySphere(720, 720);  // 1,035,360 triangles
+  static Mesh m = test::makeBumpySphere(720, 720);  // 1,035,360 triangles
   return m;
 }
 

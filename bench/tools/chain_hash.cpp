@@ -33,25 +33,6 @@ struct Fnv {
   template <class T> void pod(const T& v) { bytes(&v, sizeof v); }
 };
 
-Mesh bumpySphere(int rings, int segments) {
-  Mesh m;
-  const float pi = 3.14159265358979f;
-  for (int r = 0; r <= rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const float th = pi * float(r) / float(rings), ph = 2.0f * pi * float(s) / float(segments);
-      const float rad = 1.0f + 0.05f * std::sin(9.0f * th) * std::cos(7.0f * ph);
-      m.positions.push_back(rad * glm::vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
-    }
-  for (int r = 0; r < rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const uint32_t a = uint32_t(r * segments + s), b = uint32_t(r * segments + (s + 1) % segments);
-      const uint32_t c = b + uint32_t(segments), d = a + uint32_t(segments);
-      if (r > 0) m.triangles.insert(m.triangles.end(), {a, d, b});
-      if (r + 1 < rings) m.triangles.insert(m.triangles.end(), {b, d, c});
-    }
-  return m;
-}
-
 Mesh coloured(Mesh m) {
   m.colors.resize(m.positions.size());
   for (size_t i = 0; i < m.positions.size(); ++i) {
@@ -89,7 +70,7 @@ int main(int argc, char** argv) {
   else std::fprintf(stderr, "chain_hash: no bunny (apt-get install glmark2-data), skipped\n");
   meshes.push_back({"cad", makeCadPart()});
   meshes.push_back({"sphere-col", coloured(makeSphere(glm::vec3(0.0f), 1.0f, 60, 90))});
-  if (big) meshes.push_back({"sphere1M", bumpySphere(720, 720)});
+  if (big) meshes.push_back({"sphere1M", makeBumpySphere(720, 720)});
   const LodMethod methods[] = {LodMethod::kFloatingNearest, LodMethod::kFloatingHeaviest, LodMethod::kUniform};
   const Synthesis syntheses[] = {Synthesis::kQuadric, Synthesis::kMean, Synthesis::kHeaviest};
   const CellShape shapes[] = {CellShape::kCube, CellShape::kSphere};

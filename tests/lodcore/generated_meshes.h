@@ -10,6 +10,27 @@
 
 namespace scenelod::test {
 
+// UV sphere with bumps (the benchmarks' large generated mesh): rings x segments quads, about
+// 2 x rings x segments triangles; 720 x 720 gives 1,035,360
+inline Mesh makeBumpySphere(int rings, int segments) {
+  Mesh m;
+  const float pi = 3.14159265358979f;
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const float th = pi * float(r) / float(rings), ph = 2.0f * pi * float(s) / float(segments);
+      const float rad = 1.0f + 0.05f * std::sin(9.0f * th) * std::cos(7.0f * ph);
+      m.positions.push_back(rad * glm::vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const uint32_t a = uint32_t(r * segments + s), b = uint32_t(r * segments + (s + 1) % segments);
+      const uint32_t c = b + uint32_t(segments), d = a + uint32_t(segments);
+      if (r > 0) m.triangles.insert(m.triangles.end(), {a, d, b});
+      if (r + 1 < rings) m.triangles.insert(m.triangles.end(), {b, d, c});
+    }
+  return m;
+}
+
 // UV sphere with `rings` latitude bands and `segments` longitudes, counter-clockwise outward.
 inline Mesh makeSphere(glm::vec3 centre, float radius, int rings, int segments) {
   Mesh m;
