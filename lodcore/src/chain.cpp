@@ -33,8 +33,14 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
   return s;
 }
 
-Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
-                             double tolerance) {
+namespace {
+
+// The search of findCellWidthForTarget. With `keep`, the assignment of the probe that ends the
+// search within the tolerance is moved there (a chain's first level at that width is then spared
+// its assignment, a third of the level); `keep` stays empty when the width chosen is not the last
+// probed (the search ended outside the tolerance).
+Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
+                      double tolerance, detail::Assignment* keep) {
   cell_width = 0.0f;
   if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
   if (!p.mesh || p.mesh->triangleCount() == 0 || p.order.empty())
@@ -48,10 +54,20 @@ Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params,
   double hi = diag * 2.0;
   size_t best_diff = SIZE_MAX;
   float best = static_cast<float>(lo);
-  auto count = [&](double w, size_t& n) {
+  const bool keep_last = keep != nullptr;
+  detail::Assignment a;
+  // countClusteredTriangles, keeping the assignment for `keep`
+  auto count = [&](double w, size_t& n) -> Error {
     cp.cell_width = static_cast<float>(w);
-    return countClusteredTriangles(p, cp, n);
+    n = 0;
+    a = detail::Assignment();
+    if (Error e = detail::assign(p, cp, a)) return e;
+    detail::Eliminated el;
+    detail::eliminate(p, a, false, false, false, el);
+    n = el.triangles.size() / 3;
+    return {};
   };
+  auto within = [&](size_t diff) { return double(diff) <= tolerance * double(target); };
   size_t n = 0;
   // safeguarded secant on the model count ~ w^-2 (a surface's clusters): a first guess from the
   // area, then w * sqrt(count / target), falling back to bisection of the bracket [lo, hi]
@@ -61,24 +77,35 @@ Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params,
     if (Error e = count(w, n)) return e;
     const size_t diff = n > target ? n - target : target - n;
     if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
-    if (double(diff) <= tolerance * double(target)) break;
+    if (within(diff)) {
+      if (keep_last) *keep = std::move(a);
+      break;
+    }
     if (n > target) lo = w; else hi = w;
     if (hi / lo < 1.0 + 1e-6) break;
     w = n > 0 ? w * std::sqrt(double(n) / double(target)) : std::sqrt(lo * hi);
   }
   // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
   // scan widths around the best one and keep the closest
-  if (double(best_diff) > tolerance * double(target)) {
+  if (!within(best_diff)) {
     const double centre = best;
-    for (int k = -16; k <= 16 && double(best_diff) > tolerance * double(target); ++k) {
+    for (int k = -16; k <= 16 && !within(best_diff); ++k) {
       const double w = centre * std::pow(1.25, double(k) / 16.0);
       if (Error e = count(w, n)) return e;
       const size_t diff = n > target ? n - target : target - n;
       if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
+      if (keep_last && within(diff)) *keep = std::move(a);
     }
   }
   cell_width = best;
   return {};
+}
+
+}  // namespace
+
+Error findCellWidthForTarget(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
+                             double tolerance) {
+  return searchCellWidth(p, params, target, cell_width, tolerance, nullptr);
 }
 
 Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, size_t target, float& cell_width,
@@ -124,12 +151,14 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   }
 
   float w1 = params.first_cell_width;
+  // the search's last probe, at w1: level 1's assignment (empty when w1 is given or was not probed last)
+  detail::Assignment first;
   t0 = Clock::now();
   if (w1 == 0.0f) {
     params.progress(0.05, "choosing w1");
     const size_t tn = original.triangleCount();
     if (tn >= 2) {
-      if (Error e = findCellWidthForTarget(p, params.cluster, tn / 2, w1, 0.05)) {
+      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first)) {
         out.levels.clear();
         return e;
       }
@@ -201,7 +230,12 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     LodLevel& level = out.levels[k + 1];
     detail::LevelParts parts;
     ClusterStats cs;
-    errors[k] = detail::clusterLevelParts(p, cp, parts, &cs, releaseSorted, &release);
+    if (k == 0 && !first.cluster_of.empty()) {
+      releaseSorted(&release);
+      errors[k] = detail::clusterLevelParts(p, cp, first, parts, &cs);
+    } else {
+      errors[k] = detail::clusterLevelParts(p, cp, parts, &cs, releaseSorted, &release);
+    }
     level.cell_width = cp.cell_width;
     level.max_error = cs.max_error;
     level.method = cp.method;

@@ -180,5 +180,11 @@ struct LevelParts {
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
                         ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr);
 void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out);  // frees parts
+// The same first step from an assignment already made at params.cell_width (by `assign`, e.g. a
+// width search's last probe, which a chain keeps as its first level's); consumes `a`.
+Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
+                        ClusterStats* stats);
+// The assignment step alone: checks the width and the method, then assigns every vertex.
+Error assign(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a);
 
 }  // namespace scenelod::detail

@@ -9,9 +9,9 @@
 
 namespace scenelod {
 
-namespace {
+namespace detail {
 
-Error assign(const PreparedMesh& p, const ClusterParams& params, detail::Assignment& a) {
+Error assign(const PreparedMesh& p, const ClusterParams& params, Assignment& a) {
   if (!p.mesh) return {Status::kInvalidArgument, "the prepared mesh holds no mesh (call prepareMesh first)"};
   if (Error e = detail::checkCellWidth(p, params.cell_width)) return e;
   switch (params.method) {
@@ -28,18 +28,23 @@ Error assign(const PreparedMesh& p, const ClusterParams& params, detail::Assignm
   }
 }
 
-}  // namespace
-
-namespace detail {
-
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
                         ClusterStats* stats, void (*assigned)(void*), void* context) {
-  parts = LevelParts();
-  if (stats) *stats = ClusterStats();
   Assignment a;
   const Error assign_error = assign(prepared, params, a);
   if (assigned) assigned(context);
-  if (assign_error) return assign_error;
+  if (assign_error) {
+    parts = LevelParts();
+    if (stats) *stats = ClusterStats();
+    return assign_error;
+  }
+  return clusterLevelParts(prepared, params, a, parts, stats);
+}
+
+Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
+                        ClusterStats* stats) {
+  parts = LevelParts();
+  if (stats) *stats = ClusterStats();
   const Mesh& m = *prepared.mesh;
   // elimination before synthesis (neither reads the other's result), so that the representatives
   // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
@@ -60,6 +65,7 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
     }
     stats->max_error = std::sqrt(max_d2);
   }
+  a = Assignment();
   return {};
 }
 
@@ -81,7 +87,7 @@ Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params,
 Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, ClusterAssignment& out) {
   out = ClusterAssignment();
   detail::Assignment a;
-  if (Error e = assign(prepared, params, a)) return e;
+  if (Error e = detail::assign(prepared, params, a)) return e;
   out.cluster_of = std::move(a.cluster_of);
   out.heaviest = std::move(a.heaviest);
   return {};
@@ -90,7 +96,7 @@ Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, 
 Error countClusteredTriangles(const PreparedMesh& prepared, const ClusterParams& params, size_t& triangle_count) {
   triangle_count = 0;
   detail::Assignment a;
-  if (Error e = assign(prepared, params, a)) return e;
+  if (Error e = detail::assign(prepared, params, a)) return e;
   detail::Eliminated el;
   detail::eliminate(prepared, a, false, false, false, el);
   triangle_count = el.triangles.size() / 3;
