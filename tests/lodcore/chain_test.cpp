@@ -109,6 +109,40 @@ TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
     }
 }
 
+// A searched chain keeps the search's last probe's assignment as level 1's: level 1 must be the
+// width findCellWidthForTarget chooses and the same mesh as one level clustered afresh at it, for
+// every clustering method and cell shape, one thread and several (a kept assignment of another
+// width, or one freed or moved too early, gives another mesh or none).
+TEST(Chain, SearchedFirstLevelIsTheSearchedWidthClusteredAfresh) {
+  const Mesh m = testMesh();
+  for (LodMethod method : {LodMethod::kFloatingNearest, LodMethod::kFloatingHeaviest, LodMethod::kUniform})
+    for (CellShape shape : {CellShape::kCube, CellShape::kSphere})
+      for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        ChainParams cp;
+        cp.level_count = 3;
+        cp.cluster.method = method;
+        cp.cluster.cell_shape = shape;
+        PreparedMesh prepared;
+        ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
+        float w = 0.0f;
+        ASSERT_TRUE(findCellWidthForTarget(prepared, cp.cluster, m.triangleCount() / 2, w, 0.05).ok());
+        LodChain chain;
+        ASSERT_TRUE(buildChain(m, cp, chain).ok());
+        ASSERT_EQ(chain.levelCount(), 4u);
+        EXPECT_EQ(chain.levels[1].cell_width, w) << lodMethodName(method);
+        ClusterParams params = cp.cluster;
+        params.cell_width = w;
+        Mesh single;
+        ClusterStats stats;
+        ASSERT_TRUE(clusterPrepared(prepared, params, single, &stats).ok());
+        EXPECT_TRUE(sameMesh(chain.levels[1].mesh, single)) << lodMethodName(method) << ", " << threads << " threads";
+        EXPECT_EQ(chain.levels[1].max_error, stats.max_error);
+        const double diff = std::fabs(double(single.triangleCount()) - double(m.triangleCount() / 2));
+        EXPECT_LE(diff, 0.05 * double(m.triangleCount() / 2)) << lodMethodName(method);
+      }
+}
+
 TEST(Chain, ProgressIsReportedUpToOne) {
   const Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 16, 24);
   struct Seen {
