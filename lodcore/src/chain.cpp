@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -133,10 +134,11 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   stats.prepare_seconds = since(t0);
   // level 0, the copy of the input, is made last, once the prepared mesh and the levels' scratch are
   // freed, so that it does not add to the peak memory of the levels
+  std::optional<Sphere> base_bounds;
   auto finish = [&]() {
     p = PreparedMesh();
     LodLevel& base = out.levels[0];
-    base.bounds = computeBoundingSphere(original);
+    base.bounds = base_bounds ? *base_bounds : computeBoundingSphere(original);
     if (take) base.mesh = std::move(*take);
     else base.mesh = original;
     base.cell_width = 0.0f;
@@ -253,6 +255,8 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     }
     if (k != 0 && !errors[k]) finishLevel(k, parts, cp, seconds);
   });
+  // level 0's bounds here, while the other thread may still make level 1's output (held above)
+  base_bounds = computeBoundingSphere(original);
   finish_group.wait();
   for (const Error& e : errors)
     if (e) {
