@@ -129,9 +129,10 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
   // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
   // pass's lookups went to random slots of it.
-  // candidate edges (cluster pairs, low id first), in chunks of kEdgeChunk edges: only read in order,
-  // and a growing vector's copy (old and new buffers at once) came at the peak of a level
-  constexpr size_t kEdgeChunk = 8192;
+  // candidate edges (cluster pairs, low id first, then the block of the last triangle collapsed onto
+  // the edge, kNone for none), in chunks of kEdgeChunk edges: a growing vector's copy (old and new
+  // buffers at once) came at the peak of a level
+  constexpr size_t kEdgeChunk = 4096;
   std::vector<std::vector<uint32_t>> edges;
   size_t edge_total = 0;
   // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
@@ -139,11 +140,23 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   const bool input_edges = m.edgeCount() > 0;
   const size_t listed = keep_edges || input_edges ? nc : 0;
   EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
-  // triangles collapsed onto a candidate edge, in chunks of fixed capacity: a growing vector's copy
-  // (old and new buffers at once) at fine levels, or a reserve extrapolated from the first blocks, was
-  // among the largest transients of a level; only those of uncovered edges are kept at the end
-  constexpr size_t kCollapsedChunk = 8192;
-  std::vector<std::vector<CollapsedTriangle>> collapsed_chunks;
+  // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
+  // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
+  // uncovered, the blocks of triangles that can hold its triangles are classified again at the end.
+  // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
+  // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
+  // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
+  // last triangle for this, beside its cluster pair (its first block follows from its id).
+  constexpr size_t kCollapsedList = 4096;
+  constexpr size_t kBlock = 512;  // triangles classified at once (below)
+  const bool track_collapsed = compute_thickness && keep_edges;
+  std::vector<CollapsedTriangle> collapsed_list;
+  bool collapsed_dropped = false;
+  std::vector<uint32_t> block_first_edge;  // per block: the id of the first edge it created
+  if (track_collapsed) {
+    collapsed_list.reserve(std::min(kCollapsedList, tn));
+    block_first_edge.reserve((tn + kBlock - 1) / kBlock);
+  }
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
   // points are output in); coarse levels collapse most triangles onto a few clusters
   std::vector<uint32_t> point_candidates;
@@ -160,10 +173,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       e = static_cast<uint32_t>(edge_total++);
       if (edges.empty() || edges.back().size() == edges.back().capacity()) {
         edges.emplace_back();
-        edges.back().reserve(2 * kEdgeChunk);
+        edges.back().reserve(3 * kEdgeChunk);
       }
       edges.back().push_back(lo);
       edges.back().push_back(hi);
+      edges.back().push_back(kNone);
       edge_lists.add(lo, hi, e);
       if (input_edges) input_thickness.push_back(0.0f);
     }
@@ -201,7 +215,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // to a point: at coarse levels the three are mixed at random, so a branch on the class
   // mispredicted about once per triangle), each class into its own small list; the lists are then
   // processed in input order, so ids and output order are those of a single pass.
-  constexpr size_t kBlock = 512;
   uint32_t kept_block[3 * kBlock], edge_block[3 * kBlock], point_block[kBlock];
   const uint32_t* tri = m.triangles.data();
   // where nearly all triangles of the last block collapsed to a point, the next block tests for that
@@ -214,46 +227,48 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // cache lines, unchanged). Smaller meshes skip it (a test per block, unswitched out of the loop).
   constexpr size_t kPrefetchTriangles = 16;
   const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
-  for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
-    const size_t t1 = std::min(tn, t0 + kBlock);
-    size_t kept_count = 0, edge_count = 0, point_count = 0;
-    const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
-    // the loop compiled twice, with and without the prefetch (a branch per triangle otherwise)
-    auto classify = [&](auto with_prefetch) {
-      for (size_t t = t0; t < t1; ++t) {
-        if (decltype(with_prefetch)::value) {
-          const uint32_t* ahead = tri + 3 * (t + kPrefetchTriangles);
-          __builtin_prefetch(co + ahead[0]);
-          __builtin_prefetch(co + ahead[1]);
-          __builtin_prefetch(co + ahead[2]);
-        }
-        const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
-        if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
-          point_block[point_count++] = c0;
-          continue;
-        }
-        const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
-        const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-        // rotation (keeping orientation) that puts the smallest id first, by index rather than by
-        // selects (which the compiler turned into branches)
-        const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
-        const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
-        const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
-        uint32_t* k = kept_block + 3 * kept_count;
-        k[0] = lo;
-        k[1] = c[r + 1];
-        k[2] = c[r + 2];
-        kept_count += kept;
-        const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
-        uint32_t* e = edge_block + 3 * edge_count;
-        e[0] = c0;
-        e[1] = y;
-        e[2] = static_cast<uint32_t>(t);
-        edge_count += !kept & !point;
-        point_block[point_count] = c0;
-        point_count += point;
+  size_t t0 = 0, t1 = 0, kept_count = 0, edge_count = 0, point_count = 0;  // the block classify() reads
+  // the loop compiled twice, with and without the prefetch (a branch per triangle otherwise)
+  auto classify = [&](auto with_prefetch) {
+    kept_count = edge_count = point_count = 0;
+    for (size_t t = t0; t < t1; ++t) {
+      if (decltype(with_prefetch)::value) {
+        const uint32_t* ahead = tri + 3 * (t + kPrefetchTriangles);
+        __builtin_prefetch(co + ahead[0]);
+        __builtin_prefetch(co + ahead[1]);
+        __builtin_prefetch(co + ahead[2]);
       }
-    };
+      const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
+      if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
+        point_block[point_count++] = c0;
+        continue;
+      }
+      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+      const bool kept = !(e01 | e12 | e02), point = e01 & e12;
+      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
+      // selects (which the compiler turned into branches)
+      const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
+      const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
+      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
+      uint32_t* k = kept_block + 3 * kept_count;
+      k[0] = lo;
+      k[1] = c[r + 1];
+      k[2] = c[r + 2];
+      kept_count += kept;
+      const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
+      uint32_t* e = edge_block + 3 * edge_count;
+      e[0] = c0;
+      e[1] = y;
+      e[2] = static_cast<uint32_t>(t);
+      edge_count += !kept & !point;
+      point_block[point_count] = c0;
+      point_count += point;
+    }
+  };
+  for (size_t b0 = 0; b0 < tn; b0 += kBlock) {
+    t0 = b0;
+    t1 = std::min(tn, t0 + kBlock);
+    const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
     if (prefetch_block) classify(std::true_type());
     else classify(std::false_type());
     out.collapsed_triangles += (t1 - t0) - kept_count;
@@ -262,18 +277,27 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
     if (keep_points)
       for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
-    std::vector<CollapsedTriangle>* collapsed = nullptr;
-    if (compute_thickness && keep_edges && edge_count > 0) {
-      if (collapsed_chunks.empty() || collapsed_chunks.back().size() + edge_count > collapsed_chunks.back().capacity()) {
-        collapsed_chunks.emplace_back();
-        collapsed_chunks.back().reserve(std::max(edge_count, std::min(kCollapsedChunk, tn - t0)));
-      }
-      collapsed = &collapsed_chunks.back();
+    if (!keep_edges) continue;
+    if (!track_collapsed) {
+      for (size_t j = 0; j < edge_count; ++j) edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+      continue;
     }
-    if (keep_edges)
+    const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
+    block_first_edge.push_back(static_cast<uint32_t>(edge_total));
+    if (!collapsed_dropped && collapsed_list.size() + edge_count > kCollapsedList) {
+      collapsed_dropped = true;
+      std::vector<CollapsedTriangle>().swap(collapsed_list);
+    }
+    if (collapsed_dropped)
       for (size_t j = 0; j < edge_count; ++j) {
         const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
-        if (collapsed) collapsed->push_back({edge_block[3 * j + 2], e});
+        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
+      }
+    else
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
+        collapsed_list.push_back({edge_block[3 * j + 2], e});
       }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
@@ -301,12 +325,26 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
     }
   }
-  { EdgeLists released(0, false); std::swap(released, edge_lists); }
+  // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
+  // uncovered edge's triangles (+1 at its first block, -1 past its last) are classified again below
+  std::vector<int32_t> rescan;
+  if (collapsed_dropped)
+    for (size_t e = 0; e < en; ++e) {
+      const uint32_t last = edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2];
+      if (covered[e] || last == kNone) continue;
+      if (rescan.empty()) rescan.assign(block_first_edge.size() + 1, 0);
+      // the block whose triangle created the edge (edges from triangles come first, in block order)
+      const size_t first = static_cast<size_t>(
+          std::upper_bound(block_first_edge.begin(), block_first_edge.end(), uint32_t(e)) - block_first_edge.begin() - 1);
+      ++rescan[first];
+      --rescan[last + 1];
+    }
+  if (rescan.empty()) { EdgeLists released(0, false); std::swap(released, edge_lists); }
   for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
     if (covered[e]) continue;
-    const uint32_t* pair = edges[e / kEdgeChunk].data() + 2 * (e % kEdgeChunk);
+    const uint32_t* pair = edges[e / kEdgeChunk].data() + 3 * (e % kEdgeChunk);
     remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
     out.edges.push_back(pair[0]);
     out.edges.push_back(pair[1]);
@@ -321,15 +359,31 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
 
   if (!compute_thickness) return;
   out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
-  size_t kept = 0;
-  for (const std::vector<CollapsedTriangle>& chunk : collapsed_chunks)
-    for (const CollapsedTriangle& ct : chunk) kept += remap[ct.edge] != kNone;
+  // the triangles collapsed onto uncovered edges, in input order, with the edges' output ids
   std::vector<CollapsedTriangle> collapsed;
-  collapsed.reserve(kept);
-  for (std::vector<CollapsedTriangle>& chunk : collapsed_chunks) {
-    for (const CollapsedTriangle& ct : chunk)
+  if (!collapsed_dropped) {
+    size_t kept = 0;
+    for (const CollapsedTriangle& ct : collapsed_list) kept += remap[ct.edge] != kNone;
+    collapsed.reserve(kept);
+    for (const CollapsedTriangle& ct : collapsed_list)
       if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
-    std::vector<CollapsedTriangle>().swap(chunk);
+    std::vector<CollapsedTriangle>().swap(collapsed_list);
+  } else if (!rescan.empty()) {
+    int32_t open = 0;
+    for (size_t b = 0; b + 1 < rescan.size(); ++b) {
+      open += rescan[b];
+      if (open == 0) continue;
+      t0 = b * kBlock;
+      t1 = std::min(tn, t0 + kBlock);
+      classify(std::false_type());
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t x = edge_block[3 * j], y = edge_block[3 * j + 1];
+        const uint32_t lo = branchlessMin(x, y), r = remap[edge_lists.find(lo, x ^ y ^ lo)];
+        if (r != kNone) collapsed.push_back({edge_block[3 * j + 2], r});
+      }
+    }
+    EdgeLists released(0, false);
+    std::swap(released, edge_lists);
   }
   computeThickness(p, a, collapsed, out);
   if (input_edges)
