@@ -158,12 +158,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     block_first_edge.reserve((tn + kBlock - 1) / kBlock);
   }
   // clusters of collapsed primitives, each listed once in order of first appearance (the order
-  // points are output in); coarse levels collapse most triangles onto a few clusters
+  // points are output in); coarse levels collapse most triangles onto a few clusters. Per cluster:
+  // 1 once listed, 2 once a corner of an output triangle or edge, which covers its point (it is then
+  // not listed, or dropped at the end: a separate pass over the output triangles did that before)
+  constexpr uint8_t kListed = 1, kUsed = 2;
   std::vector<uint32_t> point_candidates;
-  std::vector<uint8_t> candidate(nc, 0);
+  std::vector<uint8_t> point_state(nc, 0);
   auto addPoint = [&](uint32_t c) {
-    if (candidate[c]) return;
-    candidate[c] = 1;
+    if (point_state[c]) return;
+    point_state[c] = kListed;
     point_candidates.push_back(c);
   };
   auto edgeSlot = [&](uint32_t x, uint32_t y) {
@@ -205,6 +208,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
         out.triangles.push_back(c0);
         out.triangles.push_back(c1);
         out.triangles.push_back(c2);
+        point_state[c0] = point_state[c1] = point_state[c2] = kUsed;
         return;
       }
       if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) return;
@@ -312,10 +316,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   for (uint32_t v : m.points) addPoint(co[v]);
   std::vector<uint32_t>().swap(table);
 
-  // coverage: an edge of a kept triangle removes the candidate edge; a used cluster removes points
+  // coverage: an edge of a kept triangle removes the candidate edge (a used cluster removes points)
   const size_t en = edge_total;
   std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
-  std::vector<uint8_t> used(nc, 0);
   if (en > 0) {
     for (size_t t = 0; t < out.triangles.size(); t += 3) {
       const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
@@ -340,7 +343,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       --rescan[last + 1];
     }
   if (rescan.empty()) { EdgeLists released(0, false); std::swap(released, edge_lists); }
-  for (uint32_t c : out.triangles) used[c] = 1;
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
     if (covered[e]) continue;
@@ -348,14 +350,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
     out.edges.push_back(pair[0]);
     out.edges.push_back(pair[1]);
-    used[pair[0]] = used[pair[1]] = 1;
+    point_state[pair[0]] = point_state[pair[1]] = kUsed;
   }
   std::vector<std::vector<uint32_t>>().swap(edges);
   for (uint32_t c : point_candidates)
-    if (!used[c]) {
-      used[c] = 1;
-      out.points.push_back(c);
-    }
+    if (point_state[c] == kListed) out.points.push_back(c);
 
   if (!compute_thickness) return;
   out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
