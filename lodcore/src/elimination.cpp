@@ -249,15 +249,10 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       }
       const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
       const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
-      // selects (which the compiler turned into branches)
-      const uint32_t c[6] = {c0, c1, c2, c0, c1, c2};
-      const uint32_t m01 = branchlessMin(c0, c1), lo = branchlessMin(m01, c2);
-      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2 when kept
-      uint32_t* k = kept_block + 3 * kept_count;
-      k[0] = lo;
-      k[1] = c[r + 1];
-      k[2] = c[r + 2];
+      uint32_t* k = kept_block + 3 * kept_count;  // (rotated when added: most triangles of coarse levels are not kept)
+      k[0] = c0;
+      k[1] = c1;
+      k[2] = c2;
       kept_count += kept;
       const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
       uint32_t* e = edge_block + 3 * edge_count;
@@ -277,8 +272,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     else classify(std::false_type());
     out.collapsed_triangles += (t1 - t0) - kept_count;
     points_dominate = point_count * 8 > (t1 - t0) * 7;  // for the next block: fine meshes at coarse widths
-    for (size_t j = 0; j < kept_count; ++j)
-      addTriangle(kept_block[3 * j], kept_block[3 * j + 1], kept_block[3 * j + 2]);
+    for (size_t j = 0; j < kept_count; ++j) {
+      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
+      // selects (which the compiler turned into branches)
+      const uint32_t c0 = kept_block[3 * j], c1 = kept_block[3 * j + 1], c2 = kept_block[3 * j + 2];
+      const uint32_t c[5] = {c0, c1, c2, c0, c1};
+      const uint32_t lo = branchlessMin(branchlessMin(c0, c1), c2);
+      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2
+      addTriangle(lo, c[r + 1], c[r + 2]);
+    }
     if (keep_points)
       for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
     if (!keep_edges) continue;
