@@ -232,44 +232,54 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   constexpr size_t kPrefetchTriangles = 16;
   const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
   size_t t0 = 0, t1 = 0, kept_count = 0, edge_count = 0, point_count = 0;  // the block classify() reads
-  // the loop compiled twice, with and without the prefetch (a branch per triangle otherwise)
-  auto classify = [&](auto with_prefetch) {
-    kept_count = edge_count = point_count = 0;
-    for (size_t t = t0; t < t1; ++t) {
+  // (compiled for each pair of constants: a test of a flag in memory per triangle otherwise; the
+  // lists are written through pointers of their own, so that the block bases are not reloaded)
+  auto classify = [&](auto with_prefetch, auto points_first) {
+    uint32_t *k = kept_block, *e = edge_block, *pt = point_block;
+    const uint32_t* v = tri + 3 * t0;
+    for (size_t t = t0; t < t1; ++t, v += 3) {
       if (decltype(with_prefetch)::value) {
-        const uint32_t* ahead = tri + 3 * (t + kPrefetchTriangles);
-        __builtin_prefetch(co + ahead[0]);
-        __builtin_prefetch(co + ahead[1]);
-        __builtin_prefetch(co + ahead[2]);
+        __builtin_prefetch(co + v[3 * kPrefetchTriangles]);
+        __builtin_prefetch(co + v[3 * kPrefetchTriangles + 1]);
+        __builtin_prefetch(co + v[3 * kPrefetchTriangles + 2]);
       }
-      const uint32_t c0 = co[tri[3 * t]], c1 = co[tri[3 * t + 1]], c2 = co[tri[3 * t + 2]];
-      if (points_dominate && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
-        point_block[point_count++] = c0;
+      const uint32_t c0 = co[v[0]], c1 = co[v[1]], c2 = co[v[2]];
+      if (decltype(points_first)::value && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
+        *pt++ = c0;
         continue;
       }
       const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
       const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-      uint32_t* k = kept_block + 3 * kept_count;  // (rotated when added: most triangles of coarse levels are not kept)
-      k[0] = c0;
+      k[0] = c0;  // (rotated when added: most triangles of coarse levels are not kept)
       k[1] = c1;
       k[2] = c2;
-      kept_count += kept;
-      const uint32_t y = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
-      uint32_t* e = edge_block + 3 * edge_count;
+      k += 3 * size_t(kept);
       e[0] = c0;
-      e[1] = y;
+      e[1] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
       e[2] = static_cast<uint32_t>(t);
-      edge_count += !kept & !point;
-      point_block[point_count] = c0;
-      point_count += point;
+      e += 3 * size_t(!kept & !point);
+      *pt = c0;
+      pt += point;
+    }
+    kept_count = size_t(k - kept_block) / 3;
+    edge_count = size_t(e - edge_block) / 3;
+    point_count = size_t(pt - point_block);
+  };
+  // the classification of one block [t0, t1)
+  auto classifyBlock = [&](bool prefetch_block) {
+    if (prefetch_block) {
+      if (points_dominate) classify(std::true_type(), std::true_type());
+      else classify(std::true_type(), std::false_type());
+    } else {
+      if (points_dominate) classify(std::false_type(), std::true_type());
+      else classify(std::false_type(), std::false_type());
     }
   };
   for (size_t b0 = 0; b0 < tn; b0 += kBlock) {
     t0 = b0;
     t1 = std::min(tn, t0 + kBlock);
     const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
-    if (prefetch_block) classify(std::true_type());
-    else classify(std::false_type());
+    classifyBlock(prefetch_block);
     out.collapsed_triangles += (t1 - t0) - kept_count;
     points_dominate = point_count * 8 > (t1 - t0) * 7;  // for the next block: fine meshes at coarse widths
     for (size_t j = 0; j < kept_count; ++j) {
@@ -376,7 +386,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       if (open == 0) continue;
       t0 = b * kBlock;
       t1 = std::min(tn, t0 + kBlock);
-      classify(std::false_type());
+      classifyBlock(false);
       for (size_t j = 0; j < edge_count; ++j) {
         const uint32_t x = edge_block[3 * j], y = edge_block[3 * j + 1];
         const uint32_t lo = branchlessMin(x, y), r = remap[edge_lists.find(lo, x ^ y ^ lo)];
