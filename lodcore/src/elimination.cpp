@@ -380,17 +380,27 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
     std::vector<CollapsedTriangle>().swap(collapsed_list);
   } else if (!rescan.empty()) {
+    // A triangle collapsed onto an uncovered edge has its corners in the edge's two clusters: with
+    // those marked (the point states are no longer read), a triangle whose first corner is not is
+    // passed over after one test that is rarely taken (at 2 % of the bunny, one uncovered edge of
+    // four triangles spread over most blocks: the full classification of them cost 0.9 M
+    // instructions, 11 % of the level's elimination).
+    constexpr uint8_t kEdgeEnd = 4;
+    for (uint32_t c : out.edges) point_state[c] = kEdgeEnd;
     int32_t open = 0;
     for (size_t b = 0; b + 1 < rescan.size(); ++b) {
       open += rescan[b];
       if (open == 0) continue;
-      t0 = b * kBlock;
-      t1 = std::min(tn, t0 + kBlock);
-      classifyBlock(false);
-      for (size_t j = 0; j < edge_count; ++j) {
-        const uint32_t x = edge_block[3 * j], y = edge_block[3 * j + 1];
-        const uint32_t lo = branchlessMin(x, y), r = remap[edge_lists.find(lo, x ^ y ^ lo)];
-        if (r != kNone) collapsed.push_back({edge_block[3 * j + 2], r});
+      for (size_t t = b * kBlock; t < std::min(tn, (b + 1) * kBlock); ++t) {
+        const uint32_t* v = tri + 3 * t;
+        const uint32_t c0 = co[v[0]];
+        if (point_state[c0] != kEdgeEnd) continue;
+        const uint32_t c1 = co[v[1]], c2 = co[v[2]];
+        const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+        if (!(e01 | e12 | e02) || (e01 & e12)) continue;  // kept, or collapsed to a point
+        const uint32_t y = e01 ? c2 : c1, lo = branchlessMin(c0, y);
+        const uint32_t r = remap[edge_lists.find(lo, c0 ^ y ^ lo)];
+        if (r != kNone) collapsed.push_back({static_cast<uint32_t>(t), r});
       }
     }
     EdgeLists released(0, false);
