@@ -169,7 +169,8 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     point_state[c] = kListed;
     point_candidates.push_back(c);
   };
-  auto edgeSlot = [&](uint32_t x, uint32_t y) {
+  // (inlined: called out of line, its saves and restores were about a quarter of its cost)
+  auto edgeSlot = [&](uint32_t x, uint32_t y) __attribute__((always_inline)) {
     const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
     uint32_t e = edge_lists.find(lo, hi);
     if (e == kNone) {
@@ -304,17 +305,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       collapsed_dropped = true;
       std::vector<CollapsedTriangle>().swap(collapsed_list);
     }
-    if (collapsed_dropped)
-      for (size_t j = 0; j < edge_count; ++j) {
-        const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
-        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-      }
-    else
-      for (size_t j = 0; j < edge_count; ++j) {
-        const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
-        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-        collapsed_list.push_back({edge_block[3 * j + 2], e});
-      }
+    for (size_t j = 0; j < edge_count; ++j) {
+      const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+      edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
+      if (!collapsed_dropped) collapsed_list.push_back({edge_block[3 * j + 2], e});
+    }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
