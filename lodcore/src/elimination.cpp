@@ -142,7 +142,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
   // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
   // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
-  // uncovered, the blocks of triangles that can hold its triangles are classified again at the end.
+  // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
   // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
   // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
   // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
@@ -339,7 +339,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     }
   }
   // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
-  // uncovered edge's triangles (+1 at its first block, -1 past its last) are classified again below
+  // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
   std::vector<int32_t> rescan;
   if (collapsed_dropped)
     for (size_t e = 0; e < en; ++e) {
