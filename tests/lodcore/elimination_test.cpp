@@ -133,6 +133,31 @@ TEST(ThickEdge, ThinCylinderCollapsesToEdgesAsThickAsItsDiameter) {
   for (float t : out.edge_thickness) EXPECT_NEAR(t, 2.0f * r, 2e-3f);
 }
 
+TEST(ThickEdge, ThicknessIsTheSameWhenMoreTrianglesCollapseThanAreListed) {
+  // Beside a fine closed box, far more triangles collapse onto (covered) edges than the elimination
+  // lists, so it finds the triangles of the edges left uncovered (the cylinder's) by classifying
+  // their blocks again; the thickness must be that of the cylinder alone, whose few are listed.
+  const Mesh cyl = test::makeCylinder(0.0f, 6.0f, 0.05f, 24, 16);
+  const Mesh alone = run(cyl, floating(0.6f));
+  std::vector<float> expected(alone.edge_thickness);
+  std::sort(expected.begin(), expected.end());
+  ASSERT_GT(expected.size(), 3u);
+  for (bool box_first : {true, false}) {
+    Mesh m;
+    const Mesh box = test::makeBox({20, 20, 20}, {28, 28, 28}, 60);  // 43 200 triangles, spacing 0.13
+    if (box_first) test::appendMesh(m, box);
+    test::appendMesh(m, cyl);
+    if (!box_first) test::appendMesh(m, box);
+    const Mesh out = run(m, floating(0.6f));
+    std::vector<float> got;
+    for (size_t e = 0; e < out.edgeCount(); ++e)
+      if (out.positions[out.edges[2 * e]].y < 10.0f) got.push_back(out.edge_thickness[e]);  // the cylinder's
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got.size(), expected.size()) << "box first " << box_first;
+    for (size_t k = 0; k < got.size(); ++k) EXPECT_EQ(got[k], expected[k]) << "box first " << box_first;
+  }
+}
+
 TEST(ThickEdge, ThinBoxThicknessLiesBetweenItsWidthAndDiagonal) {
   const float s = 0.1f;
   const Mesh box = test::makeBox({0, 0, 0}, {4.0f, s, s}, 8);
