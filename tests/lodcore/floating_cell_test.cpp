@@ -14,6 +14,11 @@
 
 using namespace scenelod;
 
+namespace scenelod::detail {
+// floating_cell_cluster.cpp's hidden switch: false keeps the assignment off its AVX2 paths
+void setFloatingAvx2ForTest(bool allowed);
+}  // namespace scenelod::detail
+
 namespace {
 
 constexpr uint32_t kNone = 0xffffffffu;
@@ -119,6 +124,40 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
             }
           }
         }
+      }
+    }
+  }
+}
+
+// The AVX2 paths (where the CPU has them) choose the same cells as the SSE2 ones, for both rules and
+// shapes, on the flat grids of side w/2 and w (listed) at widths from a few vertices per cell to a
+// few cells per mesh; the grid-aligned part puts vertices exactly on cube faces (the wide gathers).
+// On a CPU without AVX2 both runs take the SSE2 paths.
+TEST(FloatingCell, Avx2AndSse2PathsChooseTheSameCells) {
+  Mesh grid_part = test::makeCadPart();
+  Mesh sphere = test::makeBumpySphere(60, 80);
+  for (const Mesh* m : {&grid_part, &sphere}) {
+    PreparedMesh p;
+    ClusterParams params;
+    ASSERT_TRUE(prepareMesh(*m, params, p).ok());
+    for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                   Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                   Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+      for (float w : {0.01f, 0.03f, 0.1f, 0.25f, 0.5f, 1.0f}) {
+        SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
+        params.method = c.method;
+        params.cell_shape = c.shape;
+        params.cell_width = w;
+        ClusterAssignment fast, plain;
+        detail::setFloatingAvx2ForTest(true);
+        ASSERT_TRUE(assignClusters(p, params, fast).ok());
+        detail::setFloatingAvx2ForTest(false);
+        const bool ok = assignClusters(p, params, plain).ok();
+        detail::setFloatingAvx2ForTest(true);
+        ASSERT_TRUE(ok);
+        EXPECT_GT(plain.heaviest.size(), 1u);
+        EXPECT_EQ(fast.heaviest, plain.heaviest);
+        EXPECT_EQ(fast.cluster_of, plain.cluster_of);
       }
     }
   }
