@@ -300,8 +300,8 @@ bool cpuHasAvx2() {
 constexpr bool kAvx2Built = false;
 bool cpuHasAvx2() { return false; }
 #endif
-// cleared by setFloatingAvx2ForTest(false), so that a test can compare the paths on one CPU
-std::atomic<bool> g_avx2_allowed{true};
+// cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
+std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true};
 bool useAvx2() {
   static const bool has = cpuHasAvx2();
   return kAvx2Built && has && g_avx2_allowed.load(std::memory_order_relaxed);
@@ -324,12 +324,19 @@ struct PackTable {
 };
 constexpr PackTable kPack;
 
+// four list heads as 32-bit lanes
+SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
+  return _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
+}
+SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint16_t* r) {
+  return _mm_cvtepu16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(r)));
+}
+
 // the non-zero heads of rows r0 and r1 (three each) appended to found[count ..); writes 8 entries
-SCENELOD_AVX2_TARGET inline uint32_t packRows(const uint32_t* r0, const uint32_t* r1, uint32_t valid, uint32_t* found,
+template <typename Head>
+SCENELOD_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, uint32_t valid, uint32_t* found,
                                               uint32_t count) {
-  const __m256i v = _mm256_inserti128_si256(
-      _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(r0))),
-      _mm_loadu_si128(reinterpret_cast<const __m128i*>(r1)), 1);
+  const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(loadHeads4(r0)), loadHeads4(r1), 1);
   const uint32_t zero = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
   const uint32_t m = ~zero & valid;
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPack.idx[m])));
@@ -416,7 +423,7 @@ SCENELOD_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-template <bool kCube, bool kNearest>
+template <bool kCube, bool kNearest, typename Head>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
@@ -430,7 +437,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], 0);
+  std::vector<Head> head(sz * dims[2], 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
@@ -449,10 +456,10 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     uint32_t found_count = 0;
     if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
       // the common case of cubes of side w/2 (3 per axis), unrolled
-      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 3; ++z)
         for (int y = 0; y < 3; ++y) {
-          const uint32_t* row = base + size_t(z) * sz + size_t(y) * sy;
+          const Head* row = base + size_t(z) * sz + size_t(y) * sy;
           for (int x = 0; x < 3; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -461,7 +468,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     } else {
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const Head* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -512,7 +519,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
                        size_t(floorToInt(q.x) - lo_cube[0]);
       cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = best + 1;
+      head[k] = Head(best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -522,7 +529,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 // assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
 // are tested 8 at a time
-template <bool kCube, bool kNearest>
+template <bool kCube, bool kNearest, typename Head>
 SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
@@ -535,7 +542,7 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], 0);
+  std::vector<Head> head(sz * dims[2], 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;
   const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
@@ -560,18 +567,24 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
     if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
       // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
       // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
-      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
       found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
       found_count = packRows(base + r[4], base + r[5], 0x77u, found, found_count);
       found_count = packRows(base + r[6], base + r[7], 0x77u, found, found_count);
       found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
+      // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
+      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const size_t* r = row_offset;
+      found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
+      found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
     } else {
       const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const Head* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -606,7 +619,7 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
       const size_t k = size_t(_mm_extract_epi32(c4, 2)) * sz + size_t(_mm_extract_epi32(c4, 1)) * sy +
                        size_t(_mm_cvtsi128_si32(c4));
       cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = best + 1;
+      head[k] = Head(best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -743,11 +756,10 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
 }
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, Assignment& out) {
+                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, bool short_heads,
+                 Assignment& out) {
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
-  static constexpr Fn kFns[2][2] = {{assignDenseT<false, false>, assignDenseT<false, true>},
-                                    {assignDenseT<true, false>, assignDenseT<true, true>}};
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
   // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
   if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
@@ -756,15 +768,24 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
     kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
+  // heads of 16 bits (the caller checked that every cell's index + 1 fits) or 32
 #if defined(SCENELOD_FLOATING_AVX2)
   if (useAvx2()) {
-    static constexpr Fn kAvx2Fns[2][2] = {{assignDenseAvx2T<false, false>, assignDenseAvx2T<false, true>},
-                                          {assignDenseAvx2T<true, false>, assignDenseAvx2T<true, true>}};
-    kAvx2Fns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    static constexpr Fn kAvx2Fns[2][2][2] = {
+        {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
+         {assignDenseAvx2T<true, false, uint32_t>, assignDenseAvx2T<true, true, uint32_t>}},
+        {{assignDenseAvx2T<false, false, uint16_t>, assignDenseAvx2T<false, true, uint16_t>},
+         {assignDenseAvx2T<true, false, uint16_t>, assignDenseAvx2T<true, true, uint16_t>}}};
+    kAvx2Fns[short_heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
 #endif
-  kFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  static constexpr Fn kFns[2][2][2] = {
+      {{assignDenseT<false, false, uint32_t>, assignDenseT<false, true, uint32_t>},
+       {assignDenseT<true, false, uint32_t>, assignDenseT<true, true, uint32_t>}},
+      {{assignDenseT<false, false, uint16_t>, assignDenseT<false, true, uint16_t>},
+       {assignDenseT<true, false, uint16_t>, assignDenseT<true, true, uint16_t>}}};
+  kFns[short_heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
@@ -798,12 +819,17 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     }
     const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
                                          kDenseBytesPerVertex * double(p.order.size()));
-    if (volume * sizeof(uint32_t) <= dense_budget) {
-      // cubes of side w keep their cells in blocks where these fit the budget too (the 1 M sphere's
-      // 10 % level; not the bunny's 50 % level, where they would add 0.3 MB to the chain's peak)
+    // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
+    // these fit (the bunny: its 50 % level's heads 1.72 -> 0.86 MB, the peak of its chain)
+    const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
+    const double head_bytes = short_heads ? sizeof(uint16_t) : sizeof(uint32_t);
+    if (volume * head_bytes <= dense_budget) {
+      // cubes of side w keep their cells in blocks (heads of 32 bits) where these fit the budget too
+      // (the 1 M sphere's 10 % level; not the bunny's 50 % level, where they would add 1.2 MB to the
+      // chain's peak)
       const bool blocks =
           sub == 1 && volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
-      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, out);
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, short_heads, out);
       return;
     }
   }
@@ -880,8 +906,12 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-// the hidden switch the tests flip: false keeps the assignment on its SSE2 (or scalar) paths
-void setFloatingAvx2ForTest(bool allowed) { g_avx2_allowed.store(allowed, std::memory_order_relaxed); }
+// the hidden switches the tests flip: avx2 false keeps the assignment on its SSE2 (or scalar) paths,
+// short_heads false gives every listed grid heads of 32 bits
+void setFloatingPathsForTest(bool avx2, bool short_heads) {
+  g_avx2_allowed.store(avx2, std::memory_order_relaxed);
+  g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
+}
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))

@@ -15,8 +15,9 @@
 using namespace scenelod;
 
 namespace scenelod::detail {
-// floating_cell_cluster.cpp's hidden switch: false keeps the assignment off its AVX2 paths
-void setFloatingAvx2ForTest(bool allowed);
+// floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
+// short_heads false keeps the flat grids' list heads at 32 bits
+void setFloatingPathsForTest(bool avx2, bool short_heads);
 }  // namespace scenelod::detail
 
 namespace {
@@ -129,11 +130,11 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
   }
 }
 
-// The AVX2 paths (where the CPU has them) choose the same cells as the SSE2 ones, for both rules and
-// shapes, on the flat grids of side w/2 and w (listed) at widths from a few vertices per cell to a
-// few cells per mesh; the grid-aligned part puts vertices exactly on cube faces (the wide gathers).
-// On a CPU without AVX2 both runs take the SSE2 paths.
-TEST(FloatingCell, Avx2AndSse2PathsChooseTheSameCells) {
+// The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, choose
+// the same cells, for both rules and shapes, on the flat grids of side w/2 and w (listed) at widths
+// from a few vertices per cell to a few cells per mesh; the grid-aligned part puts vertices exactly
+// on cube faces (the wide gathers). On a CPU without AVX2 those runs take the SSE2 paths.
+TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
   Mesh grid_part = test::makeCadPart();
   Mesh sphere = test::makeBumpySphere(60, 80);
   for (const Mesh* m : {&grid_part, &sphere}) {
@@ -148,16 +149,22 @@ TEST(FloatingCell, Avx2AndSse2PathsChooseTheSameCells) {
         params.method = c.method;
         params.cell_shape = c.shape;
         params.cell_width = w;
-        ClusterAssignment fast, plain;
-        detail::setFloatingAvx2ForTest(true);
-        ASSERT_TRUE(assignClusters(p, params, fast).ok());
-        detail::setFloatingAvx2ForTest(false);
+        ClusterAssignment plain;  // SSE2, 32-bit heads
+        detail::setFloatingPathsForTest(false, false);
         const bool ok = assignClusters(p, params, plain).ok();
-        detail::setFloatingAvx2ForTest(true);
+        detail::setFloatingPathsForTest(true, true);
         ASSERT_TRUE(ok);
         EXPECT_GT(plain.heaviest.size(), 1u);
-        EXPECT_EQ(fast.heaviest, plain.heaviest);
-        EXPECT_EQ(fast.cluster_of, plain.cluster_of);
+        for (int k = 1; k < 4; ++k) {
+          SCOPED_TRACE(k);
+          ClusterAssignment other;
+          detail::setFloatingPathsForTest(k & 1, k & 2);
+          const bool other_ok = assignClusters(p, params, other).ok();
+          detail::setFloatingPathsForTest(true, true);
+          ASSERT_TRUE(other_ok);
+          EXPECT_EQ(other.heaviest, plain.heaviest);
+          EXPECT_EQ(other.cluster_of, plain.cluster_of);
+        }
       }
     }
   }
