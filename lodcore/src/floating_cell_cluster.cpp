@@ -357,7 +357,7 @@ SCENELOD_AVX2_TARGET inline __m256 load2Cells(const CellRecord* cells, uint32_t 
 }
 
 // testCellLanes, 8 lanes: lane k holds list[j + k] (records k and k + 4 share a 128-bit half, so the
-// in-half transpose leaves the lanes in list order). Needs 7 spare entries after the list.
+// in-half transpose leaves the lanes in list order). Needs 8 spare entries after the list.
 template <bool kCube, bool kNearest, typename CellRecord>
 SCENELOD_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* cells, uint32_t* list, uint32_t count, __m256 px,
                                                    __m256 py, __m256 pz, const JoinRule& rule, __m256& bd2,
@@ -561,7 +561,7 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
     const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
     const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
     const __m128i span = _mm_sub_epi32(hi4, lo4);
-    uint32_t found[64 + 8];  // 8 spare: packRows writes 8 entries, testCellLanes8 pads with 7
+    uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
@@ -636,6 +636,65 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
 // of the bunny's 50 % level); such cubes, and vertices within the slack of a cube face (3 cubes
 // along an axis), take a general gather. 20 bytes per block (kBlockBytes), one block per occupied
 // cube: 1.4 to 2 cells per occupied cube on the bunny and the sphere.
+// assignBlocksT's grid: the heads, the blocks of 4 cell indices and their links
+struct CellBlocks {
+  struct Block {
+    uint32_t id[4];  // cell indices, filled in order, 0 where free
+  };
+  std::vector<Block> blocks;  // blocks[0] stays empty
+  std::vector<uint32_t> more;  // per block: the cube's next block once it is full, 0 for none
+  std::vector<uint32_t> head;
+  size_t sy, sz;
+
+  CellBlocks(const size_t dims[3], size_t expected)
+      : blocks(1, Block{}), more(1, 0), sy(dims[0]), sz(dims[0] * dims[1]) {
+    blocks.reserve(expectedBlocks(expected));
+    more.reserve(expectedBlocks(expected));
+    head.assign(sz * dims[2], 0);
+  }
+  // every cell listed in the cubes lo .. hi (grid indices), into scratch, followed by `pad` spare
+  // entries; returns the count
+  uint32_t gatherAll(const int32_t lo[3], const int32_t hi[3], std::vector<uint32_t>& scratch, size_t pad) const {
+    scratch.clear();
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+          for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
+            for (uint32_t k = 0; k < 4; ++k)
+              if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
+    const uint32_t count = static_cast<uint32_t>(scratch.size());
+    scratch.resize(scratch.size() + pad);
+    return count;
+  }
+  // lists cell index `id` in the cube of head index k
+  void add(size_t k, uint32_t id) {
+    uint32_t& h = head[k];
+    if (h == 0) {
+      h = uint32_t(blocks.size()) << 3 | 1u;
+      blocks.push_back(Block{});
+      more.push_back(0);
+      blocks.back().id[0] = id;
+    } else if ((h & 7u) < 4) {
+      blocks[h >> 3].id[h & 7u] = id;
+      ++h;
+    } else {  // the first block is full: the last block of the cube's chain, or a new one
+      h = (h & ~7u) | 5u;
+      uint32_t b = h >> 3;
+      while (more[b] != 0) b = more[b];
+      uint32_t k4 = 0;
+      while (k4 < 4 && blocks[b].id[k4] != 0) ++k4;
+      if (k4 == 4) {
+        more[b] = uint32_t(blocks.size());
+        b = more[b];
+        blocks.push_back(Block{});
+        more.push_back(0);
+        k4 = 0;
+      }
+      blocks[b].id[k4] = id;
+    }
+  }
+};
+
 template <bool kCube, bool kNearest>
 void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half a cube*/, const int32_t lo_cube[3],
                    const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
@@ -647,15 +706,8 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
   cells.reserve(expected + 1);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  struct Block {
-    uint32_t id[4];  // cell indices, filled in order, 0 where free
-  };
-  std::vector<Block> blocks(1, Block{});  // blocks[0] stays empty
-  blocks.reserve(expectedBlocks(expected));
-  std::vector<uint32_t> more(1, 0);  // per block: the cube's next block once it is full, 0 for none
-  more.reserve(expectedBlocks(expected));
-  const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], 0);
+  CellBlocks grid(dims, expected);
+  const size_t sy = grid.sy, sz = grid.sz;
   std::vector<uint32_t> scratch;  // the general gather's list
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
@@ -675,12 +727,12 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     uint32_t chained = 0;
     const bool narrow = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
     if (narrow) {
-      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 2; ++z)
         for (int y = 0; y < 2; ++y)
           for (int x = 0; x < 2; ++x) {
             const uint32_t h = base[size_t(z) * sz + size_t(y) * sy + size_t(x)];
-            const uint32_t* ids = blocks[h >> 3].id;
+            const uint32_t* ids = grid.blocks[h >> 3].id;
 #if defined(__SSE2__)
             _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
                              _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids)));
@@ -693,15 +745,7 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
           }
     }
     if (!narrow || (chained & 8u)) {
-      scratch.clear();
-      for (int32_t z = lo[2]; z <= hi[2]; ++z)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y)
-          for (int32_t x = lo[0]; x <= hi[0]; ++x)
-            for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
-              for (uint32_t k = 0; k < 4; ++k)
-                if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
-      count = static_cast<uint32_t>(scratch.size());
-      scratch.resize(scratch.size() + 3);
+      count = grid.gatherAll(lo, hi, scratch, 3);
       list = scratch.data();
     }
     uint32_t best = kNone;
@@ -723,37 +767,85 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
-      const uint32_t id = best + 1;
       cells.push_back({pv.x, pv.y, pv.z, 0});
-      uint32_t& h = head[size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
-                         size_t(floorToInt(q.x) - lo_cube[0])];
-      if (h == 0) {
-        h = uint32_t(blocks.size()) << 3 | 1u;
-        blocks.push_back(Block{});
-        more.push_back(0);
-        blocks.back().id[0] = id;
-      } else if ((h & 7u) < 4) {
-        blocks[h >> 3].id[h & 7u] = id;
-        ++h;
-      } else {  // the first block is full: the last block of the cube's chain, or a new one
-        h = (h & ~7u) | 5u;
-        uint32_t b = h >> 3;
-        while (more[b] != 0) b = more[b];
-        uint32_t k = 0;
-        while (k < 4 && blocks[b].id[k] != 0) ++k;
-        if (k == 4) {
-          more[b] = uint32_t(blocks.size());
-          b = more[b];
-          blocks.push_back(Block{});
-          more.push_back(0);
-          k = 0;
-        }
-        blocks[b].id[k] = id;
-      }
+      grid.add(size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
+                   size_t(floorToInt(q.x) - lo_cube[0]),
+               best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
 }
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// assignBlocksT on AVX2: the searched range on the three axes at once, the same copies of the
+// first blocks, the cells tested 8 at a time (testCellLanes8, laneBest8)
+template <bool kCube, bool kNearest>
+SCENELOD_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, float /*reach*/,
+                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                            size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t zero;
+  };
+  std::vector<Cell> cells;
+  cells.reserve(expected + 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cells.push_back({nan, nan, nan, 0});
+  CellBlocks grid(dims, expected);
+  const size_t sy = grid.sy, sz = grid.sz;
+  std::vector<uint32_t> scratch;
+  const float inv = 1.0f / cube_width;
+  const __m128 inv4 = _mm_set1_ps(inv), half4 = _mm_set1_ps(0.5f), slack4 = _mm_set1_ps(kSearchSlack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  const size_t offset[8] = {0, 1, sy, sy + 1, sz, sz + 1, sz + sy, sz + sy + 1};
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+    const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+    uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, then 8 sentinels of padding
+    uint32_t* list = found;
+    uint32_t count = 0;
+    uint32_t chained = 0;
+    const bool narrow =
+        (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
+    if (narrow) {
+      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      for (int k = 0; k < 8; ++k) {
+        const uint32_t h = base[offset[k]];
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
+                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(grid.blocks[h >> 3].id)));
+        const uint32_t c = h & 7u;
+        count += c;
+        chained |= c + 3u;
+      }
+    }
+    if (!narrow || (chained & 8u)) {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      count = grid.gatherAll(lo, hi, scratch, 8);
+      list = scratch.data();
+    }
+    __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    __m256i bid = _mm256_set1_epi32(0x7fffffff);
+    testCellLanes8<kCube, kNearest>(cells.data(), list, count, _mm256_set1_ps(pv.x), _mm256_set1_ps(pv.y),
+                                    _mm256_set1_ps(pv.z), rule, bd2, bid);
+    uint32_t best = laneBest8<kNearest>(bd2, bid);
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      cells.push_back({pv.x, pv.y, pv.z, 0});
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      grid.add(size_t(_mm_extract_epi32(c4, 2)) * sz + size_t(_mm_extract_epi32(c4, 1)) * sy +
+                   size_t(_mm_cvtsi128_si32(c4)),
+               best + 1);
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+#endif
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                  const size_t dims[3], JoinRule rule, size_t expected, bool blocks, bool short_heads,
@@ -763,6 +855,14 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
   // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
   if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
+#if defined(SCENELOD_FLOATING_AVX2)
+    if (useAvx2()) {
+      static constexpr Fn kAvx2BlockFns[2][2] = {{assignBlocksAvx2T<false, false>, assignBlocksAvx2T<false, true>},
+                                                 {assignBlocksAvx2T<true, false>, assignBlocksAvx2T<true, true>}};
+      kAvx2BlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+      return;
+    }
+#endif
     static constexpr Fn kBlockFns[2][2] = {{assignBlocksT<false, false>, assignBlocksT<false, true>},
                                            {assignBlocksT<true, false>, assignBlocksT<true, true>}};
     kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);

@@ -133,18 +133,25 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
 // The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, choose
 // the same cells, for both rules and shapes, on the flat grids of side w/2 and w (listed) at widths
 // from a few vertices per cell to a few cells per mesh; the grid-aligned part puts vertices exactly
-// on cube faces (the wide gathers). On a CPU without AVX2 those runs take the SSE2 paths.
+// on cube faces (the wide gathers); a triangle at 20 makes the sphere's box too large for cubes of
+// side w/2 at w = 0.4 and 0.5 (cubes of side w with cells in blocks). On a CPU without AVX2 those
+// runs take the SSE2 paths.
 TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
   Mesh grid_part = test::makeCadPart();
   Mesh sphere = test::makeBumpySphere(60, 80);
-  for (const Mesh* m : {&grid_part, &sphere}) {
+  Mesh sphere_far = sphere;
+  Mesh t;
+  t.positions = {{20, 20, 20}, {20.5f, 20, 20}, {20, 20.5f, 20}};
+  t.triangles = {0, 1, 2};
+  test::appendMesh(sphere_far, t);
+  for (const Mesh* m : {&grid_part, &sphere, &sphere_far}) {
     PreparedMesh p;
     ClusterParams params;
     ASSERT_TRUE(prepareMesh(*m, params, p).ok());
     for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
                    Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
                    Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
-      for (float w : {0.01f, 0.03f, 0.1f, 0.25f, 0.5f, 1.0f}) {
+      for (float w : {0.01f, 0.03f, 0.1f, 0.25f, 0.4f, 0.5f, 1.0f}) {
         SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
         params.method = c.method;
         params.cell_shape = c.shape;
