@@ -17,7 +17,9 @@
 // blocks of 4 where these fit too (one copy per cube instead of a walk along a list), else listed;
 // otherwise a hash whose slots hold each grid cube's first three cells inline (one cache line per
 // cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
-// the joining rule breaks ties by id.
+// the joining rule breaks ties by id. A listed flat grid's heads take 16 bits where every cell index
+// fits (at most 65,535 referenced vertices); the flat grids have AVX2 variants, chosen at run time,
+// that gather the heads by rows and test cells 8 at a time with the same operations and order.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -925,10 +927,11 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     const double head_bytes = short_heads ? sizeof(uint16_t) : sizeof(uint32_t);
     if (volume * head_bytes <= dense_budget) {
       // cubes of side w keep their cells in blocks (heads of 32 bits) where these fit the budget too
-      // (the 1 M sphere's 10 % level; not the bunny's 50 % level, where they would add 1.2 MB to the
-      // chain's peak)
-      const bool blocks =
-          sub == 1 && volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
+      // and the heads could not be short (the 1 M sphere's 10 % level): blocks take 8 + 11 bytes per
+      // cube and expected cell where short heads take 2 per cube (the bunny's width search probed
+      // finer than its 50 % level with 1.5 MB of heads and 0.7 MB of blocks, its chain's peak)
+      const bool blocks = sub == 1 && !short_heads &&
+                          volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
       assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, short_heads, out);
       return;
     }
