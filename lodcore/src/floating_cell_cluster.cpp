@@ -18,12 +18,15 @@
 // otherwise a hash whose slots hold each grid cube's first three cells inline (one cache line per
 // cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
 // the joining rule breaks ties by id. A listed flat grid's heads take 16 bits where every cell index
-// fits (at most 65,535 referenced vertices); the flat grids have AVX2 variants, chosen at run time,
-// that gather the heads by rows and test cells 8 at a time with the same operations and order.
+// fits (at most 65,535 referenced vertices), kept in bricks of 4 x 4 x 4 cubes, allocated where cells
+// are, when a flat array of them would take more than 16 bytes per vertex; the flat grids have AVX2
+// variants, chosen at run time, that gather the heads by rows and test cells 8 at a time with the
+// same operations and order.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -216,6 +219,9 @@ inline void testCellT(const JoinRule& r, const glm::vec3& pv, float cx, float cy
 // may also take up to 8 bytes per referenced vertex (twice the level's cluster_of array): the 1 M
 // sphere's 10 % level then takes the flat grid of side w (3 MB, the hash 2.2 MB), 115 -> 86 ms.
 constexpr double kDenseBaseBytes = 1 << 20;
+// a flat array of short heads above this many bytes per referenced vertex is kept in bricks
+// (BrickHeads): the bunny's 50 % level, its chain's level 1, would take 24.7 (0.86 MB)
+constexpr double kFlatHeadBytesPerVertex = 16.0;
 constexpr double kDenseBytesPerCell = 32.0;
 constexpr double kDenseBytesPerVertex = 8.0;
 // assignBlocksT's blocks of 4 cell ids and their links: reserved for 0.55 per expected cell (the
@@ -303,8 +309,8 @@ constexpr bool kAvx2Built = false;
 bool cpuHasAvx2() { return false; }
 #endif
 // cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
-std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true};
-bool useAvx2() {
+std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true};
+[[maybe_unused]] bool useAvx2() {  // unused where no AVX2 path is built
   static const bool has = cpuHasAvx2();
   return kAvx2Built && has && g_avx2_allowed.load(std::memory_order_relaxed);
 }
@@ -422,6 +428,57 @@ SCENELOD_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
 }
 #endif
 
+// List heads of 16 bits in bricks of 4 x 4 x 4 grid cubes (128 bytes), a brick allocated when a cell
+// is first listed in it; bricks listing no cell are all brick 0 (empty), so a sparse grid (a fine
+// level's surface in its box) takes the bricks its cells touch, not its whole box: the bunny's 50 %
+// level 1,124 bricks (144 KB, 217 KB reserved) and 27 KB of brick indices where a flat array of short heads takes
+// 0.86 MB. A head costs two dependent loads instead of one.
+struct Bricked {};  // the head type of assignDenseT over BrickHeads
+class BrickHeads {
+ public:
+  // `expected` cells (0: no grid); bricks reserved for one per 16 of them (15.4 and 16.3 cells per
+  // brick were measured on the bunny's 50 % level and at w = 0.02; more only regrows the array)
+  BrickHeads(const size_t dims[3], size_t expected)
+      : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), bz_((dims[2] + 3) / 4) {
+    if (expected == 0) return;
+    top_.assign(bx_ * by_ * bz_, 0);
+    heads_.reserve((expected / 16 + 16) * 64);
+    heads_.assign(64, 0);
+  }
+  uint32_t get(int32_t x, int32_t y, int32_t z) const {
+    return heads_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
+  }
+  void set(int32_t x, int32_t y, int32_t z, uint32_t v) {
+    uint32_t& b = top_[brick(x, y, z)];
+    if (b == 0) {
+      b = uint32_t(heads_.size() >> 6);
+      heads_.resize(heads_.size() + 64, 0);
+    }
+    heads_[size_t(b) << 6 | inBrick(x, y, z)] = uint16_t(v);
+  }
+  // the non-empty heads of the cubes lo .. hi into found (without a branch per head); their count
+  uint32_t gather(const int32_t lo[3], const int32_t hi[3], uint32_t* found) const {
+    uint32_t count = 0;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+          const uint32_t h = get(x, y, z);
+          found[count] = h;
+          count += h != 0;
+        }
+    return count;
+  }
+
+ private:
+  size_t brick(int32_t x, int32_t y, int32_t z) const {
+    return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
+  }
+  static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
+  size_t bx_, by_, bz_;
+  std::vector<uint32_t> top_;     // per brick position: its brick, 0 for the shared empty one
+  std::vector<uint16_t> heads_;   // 64 per brick, x fastest
+};
+
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
@@ -439,7 +496,10 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<Head> head(sz * dims[2], 0);
+  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
+  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
+  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
+  BrickHeads bricks(dims, kBricks ? expected : 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
@@ -456,12 +516,14 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     // random, so testing each head would mispredict about once per vertex and cube
     uint32_t found[64 + 3];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
     uint32_t found_count = 0;
-    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
+    if (kBricks) {
+      found_count = bricks.gather(lo, hi, found);
+    } else if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
       // the common case of cubes of side w/2 (3 per axis), unrolled
-      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 3; ++z)
         for (int y = 0; y < 3; ++y) {
-          const Head* row = base + size_t(z) * sz + size_t(y) * sy;
+          const Stored* row = base + size_t(z) * sz + size_t(y) * sy;
           for (int x = 0; x < 3; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -470,7 +532,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     } else {
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const Head* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -518,10 +580,16 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
-      const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
-                       size_t(floorToInt(q.x) - lo_cube[0]);
-      cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = Head(best + 1);
+      const int32_t cx = floorToInt(q.x) - lo_cube[0], cy = floorToInt(q.y) - lo_cube[1],
+                    cz = floorToInt(q.z) - lo_cube[2];
+      if constexpr (kBricks) {
+        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+        bricks.set(cx, cy, cz, best + 1);
+      } else {
+        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+        cells.push_back({pv.x, pv.y, pv.z, head[k]});
+        head[k] = Stored(best + 1);
+      }
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -544,7 +612,10 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<Head> head(sz * dims[2], 0);
+  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
+  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
+  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
+  BrickHeads bricks(dims, kBricks ? expected : 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;
   const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
@@ -566,10 +637,13 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
-    if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
+    if (kBricks) {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      found_count = bricks.gather(lo, hi, found);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
       // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
       // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
-      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
       found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
@@ -578,7 +652,7 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
       found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
       // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
-      const Head* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
       found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
@@ -586,7 +660,7 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
       const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const Head* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -618,10 +692,15 @@ SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_wid
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
-      const size_t k = size_t(_mm_extract_epi32(c4, 2)) * sz + size_t(_mm_extract_epi32(c4, 1)) * sy +
-                       size_t(_mm_cvtsi128_si32(c4));
-      cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = Head(best + 1);
+      const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
+      if constexpr (kBricks) {
+        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+        bricks.set(cx, cy, cz, best + 1);
+      } else {
+        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+        cells.push_back({pv.x, pv.y, pv.z, head[k]});
+        head[k] = Stored(best + 1);
+      }
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -850,7 +929,7 @@ SCENELOD_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_wi
 #endif
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, bool short_heads,
+                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, int heads,
                  Assignment& out) {
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
@@ -870,24 +949,28 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
     kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
-  // heads of 16 bits (the caller checked that every cell's index + 1 fits) or 32
+  // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
 #if defined(SCENELOD_FLOATING_AVX2)
   if (useAvx2()) {
-    static constexpr Fn kAvx2Fns[2][2][2] = {
+    static constexpr Fn kAvx2Fns[3][2][2] = {
         {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
          {assignDenseAvx2T<true, false, uint32_t>, assignDenseAvx2T<true, true, uint32_t>}},
         {{assignDenseAvx2T<false, false, uint16_t>, assignDenseAvx2T<false, true, uint16_t>},
-         {assignDenseAvx2T<true, false, uint16_t>, assignDenseAvx2T<true, true, uint16_t>}}};
-    kAvx2Fns[short_heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+         {assignDenseAvx2T<true, false, uint16_t>, assignDenseAvx2T<true, true, uint16_t>}},
+        {{assignDenseAvx2T<false, false, Bricked>, assignDenseAvx2T<false, true, Bricked>},
+         {assignDenseAvx2T<true, false, Bricked>, assignDenseAvx2T<true, true, Bricked>}}};
+    kAvx2Fns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
 #endif
-  static constexpr Fn kFns[2][2][2] = {
+  static constexpr Fn kFns[3][2][2] = {
       {{assignDenseT<false, false, uint32_t>, assignDenseT<false, true, uint32_t>},
        {assignDenseT<true, false, uint32_t>, assignDenseT<true, true, uint32_t>}},
       {{assignDenseT<false, false, uint16_t>, assignDenseT<false, true, uint16_t>},
-       {assignDenseT<true, false, uint16_t>, assignDenseT<true, true, uint16_t>}}};
-  kFns[short_heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+       {assignDenseT<true, false, uint16_t>, assignDenseT<true, true, uint16_t>}},
+      {{assignDenseT<false, false, Bricked>, assignDenseT<false, true, Bricked>},
+       {assignDenseT<true, false, Bricked>, assignDenseT<true, true, Bricked>}}};
+  kFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
@@ -932,7 +1015,12 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       // finer than its 50 % level with 1.5 MB of heads and 0.7 MB of blocks, its chain's peak)
       const bool blocks = sub == 1 && !short_heads &&
                           volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
-      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, short_heads, out);
+      // short heads in bricks where a flat array of them would take more than
+      // kFlatHeadBytesPerVertex per referenced vertex (the bunny's 50 % level, 24.7)
+      const bool bricked = short_heads && g_bricks_allowed.load(std::memory_order_relaxed) &&
+                           volume * head_bytes > kFlatHeadBytesPerVertex * double(p.order.size());
+      const int heads = bricked ? 2 : short_heads ? 1 : 0;
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, heads, out);
       return;
     }
   }
@@ -1010,10 +1098,11 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
 }
 
 // the hidden switches the tests flip: avx2 false keeps the assignment on its SSE2 (or scalar) paths,
-// short_heads false gives every listed grid heads of 32 bits
-void setFloatingPathsForTest(bool avx2, bool short_heads) {
+// short_heads false gives every listed grid heads of 32 bits, bricks false keeps short heads flat
+void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
   g_avx2_allowed.store(avx2, std::memory_order_relaxed);
   g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
+  g_bricks_allowed.store(bricks, std::memory_order_relaxed);
 }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {

@@ -16,8 +16,8 @@ using namespace scenelod;
 
 namespace scenelod::detail {
 // floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
-// short_heads false keeps the flat grids' list heads at 32 bits
-void setFloatingPathsForTest(bool avx2, bool short_heads);
+// short_heads false keeps the flat grids' list heads at 32 bits, bricks false keeps them flat
+void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
 }  // namespace scenelod::detail
 
 namespace {
@@ -130,7 +130,8 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
   }
 }
 
-// The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, choose
+// The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, flat or
+// in bricks (the sphere at w = 0.03: a flat array of short heads over 16 B per vertex), choose
 // the same cells, for both rules and shapes, on the flat grids of side w/2 and w (listed) at widths
 // from a few vertices per cell to a few cells per mesh; the grid-aligned part puts vertices exactly
 // on cube faces (the wide gathers); a triangle at 20 makes the sphere's box too large for cubes of
@@ -156,18 +157,18 @@ TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
         params.method = c.method;
         params.cell_shape = c.shape;
         params.cell_width = w;
-        ClusterAssignment plain;  // SSE2, 32-bit heads
-        detail::setFloatingPathsForTest(false, false);
+        ClusterAssignment plain;  // SSE2, flat 32-bit heads
+        detail::setFloatingPathsForTest(false, false, false);
         const bool ok = assignClusters(p, params, plain).ok();
-        detail::setFloatingPathsForTest(true, true);
+        detail::setFloatingPathsForTest(true, true, true);
         ASSERT_TRUE(ok);
         EXPECT_GT(plain.heaviest.size(), 1u);
-        for (int k = 1; k < 4; ++k) {
+        for (int k = 1; k < 8; ++k) {
           SCOPED_TRACE(k);
           ClusterAssignment other;
-          detail::setFloatingPathsForTest(k & 1, k & 2);
+          detail::setFloatingPathsForTest(k & 1, k & 2, k & 4);
           const bool other_ok = assignClusters(p, params, other).ok();
-          detail::setFloatingPathsForTest(true, true);
+          detail::setFloatingPathsForTest(true, true, true);
           ASSERT_TRUE(other_ok);
           EXPECT_EQ(other.heaviest, plain.heaviest);
           EXPECT_EQ(other.cluster_of, plain.cluster_of);
