@@ -431,8 +431,8 @@ SCENELOD_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
 // List heads of 16 bits in bricks of 4 x 4 x 4 grid cubes (128 bytes), a brick allocated when a cell
 // is first listed in it; bricks listing no cell are all brick 0 (empty), so a sparse grid (a fine
 // level's surface in its box) takes the bricks its cells touch, not its whole box: the bunny's 50 %
-// level 1,124 bricks (144 KB, 217 KB reserved) and 27 KB of brick indices where a flat array of short heads takes
-// 0.86 MB. A head costs two dependent loads instead of one.
+// level 1,124 bricks (144 KB, 217 KB reserved) and 27 KB of brick indices where a flat array of
+// short heads takes 0.86 MB. A head costs two dependent loads instead of one.
 struct Bricked {};  // the head type of assignDenseT over BrickHeads
 class BrickHeads {
  public:
@@ -458,6 +458,26 @@ class BrickHeads {
   }
   // the non-empty heads of the cubes lo .. hi into found (without a branch per head); their count
   uint32_t gather(const int32_t lo[3], const int32_t hi[3], uint32_t* found) const {
+    if (hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1) {
+      // 2 x 2 x 2 cubes (the grid of side w): the brick and in-brick parts of each axis once, and
+      // loops of fixed counts (the general loops below mispredicted about once per vertex)
+      size_t bx[2], ix[2], row[4], in[4];
+      for (int k = 0; k < 2; ++k) bx[k] = size_t((lo[0] + k) >> 2), ix[k] = size_t((lo[0] + k) & 3);
+      for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 2; ++y) {
+          const int32_t cy = lo[1] + y, cz = lo[2] + z;
+          row[2 * z + y] = (size_t(cz >> 2) * by_ + size_t(cy >> 2)) * bx_;
+          in[2 * z + y] = size_t((cz & 3) << 4 | (cy & 3) << 2);
+        }
+      uint32_t count = 0;
+      for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 2; ++k) {
+          const uint32_t h = heads_[size_t(top_[row[r] + bx[k]]) << 6 | in[r] | ix[k]];
+          found[count] = h;
+          count += h != 0;
+        }
+      return count;
+    }
     uint32_t count = 0;
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
       for (int32_t y = lo[1]; y <= hi[1]; ++y)
