@@ -1025,13 +1025,13 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
                                          kDenseBytesPerVertex * double(p.order.size()));
     // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
-    // these fit (the bunny: its 50 % level's heads 1.72 -> 0.86 MB, the peak of its chain)
+    // these fit (the bunny: its 50 % level's flat heads 1.72 -> 0.86 MB; see the bricks below)
     const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
     const double head_bytes = short_heads ? sizeof(uint16_t) : sizeof(uint32_t);
     if (volume * head_bytes <= dense_budget) {
       // cubes of side w keep their cells in blocks (heads of 32 bits) where these fit the budget too
-      // and the heads could not be short (the 1 M sphere's 10 % level): blocks take 8 + 11 bytes per
-      // cube and expected cell where short heads take 2 per cube (the bunny's width search probed
+      // and the heads could not be short (the 1 M sphere's 10 % level): blocks take 4 bytes per cube
+      // and 11 per expected cell where short heads take 2 per cube (the bunny's width search probed
       // finer than its 50 % level with 1.5 MB of heads and 0.7 MB of blocks, its chain's peak)
       const bool blocks = sub == 1 && !short_heads &&
                           volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
