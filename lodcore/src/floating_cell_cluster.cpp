@@ -17,10 +17,16 @@
 // blocks of 4 where these fit too (one copy per cube instead of a walk along a list), else listed;
 // otherwise a hash whose slots hold each grid cube's first three cells inline (one cache line per
 // cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
-// the joining rule breaks ties by id.
+// the joining rule breaks ties by id. A listed flat grid's heads take 16 bits where every cell index
+// fits (at most 65,535 referenced vertices), kept in bricks of 4 x 4 x 4 cubes, allocated where cells
+// are, when a flat array of them would take more than 16 bytes per vertex; the flat grids have AVX2
+// variants, chosen at run time, that gather the heads by rows and test cells 8 at a time with the
+// same operations and order.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -28,6 +34,11 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #include <xmmintrin.h>
+#endif
+// the AVX2 paths are built on x86 beside the SSE2 ones (a build without SSE2 keeps the scalar paths)
+#if defined(__SSE2__) && (defined(__x86_64__) || defined(__i386__))
+#define SCENELOD_FLOATING_AVX2 1
+#include <immintrin.h>
 #endif
 
 #include "cluster_internal.h"
@@ -208,6 +219,9 @@ inline void testCellT(const JoinRule& r, const glm::vec3& pv, float cx, float cy
 // may also take up to 8 bytes per referenced vertex (twice the level's cluster_of array): the 1 M
 // sphere's 10 % level then takes the flat grid of side w (3 MB, the hash 2.2 MB), 115 -> 86 ms.
 constexpr double kDenseBaseBytes = 1 << 20;
+// a flat array of short heads above this many bytes per referenced vertex is kept in bricks
+// (BrickHeads): the bunny's 50 % level, its chain's level 1, would take 24.7 (0.86 MB)
+constexpr double kFlatHeadBytesPerVertex = 16.0;
 constexpr double kDenseBytesPerCell = 32.0;
 constexpr double kDenseBytesPerVertex = 8.0;
 // assignBlocksT's blocks of 4 cell ids and their links: reserved for 0.55 per expected cell (the
@@ -279,10 +293,216 @@ inline uint32_t laneBest(__m128 bd2, __m128i bid) {
 }
 #endif
 
+// The AVX2 variant of the flat grid of side w/2 (chosen at run time, where the CPU has it): the 27
+// heads gathered as 9 rows of 4 loads with one compaction per pair of rows, and the cells tested 8 at
+// a time. The lanes use testCellLanes' operations (no FMA: "avx2" alone never contracts a * b + c)
+// and keep the same order on (d^2, id), so the cell chosen, and every bit after it, is the same.
+#if defined(SCENELOD_FLOATING_AVX2)
+#define SCENELOD_AVX2_TARGET __attribute__((target("avx2,popcnt")))
+constexpr bool kAvx2Built = true;
+bool cpuHasAvx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+}
+#else
+constexpr bool kAvx2Built = false;
+bool cpuHasAvx2() { return false; }
+#endif
+// cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
+std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true};
+[[maybe_unused]] bool useAvx2() {  // unused where no AVX2 path is built
+  static const bool has = cpuHasAvx2();
+  return kAvx2Built && has && g_avx2_allowed.load(std::memory_order_relaxed);
+}
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// For a mask of the non-empty heads of two rows (lanes 0-2 and 4-6 of a pair of 4-head loads), the
+// lane indices that pack them to the front, one byte each: 128 entries of 8 bytes (1 KB)
+struct PackTable {
+  uint64_t idx[128];
+  constexpr PackTable() : idx() {
+    for (uint32_t m = 0; m < 128; ++m) {
+      uint64_t v = 0;
+      int k = 0;
+      for (uint32_t lane = 0; lane < 7; ++lane)
+        if (m >> lane & 1u) v |= uint64_t(lane) << (8 * k++);
+      idx[m] = v;
+    }
+  }
+};
+constexpr PackTable kPack;
+
+// four list heads as 32-bit lanes
+SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
+  return _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
+}
+SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint16_t* r) {
+  return _mm_cvtepu16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(r)));
+}
+
+// the non-zero heads of rows r0 and r1 (three each) appended to found[count ..); writes 8 entries
+template <typename Head>
+SCENELOD_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, uint32_t valid, uint32_t* found,
+                                              uint32_t count) {
+  const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(loadHeads4(r0)), loadHeads4(r1), 1);
+  const uint32_t zero = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
+  const uint32_t m = ~zero & valid;
+  const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPack.idx[m])));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(found + count), _mm256_permutevar8x32_epi32(v, perm));
+  return count + uint32_t(_mm_popcnt_u32(m));
+}
+
+// floorToInt per lane
+SCENELOD_AVX2_TARGET inline __m128i floorToInt4(__m128 x) {
+  const __m128i t = _mm_cvttps_epi32(x);
+  return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
+}
+
+// cells a and b as the two halves of a vector
+template <typename CellRecord>
+SCENELOD_AVX2_TARGET inline __m256 load2Cells(const CellRecord* cells, uint32_t a, uint32_t b) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&cells[a].x)), _mm_loadu_ps(&cells[b].x), 1);
+}
+
+// testCellLanes, 8 lanes: lane k holds list[j + k] (records k and k + 4 share a 128-bit half, so the
+// in-half transpose leaves the lanes in list order). Needs 8 spare entries after the list.
+template <bool kCube, bool kNearest, typename CellRecord>
+SCENELOD_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* cells, uint32_t* list, uint32_t count, __m256 px,
+                                                   __m256 py, __m256 pz, const JoinRule& rule, __m256& bd2,
+                                                   __m256i& bid) {
+  static_assert(sizeof(CellRecord) == 16, "a cell is read as one 16-byte lane");
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(list + count), _mm256_setzero_si256());  // pad with the sentinel
+  __m256i chained = _mm256_setzero_si256();
+  for (uint32_t j = 0; j < count; j += 8) {
+    const __m256 a0 = load2Cells(cells, list[j], list[j + 4]), a1 = load2Cells(cells, list[j + 1], list[j + 5]);
+    const __m256 a2 = load2Cells(cells, list[j + 2], list[j + 6]), a3 = load2Cells(cells, list[j + 3], list[j + 7]);
+    const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpacklo_ps(a2, a3);
+    const __m256 t2 = _mm256_unpackhi_ps(a0, a1), t3 = _mm256_unpackhi_ps(a2, a3);
+    const __m256 cx = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 cy = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 cz = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 cw = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 dx = _mm256_sub_ps(px, cx), dy = _mm256_sub_ps(py, cy), dz = _mm256_sub_ps(pz, cz);
+    const __m256 d2 =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    __m256 inside;
+    if (kCube) {
+      const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+      inside = _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(_mm256_and_ps(dx, absmask), _mm256_and_ps(dy, absmask)),
+                                           _mm256_and_ps(dz, absmask)),
+                             _mm256_set1_ps(rule.half), _CMP_LE_OQ);
+    } else {
+      inside = _mm256_cmp_ps(d2, _mm256_set1_ps(rule.half2), _CMP_LE_OQ);
+    }
+    const __m256i id =
+        _mm256_sub_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(list + j)), _mm256_set1_epi32(1));
+    const __m256 id_less = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bid, id));
+    const __m256 better =
+        kNearest ? _mm256_or_ps(_mm256_cmp_ps(d2, bd2, _CMP_LT_OQ),
+                                _mm256_and_ps(_mm256_cmp_ps(d2, bd2, _CMP_EQ_OQ), id_less))
+                 : id_less;
+    const __m256 take = _mm256_and_ps(inside, better);
+    bd2 = _mm256_blendv_ps(bd2, d2, take);
+    bid = _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(bid), _mm256_castsi256_ps(id), take));
+    chained = _mm256_or_si256(chained, _mm256_castps_si256(cw));
+  }
+  return chained;
+}
+
+// laneBest over 8 lanes: the least d2, then the least id among the lanes holding it
+template <bool kNearest>
+SCENELOD_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
+  __m256i sel = bid;
+  if (kNearest) {
+    __m256 m = _mm256_min_ps(bd2, _mm256_permute2f128_ps(bd2, bd2, 1));
+    m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+    sel = _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)),
+                                               _mm256_castsi256_ps(bid), _mm256_cmp_ps(bd2, m, _CMP_EQ_OQ)));
+  }
+  __m128i s = _mm_min_epi32(_mm256_castsi256_si128(sel), _mm256_extracti128_si256(sel, 1));
+  s = _mm_min_epi32(s, _mm_shuffle_epi32(s, _MM_SHUFFLE(1, 0, 3, 2)));
+  s = _mm_min_epi32(s, _mm_shuffle_epi32(s, _MM_SHUFFLE(2, 3, 0, 1)));
+  const int32_t id0 = _mm_cvtsi128_si32(s);
+  return id0 == 0x7fffffff ? kNone : uint32_t(id0);
+}
+#endif
+
+// List heads of 16 bits in bricks of 4 x 4 x 4 grid cubes (128 bytes), a brick allocated when a cell
+// is first listed in it; bricks listing no cell are all brick 0 (empty), so a sparse grid (a fine
+// level's surface in its box) takes the bricks its cells touch, not its whole box: the bunny's 50 %
+// level 1,124 bricks (144 KB, 217 KB reserved) and 27 KB of brick indices where a flat array of
+// short heads takes 0.86 MB. A head costs two dependent loads instead of one.
+struct Bricked {};  // the head type of assignDenseT over BrickHeads
+class BrickHeads {
+ public:
+  // `expected` cells (0: no grid); bricks reserved for one per 16 of them (15.4 and 16.3 cells per
+  // brick were measured on the bunny's 50 % level and at w = 0.02; more only regrows the array)
+  BrickHeads(const size_t dims[3], size_t expected)
+      : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), bz_((dims[2] + 3) / 4) {
+    if (expected == 0) return;
+    top_.assign(bx_ * by_ * bz_, 0);
+    heads_.reserve((expected / 16 + 16) * 64);
+    heads_.assign(64, 0);
+  }
+  uint32_t get(int32_t x, int32_t y, int32_t z) const {
+    return heads_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
+  }
+  void set(int32_t x, int32_t y, int32_t z, uint32_t v) {
+    uint32_t& b = top_[brick(x, y, z)];
+    if (b == 0) {
+      b = uint32_t(heads_.size() >> 6);
+      heads_.resize(heads_.size() + 64, 0);
+    }
+    heads_[size_t(b) << 6 | inBrick(x, y, z)] = uint16_t(v);
+  }
+  // the non-empty heads of the cubes lo .. hi into found (without a branch per head); their count
+  uint32_t gather(const int32_t lo[3], const int32_t hi[3], uint32_t* found) const {
+    if (hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1) {
+      // 2 x 2 x 2 cubes (the grid of side w): the brick and in-brick parts of each axis once, and
+      // loops of fixed counts (the general loops below mispredicted about once per vertex)
+      size_t bx[2], ix[2], row[4], in[4];
+      for (int k = 0; k < 2; ++k) bx[k] = size_t((lo[0] + k) >> 2), ix[k] = size_t((lo[0] + k) & 3);
+      for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 2; ++y) {
+          const int32_t cy = lo[1] + y, cz = lo[2] + z;
+          row[2 * z + y] = (size_t(cz >> 2) * by_ + size_t(cy >> 2)) * bx_;
+          in[2 * z + y] = size_t((cz & 3) << 4 | (cy & 3) << 2);
+        }
+      uint32_t count = 0;
+      for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 2; ++k) {
+          const uint32_t h = heads_[size_t(top_[row[r] + bx[k]]) << 6 | in[r] | ix[k]];
+          found[count] = h;
+          count += h != 0;
+        }
+      return count;
+    }
+    uint32_t count = 0;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+          const uint32_t h = get(x, y, z);
+          found[count] = h;
+          count += h != 0;
+        }
+    return count;
+  }
+
+ private:
+  size_t brick(int32_t x, int32_t y, int32_t z) const {
+    return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
+  }
+  static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
+  size_t bx_, by_, bz_;
+  std::vector<uint32_t> top_;     // per brick position: its brick, 0 for the shared empty one
+  std::vector<uint16_t> heads_;   // 64 per brick, x fastest
+};
+
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
-template <bool kCube, bool kNearest>
+template <bool kCube, bool kNearest, typename Head>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
   struct Cell {
@@ -296,7 +516,10 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
   const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], 0);
+  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
+  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
+  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
+  BrickHeads bricks(dims, kBricks ? expected : 0);
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
@@ -313,12 +536,14 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     // random, so testing each head would mispredict about once per vertex and cube
     uint32_t found[64 + 3];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
     uint32_t found_count = 0;
-    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
+    if (kBricks) {
+      found_count = bricks.gather(lo, hi, found);
+    } else if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
       // the common case of cubes of side w/2 (3 per axis), unrolled
-      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 3; ++z)
         for (int y = 0; y < 3; ++y) {
-          const uint32_t* row = base + size_t(z) * sz + size_t(y) * sy;
+          const Stored* row = base + size_t(z) * sz + size_t(y) * sy;
           for (int x = 0; x < 3; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -327,7 +552,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     } else {
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -375,14 +600,132 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
-      const size_t k = size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
-                       size_t(floorToInt(q.x) - lo_cube[0]);
-      cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = best + 1;
+      const int32_t cx = floorToInt(q.x) - lo_cube[0], cy = floorToInt(q.y) - lo_cube[1],
+                    cz = floorToInt(q.z) - lo_cube[2];
+      if constexpr (kBricks) {
+        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+        bricks.set(cx, cy, cz, best + 1);
+      } else {
+        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+        cells.push_back({pv.x, pv.y, pv.z, head[k]});
+        head[k] = Stored(best + 1);
+      }
     }
     out.cluster_of[p.order[i]] = best;
   }
 }
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
+// 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
+// are tested 8 at a time
+template <bool kCube, bool kNearest, typename Head>
+SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                           size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t next;  // as in assignDenseT
+  };
+  std::vector<Cell> cells;
+  cells.reserve(expected + 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cells.push_back({nan, nan, nan, 0});
+  const size_t sy = dims[0], sz = dims[0] * dims[1];
+  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
+  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
+  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
+  BrickHeads bricks(dims, kBricks ? expected : 0);
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack * 2.0f * reach;
+  const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  // offsets of the 9 rows of 3 x 3 x 3 cubes from the first
+  size_t row_offset[9];
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    // the range of cubes along the three axes at once, with the scalar path's operations per lane
+    // ((q - reach) - slack and floorToInt's truncation and correction)
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i span = _mm_sub_epi32(hi4, lo4);
+    uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
+    uint32_t found_count = 0;
+    const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+    if (kBricks) {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      found_count = bricks.gather(lo, hi, found);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
+      // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
+      // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const size_t* r = row_offset;
+      found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
+      found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
+      found_count = packRows(base + r[4], base + r[5], 0x77u, found, found_count);
+      found_count = packRows(base + r[6], base + r[7], 0x77u, found, found_count);
+      found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
+      // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const size_t* r = row_offset;
+      found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
+      found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
+    } else {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      for (int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+            found[found_count] = row[x];
+            found_count += row[x] != 0;
+          }
+        }
+    }
+    const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
+    __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    __m256i bid = _mm256_set1_epi32(0x7fffffff);
+    uint32_t* list = found;
+    uint32_t list_count = found_count;
+    uint32_t successors[64 + 8];
+    for (;;) {
+      const __m256i chained =
+          testCellLanes8<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
+      if (_mm256_testz_si256(chained, chained)) break;
+      uint32_t* next_list = list == found ? successors : found;
+      uint32_t next_count = 0;
+      for (uint32_t j = 0; j < list_count; ++j) {
+        const uint32_t c = cells[list[j]].next;
+        next_list[next_count] = c;
+        next_count += c != 0;
+      }
+      list = next_list;
+      list_count = next_count;
+    }
+    uint32_t best = laneBest8<kNearest>(bd2, bid);
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
+      if constexpr (kBricks) {
+        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+        bricks.set(cx, cy, cz, best + 1);
+      } else {
+        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+        cells.push_back({pv.x, pv.y, pv.z, head[k]});
+        head[k] = Stored(best + 1);
+      }
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+#endif
 
 // The flat grid of cubes of side w (where cubes of side w/2 would not fit): such a cube lists up to
 // 8 cube cells and 64 sphere cells, so that chained lists took several rounds of dependent loads
@@ -394,6 +737,65 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 // of the bunny's 50 % level); such cubes, and vertices within the slack of a cube face (3 cubes
 // along an axis), take a general gather. 20 bytes per block (kBlockBytes), one block per occupied
 // cube: 1.4 to 2 cells per occupied cube on the bunny and the sphere.
+// assignBlocksT's grid: the heads, the blocks of 4 cell indices and their links
+struct CellBlocks {
+  struct Block {
+    uint32_t id[4];  // cell indices, filled in order, 0 where free
+  };
+  std::vector<Block> blocks;  // blocks[0] stays empty
+  std::vector<uint32_t> more;  // per block: the cube's next block once it is full, 0 for none
+  std::vector<uint32_t> head;
+  size_t sy, sz;
+
+  CellBlocks(const size_t dims[3], size_t expected)
+      : blocks(1, Block{}), more(1, 0), sy(dims[0]), sz(dims[0] * dims[1]) {
+    blocks.reserve(expectedBlocks(expected));
+    more.reserve(expectedBlocks(expected));
+    head.assign(sz * dims[2], 0);
+  }
+  // every cell listed in the cubes lo .. hi (grid indices), into scratch, followed by `pad` spare
+  // entries; returns the count
+  uint32_t gatherAll(const int32_t lo[3], const int32_t hi[3], std::vector<uint32_t>& scratch, size_t pad) const {
+    scratch.clear();
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+          for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
+            for (uint32_t k = 0; k < 4; ++k)
+              if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
+    const uint32_t count = static_cast<uint32_t>(scratch.size());
+    scratch.resize(scratch.size() + pad);
+    return count;
+  }
+  // lists cell index `id` in the cube of head index k
+  void add(size_t k, uint32_t id) {
+    uint32_t& h = head[k];
+    if (h == 0) {
+      h = uint32_t(blocks.size()) << 3 | 1u;
+      blocks.push_back(Block{});
+      more.push_back(0);
+      blocks.back().id[0] = id;
+    } else if ((h & 7u) < 4) {
+      blocks[h >> 3].id[h & 7u] = id;
+      ++h;
+    } else {  // the first block is full: the last block of the cube's chain, or a new one
+      h = (h & ~7u) | 5u;
+      uint32_t b = h >> 3;
+      while (more[b] != 0) b = more[b];
+      uint32_t k4 = 0;
+      while (k4 < 4 && blocks[b].id[k4] != 0) ++k4;
+      if (k4 == 4) {
+        more[b] = uint32_t(blocks.size());
+        b = more[b];
+        blocks.push_back(Block{});
+        more.push_back(0);
+        k4 = 0;
+      }
+      blocks[b].id[k4] = id;
+    }
+  }
+};
+
 template <bool kCube, bool kNearest>
 void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half a cube*/, const int32_t lo_cube[3],
                    const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
@@ -405,15 +807,8 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
   cells.reserve(expected + 1);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  struct Block {
-    uint32_t id[4];  // cell indices, filled in order, 0 where free
-  };
-  std::vector<Block> blocks(1, Block{});  // blocks[0] stays empty
-  blocks.reserve(expectedBlocks(expected));
-  std::vector<uint32_t> more(1, 0);  // per block: the cube's next block once it is full, 0 for none
-  more.reserve(expectedBlocks(expected));
-  const size_t sy = dims[0], sz = dims[0] * dims[1];
-  std::vector<uint32_t> head(sz * dims[2], 0);
+  CellBlocks grid(dims, expected);
+  const size_t sy = grid.sy, sz = grid.sz;
   std::vector<uint32_t> scratch;  // the general gather's list
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
@@ -433,12 +828,12 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     uint32_t chained = 0;
     const bool narrow = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
     if (narrow) {
-      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 2; ++z)
         for (int y = 0; y < 2; ++y)
           for (int x = 0; x < 2; ++x) {
             const uint32_t h = base[size_t(z) * sz + size_t(y) * sy + size_t(x)];
-            const uint32_t* ids = blocks[h >> 3].id;
+            const uint32_t* ids = grid.blocks[h >> 3].id;
 #if defined(__SSE2__)
             _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
                              _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids)));
@@ -451,15 +846,7 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
           }
     }
     if (!narrow || (chained & 8u)) {
-      scratch.clear();
-      for (int32_t z = lo[2]; z <= hi[2]; ++z)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y)
-          for (int32_t x = lo[0]; x <= hi[0]; ++x)
-            for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
-              for (uint32_t k = 0; k < 4; ++k)
-                if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
-      count = static_cast<uint32_t>(scratch.size());
-      scratch.resize(scratch.size() + 3);
+      count = grid.gatherAll(lo, hi, scratch, 3);
       list = scratch.data();
     }
     uint32_t best = kNone;
@@ -481,53 +868,129 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
-      const uint32_t id = best + 1;
       cells.push_back({pv.x, pv.y, pv.z, 0});
-      uint32_t& h = head[size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
-                         size_t(floorToInt(q.x) - lo_cube[0])];
-      if (h == 0) {
-        h = uint32_t(blocks.size()) << 3 | 1u;
-        blocks.push_back(Block{});
-        more.push_back(0);
-        blocks.back().id[0] = id;
-      } else if ((h & 7u) < 4) {
-        blocks[h >> 3].id[h & 7u] = id;
-        ++h;
-      } else {  // the first block is full: the last block of the cube's chain, or a new one
-        h = (h & ~7u) | 5u;
-        uint32_t b = h >> 3;
-        while (more[b] != 0) b = more[b];
-        uint32_t k = 0;
-        while (k < 4 && blocks[b].id[k] != 0) ++k;
-        if (k == 4) {
-          more[b] = uint32_t(blocks.size());
-          b = more[b];
-          blocks.push_back(Block{});
-          more.push_back(0);
-          k = 0;
-        }
-        blocks[b].id[k] = id;
-      }
+      grid.add(size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
+                   size_t(floorToInt(q.x) - lo_cube[0]),
+               best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
 }
 
+#if defined(SCENELOD_FLOATING_AVX2)
+// assignBlocksT on AVX2: the searched range on the three axes at once, the same copies of the
+// first blocks, the cells tested 8 at a time (testCellLanes8, laneBest8)
+template <bool kCube, bool kNearest>
+SCENELOD_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, float /*reach*/,
+                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                            size_t expected, Assignment& out) {
+  struct Cell {
+    float x, y, z;
+    uint32_t zero;
+  };
+  std::vector<Cell> cells;
+  cells.reserve(expected + 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cells.push_back({nan, nan, nan, 0});
+  CellBlocks grid(dims, expected);
+  const size_t sy = grid.sy, sz = grid.sz;
+  std::vector<uint32_t> scratch;
+  const float inv = 1.0f / cube_width;
+  const __m128 inv4 = _mm_set1_ps(inv), half4 = _mm_set1_ps(0.5f), slack4 = _mm_set1_ps(kSearchSlack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  const size_t offset[8] = {0, 1, sy, sy + 1, sz, sz + 1, sz + sy, sz + sy + 1};
+  const size_t n = p.order.size();
+  const glm::vec3* sorted = p.sorted_positions.data();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+    const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+    uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, then 8 sentinels of padding
+    uint32_t* list = found;
+    uint32_t count = 0;
+    uint32_t chained = 0;
+    const bool narrow =
+        (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
+    if (narrow) {
+      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      for (int k = 0; k < 8; ++k) {
+        const uint32_t h = base[offset[k]];
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
+                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(grid.blocks[h >> 3].id)));
+        const uint32_t c = h & 7u;
+        count += c;
+        chained |= c + 3u;
+      }
+    }
+    if (!narrow || (chained & 8u)) {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      count = grid.gatherAll(lo, hi, scratch, 8);
+      list = scratch.data();
+    }
+    __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    __m256i bid = _mm256_set1_epi32(0x7fffffff);
+    testCellLanes8<kCube, kNearest>(cells.data(), list, count, _mm256_set1_ps(pv.x), _mm256_set1_ps(pv.y),
+                                    _mm256_set1_ps(pv.z), rule, bd2, bid);
+    uint32_t best = laneBest8<kNearest>(bd2, bid);
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      cells.push_back({pv.x, pv.y, pv.z, 0});
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      grid.add(size_t(_mm_extract_epi32(c4, 2)) * sz + size_t(_mm_extract_epi32(c4, 1)) * sy +
+                   size_t(_mm_cvtsi128_si32(c4)),
+               best + 1);
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+#endif
+
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, Assignment& out) {
+                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, int heads,
+                 Assignment& out) {
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
-  static constexpr Fn kFns[2][2] = {{assignDenseT<false, false>, assignDenseT<false, true>},
-                                    {assignDenseT<true, false>, assignDenseT<true, true>}};
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
   // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
   if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
+#if defined(SCENELOD_FLOATING_AVX2)
+    if (useAvx2()) {
+      static constexpr Fn kAvx2BlockFns[2][2] = {{assignBlocksAvx2T<false, false>, assignBlocksAvx2T<false, true>},
+                                                 {assignBlocksAvx2T<true, false>, assignBlocksAvx2T<true, true>}};
+      kAvx2BlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+      return;
+    }
+#endif
     static constexpr Fn kBlockFns[2][2] = {{assignBlocksT<false, false>, assignBlocksT<false, true>},
                                            {assignBlocksT<true, false>, assignBlocksT<true, true>}};
     kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
-  kFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
+#if defined(SCENELOD_FLOATING_AVX2)
+  if (useAvx2()) {
+    static constexpr Fn kAvx2Fns[3][2][2] = {
+        {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
+         {assignDenseAvx2T<true, false, uint32_t>, assignDenseAvx2T<true, true, uint32_t>}},
+        {{assignDenseAvx2T<false, false, uint16_t>, assignDenseAvx2T<false, true, uint16_t>},
+         {assignDenseAvx2T<true, false, uint16_t>, assignDenseAvx2T<true, true, uint16_t>}},
+        {{assignDenseAvx2T<false, false, Bricked>, assignDenseAvx2T<false, true, Bricked>},
+         {assignDenseAvx2T<true, false, Bricked>, assignDenseAvx2T<true, true, Bricked>}}};
+    kAvx2Fns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    return;
+  }
+#endif
+  static constexpr Fn kFns[3][2][2] = {
+      {{assignDenseT<false, false, uint32_t>, assignDenseT<false, true, uint32_t>},
+       {assignDenseT<true, false, uint32_t>, assignDenseT<true, true, uint32_t>}},
+      {{assignDenseT<false, false, uint16_t>, assignDenseT<false, true, uint16_t>},
+       {assignDenseT<true, false, uint16_t>, assignDenseT<true, true, uint16_t>}},
+      {{assignDenseT<false, false, Bricked>, assignDenseT<false, true, Bricked>},
+       {assignDenseT<true, false, Bricked>, assignDenseT<true, true, Bricked>}}};
+  kFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
@@ -561,12 +1024,23 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     }
     const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
                                          kDenseBytesPerVertex * double(p.order.size()));
-    if (volume * sizeof(uint32_t) <= dense_budget) {
-      // cubes of side w keep their cells in blocks where these fit the budget too (the 1 M sphere's
-      // 10 % level; not the bunny's 50 % level, where they would add 0.3 MB to the chain's peak)
-      const bool blocks =
-          sub == 1 && volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
-      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, out);
+    // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
+    // these fit (the bunny: its 50 % level's flat heads 1.72 -> 0.86 MB; see the bricks below)
+    const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
+    const double head_bytes = short_heads ? sizeof(uint16_t) : sizeof(uint32_t);
+    if (volume * head_bytes <= dense_budget) {
+      // cubes of side w keep their cells in blocks (heads of 32 bits) where these fit the budget too
+      // and the heads could not be short (the 1 M sphere's 10 % level): blocks take 4 bytes per cube
+      // and 11 per expected cell where short heads take 2 per cube (the bunny's width search probed
+      // finer than its 50 % level with 1.5 MB of heads and 0.7 MB of blocks, its chain's peak)
+      const bool blocks = sub == 1 && !short_heads &&
+                          volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
+      // short heads in bricks where a flat array of them would take more than
+      // kFlatHeadBytesPerVertex per referenced vertex (the bunny's 50 % level, 24.7)
+      const bool bricked = short_heads && g_bricks_allowed.load(std::memory_order_relaxed) &&
+                           volume * head_bytes > kFlatHeadBytesPerVertex * double(p.order.size());
+      const int heads = bricked ? 2 : short_heads ? 1 : 0;
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, heads, out);
       return;
     }
   }
@@ -641,6 +1115,14 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     }
     out.cluster_of[v] = best;
   }
+}
+
+// the hidden switches the tests flip: avx2 false keeps the assignment on its SSE2 (or scalar) paths,
+// short_heads false gives every listed grid heads of 32 bits, bricks false keeps short heads flat
+void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
+  g_avx2_allowed.store(avx2, std::memory_order_relaxed);
+  g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
+  g_bricks_allowed.store(bricks, std::memory_order_relaxed);
 }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {

@@ -14,6 +14,12 @@
 
 using namespace scenelod;
 
+namespace scenelod::detail {
+// floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
+// short_heads false keeps the flat grids' list heads at 32 bits, bricks false keeps them flat
+void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
+}  // namespace scenelod::detail
+
 namespace {
 
 constexpr uint32_t kNone = 0xffffffffu;
@@ -118,6 +124,54 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
               ASSERT_GE(glm::dot(d, d), glm::dot(dc, dc)) << "vertex " << v << " has a nearer centre";
             }
           }
+        }
+      }
+    }
+  }
+}
+
+// The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, flat or
+// in bricks (the sphere at w = 0.03: a flat array of short heads over 16 B per vertex), choose
+// the same cells, for both rules and shapes, on the flat grids of side w/2 and w (listed) at widths
+// from a few vertices per cell to a few cells per mesh; the grid-aligned part puts vertices exactly
+// on cube faces (the wide gathers); a triangle at 20 makes the sphere's box too large for cubes of
+// side w/2 at w = 0.4 and 0.5 (cubes of side w with cells in blocks). On a CPU without AVX2 those
+// runs take the SSE2 paths.
+TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
+  Mesh grid_part = test::makeCadPart();
+  Mesh sphere = test::makeBumpySphere(60, 80);
+  Mesh sphere_far = sphere;
+  Mesh t;
+  t.positions = {{20, 20, 20}, {20.5f, 20, 20}, {20, 20.5f, 20}};
+  t.triangles = {0, 1, 2};
+  test::appendMesh(sphere_far, t);
+  for (const Mesh* m : {&grid_part, &sphere, &sphere_far}) {
+    PreparedMesh p;
+    ClusterParams params;
+    ASSERT_TRUE(prepareMesh(*m, params, p).ok());
+    for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                   Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                   Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+      for (float w : {0.01f, 0.03f, 0.1f, 0.25f, 0.4f, 0.5f, 1.0f}) {
+        SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
+        params.method = c.method;
+        params.cell_shape = c.shape;
+        params.cell_width = w;
+        ClusterAssignment plain;  // SSE2, flat 32-bit heads
+        detail::setFloatingPathsForTest(false, false, false);
+        const bool ok = assignClusters(p, params, plain).ok();
+        detail::setFloatingPathsForTest(true, true, true);
+        ASSERT_TRUE(ok);
+        EXPECT_GT(plain.heaviest.size(), 1u);
+        for (int k = 1; k < 8; ++k) {
+          SCOPED_TRACE(k);
+          ClusterAssignment other;
+          detail::setFloatingPathsForTest(k & 1, k & 2, k & 4);
+          const bool other_ok = assignClusters(p, params, other).ok();
+          detail::setFloatingPathsForTest(true, true, true);
+          ASSERT_TRUE(other_ok);
+          EXPECT_EQ(other.heaviest, plain.heaviest);
+          EXPECT_EQ(other.cluster_of, plain.cluster_of);
         }
       }
     }
