@@ -225,6 +225,20 @@ struct Sums {          // 92 bytes per cluster
   }
 };
 
+// the per-vertex inputs of the sums as plain pointers: the sums are stored through __m128, which may
+// alias anything, so members of the PreparedMesh were reloaded after every vertex's stores
+struct VertexArrays {
+  const glm::vec3* pos;
+  const float* weights;
+  const VertexFaceSums* face_sums;
+  const glm::vec4* face_colors;  // with colours only
+  const glm::vec3* colors;
+};
+
+inline VertexArrays vertexArrays(const PreparedMesh& p) {
+  return {p.mesh->positions.data(), p.weights.data(), p.face_sums.data(), p.face_colors.data(), p.mesh->colors.data()};
+}
+
 #if defined(__SSE2__)
 // one vertex's terms of its cluster's sums, one register per four-float group of Sums (ws, sc,
 // q[0..3], q[4..7], q[8..11]); q0, q4 and q8 are zero without face sums
@@ -233,12 +247,12 @@ struct Terms {
 };
 
 // `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
-inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, __m128 centre, bool have_face_sums,
-                         bool quadric) {
+inline Terms vertexTerms(const VertexArrays& in, size_t v, __m128 centre, bool have_face_sums, bool quadric) {
   const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
   const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
   const __m128 sign = _mm_set1_ps(-0.0f);
-  const float w = p.weights[v];
+  const glm::vec3* pos = in.pos;
+  const float w = in.weights[v];
   Terms t;
   // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The position is loaded as 8 + 4 bytes
   // (the last vertex ends the array).
@@ -251,7 +265,7 @@ inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, 
   t.q0 = t.q4 = t.q8 = _mm_setzero_ps();
   if (have_face_sums) {
     // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
-    const VertexFaceSums& f = p.face_sums[v];
+    const VertexFaceSums& f = in.face_sums[v];
     const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
     const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
     const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
@@ -278,14 +292,13 @@ inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, 
 
 // adds vertex v to its cluster's sums (the single pass and the grouped one make the same
 // operations in the same order)
-inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, bool have_face_sums, bool quadric,
-                      Sums& s) {
+inline void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, bool quadric, Sums& s) {
 #if defined(__SSE2__)
   // the centre is loaded as 8 + 4 bytes: a 16-byte load would take in ws[0], which the previous
   // vertex may just have stored (a load straddling a pending store waits for it to retire)
   const __m128 centre = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&s.centre.x)),
                                       _mm_load_ss(&s.centre.z));
-  const Terms t = vertexTerms(p, pos, v, centre, have_face_sums, quadric);
+  const Terms t = vertexTerms(in, v, centre, have_face_sums, quadric);
   _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), t.ws));
   _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), t.sc));
   if (have_face_sums) {
@@ -294,15 +307,15 @@ inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, boo
     _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), t.q8));
   }
 #else
-  const float w = p.weights[v];
-  const glm::vec3 d = pos[v] - s.centre;
+  const float w = in.weights[v];
+  const glm::vec3 d = in.pos[v] - s.centre;
   s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
   s.ws[3] += w;
   s.sc[0] += d.x, s.sc[1] += d.y, s.sc[2] += d.z;
   s.sc[3] += 1.0f;
   if (have_face_sums) {
     float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
-    decodeFaceSums(p.face_sums[v], fa);
+    decodeFaceSums(in.face_sums[v], fa);
     for (int k = 0; k < 9; ++k) s.q[k] += fa[k];  // (the quadric part is unused but harmless for mean)
     if (quadric) {
       // the vertex lies on all its faces' planes: relative to the centre, b = -A d
@@ -487,14 +500,14 @@ constexpr size_t kGroupedPrefetch = 8;
 // in locals and finished with the single pass's functions (meanAndNormal4 included), each cluster's
 // vertices in index order, so the results are bit-identical. At coarse levels the single pass is
 // faster (its sums stay in cache while this reads the vertex arrays out of order).
-void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+// The flags (colours, quadric synthesis, face sums present) are template arguments: tested per
+// vertex, they were a few instructions of a vertex's 90 or so.
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
-  const glm::vec3* pos = m.positions.data();
-  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
-  const bool quadric = synthesis == Synthesis::kQuadric;
-  const bool mean = synthesis != Synthesis::kHeaviest;
-  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  const VertexArrays in = vertexArrays(p);
+  const glm::vec3* pos = in.pos;
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
   std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
@@ -530,23 +543,23 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
     for (uint32_t j = begin; j < end; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
       const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
-      __builtin_prefetch(&p.face_sums[ahead]);
+      if (have_face_sums) __builtin_prefetch(&in.face_sums[ahead]);
       __builtin_prefetch(&pos[ahead]);
-      __builtin_prefetch(&p.weights[ahead]);
+      __builtin_prefetch(&in.weights[ahead]);
       const uint32_t v = members[j];
       const uint32_t k = cluster_of[v] - c0;
-      addVertex(p, pos, v, have_face_sums, quadric, s[k]);
+      addVertex(in, v, have_face_sums, quadric, s[k]);
       if (colors) {
-        face_color[k] += p.face_colors[v];
-        vertex_color[k] += glm::vec4(m.colors[v], 1.0f);
+        face_color[k] += in.face_colors[v];
+        vertex_color[k] += glm::vec4(in.colors[v], 1.0f);
       }
     }
     begin = end;
     glm::vec3 position[4], normal[4];
 #if defined(__SSE2__)
-    meanAndNormal4(s, p.weights.data(), h, mean, quadric, position, normal);
+    meanAndNormal4(s, in.weights, h, mean, quadric, position, normal);
 #else
-    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], p.weights[h[k]], mean, quadric, position[k], normal[k]);
+    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], in.weights[h[k]], mean, quadric, position[k], normal[k]);
 #endif
     if (quadric) {
 #if defined(__SSE2__)
@@ -571,6 +584,28 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
   }
 }
 
+// synthesize's single pass over the vertices, with its flags as template arguments (as above)
+template <bool colors, bool quadric, bool have_face_sums>
+void sumVertices(const VertexArrays& in, const uint32_t* cluster_of, size_t vn, Sums* sums, glm::vec4* face_color,
+                 glm::vec4* vertex_color) {
+  for (size_t v = 0; v < vn; ++v) {
+    const uint32_t c = cluster_of[v];
+    if (c == kNone) continue;
+    addVertex(in, v, have_face_sums, quadric, sums[c]);
+    if (colors) {
+      face_color[c] += in.face_colors[v];
+      vertex_color[c] += glm::vec4(in.colors[v], 1.0f);
+    }
+  }
+}
+
+// the instance of F<colors, quadric, have_face_sums> for the run-time flags
+#define SCENELOD_SYNTHESIS_INSTANCE(F, colors, quadric, have_face_sums)                                      \
+  ((colors) ? ((quadric) ? ((have_face_sums) ? F<true, true, true> : F<true, true, false>)                   \
+                         : ((have_face_sums) ? F<true, false, true> : F<true, false, false>))                \
+            : ((quadric) ? ((have_face_sums) ? F<false, true, true> : F<false, true, false>)                 \
+                         : ((have_face_sums) ? F<false, false, true> : F<false, false, false>)))
+
 }  // namespace
 
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
@@ -590,8 +625,11 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
+  const bool quadric = synthesis == Synthesis::kQuadric;
+  const bool mean = synthesis != Synthesis::kHeaviest;
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
   if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
-    synthesizeGrouped(p, a, synthesis, out);
+    SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
     return;
   }
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
@@ -603,26 +641,13 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     face_color.assign(nc, glm::vec4(0.0f));
     vertex_color.assign(nc, glm::vec4(0.0f));
   }
-  const bool quadric = synthesis == Synthesis::kQuadric;
-  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
-  const size_t vn = m.vertexCount();
-  const uint32_t* cluster_of = a.cluster_of.data();
-  for (size_t v = 0; v < vn; ++v) {
-    const uint32_t c = cluster_of[v];
-    if (c == kNone) continue;
-    Sums& s = sums[c];
-    addVertex(p, pos, v, have_face_sums, quadric, s);
-    if (colors) {
-      face_color[c] += p.face_colors[v];
-      vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
-    }
-  }
+  SCENELOD_SYNTHESIS_INSTANCE(sumVertices, colors, quadric, have_face_sums)
+  (vertexArrays(p), a.cluster_of.data(), m.vertexCount(), sums.data(), face_color.data(), vertex_color.data());
 
   // First the weighted mean (relative to the centre; the representative itself when there is no
   // quadric) and the normal of every cluster, four clusters at a time where SSE2 is there: the
   // scalar form's operations lane by lane, both sides of its selects computed and chosen by mask,
   // so bit-identical, with a quarter of the divisions and roots. Then the quadric solve per cluster.
-  const bool mean = synthesis != Synthesis::kHeaviest;
   uint32_t c0 = 0;
 #if defined(__SSE2__)
   for (; c0 + 4 <= nc; c0 += 4)
@@ -647,6 +672,8 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   if (colors)
     for (uint32_t c = 0; c < nc; ++c) finishColor(face_color[c], vertex_color[c], out.colors[c]);
 }
+
+#undef SCENELOD_SYNTHESIS_INSTANCE
 
 }  // namespace detail
 }  // namespace scenelod
