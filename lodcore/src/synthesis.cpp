@@ -586,8 +586,9 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Re
 
 // synthesize's single pass over the vertices, with its flags as template arguments (as above)
 template <bool colors, bool quadric, bool have_face_sums>
-void sumVertices(const VertexArrays& in, const uint32_t* cluster_of, size_t vn, Sums* sums, glm::vec4* face_color,
+void sumVertices(const VertexArrays& arrays, const uint32_t* cluster_of, size_t vn, Sums* sums, glm::vec4* face_color,
                  glm::vec4* vertex_color) {
+  const VertexArrays in = arrays;  // a local copy: the stores cannot reach it, so it stays in registers
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t c = cluster_of[v];
     if (c == kNone) continue;
