@@ -66,6 +66,29 @@ namespace detail {
 
 namespace {
 
+bool cpuHasAvx2() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+bool g_avx2_paths = cpuHasAvx2();
+
+}  // namespace
+
+bool avx2Paths() { return g_avx2_paths; }
+
+bool useAvx2Paths(bool on) {
+  const bool was = g_avx2_paths;
+  g_avx2_paths = on && cpuHasAvx2();
+  return was;
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -247,7 +270,7 @@ struct Terms {
 };
 
 // `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
-inline Terms vertexTerms(const VertexArrays& in, size_t v, __m128 centre, bool have_face_sums, bool quadric) {
+SCENELOD_ALWAYS_INLINE Terms vertexTerms(const VertexArrays& in, size_t v, __m128 centre, bool have_face_sums, bool quadric) {
   const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
   const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -292,7 +315,7 @@ inline Terms vertexTerms(const VertexArrays& in, size_t v, __m128 centre, bool h
 
 // adds vertex v to its cluster's sums (the single pass and the grouped one make the same
 // operations in the same order)
-inline void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, bool quadric, Sums& s) {
+SCENELOD_ALWAYS_INLINE void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, bool quadric, Sums& s) {
 #if defined(__SSE2__)
   // the centre is loaded as 8 + 4 bytes: a 16-byte load would take in ws[0], which the previous
   // vertex may just have stored (a load straddling a pending store waits for it to retire)
@@ -329,7 +352,7 @@ inline void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, boo
 
 // one cluster's weighted mean (relative to the centre; the representative itself without a
 // quadric) and unit normal: the scalar form of the four-lane code in synthesize
-inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool quadric, glm::vec3& position,
+SCENELOD_ALWAYS_INLINE void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool quadric, glm::vec3& position,
                           glm::vec3& normal_out) {
   glm::vec3 x(0.0f);  // relative to centre
   if (mean) {
@@ -348,7 +371,7 @@ inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool 
 // meanAndNormal for the four clusters s[0..3] (heaviest vertices h[0..3]), in lanes: its operations
 // lane by lane, both sides of its selects computed and chosen by mask, so bit-identical, with a
 // quarter of the divisions and roots
-inline void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* h, bool mean, bool quadric,
+SCENELOD_ALWAYS_INLINE void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* h, bool mean, bool quadric,
                            glm::vec3* positions, glm::vec3* normals) {
   auto store3 = [](glm::vec3& dst, __m128 v) {  // 12 bytes, not past the array's end
     _mm_storel_pi(reinterpret_cast<__m64*>(&dst.x), v);
@@ -399,7 +422,7 @@ inline Quadric quadricOf(const Sums& s) {
 }
 
 // the solved point x (relative to the centre), clamped to the cell: the representative
-inline glm::vec3 clampToCell(const Sums& s, glm::vec3 x, const Assignment& a, float half) {
+SCENELOD_ALWAYS_INLINE glm::vec3 clampToCell(const Sums& s, glm::vec3 x, const Assignment& a, float half) {
   glm::vec3 lo, hi;
   a.cellBox(s.centre, lo, hi);
   x = glm::clamp(x, lo - s.centre, hi - s.centre);
@@ -421,7 +444,7 @@ inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const
 // operations in its order (the adjugate's cofactors are the full-rank test's minors, computed
 // once), so bit-identical. A lane in neither case (a rank the eigenvalues decide, about a quarter
 // of the clusters at the bunny's 50 % level) calls solveQuadric itself.
-inline void solveQuadric2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+SCENELOD_ALWAYS_INLINE void solveQuadric2Body(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
   // (lane 0, lane 1) of float f of Sums, and of the means, widened to double
   const __m128 q0 = _mm_loadu_ps(s[0].q), q1 = _mm_loadu_ps(s[1].q);
   const __m128 q0lo = _mm_unpacklo_ps(q0, q1), q0hi = _mm_unpackhi_ps(q0, q1);  // (xx, xx, xy, xy), (xz, xz, yy, yy)
@@ -482,6 +505,17 @@ inline void solveQuadric2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
     }
   }
 }
+
+// the baseline and the AVX2 variant (see synthesizeGrouped); avx2 picks the latter
+void solveQuadric2Sse2(const Sums* s, const glm::vec3* x0, glm::vec3* x) { solveQuadric2Body(s, x0, x); }
+SCENELOD_AVX2_TARGET void solveQuadric2Avx2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  solveQuadric2Body(s, x0, x);
+}
+template <bool avx2>
+inline void solveQuadric2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  if (avx2) solveQuadric2Avx2(s, x0, x);
+  else solveQuadric2Sse2(s, x0, x);
+}
 #endif
 
 inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_color, glm::vec3& out) {
@@ -502,8 +536,9 @@ constexpr size_t kGroupedPrefetch = 8;
 // faster (its sums stay in cache while this reads the vertex arrays out of order).
 // The flags (colours, quadric synthesis, face sums present) are template arguments: tested per
 // vertex, they were a few instructions of a vertex's 90 or so.
-template <bool colors, bool quadric, bool have_face_sums>
-void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+template <bool avx2, bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                  Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
   const VertexArrays in = vertexArrays(p);
@@ -564,8 +599,8 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Re
     if (quadric) {
 #if defined(__SSE2__)
       glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
-      solveQuadric2(s, position, x);
-      solveQuadric2(s + 2, position + 2, x + 2);
+      solveQuadric2<avx2>(s, position, x);
+      solveQuadric2<avx2>(s + 2, position + 2, x + 2);
       for (uint32_t k = 0; k < 4; ++k) position[k] = clampToCell(s[k], x[k], a, half);
 #else
       for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
@@ -586,8 +621,8 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Re
 
 // synthesize's single pass over the vertices, with its flags as template arguments (as above)
 template <bool colors, bool quadric, bool have_face_sums>
-void sumVertices(const VertexArrays& arrays, const uint32_t* cluster_of, size_t vn, Sums* sums, glm::vec4* face_color,
-                 glm::vec4* vertex_color) {
+SCENELOD_ALWAYS_INLINE void sumVerticesBody(const VertexArrays& arrays, const uint32_t* cluster_of, size_t vn,
+                                            Sums* sums, glm::vec4* face_color, glm::vec4* vertex_color) {
   const VertexArrays in = arrays;  // a local copy: the stores cannot reach it, so it stays in registers
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t c = cluster_of[v];
@@ -600,39 +635,25 @@ void sumVertices(const VertexArrays& arrays, const uint32_t* cluster_of, size_t 
   }
 }
 
-// the instance of F<colors, quadric, have_face_sums> for the run-time flags
-#define SCENELOD_SYNTHESIS_INSTANCE(F, colors, quadric, have_face_sums)                                      \
-  ((colors) ? ((quadric) ? ((have_face_sums) ? F<true, true, true> : F<true, true, false>)                   \
-                         : ((have_face_sums) ? F<true, false, true> : F<true, false, false>))                \
-            : ((quadric) ? ((have_face_sums) ? F<false, true, true> : F<false, true, false>)                 \
-                         : ((have_face_sums) ? F<false, false, true> : F<false, false, false>)))
-
-}  // namespace
-
-void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+// each loop twice: as the baseline (SSE2) and, chosen at run time, the same source compiled for AVX2
+// (its three-operand forms spare the register copies of the two-operand SSE2 code: about a fifth of
+// the single pass's instructions); without FMA, so the same operations and the same bits
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+  synthesizeGroupedBody<false, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_AVX2_TARGET void synthesizeGroupedAvx2(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                Representatives& out) {
+  synthesizeGroupedBody<true, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+// synthesize's single pass (below the grouped test) and its finish
+template <bool avx2, bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void synthesizeSingleBody(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                 Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
   const glm::vec3* pos = m.positions.data();
-  out.positions.resize(nc);
-  out.normals.resize(nc);
-  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
-  if (colors) out.colors.assign(nc, glm::vec3(0.0f)); else out.colors.clear();
-
-  // One pass over the vertices in index order (every per-vertex array streams; only the per-cluster
-  // sums are scattered). The face sums were made per vertex once per mesh (PreparedMesh::face_sums):
-  // summing them over a cluster's vertices is the sum over its faces, each counted once per corner
-  // in the cluster, as Lindstrom's per-face accumulation does. Offsets are relative to each cluster's
-  // heaviest vertex, so float sums keep their precision.
-  // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
-  // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
-  // vertices takes the plain mean.
-  const bool quadric = synthesis == Synthesis::kQuadric;
-  const bool mean = synthesis != Synthesis::kHeaviest;
-  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
-  if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
-    SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
-    return;
-  }
   std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
   sums.reserve(nc);
   for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
@@ -642,8 +663,8 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
     face_color.assign(nc, glm::vec4(0.0f));
     vertex_color.assign(nc, glm::vec4(0.0f));
   }
-  SCENELOD_SYNTHESIS_INSTANCE(sumVertices, colors, quadric, have_face_sums)
-  (vertexArrays(p), a.cluster_of.data(), m.vertexCount(), sums.data(), face_color.data(), vertex_color.data());
+  sumVerticesBody<colors, quadric, have_face_sums>(vertexArrays(p), a.cluster_of.data(), m.vertexCount(), sums.data(),
+                                                   face_color.data(), vertex_color.data());
 
   // First the weighted mean (relative to the centre; the representative itself when there is no
   // quadric) and the normal of every cluster, four clusters at a time where SSE2 is there: the
@@ -663,7 +684,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
 #if defined(__SSE2__)
     for (; c + 2 <= nc; c += 2) {
       glm::vec3 x[2];
-      solveQuadric2(&sums[c], &out.positions[c], x);
+      solveQuadric2<avx2>(&sums[c], &out.positions[c], x);
       out.positions[c] = clampToCell(sums[c], x[0], a, half);
       out.positions[c + 1] = clampToCell(sums[c + 1], x[1], a, half);
     }
@@ -672,6 +693,52 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   }
   if (colors)
     for (uint32_t c = 0; c < nc; ++c) finishColor(face_color[c], vertex_color[c], out.colors[c]);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeSingle(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+  synthesizeSingleBody<false, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_AVX2_TARGET void synthesizeSingleAvx2(const PreparedMesh& p, const Assignment& a, bool mean,
+                                               Representatives& out) {
+  synthesizeSingleBody<true, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+
+// the instance of F<colors, quadric, have_face_sums> for the run-time flags
+#define SCENELOD_SYNTHESIS_INSTANCE(F, colors, quadric, have_face_sums)                                      \
+  ((colors) ? ((quadric) ? ((have_face_sums) ? F<true, true, true> : F<true, true, false>)                   \
+                         : ((have_face_sums) ? F<true, false, true> : F<true, false, false>))                \
+            : ((quadric) ? ((have_face_sums) ? F<false, true, true> : F<false, true, false>)                 \
+                         : ((have_face_sums) ? F<false, false, true> : F<false, false, false>)))
+
+}  // namespace
+
+void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t nc = a.cluster_count;
+  out.positions.resize(nc);
+  out.normals.resize(nc);
+  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
+  if (colors) out.colors.assign(nc, glm::vec3(0.0f)); else out.colors.clear();
+
+  // One pass over the vertices in index order (every per-vertex array streams; only the per-cluster
+  // sums are scattered). The face sums were made per vertex once per mesh (PreparedMesh::face_sums):
+  // summing them over a cluster's vertices is the sum over its faces, each counted once per corner
+  // in the cluster, as Lindstrom's per-face accumulation does. Offsets are relative to each cluster's
+  // heaviest vertex, so float sums keep their precision.
+  // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
+  // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
+  // vertices takes the plain mean.
+  const bool quadric = synthesis == Synthesis::kQuadric;
+  const bool mean = synthesis != Synthesis::kHeaviest;
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
+    if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeGroupedAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
+    else SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
+    return;
+  }
+  if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingleAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
+  else SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingle, colors, quadric, have_face_sums)(p, a, mean, out);
 }
 
 #undef SCENELOD_SYNTHESIS_INSTANCE
