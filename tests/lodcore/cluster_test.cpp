@@ -323,6 +323,21 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
           ++levels;
           split += base.vertexCount() > base.triangleCount() / 2 + 2;  // crease copies (closed meshes: V ~ T / 2)
         }
+  // a single-pass level whose sums outgrow the prefetch threshold (14 k clusters of 120 k vertices)
+  {
+    const Mesh big = test::makeBumpySphere(300, 400);
+    ClusterParams p;
+    p.cell_width = 0.03f;
+    Mesh wide, base;
+    detail::useAvx2Paths(true);
+    ASSERT_TRUE(clusterMesh(big, p, wide).ok());
+    detail::useAvx2Paths(false);
+    ASSERT_TRUE(clusterMesh(big, p, base).ok());
+    EXPECT_GT(base.vertexCount(), 11000u);
+    EXPECT_TRUE(sameBits(wide.positions, base.positions));
+    EXPECT_TRUE(sameBits(wide.normals, base.normals));
+    EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
+  }
   detail::useAvx2Paths(was);
   EXPECT_EQ(levels, 48u);
   EXPECT_GT(split, 0u);  // the CAD part's sharp edges split vertices in some levels
