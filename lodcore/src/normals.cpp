@@ -97,6 +97,11 @@ bool smoothCluster(const ClusterFaces& f, size_t k, float cos_ref, glm::vec3& n)
   return all;
 }
 
+// buildOutputMesh's cluster loop fetches the faces of the cluster this many ahead where the face
+// array (16 bytes per output triangle) is larger than kFacePrefetchBytes
+constexpr uint32_t kFacePrefetch = 4;
+constexpr size_t kFacePrefetchBytes = size_t(1) << 20;
+
 #if defined(__SSE2__)
 // Clusters of at most this many corners (99 % at the bunny's 50 % level) take a fixed-size path.
 constexpr uint32_t kSmall = 8;
@@ -264,7 +269,23 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   const float cos_ref = fast ? float(std::cos(0.5 * std::acos(std::max(-1.0, cos_2alpha))) + 1e-5) : 2.0f;
   ClusterFaces cf;
   std::vector<glm::vec3> sums;  // per corner of the current cluster
+  // Clusters are numbered by weight, not in space, so each cluster's faces (and its corners'
+  // entries of e.triangles) are read at random; where the face array outgrows the caches, the first,
+  // middle and last of the faces of the cluster kFacePrefetch ahead are fetched (its list is read
+  // in order anyway).
+  const size_t corner_count = e.triangles.size();
+  const bool prefetch_faces = tn * sizeof(glm::vec4) > kFacePrefetchBytes;
   for (uint32_t c = 0; c < nc; ++c) {
+    if (prefetch_faces && c + kFacePrefetch < nc) {
+      const uint32_t pb = std::min<uint32_t>(offsets[c + kFacePrefetch], uint32_t(corner_count - 1));
+      const uint32_t pl = std::max(offsets[c + kFacePrefetch + 1], pb + 1) - 1;
+      const uint32_t first = corners[pb], middle = corners[(pb + pl) / 2], last = corners[pl];
+      __builtin_prefetch(&face[first / 3]);
+      __builtin_prefetch(&face[middle / 3]);
+      __builtin_prefetch(&face[last / 3]);
+      __builtin_prefetch(&e.triangles[first], 1);
+      __builtin_prefetch(&e.triangles[last], 1);
+    }
     const uint32_t b = offsets[c], en = offsets[c + 1];
     const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
     const size_t k = en - b;

@@ -323,17 +323,18 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
           ++levels;
           split += base.vertexCount() > base.triangleCount() / 2 + 2;  // crease copies (closed meshes: V ~ T / 2)
         }
-  // a single-pass level whose sums outgrow the prefetch threshold (14 k clusters of 120 k vertices)
-  {
-    const Mesh big = test::makeBumpySphere(300, 400);
+  // levels past the prefetch thresholds: a single pass whose sums exceed 1 MB (w = 0.04: 17 k
+  // clusters of 120 k vertices, 34 k triangles) and an output of more than 64 k triangles (w = 0.012)
+  const Mesh big = test::makeBumpySphere(300, 400);
+  for (float w : {0.04f, 0.012f}) {
     ClusterParams p;
-    p.cell_width = 0.03f;
+    p.cell_width = w;
     Mesh wide, base;
     detail::useAvx2Paths(true);
     ASSERT_TRUE(clusterMesh(big, p, wide).ok());
     detail::useAvx2Paths(false);
     ASSERT_TRUE(clusterMesh(big, p, base).ok());
-    EXPECT_GT(base.vertexCount(), 11000u);
+    EXPECT_GT(base.triangleCount(), w > 0.02f ? 30000u : 65536u);
     EXPECT_TRUE(sameBits(wide.positions, base.positions));
     EXPECT_TRUE(sameBits(wide.normals, base.normals));
     EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
