@@ -143,6 +143,22 @@ struct Representatives {
 };
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out);
 
+// synthesis.cpp: whether synthesize and buildOutputMesh run their AVX2 variants (the same source
+// compiled for AVX2 without FMA, so the same bits): where the CPU has AVX2. useAvx2Paths picks them
+// (on, where the CPU has AVX2) or the baseline ones for every later call and returns the previous
+// choice: for tests comparing the two (tests/lodcore/cluster_test.cpp declares it); not thread-safe.
+bool avx2Paths();
+bool useAvx2Paths(bool on);
+
+// x86: the attribute of the AVX2 variants (elsewhere they compile as plain copies, never chosen)
+#if defined(__x86_64__) || defined(__i386__)
+#define SCENELOD_AVX2_TARGET __attribute__((target("avx2")))
+#else
+#define SCENELOD_AVX2_TARGET
+#endif
+// a body shared by a baseline function and its AVX2 variant, compiled into each
+#define SCENELOD_ALWAYS_INLINE inline __attribute__((always_inline))
+
 // elimination.cpp: cluster-level primitives after removing degenerate, duplicate and covered ones.
 struct Eliminated {
   std::vector<uint32_t> triangles;  // cluster ids, 3 per triangle

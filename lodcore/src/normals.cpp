@@ -4,6 +4,7 @@
 // cluster's area-weighted normal of the original faces (edges are shaded with dynamic normals).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
@@ -96,6 +97,11 @@ bool smoothCluster(const ClusterFaces& f, size_t k, float cos_ref, glm::vec3& n)
   return all;
 }
 
+// buildOutputMesh's cluster loop fetches the faces of the cluster this many ahead where the face
+// array (16 bytes per output triangle) is larger than kFacePrefetchBytes
+constexpr uint32_t kFacePrefetch = 4;
+constexpr size_t kFacePrefetchBytes = size_t(1) << 20;
+
 #if defined(__SSE2__)
 // Clusters of at most this many corners (99 % at the bunny's 50 % level) take a fixed-size path.
 constexpr uint32_t kSmall = 8;
@@ -103,7 +109,7 @@ constexpr uint32_t kSmall = 8;
 // smoothCluster for a cluster of k <= kSmall faces held as rows (x, y, z, w; rows past k zero) and
 // transposed into x0..w0 (faces 0-3) and x1..w1 (faces 4-7): the same ordered sum from +0, each
 // row's x * w, y * w, z * w added in its lanes (a zero row adds +0), the same test.
-bool smoothSmall(const __m128 row[kSmall], __m128 x0, __m128 y0, __m128 z0, __m128 w0, __m128 x1, __m128 y1,
+SCENELOD_ALWAYS_INLINE bool smoothSmall(const __m128 row[kSmall], __m128 x0, __m128 y0, __m128 z0, __m128 w0, __m128 x1, __m128 y1,
                  __m128 z1, __m128 w1, size_t k, float cos_ref, glm::vec3& n) {
   __m128 s = _mm_setzero_ps();
   for (uint32_t j = 0; j < kSmall; ++j) s = _mm_add_ps(s, _mm_mul_ps(row[j], _mm_shuffle_ps(row[j], row[j], 0xff)));
@@ -169,16 +175,24 @@ uint32_t smallCorners(const ClusterFaces& f, size_t k, float cos_crease, const g
 }
 #endif
 
-}  // namespace
-
-void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
+// buildOutputMesh, compiled into a baseline function and an AVX2 one (as synthesize's loops; see
+// synthesis.cpp), chosen at run time
+SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representatives& r, float crease_angle_deg,
+                                                Mesh& out) {
   out = Mesh();
   const size_t nc = r.positions.size();
   const size_t tn = e.triangles.size() / 3;
   const bool colors = !r.colors.empty();
   const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
 
-  std::vector<glm::vec4> face(tn);  // xyz: unit face normal (0 when degenerate), w: twice the area
+  // xyz: unit face normal (0 when degenerate), w: twice the area; every entry is written below: not zeroed
+  std::unique_ptr<glm::vec4[]> face(new glm::vec4[tn]);
+  // cluster -> incident triangle corners (a counting sort): corners of cluster c are counted in
+  // offsets[c + 2] by the face pass (its loads of the indices serve both), so that after the prefix
+  // sum offsets[c + 1] is where c's list starts and, advanced as the fill's cursor, where it ends:
+  // then c's corners are offsets[c] .. offsets[c + 1] with no copy of the starts
+  std::vector<uint32_t> offsets(nc + 2, 0);
+  uint32_t* count = offsets.data() + 2;
   size_t t0 = 0;
 #if defined(__SSE2__)
   // four faces at a time, one per lane, with the scalar loop's operations (glm::cross, glm::length,
@@ -192,6 +206,7 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
     };
     for (; t0 + 4 <= tn; t0 += 4) {
       const uint32_t* c = tri + 3 * t0;
+      for (int i = 0; i < 12; ++i) ++count[c[i]];
       __m128 ax = load(c[0]), ay = load(c[3]), az = load(c[6]), aw = load(c[9]);
       __m128 bx = load(c[1]), by = load(c[4]), bz = load(c[7]), bw = load(c[10]);
       __m128 cx = load(c[2]), cy = load(c[5]), cz = load(c[8]), cw = load(c[11]);
@@ -214,20 +229,19 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
   }
 #endif
   for (size_t t = t0; t < tn; ++t) {
+    for (int i = 0; i < 3; ++i) ++count[e.triangles[3 * t + i]];
     const glm::vec3& a = r.positions[e.triangles[3 * t]];
     const glm::vec3 n = glm::cross(r.positions[e.triangles[3 * t + 1]] - a, r.positions[e.triangles[3 * t + 2]] - a);
     const float l = glm::length(n);
     face[t] = l > 0.0f ? glm::vec4(n / l, l) : glm::vec4(0.0f);
   }
-  // cluster -> incident triangle corners
-  std::vector<uint32_t> offsets(nc + 1, 0);
-  for (uint32_t c : e.triangles) ++offsets[c + 1];
-  for (size_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
-  std::vector<uint32_t> corners(e.triangles.size());
+  for (size_t c = 0; c < nc; ++c) offsets[c + 2] += offsets[c + 1];
+  std::unique_ptr<uint32_t[]> corners(new uint32_t[e.triangles.size()]);  // all written: not zeroed
   {
-    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < e.triangles.size(); ++i) corners[fill[e.triangles[i]]++] = static_cast<uint32_t>(i);
+    uint32_t* cursor = offsets.data() + 1;
+    for (size_t i = 0; i < e.triangles.size(); ++i) corners[cursor[e.triangles[i]]++] = static_cast<uint32_t>(i);
   }
+  offsets.pop_back();  // (nc + 1 entries: offsets[c] .. offsets[c + 1] are c's corners)
   std::vector<uint8_t> needs_vertex(nc, 0);
   for (uint32_t c : e.edges) needs_vertex[c] = 1;
   for (uint32_t c : e.points) needs_vertex[c] = 1;
@@ -255,7 +269,23 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
   const float cos_ref = fast ? float(std::cos(0.5 * std::acos(std::max(-1.0, cos_2alpha))) + 1e-5) : 2.0f;
   ClusterFaces cf;
   std::vector<glm::vec3> sums;  // per corner of the current cluster
+  // Clusters are numbered by weight, not in space, so each cluster's faces (and its corners'
+  // entries of e.triangles) are read at random; where the face array outgrows the caches, the first,
+  // middle and last of the faces of the cluster kFacePrefetch ahead are fetched (its list is read
+  // in order anyway).
+  const size_t corner_count = e.triangles.size();
+  const bool prefetch_faces = tn * sizeof(glm::vec4) > kFacePrefetchBytes;
   for (uint32_t c = 0; c < nc; ++c) {
+    if (prefetch_faces && c + kFacePrefetch < nc) {
+      const uint32_t pb = std::min<uint32_t>(offsets[c + kFacePrefetch], uint32_t(corner_count - 1));
+      const uint32_t pl = std::max(offsets[c + kFacePrefetch + 1], pb + 1) - 1;
+      const uint32_t first = corners[pb], middle = corners[(pb + pl) / 2], last = corners[pl];
+      __builtin_prefetch(&face[first / 3]);
+      __builtin_prefetch(&face[middle / 3]);
+      __builtin_prefetch(&face[last / 3]);
+      __builtin_prefetch(&e.triangles[first], 1);
+      __builtin_prefetch(&e.triangles[last], 1);
+    }
     const uint32_t b = offsets[c], en = offsets[c + 1];
     const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
     const size_t k = en - b;
@@ -263,7 +293,6 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
       if (needs_vertex[c]) base_vertex[c] = addVertex(c, r.normals[c]);
       continue;
     }
-    if (sums.size() < k) sums.resize(k);
 #if defined(__SSE2__)
     if (k <= kSmall) {
       // fixed trip counts: the loop exits of a varying k were about four mispredicted branches per
@@ -271,10 +300,12 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
       // are zeroed for the sums, where a zero face adds +0.
       uint32_t corner_of[kSmall];
       __m128 row[kSmall];
+      // row j's mask, all ones for j < k: entry j of a window onto kSmall ones, then kSmall zeros
+      static const int32_t kRowValid[2 * kSmall] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+      const int32_t* valid = kRowValid + kSmall - k;
       for (uint32_t j = 0; j < kSmall; ++j) {
         corner_of[j] = corners[b + std::min<uint32_t>(j, uint32_t(k) - 1)];
-        const __m128 valid = _mm_castsi128_ps(_mm_set1_epi32(-int32_t(j < k)));
-        row[j] = _mm_and_ps(_mm_loadu_ps(&face[corner_of[j] / 3].x), valid);
+        row[j] = _mm_and_ps(_mm_loadu_ps(&face[corner_of[j] / 3].x), _mm_castsi128_ps(_mm_set1_epi32(valid[j])));
       }
       __m128 x0 = row[0], y0 = row[1], z0 = row[2], w0 = row[3];
       __m128 x1 = row[4], y1 = row[5], z1 = row[6], w1 = row[7];
@@ -315,6 +346,7 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
         continue;
       }
     }
+    if (sums.size() < k) sums.resize(k);
     cornerNormals(cf, k, cos_crease, sums.data());
     for (uint32_t i = b; i < en; ++i) {
       glm::vec3 n = sums[i - b];
@@ -333,7 +365,7 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
     }
     base_vertex[c] = first_vertex;
   }
-  std::vector<glm::vec4>().swap(face);
+  face.reset();
   // split vertices may have grown the arrays past the reserve: the chain keeps every level, so
   // give back the slack
   out.positions.shrink_to_fit();
@@ -347,6 +379,21 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
   if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
   out.points.resize(e.points.size());
   for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];
+}
+
+void buildOutputMeshSse2(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
+  buildOutputMeshBody(e, r, crease_angle_deg, out);
+}
+SCENELOD_AVX2_TARGET void buildOutputMeshAvx2(Eliminated& e, const Representatives& r, float crease_angle_deg,
+                                              Mesh& out) {
+  buildOutputMeshBody(e, r, crease_angle_deg, out);
+}
+
+}  // namespace
+
+void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
+  if (avx2Paths()) buildOutputMeshAvx2(e, r, crease_angle_deg, out);
+  else buildOutputMeshSse2(e, r, crease_angle_deg, out);
 }
 
 }  // namespace scenelod::detail

@@ -66,6 +66,29 @@ namespace detail {
 
 namespace {
 
+bool cpuHasAvx2() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+bool g_avx2_paths = cpuHasAvx2();
+
+}  // namespace
+
+bool avx2Paths() { return g_avx2_paths; }
+
+bool useAvx2Paths(bool on) {
+  const bool was = g_avx2_paths;
+  g_avx2_paths = on && cpuHasAvx2();
+  return was;
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -150,6 +173,8 @@ bool solveSymmetric(const double m[3][3], const double r[3], double y[3]) {
 // condition number is at most 1 / kEigenCutoff); rank 2 by the adjugate of A with its dropped
 // direction lifted to the largest eigenvalue, applied to r without that direction; rank 1 along the
 // dominant eigenvector.
+glm::vec3 solveByEigenvalues(const double a[3][3], double r[3], const glm::vec3& x0);
+
 glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
   const double a[3][3] = {{q.a00, q.a01, q.a02}, {q.a01, q.a11, q.a12}, {q.a02, q.a12, q.a22}};
   double r[3] = {-(a[0][0] * x0.x + a[0][1] * x0.y + a[0][2] * x0.z + q.b0),
@@ -170,6 +195,13 @@ glm::vec3 solveQuadric(const Quadric& q, const glm::vec3& x0) {
     if (tr > 0.0 && c1 > 0.0 && det >= kFullRankMargin * kEigenCutoff * tr * c1 && solveSymmetric(a, r, y))
       return glm::vec3(float(x0.x + y[0]), float(x0.y + y[1]), float(x0.z + y[2]));
   }
+  return solveByEigenvalues(a, r, x0);
+}
+
+// solveQuadric where its closed-form full-rank test fails: the rank from the eigenvalues. `a` and
+// `r` as solveQuadric makes them (r is consumed).
+glm::vec3 solveByEigenvalues(const double a[3][3], double r[3], const glm::vec3& x0) {
+  double y[3] = {0.0, 0.0, 0.0};
   double w[3];
   symmetricEigenvalues(a, w);
   // A is a sum of area x n n^T: positive semi-definite, so the largest eigenvalue is the largest in size
@@ -209,12 +241,27 @@ struct Sums {          // 92 bytes per cluster
   // quadric: sum of area n n^T (xx, xy, xz, yy, yz, zz), then the normal: sum of area n (x, y,
   // z), then the quadric's linear part: sum of area n d, planes relative to the centre (x, y, z)
   float q[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  Sums() = default;  // centre unset (the single pass sets it)
   explicit Sums(const glm::vec3& c) : centre(c) {}
   void reset(const glm::vec3& c) {  // as constructed from c (assigning a new Sums made a copy)
     centre = c;
     std::fill(ws, ws + 4, 0.0f), std::fill(sc, sc + 4, 0.0f), std::fill(q, q + 12, 0.0f);
   }
 };
+
+// the per-vertex inputs of the sums as plain pointers: the sums are stored through __m128, which may
+// alias anything, so members of the PreparedMesh were reloaded after every vertex's stores
+struct VertexArrays {
+  const glm::vec3* pos;
+  const float* weights;
+  const VertexFaceSums* face_sums;
+  const glm::vec4* face_colors;  // with colours only
+  const glm::vec3* colors;
+};
+
+inline VertexArrays vertexArrays(const PreparedMesh& p) {
+  return {p.mesh->positions.data(), p.weights.data(), p.face_sums.data(), p.face_colors.data(), p.mesh->colors.data()};
+}
 
 #if defined(__SSE2__)
 // one vertex's terms of its cluster's sums, one register per four-float group of Sums (ws, sc,
@@ -224,12 +271,12 @@ struct Terms {
 };
 
 // `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
-inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, __m128 centre, bool have_face_sums,
-                         bool quadric) {
+SCENELOD_ALWAYS_INLINE Terms vertexTerms(const VertexArrays& in, size_t v, __m128 centre, bool have_face_sums, bool quadric) {
   const __m128 xyz_mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
   const __m128 one_w = _mm_set_ps(1.0f, 0.0f, 0.0f, 0.0f);
   const __m128 sign = _mm_set1_ps(-0.0f);
-  const float w = p.weights[v];
+  const glm::vec3* pos = in.pos;
+  const float w = in.weights[v];
   Terms t;
   // d4 = (offset, 1): (ws, w) += d4 * w, (sum, count) += d4. The position is loaded as 8 + 4 bytes
   // (the last vertex ends the array).
@@ -242,7 +289,7 @@ inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, 
   t.q0 = t.q4 = t.q8 = _mm_setzero_ps();
   if (have_face_sums) {
     // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
-    const VertexFaceSums& f = p.face_sums[v];
+    const VertexFaceSums& f = in.face_sums[v];
     const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
     const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
     const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
@@ -269,14 +316,13 @@ inline Terms vertexTerms(const PreparedMesh& p, const glm::vec3* pos, size_t v, 
 
 // adds vertex v to its cluster's sums (the single pass and the grouped one make the same
 // operations in the same order)
-inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, bool have_face_sums, bool quadric,
-                      Sums& s) {
+SCENELOD_ALWAYS_INLINE void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, bool quadric, Sums& s) {
 #if defined(__SSE2__)
   // the centre is loaded as 8 + 4 bytes: a 16-byte load would take in ws[0], which the previous
   // vertex may just have stored (a load straddling a pending store waits for it to retire)
   const __m128 centre = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&s.centre.x)),
                                       _mm_load_ss(&s.centre.z));
-  const Terms t = vertexTerms(p, pos, v, centre, have_face_sums, quadric);
+  const Terms t = vertexTerms(in, v, centre, have_face_sums, quadric);
   _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), t.ws));
   _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), t.sc));
   if (have_face_sums) {
@@ -285,15 +331,15 @@ inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, boo
     _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), t.q8));
   }
 #else
-  const float w = p.weights[v];
-  const glm::vec3 d = pos[v] - s.centre;
+  const float w = in.weights[v];
+  const glm::vec3 d = in.pos[v] - s.centre;
   s.ws[0] += d.x * w, s.ws[1] += d.y * w, s.ws[2] += d.z * w;
   s.ws[3] += w;
   s.sc[0] += d.x, s.sc[1] += d.y, s.sc[2] += d.z;
   s.sc[3] += 1.0f;
   if (have_face_sums) {
     float fa[9];  // quadric xx, xy, xz, yy, yz, zz, then the normal sum
-    decodeFaceSums(p.face_sums[v], fa);
+    decodeFaceSums(in.face_sums[v], fa);
     for (int k = 0; k < 9; ++k) s.q[k] += fa[k];  // (the quadric part is unused but harmless for mean)
     if (quadric) {
       // the vertex lies on all its faces' planes: relative to the centre, b = -A d
@@ -307,7 +353,7 @@ inline void addVertex(const PreparedMesh& p, const glm::vec3* pos, size_t v, boo
 
 // one cluster's weighted mean (relative to the centre; the representative itself without a
 // quadric) and unit normal: the scalar form of the four-lane code in synthesize
-inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool quadric, glm::vec3& position,
+SCENELOD_ALWAYS_INLINE void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool quadric, glm::vec3& position,
                           glm::vec3& normal_out) {
   glm::vec3 x(0.0f);  // relative to centre
   if (mean) {
@@ -326,7 +372,7 @@ inline void meanAndNormal(const Sums& s, float heaviest_weight, bool mean, bool 
 // meanAndNormal for the four clusters s[0..3] (heaviest vertices h[0..3]), in lanes: its operations
 // lane by lane, both sides of its selects computed and chosen by mask, so bit-identical, with a
 // quarter of the divisions and roots
-inline void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* h, bool mean, bool quadric,
+SCENELOD_ALWAYS_INLINE void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* h, bool mean, bool quadric,
                            glm::vec3* positions, glm::vec3* normals) {
   auto store3 = [](glm::vec3& dst, __m128 v) {  // 12 bytes, not past the array's end
     _mm_storel_pi(reinterpret_cast<__m64*>(&dst.x), v);
@@ -369,12 +415,15 @@ inline void meanAndNormal4(const Sums* s, const float* weights, const uint32_t* 
 }
 #endif
 
-// the quadric's minimiser from x0 (relative to the centre), clamped to the cell: the representative
-inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const Assignment& a, float half) {
+inline Quadric quadricOf(const Sums& s) {
   Quadric q;
   q.a00 = s.q[0], q.a01 = s.q[1], q.a02 = s.q[2], q.a11 = s.q[3], q.a12 = s.q[4], q.a22 = s.q[5];
   q.b0 = s.q[9], q.b1 = s.q[10], q.b2 = s.q[11];
-  glm::vec3 x = solveQuadric(q, x0);
+  return q;
+}
+
+// the solved point x (relative to the centre), clamped to the cell: the representative
+SCENELOD_ALWAYS_INLINE glm::vec3 clampToCell(const Sums& s, glm::vec3 x, const Assignment& a, float half) {
   glm::vec3 lo, hi;
   a.cellBox(s.centre, lo, hi);
   x = glm::clamp(x, lo - s.centre, hi - s.centre);
@@ -384,6 +433,91 @@ inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const
   }
   return s.centre + x;
 }
+
+// the quadric's minimiser from x0 (relative to the centre), clamped to the cell: the representative
+inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const Assignment& a, float half) {
+  return clampToCell(s, solveQuadric(quadricOf(s), x0), a, half);
+}
+
+#if defined(__SSE2__)
+// solveQuadric for the clusters s[0] and s[1] (means x0[0], x0[1]) in the two lanes of SSE2
+// doubles, for its two cheap cases: the zero residual (x0) and the closed-form full rank, with its
+// operations in its order (the adjugate's cofactors are the full-rank test's minors, computed
+// once), so bit-identical. A lane in neither case (a rank the eigenvalues decide, about a quarter
+// of the clusters at the bunny's 50 % level) calls solveQuadric itself.
+SCENELOD_ALWAYS_INLINE void solveQuadric2Body(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  // (lane 0, lane 1) of float f of Sums, and of the means, widened to double
+  const __m128 q0 = _mm_loadu_ps(s[0].q), q1 = _mm_loadu_ps(s[1].q);
+  const __m128 q0lo = _mm_unpacklo_ps(q0, q1), q0hi = _mm_unpackhi_ps(q0, q1);  // (xx, xx, xy, xy), (xz, xz, yy, yy)
+  const __m128 q4 = _mm_unpacklo_ps(_mm_loadu_ps(s[0].q + 4), _mm_loadu_ps(s[1].q + 4));  // (yz, yz, zz, zz)
+  const __m128 q8hi = _mm_unpackhi_ps(_mm_loadu_ps(s[0].q + 8), _mm_loadu_ps(s[1].q + 8));  // (b1, b1, b2, b2)
+  const __m128 b0f = _mm_unpacklo_ps(_mm_load_ss(s[0].q + 9), _mm_load_ss(s[1].q + 9));
+  const __m128d a00 = _mm_cvtps_pd(q0lo), a01 = _mm_cvtps_pd(_mm_movehl_ps(q0lo, q0lo));
+  const __m128d a02 = _mm_cvtps_pd(q0hi), a11 = _mm_cvtps_pd(_mm_movehl_ps(q0hi, q0hi));
+  const __m128d a12 = _mm_cvtps_pd(q4), a22 = _mm_cvtps_pd(_mm_movehl_ps(q4, q4));
+  const __m128d b0 = _mm_cvtps_pd(b0f), b1 = _mm_cvtps_pd(q8hi), b2 = _mm_cvtps_pd(_mm_movehl_ps(q8hi, q8hi));
+  auto load3 = [](const glm::vec3& v) {  // (x, y, z, 0), 8 + 4 bytes as they were stored
+    return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&v.x)), _mm_load_ss(&v.z));
+  };
+  const __m128 m0 = load3(x0[0]), m1 = load3(x0[1]);
+  const __m128 mlo = _mm_unpacklo_ps(m0, m1), mhi = _mm_unpackhi_ps(m0, m1);  // (x, x, y, y), (z, z, 0, 0)
+  const __m128d xx = _mm_cvtps_pd(mlo), xy = _mm_cvtps_pd(_mm_movehl_ps(mlo, mlo)), xz = _mm_cvtps_pd(mhi);
+  const __m128d sign = _mm_set1_pd(-0.0), zero = _mm_setzero_pd();
+  auto row = [&](__m128d p, __m128d q, __m128d r, __m128d b) {  // -(p x + q y + r z + b)
+    return _mm_xor_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(p, xx), _mm_mul_pd(q, xy)), _mm_mul_pd(r, xz)), b),
+                      sign);
+  };
+  const __m128d r0 = row(a00, a01, a02, b0), r1 = row(a01, a11, a12, b1), r2 = row(a02, a12, a22, b2);
+  const __m128d still = _mm_and_pd(_mm_and_pd(_mm_cmpeq_pd(r0, zero), _mm_cmpeq_pd(r1, zero)), _mm_cmpeq_pd(r2, zero));
+  const __m128d tr = _mm_add_pd(_mm_add_pd(a00, a11), a22);
+  const __m128d m00 = _mm_sub_pd(_mm_mul_pd(a11, a22), _mm_mul_pd(a12, a12));
+  const __m128d m11 = _mm_sub_pd(_mm_mul_pd(a00, a22), _mm_mul_pd(a02, a02));
+  const __m128d m22 = _mm_sub_pd(_mm_mul_pd(a00, a11), _mm_mul_pd(a01, a01));
+  const __m128d c01 = _mm_sub_pd(_mm_mul_pd(a02, a12), _mm_mul_pd(a01, a22));
+  const __m128d c02 = _mm_sub_pd(_mm_mul_pd(a01, a12), _mm_mul_pd(a02, a11));
+  const __m128d c12 = _mm_sub_pd(_mm_mul_pd(a01, a02), _mm_mul_pd(a00, a12));
+  const __m128d c1 = _mm_add_pd(_mm_add_pd(m00, m11), m22);
+  const __m128d det = _mm_add_pd(_mm_add_pd(_mm_mul_pd(a00, m00), _mm_mul_pd(a01, c01)), _mm_mul_pd(a02, c02));
+  // solveQuadric's test, then solveSymmetric's (det >= a threshold >= 0 and det != 0: det > 0)
+  const __m128d thr = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(kFullRankMargin * kEigenCutoff), tr), c1);
+  const __m128d full = _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(tr, zero), _mm_cmpgt_pd(c1, zero)),
+                                  _mm_and_pd(_mm_cmpge_pd(det, thr), _mm_cmpgt_pd(det, zero)));
+  const __m128d id = _mm_div_pd(_mm_set1_pd(1.0), det);
+  auto solved = [&](__m128d x, __m128d p, __m128d q, __m128d r) {  // float(x + (p r0 + q r1 + r r2) / det)
+    return _mm_cvtpd_ps(
+        _mm_add_pd(x, _mm_mul_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(p, r0), _mm_mul_pd(q, r1)), _mm_mul_pd(r, r2)), id)));
+  };
+  alignas(16) float px[4], py[4], pz[4];
+  _mm_store_ps(px, solved(xx, m00, c01, c02));
+  _mm_store_ps(py, solved(xy, c01, m11, c12));
+  _mm_store_ps(pz, solved(xz, c02, c12, m22));
+  const int still_mask = _mm_movemask_pd(still), full_mask = _mm_movemask_pd(full);
+  for (int k = 0; k < 2; ++k) {
+    if (still_mask & (1 << k)) {
+      x[k] = x0[k];
+    } else if (full_mask & (1 << k)) {
+      x[k] = glm::vec3(px[k], py[k], pz[k]);
+    } else {  // the lane's matrix and residual, as solveQuadric has them at this point
+      auto lane = [k](__m128d v) { return _mm_cvtsd_f64(k == 0 ? v : _mm_unpackhi_pd(v, v)); };
+      const double l01 = lane(a01), l02 = lane(a02), l12 = lane(a12);
+      const double a3[3][3] = {{lane(a00), l01, l02}, {l01, lane(a11), l12}, {l02, l12, lane(a22)}};
+      double r3[3] = {lane(r0), lane(r1), lane(r2)};
+      x[k] = solveByEigenvalues(a3, r3, x0[k]);
+    }
+  }
+}
+
+// the baseline and the AVX2 variant (see synthesizeGrouped); avx2 picks the latter
+void solveQuadric2Sse2(const Sums* s, const glm::vec3* x0, glm::vec3* x) { solveQuadric2Body(s, x0, x); }
+SCENELOD_AVX2_TARGET void solveQuadric2Avx2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  solveQuadric2Body(s, x0, x);
+}
+template <bool avx2>
+inline void solveQuadric2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  if (avx2) solveQuadric2Avx2(s, x0, x);
+  else solveQuadric2Sse2(s, x0, x);
+}
+#endif
 
 inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_color, glm::vec3& out) {
   if (face_color.w > 0.0f) out = glm::vec3(face_color) / face_color.w;
@@ -401,14 +535,15 @@ constexpr size_t kGroupedPrefetch = 8;
 // in locals and finished with the single pass's functions (meanAndNormal4 included), each cluster's
 // vertices in index order, so the results are bit-identical. At coarse levels the single pass is
 // faster (its sums stay in cache while this reads the vertex arrays out of order).
-void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
+// The flags (colours, quadric synthesis, face sums present) are template arguments: tested per
+// vertex, they were a few instructions of a vertex's 90 or so.
+template <bool avx2, bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                  Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
-  const glm::vec3* pos = m.positions.data();
-  const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
-  const bool quadric = synthesis == Synthesis::kQuadric;
-  const bool mean = synthesis != Synthesis::kHeaviest;
-  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  const VertexArrays in = vertexArrays(p);
+  const glm::vec3* pos = in.pos;
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
   std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
@@ -444,43 +579,169 @@ void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, Synthesis syn
     for (uint32_t j = begin; j < end; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
       const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
-      __builtin_prefetch(&p.face_sums[ahead]);
+      if (have_face_sums) __builtin_prefetch(&in.face_sums[ahead]);
       __builtin_prefetch(&pos[ahead]);
-      __builtin_prefetch(&p.weights[ahead]);
+      __builtin_prefetch(&in.weights[ahead]);
       const uint32_t v = members[j];
       const uint32_t k = cluster_of[v] - c0;
-      addVertex(p, pos, v, have_face_sums, quadric, s[k]);
+      addVertex(in, v, have_face_sums, quadric, s[k]);
       if (colors) {
-        face_color[k] += p.face_colors[v];
-        vertex_color[k] += glm::vec4(m.colors[v], 1.0f);
+        face_color[k] += in.face_colors[v];
+        vertex_color[k] += glm::vec4(in.colors[v], 1.0f);
       }
     }
     begin = end;
     glm::vec3 position[4], normal[4];
 #if defined(__SSE2__)
-    meanAndNormal4(s, p.weights.data(), h, mean, quadric, position, normal);
+    meanAndNormal4(s, in.weights, h, mean, quadric, position, normal);
 #else
-    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], p.weights[h[k]], mean, quadric, position[k], normal[k]);
+    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], in.weights[h[k]], mean, quadric, position[k], normal[k]);
 #endif
+    if (quadric) {
+#if defined(__SSE2__)
+      glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
+      solveQuadric2<avx2>(s, position, x);
+      solveQuadric2<avx2>(s + 2, position + 2, x + 2);
+      for (uint32_t k = 0; k < 4; ++k) position[k] = clampToCell(s[k], x[k], a, half);
+#else
+      for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
+#endif
+    }
     // a fixed count, each cluster under a test that only the last group fails (a loop to k_n
     // mispredicted its exit once per group)
 #pragma GCC unroll 4
     for (uint32_t k = 0; k < 4; ++k) {
       if (k >= k_n) break;
       const uint32_t c = c0 + k;
-      out.positions[c] = quadric ? quadricRepresentative(s[k], position[k], a, half) : position[k];
+      out.positions[c] = position[k];
       out.normals[c] = normal[k];
       if (colors) finishColor(face_color[k], vertex_color[k], out.colors[c]);
     }
   }
 }
 
+// The clusters are numbered in the assignment's order (by weight), not in space, so the single
+// pass reads its sums at random: where they outgrow the caches (the 1 M sphere's 10 % level: 50 k
+// clusters, 4.7 MB) that was most of its time. There the first two lines (of two or three) of the
+// sums of the vertex this many ahead are fetched; below that size the fetch only costs instructions.
+constexpr size_t kSumsPrefetch = 16;
+constexpr size_t kSumsPrefetchBytes = size_t(1) << 20;
+
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void addVertexAndColor(const VertexArrays& in, size_t v, uint32_t c, Sums* sums,
+                                              glm::vec4* face_color, glm::vec4* vertex_color) {
+  addVertex(in, v, have_face_sums, quadric, sums[c]);
+  if (colors) {
+    face_color[c] += in.face_colors[v];
+    vertex_color[c] += glm::vec4(in.colors[v], 1.0f);
+  }
+}
+
+// synthesize's single pass over the vertices, with its flags as template arguments (as above)
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void sumVerticesBody(const VertexArrays& arrays, const uint32_t* cluster_of, size_t vn,
+                                            size_t nc, Sums* sums, glm::vec4* face_color, glm::vec4* vertex_color) {
+  const VertexArrays in = arrays;  // a local copy: the stores cannot reach it, so it stays in registers
+  size_t v = 0;
+  if (nc * sizeof(Sums) > kSumsPrefetchBytes && vn > kSumsPrefetch) {
+    // (the address is made as an integer: an unreferenced vertex ahead, kNone, fetches a stray line)
+    const uintptr_t base = reinterpret_cast<uintptr_t>(sums);
+    for (; v < vn - kSumsPrefetch; ++v) {
+      const uintptr_t ahead = base + uintptr_t(cluster_of[v + kSumsPrefetch]) * sizeof(Sums);
+      __builtin_prefetch(reinterpret_cast<const void*>(ahead), 1);
+      __builtin_prefetch(reinterpret_cast<const void*>(ahead + 64), 1);
+      const uint32_t c = cluster_of[v];
+      if (c != kNone) addVertexAndColor<colors, quadric, have_face_sums>(in, v, c, sums, face_color, vertex_color);
+    }
+  }
+  for (; v < vn; ++v) {
+    const uint32_t c = cluster_of[v];
+    if (c != kNone) addVertexAndColor<colors, quadric, have_face_sums>(in, v, c, sums, face_color, vertex_color);
+  }
+}
+
+// each loop twice: as the baseline (SSE2) and, chosen at run time, the same source compiled for AVX2
+// (its three-operand forms spare the register copies of the two-operand SSE2 code: about a fifth of
+// the single pass's instructions); without FMA, so the same operations and the same bits
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+  synthesizeGroupedBody<false, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_AVX2_TARGET void synthesizeGroupedAvx2(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                Representatives& out) {
+  synthesizeGroupedBody<true, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+// synthesize's single pass (below the grouped test) and its finish
+template <bool avx2, bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void synthesizeSingleBody(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                 Representatives& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t nc = a.cluster_count;
+  const glm::vec3* pos = m.positions.data();
+  // sums zeroed by their constructor, then the centres: vector's emplace_back (a capacity test and
+  // an end pointer per cluster) took about 50 instructions a cluster
+  std::unique_ptr<Sums[]> sums(new Sums[nc]);
+  for (uint32_t c = 0; c < nc; ++c) sums[c].centre = pos[a.heaviest[c]];
+  std::vector<glm::vec4> face_color;    // xyz: sum of area x face colour, w: sum of area
+  std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
+  if (colors) {
+    face_color.assign(nc, glm::vec4(0.0f));
+    vertex_color.assign(nc, glm::vec4(0.0f));
+  }
+  sumVerticesBody<colors, quadric, have_face_sums>(vertexArrays(p), a.cluster_of.data(), m.vertexCount(), nc,
+                                                   sums.get(), face_color.data(), vertex_color.data());
+
+  // First the weighted mean (relative to the centre; the representative itself when there is no
+  // quadric) and the normal of every cluster, four clusters at a time where SSE2 is there: the
+  // scalar form's operations lane by lane, both sides of its selects computed and chosen by mask,
+  // so bit-identical, with a quarter of the divisions and roots. Then the quadric solve per cluster.
+  uint32_t c0 = 0;
+#if defined(__SSE2__)
+  for (; c0 + 4 <= nc; c0 += 4)
+    meanAndNormal4(&sums[c0], p.weights.data(), &a.heaviest[c0], mean, quadric, &out.positions[c0], &out.normals[c0]);
+#endif
+  for (uint32_t c = c0; c < nc; ++c)
+    meanAndNormal(sums[c], p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
+
+  const float half = 0.5f * a.cell_width;
+  if (quadric) {
+    uint32_t c = 0;
+#if defined(__SSE2__)
+    for (; c + 2 <= nc; c += 2) {
+      glm::vec3 x[2];
+      solveQuadric2<avx2>(&sums[c], &out.positions[c], x);
+      out.positions[c] = clampToCell(sums[c], x[0], a, half);
+      out.positions[c + 1] = clampToCell(sums[c + 1], x[1], a, half);
+    }
+#endif
+    for (; c < nc; ++c) out.positions[c] = quadricRepresentative(sums[c], out.positions[c], a, half);
+  }
+  if (colors)
+    for (uint32_t c = 0; c < nc; ++c) finishColor(face_color[c], vertex_color[c], out.colors[c]);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeSingle(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+  synthesizeSingleBody<false, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_AVX2_TARGET void synthesizeSingleAvx2(const PreparedMesh& p, const Assignment& a, bool mean,
+                                               Representatives& out) {
+  synthesizeSingleBody<true, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+
+// the instance of F<colors, quadric, have_face_sums> for the run-time flags
+#define SCENELOD_SYNTHESIS_INSTANCE(F, colors, quadric, have_face_sums)                                      \
+  ((colors) ? ((quadric) ? ((have_face_sums) ? F<true, true, true> : F<true, true, false>)                   \
+                         : ((have_face_sums) ? F<true, false, true> : F<true, false, false>))                \
+            : ((quadric) ? ((have_face_sums) ? F<false, true, true> : F<false, true, false>)                 \
+                         : ((have_face_sums) ? F<false, false, true> : F<false, false, false>)))
+
 }  // namespace
 
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out) {
   const Mesh& m = *p.mesh;
   const uint32_t nc = a.cluster_count;
-  const glm::vec3* pos = m.positions.data();
   out.positions.resize(nc);
   out.normals.resize(nc);
   const bool colors = !m.colors.empty() && p.face_colors.size() == m.vertexCount();
@@ -494,53 +755,19 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   // Weighted mean: each vertex weighs its grade plus kMeanWeightFloor x the cluster's heaviest grade
   // (scale-free, so the result does not depend on the weights' normaliser); a cluster of weight-0
   // vertices takes the plain mean.
+  const bool quadric = synthesis == Synthesis::kQuadric;
+  const bool mean = synthesis != Synthesis::kHeaviest;
+  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
   if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
-    synthesizeGrouped(p, a, synthesis, out);
+    if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeGroupedAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
+    else SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
     return;
   }
-  std::vector<Sums> sums;  // made in one pass (no zeroing pass before the centres)
-  sums.reserve(nc);
-  for (uint32_t c = 0; c < nc; ++c) sums.emplace_back(pos[a.heaviest[c]]);
-  std::vector<glm::vec4> face_color;    // xyz: sum of area x face colour, w: sum of area
-  std::vector<glm::vec4> vertex_color;  // fallback colour when the cluster's faces have no area
-  if (colors) {
-    face_color.assign(nc, glm::vec4(0.0f));
-    vertex_color.assign(nc, glm::vec4(0.0f));
-  }
-  const bool quadric = synthesis == Synthesis::kQuadric;
-  const bool have_face_sums = p.face_sums.size() == m.vertexCount();
-  const size_t vn = m.vertexCount();
-  const uint32_t* cluster_of = a.cluster_of.data();
-  for (size_t v = 0; v < vn; ++v) {
-    const uint32_t c = cluster_of[v];
-    if (c == kNone) continue;
-    Sums& s = sums[c];
-    addVertex(p, pos, v, have_face_sums, quadric, s);
-    if (colors) {
-      face_color[c] += p.face_colors[v];
-      vertex_color[c] += glm::vec4(m.colors[v], 1.0f);
-    }
-  }
-
-  // First the weighted mean (relative to the centre; the representative itself when there is no
-  // quadric) and the normal of every cluster, four clusters at a time where SSE2 is there: the
-  // scalar form's operations lane by lane, both sides of its selects computed and chosen by mask,
-  // so bit-identical, with a quarter of the divisions and roots. Then the quadric solve per cluster.
-  const bool mean = synthesis != Synthesis::kHeaviest;
-  uint32_t c0 = 0;
-#if defined(__SSE2__)
-  for (; c0 + 4 <= nc; c0 += 4)
-    meanAndNormal4(&sums[c0], p.weights.data(), &a.heaviest[c0], mean, quadric, &out.positions[c0], &out.normals[c0]);
-#endif
-  for (uint32_t c = c0; c < nc; ++c)
-    meanAndNormal(sums[c], p.weights[a.heaviest[c]], mean, quadric, out.positions[c], out.normals[c]);
-
-  const float half = 0.5f * a.cell_width;
-  if (quadric)
-    for (uint32_t c = 0; c < nc; ++c) out.positions[c] = quadricRepresentative(sums[c], out.positions[c], a, half);
-  if (colors)
-    for (uint32_t c = 0; c < nc; ++c) finishColor(face_color[c], vertex_color[c], out.colors[c]);
+  if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingleAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
+  else SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingle, colors, quadric, have_face_sums)(p, a, mean, out);
 }
+
+#undef SCENELOD_SYNTHESIS_INSTANCE
 
 }  // namespace detail
 }  // namespace scenelod

@@ -2,6 +2,7 @@
 // Low & Tan 1997 §3.2.2, synthesis bounds, bad input.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <tuple>
 #include <vector>
@@ -268,4 +269,77 @@ TEST(ClusterMesh, DegenerateTrianglesAreHandled) {
   EXPECT_EQ(out.edgeCount(), 1u);  // the collinear triangle became the edge 3-5
   ASSERT_EQ(out.edge_thickness.size(), 1u);
   EXPECT_TRUE(std::isfinite(out.edge_thickness[0]));
+}
+
+// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
+// of synthesize and buildOutputMesh for every later call; returns the previous choice
+namespace scenelod::detail {
+bool useAvx2Paths(bool on);
+}
+
+namespace {
+
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+}  // namespace
+
+// The AVX2 variants (where the CPU has them) give the baseline's bits: every array of the output,
+// for each synthesis, fine levels (the grouped synthesis) and coarse ones (the single pass), with
+// colours, crease splits and a sphere cell; on a CPU without AVX2 both runs take the baseline.
+TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
+  Mesh bumpy = test::makeBumpySphere(90, 120);
+  Mesh cad = test::makeCadPart();
+  cad.colors.resize(cad.positions.size());
+  for (size_t i = 0; i < cad.colors.size(); ++i)
+    cad.colors[i] = glm::vec3(float(i % 7) / 7.0f, float(i % 5) / 5.0f, float(i % 3) / 3.0f);
+  const bool was = detail::useAvx2Paths(true);
+  size_t levels = 0, split = 0;
+  for (const Mesh* m : {&bumpy, &cad})
+    for (Synthesis s : {Synthesis::kQuadric, Synthesis::kMean, Synthesis::kHeaviest})
+      for (CellShape shape : {CellShape::kCube, CellShape::kSphere})
+        for (float w : {0.01f, 0.03f, 0.1f, 0.4f}) {
+          ClusterParams p;
+          p.synthesis = s;
+          p.cell_shape = shape;
+          p.cell_width = w;
+          p.crease_angle_deg = 40.0f;
+          Mesh wide, base;
+          detail::useAvx2Paths(true);
+          ASSERT_TRUE(clusterMesh(*m, p, wide).ok());
+          detail::useAvx2Paths(false);
+          ASSERT_TRUE(clusterMesh(*m, p, base).ok());
+          SCOPED_TRACE(std::string(synthesisName(s)) + " " + cellShapeName(shape) + " w=" + std::to_string(w));
+          ASSERT_GT(base.triangleCount(), 0u);
+          EXPECT_TRUE(sameBits(wide.positions, base.positions));
+          EXPECT_TRUE(sameBits(wide.normals, base.normals));
+          EXPECT_TRUE(sameBits(wide.colors, base.colors));
+          EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
+          EXPECT_TRUE(sameBits(wide.edges, base.edges));
+          EXPECT_TRUE(sameBits(wide.edge_thickness, base.edge_thickness));
+          EXPECT_TRUE(sameBits(wide.points, base.points));
+          ++levels;
+          split += base.vertexCount() > base.triangleCount() / 2 + 2;  // crease copies (closed meshes: V ~ T / 2)
+        }
+  // levels past the prefetch thresholds: a single pass whose sums exceed 1 MB (w = 0.04: 17 k
+  // clusters of 120 k vertices, 34 k triangles) and an output of more than 64 k triangles (w = 0.012)
+  const Mesh big = test::makeBumpySphere(300, 400);
+  for (float w : {0.04f, 0.012f}) {
+    ClusterParams p;
+    p.cell_width = w;
+    Mesh wide, base;
+    detail::useAvx2Paths(true);
+    ASSERT_TRUE(clusterMesh(big, p, wide).ok());
+    detail::useAvx2Paths(false);
+    ASSERT_TRUE(clusterMesh(big, p, base).ok());
+    EXPECT_GT(base.triangleCount(), w > 0.02f ? 30000u : 65536u);
+    EXPECT_TRUE(sameBits(wide.positions, base.positions));
+    EXPECT_TRUE(sameBits(wide.normals, base.normals));
+    EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
+  }
+  detail::useAvx2Paths(was);
+  EXPECT_EQ(levels, 48u);
+  EXPECT_GT(split, 0u);  // the CAD part's sharp edges split vertices in some levels
 }
