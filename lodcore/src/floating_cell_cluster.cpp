@@ -298,7 +298,7 @@ inline uint32_t laneBest(__m128 bd2, __m128i bid) {
 // a time. The lanes use testCellLanes' operations (no FMA: "avx2" alone never contracts a * b + c)
 // and keep the same order on (d^2, id), so the cell chosen, and every bit after it, is the same.
 #if defined(SCENELOD_FLOATING_AVX2)
-#define SCENELOD_AVX2_TARGET __attribute__((target("avx2,popcnt")))
+#define SCENELOD_FLOATING_AVX2_TARGET __attribute__((target("avx2,popcnt")))
 constexpr bool kAvx2Built = true;
 bool cpuHasAvx2() {
   __builtin_cpu_init();
@@ -333,16 +333,16 @@ struct PackTable {
 constexpr PackTable kPack;
 
 // four list heads as 32-bit lanes
-SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
+SCENELOD_FLOATING_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
   return _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
 }
-SCENELOD_AVX2_TARGET inline __m128i loadHeads4(const uint16_t* r) {
+SCENELOD_FLOATING_AVX2_TARGET inline __m128i loadHeads4(const uint16_t* r) {
   return _mm_cvtepu16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(r)));
 }
 
 // the non-zero heads of rows r0 and r1 (three each) appended to found[count ..); writes 8 entries
 template <typename Head>
-SCENELOD_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, uint32_t valid, uint32_t* found,
+SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, uint32_t valid, uint32_t* found,
                                               uint32_t count) {
   const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(loadHeads4(r0)), loadHeads4(r1), 1);
   const uint32_t zero = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
@@ -353,21 +353,21 @@ SCENELOD_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, ui
 }
 
 // floorToInt per lane
-SCENELOD_AVX2_TARGET inline __m128i floorToInt4(__m128 x) {
+SCENELOD_FLOATING_AVX2_TARGET inline __m128i floorToInt4(__m128 x) {
   const __m128i t = _mm_cvttps_epi32(x);
   return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
 }
 
 // cells a and b as the two halves of a vector
 template <typename CellRecord>
-SCENELOD_AVX2_TARGET inline __m256 load2Cells(const CellRecord* cells, uint32_t a, uint32_t b) {
+SCENELOD_FLOATING_AVX2_TARGET inline __m256 load2Cells(const CellRecord* cells, uint32_t a, uint32_t b) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&cells[a].x)), _mm_loadu_ps(&cells[b].x), 1);
 }
 
 // testCellLanes, 8 lanes: lane k holds list[j + k] (records k and k + 4 share a 128-bit half, so the
 // in-half transpose leaves the lanes in list order). Needs 8 spare entries after the list.
 template <bool kCube, bool kNearest, typename CellRecord>
-SCENELOD_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* cells, uint32_t* list, uint32_t count, __m256 px,
+SCENELOD_FLOATING_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* cells, uint32_t* list, uint32_t count, __m256 px,
                                                    __m256 py, __m256 pz, const JoinRule& rule, __m256& bd2,
                                                    __m256i& bid) {
   static_assert(sizeof(CellRecord) == 16, "a cell is read as one 16-byte lane");
@@ -411,7 +411,7 @@ SCENELOD_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* cells, uint
 
 // laneBest over 8 lanes: the least d2, then the least id among the lanes holding it
 template <bool kNearest>
-SCENELOD_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
+SCENELOD_FLOATING_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid) {
   __m256i sel = bid;
   if (kNearest) {
     __m256 m = _mm256_min_ps(bd2, _mm256_permute2f128_ps(bd2, bd2, 1));
@@ -620,7 +620,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
 // are tested 8 at a time
 template <bool kCube, bool kNearest, typename Head>
-SCENELOD_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
   struct Cell {
@@ -881,7 +881,7 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
 // assignBlocksT on AVX2: the searched range on the three axes at once, the same copies of the
 // first blocks, the cells tested 8 at a time (testCellLanes8, laneBest8)
 template <bool kCube, bool kNearest>
-SCENELOD_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, float /*reach*/,
+SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, float /*reach*/,
                                             const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                             size_t expected, Assignment& out) {
   struct Cell {

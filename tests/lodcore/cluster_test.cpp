@@ -151,19 +151,24 @@ TEST(ClusterMesh, CornerNormalsFollowTheCreaseRule) {
               if (taken[i - g].back()) sum += face[corner_order[j] / 3];
             }
             const glm::vec3 n = out.normals[out.triangles[corner_order[i]]];
-            if (clear && glm::length(sum) > 1e-6f) EXPECT_GT(glm::dot(n, glm::normalize(sum)), 0.9999f);
+            if (clear && glm::length(sum) > 1e-6f) {
+              EXPECT_GT(glm::dot(n, glm::normalize(sum)), 0.9999f);
+            }
           }
-          if (clear)
+          if (clear) {
             for (size_t i = g; i < ge; ++i)
               for (size_t j = g; j < ge; ++j)
                 if (taken[i - g] == taken[j - g]) {
                   EXPECT_EQ(out.triangles[corner_order[i]], out.triangles[corner_order[j]]);
                   ++checked;
                 }
+          }
           g = ge;
         }
         // (at 0 degrees the coplanar faces lie on the threshold and are skipped)
-        if (angle > 0.0f) EXPECT_GT(checked, tn);
+        if (angle > 0.0f) {
+          EXPECT_GT(checked, tn);
+        }
       }
 }
 
