@@ -112,8 +112,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // Triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
   // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
   // input count) rather than the input, so that it stays in cache; grows at 2/3 load.
-  // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output)
-  const size_t expected = std::min(tn, size_t(2) * nc + nc / 16 + 64);
+  // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output:
+  // the extra is about constant, not proportional: the 1 M sphere's chain keeps 2C + 1.9 k / 2.9 k /
+  // 2.8 k / 1.7 k triangles at levels 1-4, the bunny's 2C + 6 / 191 / 377 / 112; a regrowth, old and
+  // new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
+  const size_t expected = std::min(tn, size_t(2) * nc + nc / 32 + std::min<size_t>(4096, nc / 8));
   out.triangles.reserve(3 * expected);
   // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
   // the power of two was about 4 x the output, the largest array of the main pass at fine levels
