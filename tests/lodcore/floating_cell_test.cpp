@@ -103,7 +103,9 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
           most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
         }
         EXPECT_LE(most, c.shape == CellShape::kCube ? 8 : 64);
-        if (!m.points.empty() && c.shape == CellShape::kSphere && w == 0.4f) EXPECT_GT(most, 8);  // see lattice()
+        if (!m.points.empty() && c.shape == CellShape::kSphere && w == 0.4f) {
+          EXPECT_GT(most, 8);  // see lattice()
+        }
         // every referenced vertex is assigned, lies in its cell, and is assigned by the variant's rule
         // among the cells that existed when it was visited (centres earlier in the weight order)
         std::vector<size_t> rank(m.positions.size());
