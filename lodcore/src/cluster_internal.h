@@ -158,6 +158,16 @@ bool useAvx2Paths(bool on);
 #endif
 // a body shared by a baseline function and its AVX2 variant, compiled into each
 #define SCENELOD_ALWAYS_INLINE inline __attribute__((always_inline))
+// whether this CPU runs the AVX2 variants (AVX2 and POPCNT, which every AVX2 CPU has; the
+// floating-cell grid's compaction counts bits); false where they are not built
+inline bool cpuHasAvx2() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+#else
+  return false;
+#endif
+}
 
 // elimination.cpp: cluster-level primitives after removing degenerate, duplicate and covered ones.
 struct Eliminated {

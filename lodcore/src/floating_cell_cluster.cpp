@@ -300,13 +300,8 @@ inline uint32_t laneBest(__m128 bd2, __m128i bid) {
 #if defined(SCENELOD_FLOATING_AVX2)
 #define SCENELOD_FLOATING_AVX2_TARGET __attribute__((target("avx2,popcnt")))
 constexpr bool kAvx2Built = true;
-bool cpuHasAvx2() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
-}
 #else
 constexpr bool kAvx2Built = false;
-bool cpuHasAvx2() { return false; }
 #endif
 // cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
 std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true};

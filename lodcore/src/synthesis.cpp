@@ -66,15 +66,6 @@ namespace detail {
 
 namespace {
 
-bool cpuHasAvx2() {
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-#else
-  return false;
-#endif
-}
-
 bool g_avx2_paths = cpuHasAvx2();
 
 }  // namespace
