@@ -497,6 +497,21 @@ class BrickHeads {
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
+// a new cell (cluster `id`) at pv listed first in grid cube (cx, cy, cz), its successor the cube's
+// previous first; shared by assignDenseT and its AVX2 variant (inlined into each)
+template <bool kBricks, typename Cells, typename Heads>
+SCENELOD_ALWAYS_INLINE void listCell(Cells& cells, Heads& head, BrickHeads& bricks, size_t sy, size_t sz, int32_t cx,
+                                     int32_t cy, int32_t cz, const glm::vec3& pv, uint32_t id) {
+  if constexpr (kBricks) {
+    cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+    bricks.set(cx, cy, cz, id + 1);
+  } else {
+    const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+    cells.push_back({pv.x, pv.y, pv.z, head[k]});
+    head[k] = typename Heads::value_type(id + 1);
+  }
+}
+
 template <bool kCube, bool kNearest, typename Head>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
@@ -597,14 +612,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       out.heaviest.push_back(p.order[i]);
       const int32_t cx = floorToInt(q.x) - lo_cube[0], cy = floorToInt(q.y) - lo_cube[1],
                     cz = floorToInt(q.z) - lo_cube[2];
-      if constexpr (kBricks) {
-        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
-        bricks.set(cx, cy, cz, best + 1);
-      } else {
-        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
-        cells.push_back({pv.x, pv.y, pv.z, head[k]});
-        head[k] = Stored(best + 1);
-      }
+      listCell<kBricks>(cells, head, bricks, sy, sz, cx, cy, cz, pv, best);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -708,14 +716,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       out.heaviest.push_back(p.order[i]);
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
-      if constexpr (kBricks) {
-        cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
-        bricks.set(cx, cy, cz, best + 1);
-      } else {
-        const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
-        cells.push_back({pv.x, pv.y, pv.z, head[k]});
-        head[k] = Stored(best + 1);
-      }
+      listCell<kBricks>(cells, head, bricks, sy, sz, cx, cy, cz, pv, best);
     }
     out.cluster_of[p.order[i]] = best;
   }
