@@ -19,17 +19,21 @@ namespace {
 inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
 
 // Candidate edges listed under their lower cluster id. Where the clusters are few enough (below),
-// a cluster's first four edges are kept inline in a 32-byte block, their higher ids compared at
-// once, so that a lookup is one block read and a branch that is taken only for a new edge (the
-// walk of a list mispredicted about once per lookup at coarse levels, where a low id heads several
-// edges); later edges, and all edges where the blocks would be too large, are chained through
-// flat arrays under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle
-// wrote recently: the input order is spatially coherent, the cluster ids are not).
+// a cluster's first four edges are kept inline in a 16-byte block (16-bit ids: blocks are used only
+// below 2^15 clusters), their other ids compared at once, so that a lookup is one block read and a
+// branch that is taken only for a new edge (the walk of a list mispredicted about once per lookup
+// at coarse levels, where a low id heads several edges); later edges, edges whose id does not fit
+// 16 bits, and all edges where the blocks would be too large, are chained through flat arrays
+// under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle wrote
+// recently: the input order is spatially coherent, the cluster ids are not). With blocks the heads
+// are made when the first edge is chained (each of the bunny's levels chains a few). The blocks, 32
+// bytes per cluster with 32-bit ids, were the largest part of the bunny chain's memory peak (its 50 %
+// level's elimination: 0.54 MB of 3.53).
 class EdgeLists {
  public:
-  EdgeLists(size_t clusters, bool use_blocks) {
-    if (use_blocks) blocks_.assign(clusters, Block{{kNone, kNone, kNone, kNone}, {kNone, kNone, kNone, kNone}});
-    head_.assign(clusters, kNone);
+  EdgeLists(size_t clusters, bool use_blocks) : clusters_(clusters) {
+    if (use_blocks) blocks_.assign(clusters, Block{{kFree, kFree, kFree, kFree}, {kFree, kFree, kFree, kFree}});
+    else head_.assign(clusters, kNone);
   }
   // the id of edge (lo, hi), lo < hi, or kNone
   uint32_t find(uint32_t lo, uint32_t hi) const {
@@ -37,17 +41,18 @@ class EdgeLists {
     swapOwner(lo, hi);
     const Block& b = blocks_[lo];
 #if defined(__SSE2__)
-    const __m128i eq =
-        _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(b.hi)), _mm_set1_epi32(int32_t(hi)));
-    const uint32_t found = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(eq)));
+    const __m128i eq = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
+                                       _mm_set1_epi16(static_cast<short>(hi)));
+    const uint32_t found = uint32_t(_mm_movemask_epi8(eq)) & 0x55u;  // bit 2k: entry k
 #else
     uint32_t found = 0;
-    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << k;
+    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << (2 * k);
 #endif
     // without a branch: the id when found inline, else kNone
-    const uint32_t id = b.id[__builtin_ctz(found | 8u)] | (0u - uint32_t(found == 0));
-    // not found in a full block: the rest are chained (one test, rarely taken)
-    if ((0u - uint32_t(found == 0)) & (b.hi[3] ^ kNone)) return walk(lo, hi);
+    const uint32_t id = uint32_t(b.id[__builtin_ctz(found | 0x40u) >> 1]) | (0u - uint32_t(found == 0));
+    // not found in a full block (or once some edge's id went past 16 bits): the rest are chained
+    // (one test, rarely taken)
+    if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(long_ids_))) return walk(lo, hi);
     return id;
   }
   // lists edge `id` = (lo, hi), not listed yet
@@ -55,12 +60,17 @@ class EdgeLists {
     if (!blocks_.empty()) {
       swapOwner(lo, hi);
       Block& b = blocks_[lo];
-      for (int k = 0; k < 4; ++k)
-        if (b.hi[k] == kNone) {
-          b.hi[k] = hi;
-          b.id[k] = id;
-          return;
-        }
+      if (id < kFree) {
+        for (int k = 0; k < 4; ++k)
+          if (b.hi[k] == kFree) {
+            b.hi[k] = static_cast<uint16_t>(hi);
+            b.id[k] = static_cast<uint16_t>(id);
+            return;
+          }
+      } else {
+        long_ids_ = true;
+      }
+      if (head_.empty()) head_.assign(clusters_, kNone);
     }
     node_hi_.push_back(hi);
     if (!blocks_.empty()) node_id_.push_back(id);  // without blocks, every edge is a node: its index is its id
@@ -79,21 +89,27 @@ class EdgeLists {
     hi ^= flip;
   }
   uint32_t walk(uint32_t lo, uint32_t hi) const {
+    if (head_.empty()) return kNone;  // (blocks, none chained yet)
     for (uint32_t e = head_[lo]; e != kNone; e = node_next_[e])
       if (node_hi_[e] == hi) return blocks_.empty() ? e : node_id_[e];
     return kNone;
   }
+  static constexpr uint16_t kFree = 0xFFFF;  // a free entry; no cluster id or inline edge id is this
   struct Block {
-    uint32_t hi[4];  // higher ids of the first four edges, kNone where free (filled in order)
-    uint32_t id[4];
+    uint16_t hi[4];  // other cluster ids of the first four edges, kFree where free (filled in order)
+    uint16_t id[4];
   };
+  static_assert(sizeof(Block) == 16, "a block is 16 bytes");
+  size_t clusters_;
+  bool long_ids_ = false;  // some edge id did not fit a block (chained whatever its block's room)
   std::vector<Block> blocks_;
-  std::vector<uint32_t> head_;  // per cluster: its first chained edge
+  std::vector<uint32_t> head_;  // per cluster: its first chained edge (with blocks, made when first needed)
   std::vector<uint32_t> node_hi_, node_id_, node_next_;
 };
 
-// the blocks above are used while they take at most this (the bunny's levels; not the 1 M sphere's
-// finer ones, where the heads alone keep the lists in cache)
+// the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
+// 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
+// their ids fit the blocks' 16 bits
 constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 }  // namespace
 

@@ -109,6 +109,53 @@ TEST(Elimination, AClusterWithManyCollapsedEdgesKeepsEachOnce) {
   for (size_t k = 1; k < angles.size(); ++k) EXPECT_GT(angles[k] - angles[k - 1], 0.2f);  // all spokes distinct
 }
 
+TEST(Elimination, MoreCandidateEdgesThanSixteenBitsOnFewClusters) {
+  // 400 clusters (one per vertex) and 72,100 input edges, each listed twice in opposite directions:
+  // first every pair of clusters 0-379 (71,910), then every pair of 380-399, whose blocks (used
+  // below 2^15 clusters, with 16-bit ids) are still empty when their edge ids have passed 16 bits,
+  // so they are chained instead; each pair must come out once, with the larger of its two input
+  // thicknesses (an id cut to 16 bits would find another edge, an id chained but not looked for
+  // would list the pair twice)
+  Mesh m;
+  const int side = 20, n = side * side, split = 380;
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) m.positions.push_back({float(x), float(y), 0.0f});
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < split; ++i)
+    for (int j = i + 1; j < split; ++j) pairs.push_back({i, j});
+  for (int i = split; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) pairs.push_back({i, j});
+  ASSERT_GT(pairs.size(), size_t(65535));
+  auto forward = [](int i) { return 0.001f * float(i % 7); };
+  auto backward = [](int j) { return 0.001f * float(j % 5); };
+  for (const auto& [i, j] : pairs) {
+    m.edges.insert(m.edges.end(), {uint32_t(i), uint32_t(j)});
+    m.edge_thickness.push_back(forward(i));
+  }
+  for (const auto& [i, j] : pairs) {
+    m.edges.insert(m.edges.end(), {uint32_t(j), uint32_t(i)});
+    m.edge_thickness.push_back(backward(j));
+  }
+  const Mesh out = run(m, floating(0.2f));
+  ASSERT_EQ(out.edgeCount(), pairs.size());
+  ASSERT_EQ(out.edge_thickness.size(), pairs.size());
+  EXPECT_EQ(out.pointCount(), 0u);
+  std::vector<uint8_t> seen(size_t(n) * size_t(n), 0);
+  size_t wrong_thickness = 0, repeated = 0;
+  for (size_t e = 0; e < out.edgeCount(); ++e) {
+    const glm::vec3 a = out.positions[out.edges[2 * e]], b = out.positions[out.edges[2 * e + 1]];
+    int i = int(std::lround(a.y)) * side + int(std::lround(a.x));
+    int j = int(std::lround(b.y)) * side + int(std::lround(b.x));
+    if (i > j) std::swap(i, j);
+    ASSERT_LT(i, j);
+    ASSERT_EQ(i < split, j < split);
+    repeated += seen[size_t(i) * size_t(n) + size_t(j)]++ != 0;
+    wrong_thickness += out.edge_thickness[e] != std::max(forward(i), backward(j));
+  }
+  EXPECT_EQ(repeated, 0u);
+  EXPECT_EQ(wrong_thickness, 0u);
+}
+
 TEST(Elimination, InputEdgesAndPointsAreClusteredToo) {
   Mesh m;
   m.positions = {{0, 0, 0}, {5, 0, 0}, {0.01f, 0, 0}, {9, 9, 9}, {9.01f, 9, 9}};
