@@ -135,6 +135,9 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   Clock::time_point t0 = Clock::now();
   if (Error e = prepareMesh(original, params.cluster, p)) return e;
   stats.prepare_seconds = since(t0);
+  // a small mesh's levels read its positions through the order (detail::PositionsByWeight)
+  if (p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
+    std::vector<glm::vec3>().swap(p.sorted_positions);
   // level 0, the copy of the input, is made last, once the prepared mesh and the levels' scratch are
   // freed, so that it does not add to the peak memory of the levels
   std::optional<Sphere> base_bounds;

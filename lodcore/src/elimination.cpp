@@ -134,24 +134,26 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
   const size_t expected = std::min(tn, size_t(2) * nc + nc / 32 + std::min<size_t>(4096, nc / 8));
   out.triangles.reserve(3 * expected);
-  // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
-  // the power of two was about 4 x the output, the largest array of the main pass at fine levels
-  size_t cap = 64;
-  while (cap * 2 < expected * 3) cap <<= 1;
+  // load at most 2/3: 1.5 x expected slots, of any count (the home slot is the hash's top 32 bits
+  // scaled to the table), so about 2/3 full at the end; the power of two at least that took up to
+  // a third more (the bunny's 50 % level: 65,536 slots for 56 k, at its chain's memory peak)
+  size_t cap = std::max<size_t>(64, expected * 3 / 2 + 1);
   std::vector<uint32_t> table(cap, kNone);
-  size_t mask = cap - 1;
   auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
     const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
-    return static_cast<size_t>(h ^ (h >> 31));
+    return h ^ (h >> 31);
   };
+  auto home = [&](uint64_t h) { return static_cast<size_t>(((h >> 32) * uint64_t(cap)) >> 32); };
+  auto nextSlot = [&](size_t i) { return i + 1 == cap ? 0 : i + 1; };
   // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
   // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
   // pass's lookups went to random slots of it.
   // candidate edges (cluster pairs, low id first, then the block of the last triangle collapsed onto
   // the edge, kNone for none), in chunks of kEdgeChunk edges: a growing vector's copy (old and new
   // buffers at once) came at the peak of a level
-  constexpr size_t kEdgeChunk = 4096;
+  // (1024: the unused part of the last chunk, 6 KB on average, was part of the bunny chain's peak)
+  constexpr size_t kEdgeChunk = 1024;
   std::vector<std::vector<uint32_t>> edges;
   size_t edge_total = 0;
   // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
@@ -208,21 +210,20 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   };
 
   auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
-    for (size_t i = triangleHash(c0, c1, c2) & mask;; i = (i + 1) & mask) {
+    for (size_t i = home(triangleHash(c0, c1, c2));; i = nextSlot(i)) {
       const uint32_t o = table[i];
       if (o == kNone) {
         table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
         if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
-          cap <<= 1;
-          mask = cap - 1;
+          cap *= 2;
           table.assign(cap, kNone);
           for (size_t k = 0; k < out.triangles.size(); k += 3) {
-            size_t j = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]) & mask;
-            while (table[j] != kNone) j = (j + 1) & mask;
+            size_t j = home(triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]));
+            while (table[j] != kNone) j = nextSlot(j);
             table[j] = static_cast<uint32_t>(k / 3);
           }
-          size_t j = triangleHash(c0, c1, c2) & mask;
-          while (table[j] != kNone) j = (j + 1) & mask;
+          size_t j = home(triangleHash(c0, c1, c2));
+          while (table[j] != kNone) j = nextSlot(j);
           table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
         }
         out.triangles.push_back(c0);

@@ -533,7 +533,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
-  const glm::vec3* sorted = p.sorted_positions.data();
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
@@ -648,7 +648,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   for (int z = 0; z < 3; ++z)
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   const size_t n = p.order.size();
-  const glm::vec3* sorted = p.sorted_positions.data();
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     // the range of cubes along the three axes at once, with the scalar path's operations per lane
@@ -809,7 +809,7 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
   const size_t n = p.order.size();
-  const glm::vec3* sorted = p.sorted_positions.data();
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
@@ -896,7 +896,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
   const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
   const size_t offset[8] = {0, 1, sy, sy + 1, sz, sz + 1, sz + sy, sz + sy + 1};
   const size_t n = p.order.size();
-  const glm::vec3* sorted = p.sorted_positions.data();
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
@@ -1046,7 +1046,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   CellGrid grid(expected * 11 / 20);
 
   const size_t n = p.order.size();
-  const glm::vec3* sorted = p.sorted_positions.data();
+  const PositionsByWeight sorted(p);
   // the 2 x 2 x 2 grid cubes a vertex searches (all but a rare few need no third along an axis)
   struct Search {
     int32_t lo[3];

@@ -15,9 +15,10 @@ void assignUniform(const PreparedMesh& p, float cell_width, Assignment& out) {
   const double patches = 2.0 * p.surface_area / (double(cell_width) * double(cell_width));
   GridHash grid(static_cast<size_t>(std::min(double(p.order.size()), patches)) + 16);
   // visiting vertices heaviest first makes each cluster's id order and its first vertex the heaviest
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < p.order.size(); ++i) {
     const uint32_t v = p.order[i];
-    const glm::vec3 q = (p.sorted_positions[i] - out.grid_origin) * inv;
+    const glm::vec3 q = (sorted[i] - out.grid_origin) * inv;
     const GridKey key{floorToInt(q.x), floorToInt(q.y),
                       floorToInt(q.z)};
     uint32_t& c = grid.at(key);

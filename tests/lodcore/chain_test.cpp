@@ -82,6 +82,8 @@ TEST(Chain, ResultIsIdenticalForAnyThreadCount) {
 // the chain frees the prepared arrays while levels are still being finished and holds the finest
 // level's output pass until the others are past synthesis: every level must still be what
 // clusterPrepared makes at its width, for one level or several, one thread or several, with colours
+// (the chain drops the sorted copy of this small mesh's positions and reads them through the order;
+// the single levels below read the prepared mesh's sorted copy: both must give the same levels)
 TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
   Mesh m = testMesh();
   m.colors.resize(m.positions.size());
