@@ -37,7 +37,7 @@ class EdgeLists {
   }
   // the id of edge (lo, hi), lo < hi, or kNone
   uint32_t find(uint32_t lo, uint32_t hi) const {
-    if (blocks_.empty()) return walk(lo, hi);
+    if (blocks_.empty()) return walk(lo, hi);  // (every edge chained, the heads made)
     swapOwner(lo, hi);
     const Block& b = blocks_[lo];
 #if defined(__SSE2__)
@@ -52,7 +52,8 @@ class EdgeLists {
     const uint32_t id = uint32_t(b.id[__builtin_ctz(found | 0x40u) >> 1]) | (0u - uint32_t(found == 0));
     // not found in a full block (or once some edge's id went past 16 bits): the rest are chained
     // (one test, rarely taken)
-    if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(long_ids_))) return walk(lo, hi);
+    if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(long_ids_)))
+      return head_.empty() ? kNone : walk(lo, hi);  // (none chained yet)
     return id;
   }
   // lists edge `id` = (lo, hi), not listed yet
@@ -89,7 +90,6 @@ class EdgeLists {
     hi ^= flip;
   }
   uint32_t walk(uint32_t lo, uint32_t hi) const {
-    if (head_.empty()) return kNone;  // (blocks, none chained yet)
     for (uint32_t e = head_[lo]; e != kNone; e = node_next_[e])
       if (node_hi_[e] == hi) return blocks_.empty() ? e : node_id_[e];
     return kNone;
@@ -134,18 +134,19 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
   const size_t expected = std::min(tn, size_t(2) * nc + nc / 32 + std::min<size_t>(4096, nc / 8));
   out.triangles.reserve(3 * expected);
-  // load at most 2/3: 1.5 x expected slots, of any count (the home slot is the hash's top 32 bits
-  // scaled to the table), so about 2/3 full at the end; the power of two at least that took up to
-  // a third more (the bunny's 50 % level: 65,536 slots for 56 k, at its chain's memory peak)
-  size_t cap = std::max<size_t>(64, expected * 3 / 2 + 1);
+  // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
+  // the power of two was about 4 x the output, the largest array of the main pass at fine levels
+  size_t cap = 64;
+  while (cap * 2 < expected * 3) cap <<= 1;
   std::vector<uint32_t> table(cap, kNone);
+  size_t mask = cap - 1;
   auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
     const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
-    return h ^ (h >> 31);
+    return static_cast<size_t>(h ^ (h >> 31));
   };
-  auto home = [&](uint64_t h) { return static_cast<size_t>(((h >> 32) * uint64_t(cap)) >> 32); };
-  auto nextSlot = [&](size_t i) { return i + 1 == cap ? 0 : i + 1; };
+  auto home = [&](size_t h) { return h & mask; };
+  auto nextSlot = [&](size_t i) { return (i + 1) & mask; };
   // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
   // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
   // pass's lookups went to random slots of it.
@@ -215,7 +216,8 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       if (o == kNone) {
         table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
         if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
-          cap *= 2;
+          cap <<= 1;
+          mask = cap - 1;
           table.assign(cap, kNone);
           for (size_t k = 0; k < out.triangles.size(); k += 3) {
             size_t j = home(triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]));

@@ -497,6 +497,14 @@ class BrickHeads {
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
 // with no hashing, probing or key test. Cells are chained through `next`, newest first.
+// the positions in weight order for assignDenseT: read through the order for short heads (a small
+// mesh, whose sorted copy a chain may have dropped), the sorted copy streamed for 4-byte heads
+template <typename Head>
+auto positionsInOrder(const PreparedMesh& p, std::vector<glm::vec3>& local) {
+  if constexpr (std::is_same_v<Head, uint32_t>) return sortedPositions(p, local);
+  else return PositionsByWeight(p);
+}
+
 // a new cell (cluster `id`) at pv listed first in grid cube (cx, cy, cz), its successor the cube's
 // previous first; shared by assignDenseT and its AVX2 variant (inlined into each)
 template <bool kBricks, typename Cells, typename Heads>
@@ -533,7 +541,10 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);
+  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
+  // heads (larger meshes) stream the copy
+  std::vector<glm::vec3> local;
+  const auto sorted = positionsInOrder<Head>(p, local);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
@@ -648,7 +659,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   for (int z = 0; z < 3; ++z)
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);
+  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
+  // heads (larger meshes) stream the copy
+  std::vector<glm::vec3> local;
+  const auto sorted = positionsInOrder<Head>(p, local);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     // the range of cubes along the three axes at once, with the scalar path's operations per lane
@@ -809,7 +823,8 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
   const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
@@ -896,7 +911,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
   const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
   const size_t offset[8] = {0, 1, sy, sy + 1, sz, sz + 1, sz + sy, sz + sy + 1};
   const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
@@ -1046,7 +1062,8 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   CellGrid grid(expected * 11 / 20);
 
   const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   // the 2 x 2 x 2 grid cubes a vertex searches (all but a rare few need no third along an axis)
   struct Search {
     int32_t lo[3];
