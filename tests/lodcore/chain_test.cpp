@@ -111,6 +111,30 @@ TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
     }
 }
 
+// Two small spheres far apart: a box too sparse for a flat grid, so the levels take the hash, which
+// streams the positions in weight order; a chain drops the sorted copy of so small a mesh and the
+// hash then makes its own: the levels must equal single levels on the prepared mesh, which keeps it
+TEST(Chain, SparseSmallMeshLevelsAreTheSingleLevelClustering) {
+  Mesh m = test::makeSphere(glm::vec3(0.0f), 1.0f, 24, 32);
+  test::appendMesh(m, test::makeSphere(glm::vec3(5000.0f, 0.0f, 0.0f), 1.0f, 24, 32));
+  ChainParams cp;
+  cp.level_count = 4;
+  PreparedMesh prepared;
+  ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
+  ASSERT_LT(prepared.sorted_positions.size() * sizeof(glm::vec3), size_t(1) << 19);  // dropped in the chain
+  LodChain chain;
+  ASSERT_TRUE(buildChain(m, cp, chain).ok());
+  ASSERT_EQ(chain.levelCount(), 5u);
+  for (size_t k = 1; k <= 4; ++k) {
+    ClusterParams params = cp.cluster;
+    params.cell_width = chain.levels[k].cell_width;
+    Mesh single;
+    ASSERT_TRUE(clusterPrepared(prepared, params, single).ok());
+    EXPECT_GT(single.triangleCount(), 0u);
+    EXPECT_TRUE(sameMesh(chain.levels[k].mesh, single)) << "level " << k;
+  }
+}
+
 // A searched chain keeps the search's last probe's assignment as level 1's: level 1 must be the
 // width findCellWidthForTarget chooses and the same mesh as one level clustered afresh at it, for
 // every clustering method and cell shape, one thread and several (a kept assignment of another
