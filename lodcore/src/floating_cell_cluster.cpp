@@ -494,9 +494,6 @@ class BrickHeads {
   std::vector<uint16_t> heads_;   // 64 per brick, x fastest
 };
 
-// §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
-// origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
-// with no hashing, probing or key test. Cells are chained through `next`, newest first.
 // the positions in weight order for assignDenseT: read through the order for short heads (a small
 // mesh, whose sorted copy a chain may have dropped), the sorted copy streamed for 4-byte heads
 template <typename Head>
@@ -505,39 +502,56 @@ auto positionsInOrder(const PreparedMesh& p, std::vector<glm::vec3>& local) {
   else return PositionsByWeight(p);
 }
 
-// a new cell (cluster `id`) at pv listed first in grid cube (cx, cy, cz), its successor the cube's
-// previous first; shared by assignDenseT and its AVX2 variant (inlined into each)
-template <bool kBricks, typename Cells, typename Heads>
-SCENELOD_ALWAYS_INLINE void listCell(Cells& cells, Heads& head, BrickHeads& bricks, size_t sy, size_t sz, int32_t cx,
-                                     int32_t cy, int32_t cz, const glm::vec3& pv, uint32_t id) {
-  if constexpr (kBricks) {
-    cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
-    bricks.set(cx, cy, cz, id + 1);
-  } else {
-    const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
-    cells.push_back({pv.x, pv.y, pv.z, head[k]});
-    head[k] = typename Heads::value_type(id + 1);
-  }
-}
-
-template <bool kCube, bool kNearest, typename Head>
-void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                  const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+// §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
+// origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
+// with no hashing, probing or key test. Shared by assignDenseT and its AVX2 variant: the cells,
+// chained through `next` newest first per grid cube, and the heads, flat or in bricks (Bricked).
+// cells[k + 1] is cluster k's cell; cells[0] is a sentinel at NaN, which contains no vertex: empty
+// heads (0) point to it, so that the cells found can be tested four (or eight) at a time, padded
+// with it.
+template <typename Head>
+struct DenseGrid {
   struct Cell {
     float x, y, z;
     uint32_t next;  // index of the next cell listed in the same grid cube; 0 ends the list
   };
-  // cells[k + 1] is cluster k's cell; cells[0] is a sentinel at NaN, which contains no vertex: empty
-  // heads (0) point to it, so that the cells found can be tested four at a time, padded with it
-  std::vector<Cell> cells;
-  cells.reserve(expected + 1);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  cells.push_back({nan, nan, nan, 0});
-  const size_t sy = dims[0], sz = dims[0] * dims[1];
-  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
+  static constexpr bool kBricks = std::is_same_v<Head, Bricked>;
   using Stored = std::conditional_t<kBricks, uint16_t, Head>;
-  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
-  BrickHeads bricks(dims, kBricks ? expected : 0);
+
+  DenseGrid(const size_t dims[3], size_t expected)
+      : sy(dims[0]), sz(dims[0] * dims[1]), head(kBricks ? 0 : sz * dims[2], 0), bricks(dims, kBricks ? expected : 0) {
+    cells.reserve(expected + 1);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    cells.push_back({nan, nan, nan, 0});
+  }
+  // a new cell (cluster `id`) at pv, listed first in grid cube (cx, cy, cz) (inlined into each variant)
+  SCENELOD_ALWAYS_INLINE void list(int32_t cx, int32_t cy, int32_t cz, const glm::vec3& pv, uint32_t id) {
+    if constexpr (kBricks) {
+      cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
+      bricks.set(cx, cy, cz, id + 1);
+    } else {
+      const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+      cells.push_back({pv.x, pv.y, pv.z, head[k]});
+      head[k] = Stored(id + 1);
+    }
+  }
+
+  const size_t sy, sz;  // strides of y and z in the flat array
+  std::vector<Cell> cells;
+  std::vector<Stored> head;
+  BrickHeads bricks;
+};
+
+template <bool kCube, bool kNearest, typename Head>
+void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
+                  const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+  DenseGrid<Head> grid(dims, expected);
+  auto& cells = grid.cells;
+  auto& head = grid.head;
+  auto& bricks = grid.bricks;
+  const size_t sy = grid.sy, sz = grid.sz;
+  constexpr bool kBricks = DenseGrid<Head>::kBricks;
+  using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
@@ -623,7 +637,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
       out.heaviest.push_back(p.order[i]);
       const int32_t cx = floorToInt(q.x) - lo_cube[0], cy = floorToInt(q.y) - lo_cube[1],
                     cz = floorToInt(q.z) - lo_cube[2];
-      listCell<kBricks>(cells, head, bricks, sy, sz, cx, cy, cz, pv, best);
+      grid.list(cx, cy, cz, pv, best);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -637,19 +651,13 @@ template <bool kCube, bool kNearest, typename Head>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
-  struct Cell {
-    float x, y, z;
-    uint32_t next;  // as in assignDenseT
-  };
-  std::vector<Cell> cells;
-  cells.reserve(expected + 1);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  cells.push_back({nan, nan, nan, 0});
-  const size_t sy = dims[0], sz = dims[0] * dims[1];
-  constexpr bool kBricks = std::is_same_v<Head, Bricked>;
-  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
-  std::vector<Stored> head(kBricks ? 0 : sz * dims[2], 0);
-  BrickHeads bricks(dims, kBricks ? expected : 0);
+  DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
+  auto& cells = grid.cells;
+  auto& head = grid.head;
+  auto& bricks = grid.bricks;
+  const size_t sy = grid.sy, sz = grid.sz;
+  constexpr bool kBricks = DenseGrid<Head>::kBricks;
+  using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;
   const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
@@ -730,7 +738,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       out.heaviest.push_back(p.order[i]);
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
-      listCell<kBricks>(cells, head, bricks, sy, sz, cx, cy, cz, pv, best);
+      grid.list(cx, cy, cz, pv, best);
     }
     out.cluster_of[p.order[i]] = best;
   }
