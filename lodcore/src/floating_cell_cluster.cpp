@@ -611,8 +611,10 @@ struct DenseGrid {
 // a free place: the sentinel), so that a vertex reads one entry instead of gathering 27 heads and
 // walking their lists. An entry is made at its cube's first vertex and kept current by adding each
 // new cell to the built entries of the 27 cubes it is near; a cube near more than 8 cells is marked
-// (kOverflow) and takes the general path. Worth it where cells are rare among the vertices (at the
-// bunny's 2 % level 700 cells among 35 k vertices: 1,721 entries made, each then read ~20 times).
+// (kOverflow) and takes the general path, as does one near a cell whose index needs more than 16
+// bits (32-bit heads). Worth it where cells are rare among the vertices (at the bunny's 2 % level
+// 700 cells among 35 k vertices: 1,721 entries made, each then read ~20 times; the 1 M sphere's 1 %
+// level 5 k cells among 519 k vertices).
 // Small, for the chain's memory peak (reached in its width search's coarse probes): entries of
 // 16 bytes, and the cubes' entry numbers in bricks of 4 x 4 x 4 cubes allocated where a cube has
 // an entry (as BrickHeads), about 55 KB at the 2 % level where a flat array of them takes 43 KB and
@@ -639,7 +641,7 @@ class CandidateCache {
   // marked kOverflow) where they are more than 8 or the entry numbers are used up
   bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count) {
     uint16_t& slot = slotFor(x, y, z);
-    if (count > 8 || entries_.size() >= kOverflow) {
+    if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
       slot = kOverflow;
       return false;
     }
@@ -667,7 +669,7 @@ class CandidateCache {
           uint16_t& slot = slots_[size_t(b) << 6 | zi[z] | yi[y] | xi[x]];
           if (slot == 0 || slot == kOverflow) continue;
           Entry& e = entries_[slot];
-          if (e.cell[7] != 0) {
+          if (e.cell[7] != 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
             slot = kOverflow;
             continue;
           }
@@ -808,10 +810,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
                                            size_t expected, Assignment& out) {
   constexpr bool kBricks = DenseGrid<Head>::kBricks;
   const size_t n = p.order.size();
-  // the candidates cached per grid cube where cells are rare among the vertices (cubes of side w/2:
-  // a cube lists at most 8 sphere cells, so an entry at most 216); a separate instance, so that the
+  // the candidates cached per grid cube where cells are rare among the vertices (cubes of side w/2,
+  // flat heads of 16 or 32 bits); a separate instance, so that the
   // loop without the cache stays as it was (sharing it cost the 10 % level 1.2 M instructions)
-  if constexpr (std::is_same_v<Head, uint16_t> && !kCached) {
+  if constexpr (!kBricks && !kCached) {
     if (reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
         double(n) >= kCacheVerticesPerCell * double(expected)) {
       assignDenseAvx2T<kCube, kNearest, Head, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
