@@ -53,9 +53,9 @@ constexpr float kSearchSlack = 1e-4f;
 // latency of its random slot reads, vertices being visited in weight order)
 constexpr size_t kPrefetchDistance = 4;
 // CandidateCache is used where the referenced vertices are at least this many per expected cell:
-// on the bunny, assignment 1.09 -> 0.91 ms at 2 % (53 per cell), 1.12 -> 1.04 at 3 % (23), a loss at
-// 5 % (14: 1.18 -> 1.34; an entry is made for every ~8 vertices)
-constexpr double kCacheVerticesPerCell = 20.0;
+// on the bunny, assignment 1.09 -> 0.85 ms at 2 % (53 per cell), 1.19 -> 0.97 at 3 % (23), 1.26 ->
+// 1.19 at 5 % (14), a loss at 10 % (9.4: 1.35 -> 1.72; an entry is made for every ~4 vertices)
+constexpr double kCacheVerticesPerCell = 12.0;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
 // cube costs one cache line. A grid cube lists at most 8 cube cells (64 sphere cells); those past
@@ -670,18 +670,19 @@ class CandidateCache {
     for (int z = 0; z < 3; ++z)
       for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 3; ++x) {
-          const uint32_t b = top_[zb[z] + yb[y] + xb[x]];
-          if (b == 0) continue;
-          uint16_t& slot = slots_[size_t(b) << 6 | zi[z] | yi[y] | xi[x]];
-          if (slot == 0 || slot == kOverflow) continue;
+          // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
+          uint16_t& slot = slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
+          if (uint16_t(slot - 1) >= kOverflow - 1) continue;
           Entry& e = entries_[slot];
-          if (e.cell[7] != 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
+          // the free places (a full entry has none), without a loop whose exit would mispredict
+          const uint32_t free_places = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(
+                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(e.cell)), _mm_setzero_si128()))) &
+                                       0x5555u;
+          if (free_places == 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
             slot = kOverflow;
             continue;
           }
-          int k = 0;
-          while (e.cell[k] != 0) ++k;
-          e.cell[k] = uint16_t(c);
+          e.cell[__builtin_ctz(free_places) >> 1] = uint16_t(c);
         }
   }
 
