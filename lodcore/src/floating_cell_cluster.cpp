@@ -377,32 +377,6 @@ SCENELOD_FLOATING_AVX2_TARGET inline __m256 load2Cells(const CellRecord* cells, 
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&cells[a].x)), _mm_loadu_ps(&cells[b].x), 1);
 }
 
-// the containment and joining test of testCellLanes on 8 cells given as columns (cx, cy, cz, id):
-// each lane keeps its least (d^2, id) in (bd2, bid)
-template <bool kCube, bool kNearest>
-SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void testLanes8(__m256 cx, __m256 cy, __m256 cz, __m256i id,
-                                                                     __m256 px, __m256 py, __m256 pz,
-                                                                     const JoinRule& rule, __m256& bd2, __m256i& bid) {
-  const __m256 dx = _mm256_sub_ps(px, cx), dy = _mm256_sub_ps(py, cy), dz = _mm256_sub_ps(pz, cz);
-  const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-  __m256 inside;
-  if (kCube) {
-    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    inside = _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(_mm256_and_ps(dx, absmask), _mm256_and_ps(dy, absmask)),
-                                         _mm256_and_ps(dz, absmask)),
-                           _mm256_set1_ps(rule.half), _CMP_LE_OQ);
-  } else {
-    inside = _mm256_cmp_ps(d2, _mm256_set1_ps(rule.half2), _CMP_LE_OQ);
-  }
-  const __m256 id_less = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bid, id));
-  const __m256 better =
-      kNearest ? _mm256_or_ps(_mm256_cmp_ps(d2, bd2, _CMP_LT_OQ), _mm256_and_ps(_mm256_cmp_ps(d2, bd2, _CMP_EQ_OQ), id_less))
-               : id_less;
-  const __m256 take = _mm256_and_ps(inside, better);
-  bd2 = _mm256_blendv_ps(bd2, d2, take);
-  bid = _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(bid), _mm256_castsi256_ps(id), take));
-}
-
 // testCellLanes, 8 lanes: lane k holds list[j + k] (records k and k + 4 share a 128-bit half, so the
 // in-half transpose leaves the lanes in list order). Needs 8 spare entries after the list.
 template <bool kCube, bool kNearest, typename CellRecord>
@@ -421,9 +395,28 @@ SCENELOD_FLOATING_AVX2_TARGET inline __m256i testCellLanes8(const CellRecord* ce
     const __m256 cy = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
     const __m256 cz = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
     const __m256 cw = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 dx = _mm256_sub_ps(px, cx), dy = _mm256_sub_ps(py, cy), dz = _mm256_sub_ps(pz, cz);
+    const __m256 d2 =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    __m256 inside;
+    if (kCube) {
+      const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+      inside = _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(_mm256_and_ps(dx, absmask), _mm256_and_ps(dy, absmask)),
+                                           _mm256_and_ps(dz, absmask)),
+                             _mm256_set1_ps(rule.half), _CMP_LE_OQ);
+    } else {
+      inside = _mm256_cmp_ps(d2, _mm256_set1_ps(rule.half2), _CMP_LE_OQ);
+    }
     const __m256i id =
         _mm256_sub_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(list + j)), _mm256_set1_epi32(1));
-    testLanes8<kCube, kNearest>(cx, cy, cz, id, px, py, pz, rule, bd2, bid);
+    const __m256 id_less = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bid, id));
+    const __m256 better =
+        kNearest ? _mm256_or_ps(_mm256_cmp_ps(d2, bd2, _CMP_LT_OQ),
+                                _mm256_and_ps(_mm256_cmp_ps(d2, bd2, _CMP_EQ_OQ), id_less))
+                 : id_less;
+    const __m256 take = _mm256_and_ps(inside, better);
+    bd2 = _mm256_blendv_ps(bd2, d2, take);
+    bid = _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(bid), _mm256_castsi256_ps(id), take));
     chained = _mm256_or_si256(chained, _mm256_castps_si256(cw));
   }
   return chained;
@@ -811,26 +804,116 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 // assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
 // are tested 8 at a time
-template <bool kCube, bool kNearest, typename Head, bool kCached = false>
+template <bool kCube, bool kNearest, typename Head>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
-  constexpr bool kBricks = DenseGrid<Head>::kBricks;
-  const size_t n = p.order.size();
-  // the candidates cached per grid cube where cells are rare among the vertices (cubes of side w/2,
-  // flat heads of 16 or 32 bits); a separate instance, so that the
-  // loop without the cache stays as it was (sharing it cost the 10 % level 1.2 M instructions)
-  if constexpr (!kBricks && !kCached) {
-    if (reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
-        double(n) >= kCacheVerticesPerCell * double(expected)) {
-      assignDenseAvx2T<kCube, kNearest, Head, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-      return;
-    }
-  }
   DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
   auto& cells = grid.cells;
   auto& head = grid.head;
   auto& bricks = grid.bricks;
+  const size_t sy = grid.sy, sz = grid.sz;
+  constexpr bool kBricks = DenseGrid<Head>::kBricks;
+  using Stored = typename DenseGrid<Head>::Stored;
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack * 2.0f * reach;
+  const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  // offsets of the 9 rows of 3 x 3 x 3 cubes from the first
+  size_t row_offset[9];
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
+  const size_t n = p.order.size();
+  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
+  // heads (larger meshes) stream the copy
+  std::vector<glm::vec3> local;
+  const auto sorted = positionsInOrder<Head>(p, local);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    // the range of cubes along the three axes at once, with the scalar path's operations per lane
+    // ((q - reach) - slack and floorToInt's truncation and correction)
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i span = _mm_sub_epi32(hi4, lo4);
+    uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
+    uint32_t found_count = 0;
+    const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+    if (kBricks) {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      found_count = bricks.gather(lo, hi, found);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
+      // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
+      // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const size_t* r = row_offset;
+      found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
+      found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
+      found_count = packRows(base + r[4], base + r[5], 0x77u, found, found_count);
+      found_count = packRows(base + r[6], base + r[7], 0x77u, found, found_count);
+      found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
+    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
+      // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
+      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const size_t* r = row_offset;
+      found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
+      found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
+    } else {
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      for (int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+            found[found_count] = row[x];
+            found_count += row[x] != 0;
+          }
+        }
+    }
+    const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
+    __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    __m256i bid = _mm256_set1_epi32(0x7fffffff);
+    uint32_t* list = found;
+    uint32_t list_count = found_count;
+    uint32_t successors[64 + 8];
+    for (;;) {
+      const __m256i chained =
+          testCellLanes8<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
+      if (_mm256_testz_si256(chained, chained)) break;
+      uint32_t* next_list = list == found ? successors : found;
+      uint32_t next_count = 0;
+      for (uint32_t j = 0; j < list_count; ++j) {
+        const uint32_t c = cells[list[j]].next;
+        next_list[next_count] = c;
+        next_count += c != 0;
+      }
+      list = next_list;
+      list_count = next_count;
+    }
+    uint32_t best = laneBest8<kNearest>(bd2, bid);
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
+      grid.list(cx, cy, cz, pv, best);
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+#endif
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// assignDenseAvx2T with a CandidateCache (see there): the vertices whose 3 x 3 x 3 cubes' cells are
+// in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path
+template <bool kCube, bool kNearest, typename Head>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                                 const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                 size_t expected, Assignment& out) {
+  static_assert(!DenseGrid<Head>::kBricks, "flat heads only");
+  const size_t n = p.order.size();
+  DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
+  auto& cells = grid.cells;
+  auto& head = grid.head;
   const size_t sy = grid.sy, sz = grid.sz;
   using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
@@ -843,7 +926,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
   // 10 % levels
-  CandidateCache cache(dims, kCached ? expected * 3 : 0);
+  CandidateCache cache(dims, expected * 3);
   const uint32_t* const cache_bricks = cache.bricks();
   const uint16_t* slots = cache.slots();
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
@@ -865,10 +948,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
-    const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
     uint32_t best = kNone;
     bool tested = false;
-    if (kCached && span2) {
+    if (span2) {
       // cache.find with the three axes at once (the scalar form took 30 instructions a vertex)
       const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
       const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
@@ -893,23 +975,15 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
         slots = cache.slots();
       }
       if (e != CandidateCache::kOverflow) {
-        best = testEntry8<kCube, kNearest>(cells.data(), cache.entry(e).cell, px, py, pz, rule);
+        best = testEntry8<kCube, kNearest>(cells.data(), cache.entry(e).cell, _mm256_set1_ps(pv.x),
+                                           _mm256_set1_ps(pv.y), _mm256_set1_ps(pv.z), rule);
         tested = true;
       }
     }
-    if (!tested) {
-      if (kBricks) {
-        const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-        found_count = bricks.gather(lo, hi, found);
-      } else if (span2) {
+    if (!tested) {  // the general path (reach 1: 3 or 4 cubes per axis)
+      if (span2) {
         found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset,
                                    found);
-      } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
-        // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
-        const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
-        const size_t* r = row_offset;
-        found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
-        found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
         for (int32_t z = lo[2]; z <= hi[2]; ++z)
@@ -921,6 +995,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
             }
           }
       }
+      const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
       __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
       __m256i bid = _mm256_set1_epi32(0x7fffffff);
       uint32_t* list = found;
@@ -948,7 +1023,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
       grid.list(cx, cy, cz, pv, best);
-      if (kCached) cache.add(cx, cy, cz, best + 1);
+      cache.add(cx, cy, cz, best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -1201,6 +1276,17 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
   }
   // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
 #if defined(SCENELOD_FLOATING_AVX2)
+  // flat heads of cubes of side w/2 with the candidate cache where cells are rare among the vertices
+  if (useAvx2() && heads != 2 && reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
+      double(p.order.size()) >= kCacheVerticesPerCell * double(expected)) {
+    static constexpr Fn kCachedFns[2][2][2] = {
+        {{assignDenseCachedAvx2T<false, false, uint32_t>, assignDenseCachedAvx2T<false, true, uint32_t>},
+         {assignDenseCachedAvx2T<true, false, uint32_t>, assignDenseCachedAvx2T<true, true, uint32_t>}},
+        {{assignDenseCachedAvx2T<false, false, uint16_t>, assignDenseCachedAvx2T<false, true, uint16_t>},
+         {assignDenseCachedAvx2T<true, false, uint16_t>, assignDenseCachedAvx2T<true, true, uint16_t>}}};
+    kCachedFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    return;
+  }
   if (useAvx2()) {
     static constexpr Fn kAvx2Fns[3][2][2] = {
         {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
