@@ -53,8 +53,9 @@ constexpr float kSearchSlack = 1e-4f;
 // latency of its random slot reads, vertices being visited in weight order)
 constexpr size_t kPrefetchDistance = 4;
 // CandidateCache is used where the referenced vertices are at least this many per expected cell:
-// on the bunny, assignment 1.09 -> 0.85 ms at 2 % (53 per cell), 1.19 -> 0.97 at 3 % (23), 1.26 ->
-// 1.19 at 5 % (14), a loss at 10 % (9.4: 1.35 -> 1.72; an entry is made for every ~4 vertices)
+// on the bunny, assignment 1.10 -> 0.85 ms at 2 % (53 per cell), 1.14 -> 0.97 at 3 % (23), even at
+// 5 % (14: 1.18-1.20 ms, 9 % fewer instructions), a loss at 10 % (9.4: 1.35 -> 1.72 ms, an entry
+// made for every ~4 vertices)
 constexpr double kCacheVerticesPerCell = 12.0;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
@@ -610,8 +611,9 @@ struct DenseGrid {
 // level 5 k cells among 519 k vertices).
 // Small, for the chain's memory peak (reached in its width search's coarse probes): entries of
 // 16 bytes, and the cubes' entry numbers in bricks of 4 x 4 x 4 cubes allocated where a cube has
-// an entry (as BrickHeads), about 55 KB at the 2 % level where a flat array of them takes 43 KB and
-// entries of 8 centres 220 KB.
+// an entry (as BrickHeads): about 55 KB at the 2 % level. Entries of 8 centres (128 bytes, tested
+// without the gather from the cells: 6.3 M instructions there instead of 6.8) and a flat array of
+// entry numbers took the bunny's chain peak to 4.2-4.5 MB (budget 3.34).
 class CandidateCache {
  public:
   static constexpr uint16_t kOverflow = 0xffff;
