@@ -21,7 +21,8 @@
 // fits (at most 65,535 referenced vertices), kept in bricks of 4 x 4 x 4 cubes, allocated where cells
 // are, when a flat array of them would take more than 16 bytes per vertex; the flat grids have AVX2
 // variants, chosen at run time, that gather the heads by rows and test cells 8 at a time with the
-// same operations and order.
+// same operations and order; where cells are rare among the vertices (coarse levels of a small
+// mesh), the AVX2 grid of side w/2 keeps per grid cube the cells its vertices test (CandidateCache).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -51,6 +52,11 @@ constexpr float kSearchSlack = 1e-4f;
 // vertices ahead of the current one whose grid slots are prefetched (the search is bound by the
 // latency of its random slot reads, vertices being visited in weight order)
 constexpr size_t kPrefetchDistance = 4;
+// CandidateCache is used where the referenced vertices are at least this many per expected cell:
+// on the bunny, assignment 1.10 -> 0.85 ms at 2 % (53 per cell), 1.14 -> 0.97 at 3 % (23), even at
+// 5 % (14: 1.18-1.20 ms, 9 % fewer instructions), a loss at 10 % (9.4: 1.35 -> 1.72 ms, an entry
+// made for every ~4 vertices)
+constexpr double kCacheVerticesPerCell = 12.0;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
 // cube costs one cache line. A grid cube lists at most 8 cube cells (64 sphere cells); those past
@@ -304,7 +310,7 @@ constexpr bool kAvx2Built = true;
 constexpr bool kAvx2Built = false;
 #endif
 // cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
-std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true};
+std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true}, g_cache_allowed{true};
 [[maybe_unused]] bool useAvx2() {  // unused where no AVX2 path is built
   static const bool has = cpuHasAvx2();
   return kAvx2Built && has && g_avx2_allowed.load(std::memory_order_relaxed);
@@ -345,6 +351,19 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Hea
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPack.idx[m])));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(found + count), _mm256_permutevar8x32_epi32(v, perm));
   return count + uint32_t(_mm_popcnt_u32(m));
+}
+
+// the non-empty heads of the 3 x 3 x 3 cubes from base (rows at base + row_offset[0 .. 9)) into
+// found; their count. Each load takes a fourth head (inside the grid: a row spans dims[0] >= 7 cubes
+// and lo + 3 is at most dims[0] - 1), masked off; the rows go in pairs, the last alone.
+template <typename Head>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherRows27(const Head* base, const size_t row_offset[9], uint32_t* found) {
+  const size_t* r = row_offset;
+  uint32_t count = packRows(base + r[0], base + r[1], 0x77u, found, 0);
+  count = packRows(base + r[2], base + r[3], 0x77u, found, count);
+  count = packRows(base + r[4], base + r[5], 0x77u, found, count);
+  count = packRows(base + r[6], base + r[7], 0x77u, found, count);
+  return packRows(base + r[8], base + r[8], 0x07u, found, count);
 }
 
 // floorToInt per lane
@@ -420,6 +439,44 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid)
   s = _mm_min_epi32(s, _mm_shuffle_epi32(s, _MM_SHUFFLE(2, 3, 0, 1)));
   const int32_t id0 = _mm_cvtsi128_si32(s);
   return id0 == 0x7fffffff ? kNone : uint32_t(id0);
+}
+#endif
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// testCellLanes8 and laneBest8 on 8 cells whose indices ascend along the lanes (0, the sentinel at
+// NaN, in free lanes): the same cell, found with one reduction of d^2 and the first lane holding
+// it, the least id on a tie (for the heaviest rule the first inside lane); kNone if none
+template <bool kCube, bool kNearest, typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t testEntry8(const CellRecord* cells, const uint16_t* c,
+                                                                         __m256 px, __m256 py, __m256 pz,
+                                                                         const JoinRule& rule) {
+  const __m256 a0 = load2Cells(cells, c[0], c[4]), a1 = load2Cells(cells, c[1], c[5]);
+  const __m256 a2 = load2Cells(cells, c[2], c[6]), a3 = load2Cells(cells, c[3], c[7]);
+  const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpacklo_ps(a2, a3);
+  const __m256 t2 = _mm256_unpackhi_ps(a0, a1), t3 = _mm256_unpackhi_ps(a2, a3);
+  const __m256 dx = _mm256_sub_ps(px, _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)));
+  const __m256 dy = _mm256_sub_ps(py, _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)));
+  const __m256 dz = _mm256_sub_ps(pz, _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)));
+  const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+  __m256 inside;
+  if (kCube) {
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    inside = _mm256_cmp_ps(_mm256_max_ps(_mm256_max_ps(_mm256_and_ps(dx, absmask), _mm256_and_ps(dy, absmask)),
+                                         _mm256_and_ps(dz, absmask)),
+                           _mm256_set1_ps(rule.half), _CMP_LE_OQ);
+  } else {
+    inside = _mm256_cmp_ps(d2, _mm256_set1_ps(rule.half2), _CMP_LE_OQ);
+  }
+  uint32_t lanes = uint32_t(_mm256_movemask_ps(inside));
+  if (kNearest) {
+    // an inside cell's d^2 is finite (at most 3 (w/2)^2), so +inf elsewhere never ties with it
+    const __m256 v = _mm256_blendv_ps(_mm256_set1_ps(std::numeric_limits<float>::infinity()), d2, inside);
+    __m256 m = _mm256_min_ps(v, _mm256_permute2f128_ps(v, v, 1));
+    m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+    lanes &= uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(v, m, _CMP_EQ_OQ)));
+  }
+  return lanes == 0 ? kNone : uint32_t(c[__builtin_ctz(lanes)]) - 1;
 }
 #endif
 
@@ -541,6 +598,108 @@ struct DenseGrid {
   std::vector<Stored> head;
   BrickHeads bricks;
 };
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// The cells that the vertices of one grid cube of side w/2 test, cached per cube: those listed in
+// the 3 x 3 x 3 cubes around it, up to 8, as their indices into the cells (16 bits, ascending, 0 for
+// a free place: the sentinel), so that a vertex reads one entry instead of gathering 27 heads and
+// walking their lists. An entry is made at its cube's first vertex and kept current by adding each
+// new cell to the built entries of the 27 cubes it is near; a cube near more than 8 cells is marked
+// (kOverflow) and takes the general path, as does one near a cell whose index needs more than 16
+// bits (32-bit heads). Worth it where cells are rare among the vertices (at the bunny's 2 % level
+// 700 cells among 35 k vertices: 1,721 entries made, each then read ~20 times; the 1 M sphere's 1 %
+// level 5 k cells among 519 k vertices).
+// Small, for the chain's memory peak (reached in its width search's coarse probes): entries of
+// 16 bytes, and the cubes' entry numbers in bricks of 4 x 4 x 4 cubes allocated where a cube has
+// an entry (as BrickHeads): about 55 KB at the 2 % level. Entries of 8 centres (128 bytes, tested
+// without the gather from the cells: 6.3 M instructions there instead of 6.8) and a flat array of
+// entry numbers took the bunny's chain peak to 4.2-4.5 MB (budget 3.34).
+class CandidateCache {
+ public:
+  static constexpr uint16_t kOverflow = 0xffff;
+  struct Entry {
+    uint16_t cell[8];
+  };
+  // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated)
+  CandidateCache(const size_t dims[3], size_t reserve_entries) : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4) {
+    if (reserve_entries == 0) return;
+    top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
+    slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
+    slots_.assign(64, 0);  // brick 0: no entries
+    entries_.reserve(reserve_entries + 1);
+    entries_.push_back(Entry{});
+  }
+  // the entry number of cube (x, y, z): 0 none yet, kOverflow for the general path
+  uint16_t find(int32_t x, int32_t y, int32_t z) const { return slots_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)]; }
+  const Entry& entry(uint16_t e) const { return entries_[e]; }
+  // for find in a caller's SIMD loop: the strides of the bricks' y and z, the bricks (which never
+  // move) and the slots (which move when make allocates a brick)
+  size_t brickStrideY() const { return bx_; }
+  size_t brickStrideZ() const { return bx_ * by_; }
+  const uint32_t* bricks() const { return top_.data(); }
+  const uint16_t* slots() const { return slots_.data(); }
+  // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending; false (the cube
+  // marked kOverflow) where they are more than 8 or the entry numbers are used up
+  bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count) {
+    uint16_t& slot = slotFor(x, y, z);
+    if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
+      slot = kOverflow;
+      return false;
+    }
+    slot = uint16_t(entries_.size());
+    Entry e{};
+    for (uint32_t k = 0; k < count; ++k) e.cell[k] = uint16_t(list[k]);
+    entries_.push_back(e);
+    return true;
+  }
+  // cell index c (the newest: entries stay ascending), centred in cube (cx, cy, cz), into the built
+  // entries of the 27 cubes whose 3 x 3 x 3 hold that cube
+  void add(int32_t cx, int32_t cy, int32_t cz, uint32_t c) {
+    // the brick and in-brick parts of the three coordinates on each axis once
+    size_t xb[3], xi[3], yb[3], yi[3], zb[3], zi[3];
+    for (int k = 0; k < 3; ++k) {
+      xb[k] = size_t((cx - 2 + k) >> 2), xi[k] = size_t((cx - 2 + k) & 3);
+      yb[k] = size_t((cy - 2 + k) >> 2) * bx_, yi[k] = size_t((cy - 2 + k) & 3) << 2;
+      zb[k] = size_t((cz - 2 + k) >> 2) * bx_ * by_, zi[k] = size_t((cz - 2 + k) & 3) << 4;
+    }
+    for (int z = 0; z < 3; ++z)
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 3; ++x) {
+          // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
+          uint16_t& slot = slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
+          if (uint16_t(slot - 1) >= kOverflow - 1) continue;
+          Entry& e = entries_[slot];
+          // the free places (a full entry has none), without a loop whose exit would mispredict
+          const uint32_t free_places = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(
+                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(e.cell)), _mm_setzero_si128()))) &
+                                       0x5555u;
+          if (free_places == 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
+            slot = kOverflow;
+            continue;
+          }
+          e.cell[__builtin_ctz(free_places) >> 1] = uint16_t(c);
+        }
+  }
+
+ private:
+  size_t brick(int32_t x, int32_t y, int32_t z) const {
+    return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
+  }
+  static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
+  uint16_t& slotFor(int32_t x, int32_t y, int32_t z) {
+    uint32_t& b = top_[brick(x, y, z)];
+    if (b == 0) {
+      b = uint32_t(slots_.size() >> 6);
+      slots_.resize(slots_.size() + 64, 0);
+    }
+    return slots_[size_t(b) << 6 | inBrick(x, y, z)];
+  }
+  size_t bx_, by_;
+  std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one
+  std::vector<uint16_t> slots_;    // 64 per brick: the cubes' entry numbers
+  std::vector<Entry> entries_;     // entries_[0] unused
+};
+#endif
 
 template <bool kCube, bool kNearest, typename Head>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
@@ -739,6 +898,134 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
       grid.list(cx, cy, cz, pv, best);
+    }
+    out.cluster_of[p.order[i]] = best;
+  }
+}
+#endif
+
+#if defined(SCENELOD_FLOATING_AVX2)
+// assignDenseAvx2T with a CandidateCache (see there): the vertices whose 3 x 3 x 3 cubes' cells are
+// in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path
+template <bool kCube, bool kNearest, typename Head>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                                 const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                 size_t expected, Assignment& out) {
+  static_assert(!DenseGrid<Head>::kBricks, "flat heads only");
+  const size_t n = p.order.size();
+  DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
+  auto& cells = grid.cells;
+  auto& head = grid.head;
+  const size_t sy = grid.sy, sz = grid.sz;
+  using Stored = typename DenseGrid<Head>::Stored;
+  const float inv = 1.0f / cube_width;
+  const float slack = kSearchSlack * 2.0f * reach;
+  const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  // offsets of the 9 rows of 3 x 3 x 3 cubes from the first
+  size_t row_offset[9];
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
+  // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
+  // 10 % levels
+  CandidateCache cache(dims, expected * 3);
+  const uint32_t* const cache_bricks = cache.bricks();
+  const uint16_t* slots = cache.slots();
+  // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
+  const __m128i brick_stride4 = _mm_setr_epi32(1, int32_t(cache.brickStrideY()), int32_t(cache.brickStrideZ()), 0);
+  const __m128i in_brick_shift4 = _mm_setr_epi32(0, 2, 4, 32);
+  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
+  // heads (larger meshes) stream the copy
+  std::vector<glm::vec3> local;
+  const auto sorted = positionsInOrder<Head>(p, local);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    // the range of cubes along the three axes at once, with the scalar path's operations per lane
+    // ((q - reach) - slack and floorToInt's truncation and correction)
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i span = _mm_sub_epi32(hi4, lo4);
+    const bool span2 = (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7;
+    uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
+    uint32_t found_count = 0;
+    const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+    uint32_t best = kNone;
+    bool tested = false;
+    if (span2) {
+      // cache.find with the three axes at once (the scalar form took 30 instructions a vertex)
+      const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
+      const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
+      __m128i bs = _mm_add_epi32(bm, _mm_shuffle_epi32(bm, _MM_SHUFFLE(1, 0, 3, 2)));
+      __m128i is = _mm_or_si128(im, _mm_shuffle_epi32(im, _MM_SHUFFLE(1, 0, 3, 2)));
+      bs = _mm_add_epi32(bs, _mm_shuffle_epi32(bs, _MM_SHUFFLE(2, 3, 0, 1)));
+      is = _mm_or_si128(is, _mm_shuffle_epi32(is, _MM_SHUFFLE(2, 3, 0, 1)));
+      uint16_t e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(bs))]) << 6 | uint32_t(_mm_cvtsi128_si32(is))];
+      if (e == 0) {  // the cube's first vertex: its cells from the heads and lists, by index
+        const uint32_t heads =
+            gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
+        uint32_t listed[27 * 8];
+        uint32_t count = 0;
+        for (uint32_t j = 0; j < heads; ++j)
+          for (uint32_t c = found[j]; c != 0; c = cells[c].next) {
+            uint32_t k = count++;
+            for (; k > 0 && listed[k - 1] > c; --k) listed[k] = listed[k - 1];
+            listed[k] = c;
+          }
+        e = cache.make(lo[0], lo[1], lo[2], listed, count) ? cache.find(lo[0], lo[1], lo[2])
+                                                          : CandidateCache::kOverflow;
+        slots = cache.slots();
+      }
+      if (e != CandidateCache::kOverflow) {
+        best = testEntry8<kCube, kNearest>(cells.data(), cache.entry(e).cell, _mm256_set1_ps(pv.x),
+                                           _mm256_set1_ps(pv.y), _mm256_set1_ps(pv.z), rule);
+        tested = true;
+      }
+    }
+    if (!tested) {  // the general path (reach 1: 3 or 4 cubes per axis)
+      if (span2) {
+        found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset,
+                                   found);
+      } else {
+        const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+        for (int32_t z = lo[2]; z <= hi[2]; ++z)
+          for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+            const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+            for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+              found[found_count] = row[x];
+              found_count += row[x] != 0;
+            }
+          }
+      }
+      const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
+      __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+      __m256i bid = _mm256_set1_epi32(0x7fffffff);
+      uint32_t* list = found;
+      uint32_t list_count = found_count;
+      uint32_t successors[64 + 8];
+      for (;;) {
+        const __m256i chained =
+            testCellLanes8<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
+        if (_mm256_testz_si256(chained, chained)) break;
+        uint32_t* next_list = list == found ? successors : found;
+        uint32_t next_count = 0;
+        for (uint32_t j = 0; j < list_count; ++j) {
+          const uint32_t c = cells[list[j]].next;
+          next_list[next_count] = c;
+          next_count += c != 0;
+        }
+        list = next_list;
+        list_count = next_count;
+      }
+      best = laneBest8<kNearest>(bd2, bid);
+    }
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(p.order[i]);
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
+      grid.list(cx, cy, cz, pv, best);
+      cache.add(cx, cy, cz, best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
@@ -991,6 +1278,17 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
   }
   // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
 #if defined(SCENELOD_FLOATING_AVX2)
+  // flat heads of cubes of side w/2 with the candidate cache where cells are rare among the vertices
+  if (useAvx2() && heads != 2 && reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
+      double(p.order.size()) >= kCacheVerticesPerCell * double(expected)) {
+    static constexpr Fn kCachedFns[2][2][2] = {
+        {{assignDenseCachedAvx2T<false, false, uint32_t>, assignDenseCachedAvx2T<false, true, uint32_t>},
+         {assignDenseCachedAvx2T<true, false, uint32_t>, assignDenseCachedAvx2T<true, true, uint32_t>}},
+        {{assignDenseCachedAvx2T<false, false, uint16_t>, assignDenseCachedAvx2T<false, true, uint16_t>},
+         {assignDenseCachedAvx2T<true, false, uint16_t>, assignDenseCachedAvx2T<true, true, uint16_t>}}};
+    kCachedFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    return;
+  }
   if (useAvx2()) {
     static constexpr Fn kAvx2Fns[3][2][2] = {
         {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
@@ -1148,6 +1446,8 @@ void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
   g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
   g_bricks_allowed.store(bricks, std::memory_order_relaxed);
 }
+// false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
+void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))

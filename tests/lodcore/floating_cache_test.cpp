@@ -1,0 +1,79 @@
+// The floating-cell assignment's candidate cache (floating_cell_cluster.cpp, CandidateCache): the
+// AVX2 flat grid of side w/2 with and without it, and the SSE2 path, choose the same cells.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+#include "scenelod/lodcore/obj_io.h"
+#include "test_support.h"
+
+using namespace scenelod;
+
+namespace scenelod::detail {
+// floating_cell_cluster.cpp's hidden switches (see floating_cell_test.cpp)
+void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
+void setFloatingCacheForTest(bool cache);
+}  // namespace scenelod::detail
+
+namespace {
+
+struct Case {
+  LodMethod method;
+  CellShape shape;
+};
+
+// every rule and shape at widths where the cache is taken (at least 12 vertices per expected cell)
+// and one where it is not, with short and 32-bit heads: the cached run, the uncached AVX2 run and
+// the SSE2 run give the same cells in the same order. Sphere cells make lists of more than 8
+// candidates (entries of several blocks); the coarsest widths fill an entry past its spare lanes.
+void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
+  PreparedMesh p;
+  ClusterParams params;
+  ASSERT_TRUE(prepareMesh(m, params, p).ok());
+  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                 Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+    for (float w : widths) {
+      for (bool short_heads : {true, false}) {
+        SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w) +
+                     (short_heads ? " short heads" : " 32-bit heads"));
+        params.method = c.method;
+        params.cell_shape = c.shape;
+        params.cell_width = w;
+        ClusterAssignment plain, uncached, cached;
+        detail::setFloatingPathsForTest(false, short_heads, false);
+        const bool plain_ok = assignClusters(p, params, plain).ok();
+        detail::setFloatingPathsForTest(true, short_heads, false);
+        detail::setFloatingCacheForTest(false);
+        const bool uncached_ok = assignClusters(p, params, uncached).ok();
+        detail::setFloatingCacheForTest(true);
+        const bool cached_ok = assignClusters(p, params, cached).ok();
+        detail::setFloatingPathsForTest(true, true, true);
+        ASSERT_TRUE(plain_ok && uncached_ok && cached_ok);
+        EXPECT_GT(plain.heaviest.size(), 1u);
+        EXPECT_EQ(uncached.heaviest, plain.heaviest);
+        EXPECT_EQ(uncached.cluster_of, plain.cluster_of);
+        EXPECT_EQ(cached.heaviest, plain.heaviest);
+        EXPECT_EQ(cached.cluster_of, plain.cluster_of);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST(FloatingCell, CandidateCacheChoosesTheSameCellsOnTheBunny) {
+  SCENELOD_REQUIRE_BUNNY();
+  Mesh bunny;
+  ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+  // the bunny's 10 % (not cached), 5 %, 3 %, 2 % levels, and coarser
+  expectSameCells(bunny, {0.0721607581f, 0.104215436f, 0.135870472f, 0.172672614f, 0.3f, 0.6f});
+}
+
+TEST(FloatingCell, CandidateCacheChoosesTheSameCellsOnGeneratedMeshes) {
+  // 40 k vertices on the sphere of radius ~1; the CAD part puts vertices exactly on cube faces
+  expectSameCells(test::makeBumpySphere(200, 200), {0.05f, 0.1f, 0.2f, 0.45f, 0.9f});
+  expectSameCells(test::makeCadPart(), {0.1f, 0.25f, 0.5f});
+}
