@@ -66,12 +66,22 @@ class EdgeLists {
       swapOwner(lo, hi);
       Block& b = blocks_[lo];
       if (id < kFree) {
-        for (int k = 0; k < 4; ++k)
-          if (b.hi[k] == kFree) {
-            b.hi[k] = static_cast<uint16_t>(hi);
-            b.id[k] = static_cast<uint16_t>(id);
-            return;
-          }
+        // the first free entry without a branch per entry (the loop's exit mispredicted: bunny 50 %,
+        // 8.5 k of the level's 44.8 k mispredicts)
+#if defined(__SSE2__)
+        const __m128i free = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
+                                             _mm_set1_epi16(static_cast<short>(kFree)));
+        const uint32_t room = uint32_t(_mm_movemask_epi8(free)) & 0x55u;  // bit 2k: entry k free
+#else
+        uint32_t room = 0;
+        for (int k = 0; k < 4; ++k) room |= uint32_t(b.hi[k] == kFree) << (2 * k);
+#endif
+        if (room) {
+          const int k = __builtin_ctz(room) >> 1;
+          b.hi[k] = static_cast<uint16_t>(hi);
+          b.id[k] = static_cast<uint16_t>(id);
+          return;
+        }
       } else {
         long_ids_ = true;
       }
