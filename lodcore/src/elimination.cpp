@@ -167,6 +167,22 @@ SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* 
   l.point_count = np;
 }
 
+// Whether the triangles come in a spatially coherent order, judged from the first kOrderSample:
+// most of them have their first corner within kNearIds ids of the previous triangle's (a
+// generator's rings or a scanned mesh: 1 apart; shuffled: a random distance, near 0.4 % of the time
+// on the 1 M sphere)
+bool coherentOrder(const uint32_t* tri, size_t tn) {
+  constexpr size_t kOrderSample = 1024;
+  constexpr uint32_t kNearIds = 1024;  // 4 KB of cluster ids
+  const size_t n = std::min(tn, kOrderSample);
+  size_t near = 0;
+  for (size_t t = 1; t < n; ++t) {
+    const uint32_t x = tri[3 * t], y = tri[3 * t - 3];
+    near += (x > y ? x - y : y - x) < kNearIds;
+  }
+  return 2 * near > n;
+}
+
 // x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts
 #if defined(__x86_64__) || defined(__i386__)
 #define SCENELOD_ELIMINATION_AVX2_TARGET __attribute__((target("avx2,popcnt")))
@@ -410,12 +426,16 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // first (a branch that is then predicted) and skips the rest of the classification (the scalar
   // classification only: the AVX2 one costs the same for every class)
   bool points_dominate = false;
-  // Where the cluster ids (4 bytes per vertex) outgrow the cache, the ids of the triangles a little
-  // ahead are prefetched: the loop's three random reads are then no longer misses where the input
-  // order is not spatially coherent (the 1 M sphere with shuffled vertices and triangles, 10 %
-  // level: eliminate about 42 -> 36 ms; in its generator's ring order, where nearby triangles share
-  // cache lines, unchanged). Smaller meshes skip it (a test per block, unswitched out of the loop).
-  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
+  // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
+  // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
+  // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
+  // scalar, 10 % level, eliminate about 42 -> 36 ms; AVX2, 1 % level, 12.2-12.9 -> 10.1-11.6 ms,
+  // 10 % within noise). In a coherent order, where nearby triangles share cache lines of the ids,
+  // the 24 prefetches per 8 triangles only cost: the 1 M sphere in its generator's ring order, AVX2,
+  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3 (scalar: 15-19 ->
+  // 15.0-15.3 and within noise). Smaller meshes skip them (a test per block, unswitched out of the
+  // loop).
+  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18) && !coherentOrder(tri, tn);
   // (the gathers take the vertex ids as signed 32-bit offsets)
   const bool avx2 = avx2Paths() && a.cluster_of.size() <= size_t(INT32_MAX);
   // the classification of one block [t0, t1)
