@@ -125,7 +125,8 @@ constexpr size_t kBlock = 512;             // triangles classified at once
 constexpr size_t kPrefetchTriangles = 16;  // how far ahead the cluster ids are prefetched (large meshes)
 
 // One block's triangles by class, each list in input order; columns, so that the AVX2 classification
-// stores eight lanes of each at once (8 entries of slack for its last store of a block)
+// stores eight lanes of each at once (a store starts at most at kBlock - 8, since a list holds at
+// most the triangles before the group; the 8 entries past kBlock are a margin)
 struct BlockLists {
   uint32_t kept[3][kBlock + 8];  // the corners' clusters of kept triangles (rotated when added)
   uint32_t edge[3][kBlock + 8];  // collapsed to an edge: first corner's cluster, the other, the triangle
@@ -206,7 +207,8 @@ struct CompactionTable {
 };
 constexpr CompactionTable kCompaction;
 
-// stores the lanes of `v` selected by `mask` at dst[0, popcount), in lane order (all 8 lanes written)
+// stores the lanes of `v` that `perm` (a row of kCompaction) selects at dst[0, its count), in lane
+// order; all 8 lanes are written
 SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m256i v, __m256i perm) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, perm));
 }
@@ -432,9 +434,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // scalar, 10 % level, eliminate about 42 -> 36 ms; AVX2, 1 % level, 12.2-12.9 -> 10.1-11.6 ms,
   // 10 % within noise). In a coherent order, where nearby triangles share cache lines of the ids,
   // the 24 prefetches per 8 triangles only cost: the 1 M sphere in its generator's ring order, AVX2,
-  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3 (scalar: 15-19 ->
-  // 15.0-15.3 and within noise). Smaller meshes skip them (a test per block, unswitched out of the
-  // loop).
+  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3; scalar, 10 %
+  // 16.2-19.2 -> 15.0-15.3, 1 % within noise. Smaller meshes skip them (a test per block,
+  // unswitched out of the loop).
   const bool prefetch = a.cluster_of.size() > (size_t(1) << 18) && !coherentOrder(tri, tn);
   // (the gathers take the vertex ids as signed 32-bit offsets)
   const bool avx2 = avx2Paths() && a.cluster_of.size() <= size_t(INT32_MAX);
