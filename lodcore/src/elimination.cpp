@@ -5,10 +5,14 @@
 // Edges covered by a kept triangle, and points covered by a kept edge or triangle, are removed.
 // Input edges and points are mapped the same way.
 #include <algorithm>
+#include <cstdint>
 #include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
 #endif
 
 #include "cluster_internal.h"
@@ -62,12 +66,22 @@ class EdgeLists {
       swapOwner(lo, hi);
       Block& b = blocks_[lo];
       if (id < kFree) {
-        for (int k = 0; k < 4; ++k)
-          if (b.hi[k] == kFree) {
-            b.hi[k] = static_cast<uint16_t>(hi);
-            b.id[k] = static_cast<uint16_t>(id);
-            return;
-          }
+        // the first free entry without a branch per entry (the loop's exit mispredicted: bunny 50 %,
+        // 8.5 k of the level's 44.8 k mispredicts)
+#if defined(__SSE2__)
+        const __m128i free = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
+                                             _mm_set1_epi16(static_cast<short>(kFree)));
+        const uint32_t room = uint32_t(_mm_movemask_epi8(free)) & 0x55u;  // bit 2k: entry k free
+#else
+        uint32_t room = 0;
+        for (int k = 0; k < 4; ++k) room |= uint32_t(b.hi[k] == kFree) << (2 * k);
+#endif
+        if (room) {
+          const int k = __builtin_ctz(room) >> 1;
+          b.hi[k] = static_cast<uint16_t>(hi);
+          b.id[k] = static_cast<uint16_t>(id);
+          return;
+        }
       } else {
         long_ids_ = true;
       }
@@ -106,6 +120,160 @@ class EdgeLists {
   std::vector<uint32_t> head_;  // per cluster: its first chained edge (with blocks, made when first needed)
   std::vector<uint32_t> node_hi_, node_id_, node_next_;
 };
+
+constexpr size_t kBlock = 512;             // triangles classified at once
+constexpr size_t kPrefetchTriangles = 16;  // how far ahead the cluster ids are prefetched (large meshes)
+
+// One block's triangles by class, each list in input order; columns, so that the AVX2 classification
+// stores eight lanes of each at once (a store starts at most at kBlock - 8, since a list holds at
+// most the triangles before the group; the 8 entries past kBlock are a margin)
+struct BlockLists {
+  uint32_t kept[3][kBlock + 8];  // the corners' clusters of kept triangles (rotated when added)
+  uint32_t edge[3][kBlock + 8];  // collapsed to an edge: first corner's cluster, the other, the triangle
+  uint32_t point[kBlock + 8];    // collapsed to a point: its cluster
+  size_t kept_count, edge_count, point_count;
+};
+
+// Classifies triangles [t, t1) onto the lists' ends. Compiled for each pair of constants (a test of
+// a flag in memory per triangle otherwise).
+template <bool kPrefetch, bool kPointsFirst>
+SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
+  size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
+  for (const uint32_t* v = tri + 3 * t; t < t1; ++t, v += 3) {
+    if (kPrefetch) {
+      __builtin_prefetch(co + v[3 * kPrefetchTriangles]);
+      __builtin_prefetch(co + v[3 * kPrefetchTriangles + 1]);
+      __builtin_prefetch(co + v[3 * kPrefetchTriangles + 2]);
+    }
+    const uint32_t c0 = co[v[0]], c1 = co[v[1]], c2 = co[v[2]];
+    if (kPointsFirst && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
+      l.point[np++] = c0;
+      continue;
+    }
+    const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+    const bool kept = !(e01 | e12 | e02), point = e01 & e12;
+    l.kept[0][nk] = c0;
+    l.kept[1][nk] = c1;
+    l.kept[2][nk] = c2;
+    nk += kept;
+    l.edge[0][ne] = c0;
+    l.edge[1][ne] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
+    l.edge[2][ne] = static_cast<uint32_t>(t);
+    ne += !kept & !point;
+    l.point[np] = c0;
+    np += point;
+  }
+  l.kept_count = nk;
+  l.edge_count = ne;
+  l.point_count = np;
+}
+
+// Whether the triangles come in a spatially coherent order, judged from the first kOrderSample:
+// most of them have their first corner within kNearIds ids of the previous triangle's (a
+// generator's rings or a scanned mesh: 1 apart; shuffled: a random distance, near 0.4 % of the time
+// on the 1 M sphere)
+bool coherentOrder(const uint32_t* tri, size_t tn) {
+  constexpr size_t kOrderSample = 1024;
+  constexpr uint32_t kNearIds = 1024;  // 4 KB of cluster ids
+  const size_t n = std::min(tn, kOrderSample);
+  size_t near = 0;
+  for (size_t t = 1; t < n; ++t) {
+    const uint32_t x = tri[3 * t], y = tri[3 * t - 3];
+    near += (x > y ? x - y : y - x) < kNearIds;
+  }
+  return 2 * near > n;
+}
+
+// x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts
+#if defined(__x86_64__) || defined(__i386__)
+#define SCENELOD_ELIMINATION_AVX2_TARGET __attribute__((target("avx2,popcnt")))
+#else
+#define SCENELOD_ELIMINATION_AVX2_TARGET
+#endif
+
+#if defined(__x86_64__) || defined(__i386__)
+// per 8-bit lane mask: the set lanes' indices in order, one byte each (the compaction's permutation)
+struct CompactionTable {
+  uint64_t lanes[256];
+  constexpr CompactionTable() : lanes() {
+    for (uint32_t mask = 0; mask < 256; ++mask) {
+      uint64_t packed = 0;
+      int n = 0;
+      for (uint32_t lane = 0; lane < 8; ++lane)
+        if (mask & (1u << lane)) packed |= uint64_t(lane) << (8 * n++);
+      lanes[mask] = packed;
+    }
+  }
+};
+constexpr CompactionTable kCompaction;
+
+// stores the lanes of `v` that `perm` (a row of kCompaction) selects at dst[0, its count), in lane
+// order; all 8 lanes are written
+SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m256i v, __m256i perm) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, perm));
+}
+
+// The classification eight triangles at a time (the tail of a block scalar): the three corners'
+// vertex ids split into columns, their clusters gathered, the classes compared per lane and each
+// list's lanes compacted through a permutation table; the same lists as classifyScalar.
+template <bool kPrefetch>
+SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1,
+                                                   BlockLists& l) {
+  size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
+  const int* ids = reinterpret_cast<const int*>(co);
+  // the triangles whose corner k the blends below put in lanes 0-7 are 0 3 6 1 4 7 2 5 (k = 0),
+  // 5 0 3 6 1 4 7 2 (k = 1), 2 5 0 3 6 1 4 7 (k = 2); these permutations put triangle j in lane j
+  const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+  const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
+  const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (; t + 8 <= t1; t += 8) {
+    const uint32_t* v = tri + 3 * t;
+    if (kPrefetch) {
+      // (unrolled: as a loop, 15.8 M of the 1 M sphere 10 % level's 87 M instructions)
+#pragma GCC unroll 24
+      for (int k = 0; k < 24; ++k) __builtin_prefetch(co + v[3 * kPrefetchTriangles + k]);
+    }
+    // a = v0 v1 v2 | v0 v1 v2 | v0 v1, b = v2 | v0 v1 v2 | v0 v1 v2 | v0, c = v1 v2 | v0 v1 v2 | v0 v1 v2
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v));
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 8));
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 16));
+    // corner k of triangle j sits in a at 3j + k, in b at 3j + k - 8, in c at 3j + k - 16
+    const __m256i x0 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x92), c, 0x24);  // lanes 1 4 7 of b, 2 5 of c
+    const __m256i x1 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x24), c, 0x49);  // lanes 2 5 of b, 0 3 6 of c
+    const __m256i x2 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x49), c, 0x92);  // lanes 0 3 6 of b, 1 4 7 of c
+    const __m256i c0 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x0, order0), 4);
+    const __m256i c1 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x1, order1), 4);
+    const __m256i c2 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x2, order2), 4);
+    const __m256i e01 = _mm256_cmpeq_epi32(c0, c1), e12 = _mm256_cmpeq_epi32(c1, c2), e02 = _mm256_cmpeq_epi32(c0, c2);
+    const uint32_t any = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(e01, e12), e02))));
+    const uint32_t point = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(e01, e12))));
+    const uint32_t kept = ~any & 0xFFu, edge = any & ~point;
+    const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[kept])));
+    const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[edge])));
+    const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[point])));
+    storeCompacted(l.kept[0] + nk, c0, pk);
+    storeCompacted(l.kept[1] + nk, c1, pk);
+    storeCompacted(l.kept[2] + nk, c2, pk);
+    nk += size_t(__builtin_popcount(kept));
+    storeCompacted(l.edge[0] + ne, c0, pe);
+    storeCompacted(l.edge[1] + ne, _mm256_blendv_epi8(c1, c2, e01), pe);  // the corner not in c0's cluster
+    storeCompacted(l.edge[2] + ne, _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(t)), lane), pe);
+    ne += size_t(__builtin_popcount(edge));
+    storeCompacted(l.point + np, c0, pp);
+    np += size_t(__builtin_popcount(point));
+  }
+  l.kept_count = nk;
+  l.edge_count = ne;
+  l.point_count = np;
+  classifyScalar<false, false>(tri, co, t, t1, l);
+}
+#else
+template <bool kPrefetch>
+void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
+  classifyScalar<false, false>(tri, co, t, t1, l);
+}
+#endif
 
 // the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
 // 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
@@ -147,6 +315,14 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   };
   auto home = [&](size_t h) { return h & mask; };
   auto nextSlot = [&](size_t i) { return (i + 1) & mask; };
+  // A slot holds the triangle's index in its low log2(cap) bits and, above them, bits of its hash
+  // that do not pick its home: an occupant whose bits differ is passed over without reading its
+  // triangle, a random read of the output (bunny 50 %: 19 k of its 255 k D1 read misses; 1 M sphere
+  // 10 %: 36 k). An index is below 2/3 cap, so no slot is kNone.
+  size_t index_bits = size_t(__builtin_ctzll(cap));
+  auto slotOf = [&](size_t h, size_t index) {
+    return static_cast<uint32_t>(index) | (static_cast<uint32_t>(uint64_t(h) >> 32) << index_bits);
+  };
   // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
   // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
   // pass's lookups went to random slots of it.
@@ -170,7 +346,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
   // last triangle for this, beside its cluster pair (its first block follows from its id).
   constexpr size_t kCollapsedList = 4096;
-  constexpr size_t kBlock = 512;  // triangles classified at once (below)
   const bool track_collapsed = compute_thickness && keep_edges;
   std::vector<CollapsedTriangle> collapsed_list;
   bool collapsed_dropped = false;
@@ -211,22 +386,25 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   };
 
   auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
-    for (size_t i = home(triangleHash(c0, c1, c2));; i = nextSlot(i)) {
+    const size_t h = triangleHash(c0, c1, c2);
+    for (size_t i = home(h);; i = nextSlot(i)) {
       const uint32_t o = table[i];
       if (o == kNone) {
-        table[i] = static_cast<uint32_t>(out.triangles.size() / 3);
+        table[i] = slotOf(h, out.triangles.size() / 3);
         if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
           cap <<= 1;
           mask = cap - 1;
+          ++index_bits;
           table.assign(cap, kNone);
           for (size_t k = 0; k < out.triangles.size(); k += 3) {
-            size_t j = home(triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]));
+            const size_t hk = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]);
+            size_t j = home(hk);
             while (table[j] != kNone) j = nextSlot(j);
-            table[j] = static_cast<uint32_t>(k / 3);
+            table[j] = slotOf(hk, k / 3);
           }
-          size_t j = home(triangleHash(c0, c1, c2));
+          size_t j = home(h);
           while (table[j] != kNone) j = nextSlot(j);
-          table[j] = static_cast<uint32_t>(out.triangles.size() / 3);
+          table[j] = slotOf(h, out.triangles.size() / 3);
         }
         out.triangles.push_back(c0);
         out.triangles.push_back(c1);
@@ -234,7 +412,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
         point_state[c0] = point_state[c1] = point_state[c2] = kUsed;
         return;
       }
-      if (out.triangles[3 * o] == c0 && out.triangles[3 * o + 1] == c1 && out.triangles[3 * o + 2] == c2) return;
+      if ((o ^ slotOf(h, 0)) >> index_bits) continue;  // another triangle's bits
+      const uint32_t* occupant = out.triangles.data() + 3 * size_t(o & mask);
+      if (occupant[0] == c0 && occupant[1] == c1 && occupant[2] == c2) return;
     }
   };
 
@@ -242,67 +422,43 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // to a point: at coarse levels the three are mixed at random, so a branch on the class
   // mispredicted about once per triangle), each class into its own small list; the lists are then
   // processed in input order, so ids and output order are those of a single pass.
-  uint32_t kept_block[3 * kBlock], edge_block[3 * kBlock], point_block[kBlock];
+  BlockLists lists;
   const uint32_t* tri = m.triangles.data();
   // where over 3/4 of the triangles of the last block collapsed to a point, the next block tests for that
-  // first (a branch that is then predicted) and skips the rest of the classification
+  // first (a branch that is then predicted) and skips the rest of the classification (the scalar
+  // classification only: the AVX2 one costs the same for every class)
   bool points_dominate = false;
-  // Where the cluster ids (4 bytes per vertex) outgrow the cache, the ids of the triangles a little
-  // ahead are prefetched: the loop's three random reads are then no longer misses where the input
-  // order is not spatially coherent (the 1 M sphere with shuffled vertices and triangles, 10 %
-  // level: eliminate about 42 -> 36 ms; in its generator's ring order, where nearby triangles share
-  // cache lines, unchanged). Smaller meshes skip it (a test per block, unswitched out of the loop).
-  constexpr size_t kPrefetchTriangles = 16;
-  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18);
-  size_t t0 = 0, t1 = 0, kept_count = 0, edge_count = 0, point_count = 0;  // the block classify() reads
-  // (compiled for each pair of constants: a test of a flag in memory per triangle otherwise; the
-  // lists are written through pointers of their own, so that the block bases are not reloaded)
-  auto classify = [&](auto with_prefetch, auto points_first) {
-    uint32_t *k = kept_block, *e = edge_block, *pt = point_block;
-    const uint32_t* v = tri + 3 * t0;
-    for (size_t t = t0; t < t1; ++t, v += 3) {
-      if (decltype(with_prefetch)::value) {
-        __builtin_prefetch(co + v[3 * kPrefetchTriangles]);
-        __builtin_prefetch(co + v[3 * kPrefetchTriangles + 1]);
-        __builtin_prefetch(co + v[3 * kPrefetchTriangles + 2]);
-      }
-      const uint32_t c0 = co[v[0]], c1 = co[v[1]], c2 = co[v[2]];
-      if (decltype(points_first)::value && (c0 == c1) & (c1 == c2)) {  // predictable there, and cheaper than the full body
-        *pt++ = c0;
-        continue;
-      }
-      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
-      const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-      k[0] = c0;  // (rotated when added: most triangles of coarse levels are not kept)
-      k[1] = c1;
-      k[2] = c2;
-      k += 3 * size_t(kept);
-      e[0] = c0;
-      e[1] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
-      e[2] = static_cast<uint32_t>(t);
-      e += 3 * size_t(!kept & !point);
-      *pt = c0;
-      pt += point;
-    }
-    kept_count = size_t(k - kept_block) / 3;
-    edge_count = size_t(e - edge_block) / 3;
-    point_count = size_t(pt - point_block);
-  };
+  // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
+  // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
+  // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
+  // scalar, 10 % level, eliminate about 42 -> 36 ms; AVX2, 1 % level, 12.2-12.9 -> 10.1-11.6 ms,
+  // 10 % within noise). In a coherent order, where nearby triangles share cache lines of the ids,
+  // the 24 prefetches per 8 triangles only cost: the 1 M sphere in its generator's ring order, AVX2,
+  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3; scalar, 10 %
+  // 16.2-19.2 -> 15.0-15.3, 1 % within noise. Smaller meshes skip them (a test per block,
+  // unswitched out of the loop).
+  const bool prefetch = a.cluster_of.size() > (size_t(1) << 18) && !coherentOrder(tri, tn);
+  // (the gathers take the vertex ids as signed 32-bit offsets)
+  const bool avx2 = avx2Paths() && a.cluster_of.size() <= size_t(INT32_MAX);
   // the classification of one block [t0, t1)
-  auto classifyBlock = [&](bool prefetch_block) {
-    if (prefetch_block) {
-      if (points_dominate) classify(std::true_type(), std::true_type());
-      else classify(std::true_type(), std::false_type());
+  auto classifyBlock = [&](size_t t0, size_t t1, bool prefetch_block) {
+    lists.kept_count = lists.edge_count = lists.point_count = 0;
+    if (avx2) {
+      if (prefetch_block) classifyAvx2<true>(tri, co, t0, t1, lists);
+      else classifyAvx2<false>(tri, co, t0, t1, lists);
+    } else if (prefetch_block) {
+      if (points_dominate) classifyScalar<true, true>(tri, co, t0, t1, lists);
+      else classifyScalar<true, false>(tri, co, t0, t1, lists);
     } else {
-      if (points_dominate) classify(std::false_type(), std::true_type());
-      else classify(std::false_type(), std::false_type());
+      if (points_dominate) classifyScalar<false, true>(tri, co, t0, t1, lists);
+      else classifyScalar<false, false>(tri, co, t0, t1, lists);
     }
   };
-  for (size_t b0 = 0; b0 < tn; b0 += kBlock) {
-    t0 = b0;
-    t1 = std::min(tn, t0 + kBlock);
+  for (size_t t0 = 0; t0 < tn; t0 += kBlock) {
+    const size_t t1 = std::min(tn, t0 + kBlock);
     const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
-    classifyBlock(prefetch_block);
+    classifyBlock(t0, t1, prefetch_block);
+    const size_t kept_count = lists.kept_count, edge_count = lists.edge_count, point_count = lists.point_count;
     out.collapsed_triangles += (t1 - t0) - kept_count;
     // for the next block: fine meshes at coarse widths. At 3/4 rather than 7/8: 1 M sphere 1 %, 77 %
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
@@ -311,17 +467,17 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     for (size_t j = 0; j < kept_count; ++j) {
       // rotation (keeping orientation) that puts the smallest id first, by index rather than by
       // selects (which the compiler turned into branches)
-      const uint32_t c0 = kept_block[3 * j], c1 = kept_block[3 * j + 1], c2 = kept_block[3 * j + 2];
+      const uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
       const uint32_t c[5] = {c0, c1, c2, c0, c1};
       const uint32_t lo = branchlessMin(branchlessMin(c0, c1), c2);
       const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2
       addTriangle(lo, c[r + 1], c[r + 2]);
     }
     if (keep_points)
-      for (size_t j = 0; j < point_count; ++j) addPoint(point_block[j]);
+      for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
     if (!keep_edges) continue;
     if (!track_collapsed) {
-      for (size_t j = 0; j < edge_count; ++j) edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+      for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j]);
       continue;
     }
     const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
@@ -331,9 +487,9 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       std::vector<CollapsedTriangle>().swap(collapsed_list);
     }
     for (size_t j = 0; j < edge_count; ++j) {
-      const uint32_t e = edgeSlot(edge_block[3 * j], edge_block[3 * j + 1]);
+      const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j]);
       edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-      if (!collapsed_dropped) collapsed_list.push_back({edge_block[3 * j + 2], e});
+      if (!collapsed_dropped) collapsed_list.push_back({lists.edge[2][j], e});
     }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {

@@ -1,6 +1,8 @@
 // Elimination (Low & Tan 1997 §2 step 5) and thick edges (§3.3.1) on constructed meshes.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -8,7 +10,9 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
+#include "scenelod/lodcore/obj_io.h"
 #include "scenelod/lodcore/thick_edge.h"
+#include "test_support.h"
 
 using namespace scenelod;
 
@@ -167,6 +171,99 @@ TEST(Elimination, InputEdgesAndPointsAreClusteredToo) {
   EXPECT_EQ(out.pointCount(), 1u);  // 3-4 collapses to a point
   ASSERT_EQ(out.edge_thickness.size(), 1u);
   EXPECT_FLOAT_EQ(out.edge_thickness[0], 0.3f);  // input thickness kept
+}
+
+// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
+// (the elimination's classification among them) for every later call; returns the previous choice
+namespace scenelod::detail {
+bool useAvx2Paths(bool on);
+}
+
+namespace {
+
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// the mesh with its vertex ids and its triangles in a scrambled order (a fixed LCG), so that
+// neighbouring triangles no longer share cache lines of the cluster ids
+Mesh scrambled(const Mesh& in) {
+  const size_t n = in.positions.size(), t = in.triangleCount();
+  uint64_t state = 12345;
+  auto next = [&](size_t bound) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return size_t(state >> 33) % bound;
+  };
+  std::vector<uint32_t> to(n), order(t);
+  for (size_t i = 0; i < n; ++i) to[i] = uint32_t(i);
+  for (size_t i = n; i > 1; --i) std::swap(to[i - 1], to[next(i)]);
+  for (size_t i = 0; i < t; ++i) order[i] = uint32_t(i);
+  for (size_t i = t; i > 1; --i) std::swap(order[i - 1], order[next(i)]);
+  Mesh m;
+  m.positions.resize(n);
+  for (size_t i = 0; i < n; ++i) m.positions[to[i]] = in.positions[i];
+  for (size_t i = 0; i < t; ++i)
+    for (int k = 0; k < 3; ++k) m.triangles.push_back(to[in.triangles[3 * order[i] + k]]);
+  return m;
+}
+
+}  // namespace
+
+// The AVX2 classification (eight triangles at once, where the CPU has AVX2) gives the baseline's
+// bits: every output array, at fine and coarse widths (kept triangles, edges or points dominating),
+// with edges or points not kept, on the bunny (69,666 triangles: a block tail not a multiple of 8),
+// thin cylinders beside a box (uncovered edges: thickness), and a scrambled sphere over 2^18
+// vertices (the prefetching variant). On a CPU without AVX2 both runs take the baseline.
+TEST(Elimination, Avx2ClassificationGivesTheBaselineBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  if (test::fileExists(test::bunnyPath())) {
+    Mesh bunny;
+    ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+    meshes.emplace_back("bunny", std::move(bunny));
+  }
+  Mesh sheet;
+  test::appendMesh(sheet, test::makeBox({20, 20, 20}, {28, 28, 28}, 30));
+  for (int k = 0; k < 5; ++k)
+    test::appendMesh(sheet, test::makeCylinder(0.0f, 6.0f, 0.05f, 24, 16 + k, glm::vec3(0.0f, 0.5f * k, 0.0f)));
+  meshes.emplace_back("box and cylinders", std::move(sheet));
+  meshes.emplace_back("bumpy sphere", test::makeBumpySphere(90, 121));
+  meshes.emplace_back("scrambled sphere", scrambled(test::makeBumpySphere(400, 700)));
+  ASSERT_GT(meshes.back().second.positions.size(), size_t(1) << 18);
+  const bool was = detail::useAvx2Paths(true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (const glm::vec3& q : m.positions) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    const float diagonal = glm::length(hi - lo);
+    for (float f : {0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 3; ++keep) {
+        if (m.positions.size() > (size_t(1) << 18) && keep != 0) continue;  // (the test's time)
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        Mesh wide, base;
+        detail::useAvx2Paths(true);
+        ASSERT_TRUE(clusterMesh(m, p, wide).ok());
+        detail::useAvx2Paths(false);
+        ASSERT_TRUE(clusterMesh(m, p, base).ok());
+        SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
+        ASSERT_GT(base.triangleCount(), 0u);
+        EXPECT_TRUE(sameBits(wide.positions, base.positions));
+        EXPECT_TRUE(sameBits(wide.normals, base.normals));
+        EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
+        EXPECT_TRUE(sameBits(wide.edges, base.edges));
+        EXPECT_TRUE(sameBits(wide.edge_thickness, base.edge_thickness));
+        EXPECT_TRUE(sameBits(wide.points, base.points));
+        ++levels;
+      }
+  }
+  detail::useAvx2Paths(was);
+  EXPECT_GE(levels, 28u);
 }
 
 TEST(ThickEdge, ThinCylinderCollapsesToEdgesAsThickAsItsDiameter) {
