@@ -80,6 +80,22 @@ bool useAvx2Paths(bool on) {
 
 namespace {
 
+// whether the quadric solve takes two clusters that both need their eigenvalues in lanes
+// (solveByEigenvalues2) or one at a time (solveByEigenvalues), which give the same bits
+bool g_eigen_lanes = true;
+
+}  // namespace
+
+// private test hook (declared by tests/lodcore/synthesis_test.cpp): the lanes on or off for every
+// later call; returns the previous choice; not thread-safe
+bool useEigenvalueLanes(bool on) {
+  const bool was = g_eigen_lanes;
+  g_eigen_lanes = on;
+  return was;
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -431,6 +447,158 @@ inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const
 }
 
 #if defined(__SSE2__)
+SCENELOD_ALWAYS_INLINE __m128d selectPd(__m128d mask, __m128d a, __m128d b) {
+  return _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b));
+}
+
+// eigenvector in two lanes: the same cross products, norms and first-widest choice (strict >, as
+// there), the unit vector in v; the mask of the lanes where the widest norm is > 0
+SCENELOD_ALWAYS_INLINE __m128d eigenvector2(const __m128d a[6], __m128d l, __m128d v[3]) {
+  const __m128d r0[3] = {_mm_sub_pd(a[0], l), a[1], a[2]};
+  const __m128d r1[3] = {a[1], _mm_sub_pd(a[3], l), a[4]};
+  const __m128d r2[3] = {a[2], a[4], _mm_sub_pd(a[5], l)};
+  auto cross = [](const __m128d* p, const __m128d* q, __m128d* c) {
+    c[0] = _mm_sub_pd(_mm_mul_pd(p[1], q[2]), _mm_mul_pd(p[2], q[1]));
+    c[1] = _mm_sub_pd(_mm_mul_pd(p[2], q[0]), _mm_mul_pd(p[0], q[2]));
+    c[2] = _mm_sub_pd(_mm_mul_pd(p[0], q[1]), _mm_mul_pd(p[1], q[0]));
+  };
+  auto norm2 = [](const __m128d* c) {
+    return _mm_add_pd(_mm_add_pd(_mm_mul_pd(c[0], c[0]), _mm_mul_pd(c[1], c[1])), _mm_mul_pd(c[2], c[2]));
+  };
+  __m128d c01[3], c02[3], c12[3];
+  cross(r0, r1, c01), cross(r0, r2, c02), cross(r1, r2, c12);
+  __m128d n = norm2(c01);
+  const __m128d n02 = norm2(c02), n12 = norm2(c12);
+  const __m128d g02 = _mm_cmpgt_pd(n02, n);
+  n = selectPd(g02, n02, n);
+  const __m128d g12 = _mm_cmpgt_pd(n12, n);
+  n = selectPd(g12, n12, n);
+  const __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(n));
+  for (int i = 0; i < 3; ++i) v[i] = _mm_mul_pd(selectPd(g12, c12[i], selectPd(g02, c02[i], c01[i])), inv);
+  return _mm_cmpgt_pd(n, _mm_setzero_pd());
+}
+
+// solveSymmetric's y = m^-1 r in two lanes (m's upper triangle m00, m01, m02, m11, m12, m22), with
+// its operations; the mask of the lanes where m is not singular
+SCENELOD_ALWAYS_INLINE __m128d solveSymmetric2(const __m128d m[6], const __m128d r[3], __m128d y[3]) {
+  const __m128d c00 = _mm_sub_pd(_mm_mul_pd(m[3], m[5]), _mm_mul_pd(m[4], m[4]));
+  const __m128d c01 = _mm_sub_pd(_mm_mul_pd(m[2], m[4]), _mm_mul_pd(m[1], m[5]));
+  const __m128d c02 = _mm_sub_pd(_mm_mul_pd(m[1], m[4]), _mm_mul_pd(m[2], m[3]));
+  const __m128d c11 = _mm_sub_pd(_mm_mul_pd(m[0], m[5]), _mm_mul_pd(m[2], m[2]));
+  const __m128d c12 = _mm_sub_pd(_mm_mul_pd(m[1], m[2]), _mm_mul_pd(m[0], m[4]));
+  const __m128d c22 = _mm_sub_pd(_mm_mul_pd(m[0], m[3]), _mm_mul_pd(m[1], m[1]));
+  const __m128d det = _mm_add_pd(_mm_add_pd(_mm_mul_pd(m[0], c00), _mm_mul_pd(m[1], c01)), _mm_mul_pd(m[2], c02));
+  const __m128d id = _mm_div_pd(_mm_set1_pd(1.0), det);
+  auto row = [&](__m128d p, __m128d q, __m128d t) {
+    return _mm_mul_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(p, r[0]), _mm_mul_pd(q, r[1])), _mm_mul_pd(t, r[2])), id);
+  };
+  y[0] = row(c00, c01, c02), y[1] = row(c01, c11, c12), y[2] = row(c02, c12, c22);
+  return _mm_cmpgt_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), det), _mm_setzero_pd());
+}
+
+// solveByEigenvalues for two clusters in the two lanes of SSE2 doubles (a: a00, a01, a02, a11, a12,
+// a22; r the residual; xd the means widened; full: the lanes' full-rank solution, as solveSymmetric(a, r)
+// gives it, and its mask): the scalar form's operations lane by lane in its order, its branches
+// as masks (each way taken by no lane is skipped), acos and cos called per lane as it calls them,
+// so bit-identical. On the 1 M sphere's 10 % level nearly every cluster is flat (rank 1 or 2) and
+// takes this path: about 450 instructions a cluster, a third of them in acos and cos.
+SCENELOD_ALWAYS_INLINE void solveByEigenvalues2(const __m128d a[6], const __m128d r[3], const __m128d xd[3],
+                                                const __m128 full_x[3], __m128d full_ok, const glm::vec3* x0,
+                                                glm::vec3* x) {
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), sign = _mm_set1_pd(-0.0);
+  const __m128d a00 = a[0], a01 = a[1], a02 = a[2], a11 = a[3], a12 = a[4], a22 = a[5];
+  // symmetricEigenvalues
+  const __m128d q = _mm_mul_pd(_mm_add_pd(_mm_add_pd(a00, a11), a22), _mm_set1_pd(1.0 / 3.0));
+  const __m128d p1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(a01, a01), _mm_mul_pd(a02, a02)), _mm_mul_pd(a12, a12));
+  const __m128d d0 = _mm_sub_pd(a00, q), d1 = _mm_sub_pd(a11, q), d2 = _mm_sub_pd(a22, q);
+  const __m128d p2 = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(d0, d0), _mm_mul_pd(d1, d1)), _mm_mul_pd(d2, d2)),
+                                _mm_mul_pd(_mm_set1_pd(2.0), p1));
+  const __m128d spread = _mm_cmpgt_pd(p2, zero);  // else a multiple of the identity: w = q
+  const __m128d p = _mm_sqrt_pd(_mm_mul_pd(p2, _mm_set1_pd(1.0 / 6.0))), ip = _mm_div_pd(one, p);
+  const __m128d b00 = _mm_mul_pd(d0, ip), b11 = _mm_mul_pd(d1, ip), b22 = _mm_mul_pd(d2, ip);
+  const __m128d b01 = _mm_mul_pd(a01, ip), b02 = _mm_mul_pd(a02, ip), b12 = _mm_mul_pd(a12, ip);
+  const __m128d det = _mm_add_pd(
+      _mm_sub_pd(_mm_mul_pd(b00, _mm_sub_pd(_mm_mul_pd(b11, b22), _mm_mul_pd(b12, b12))),
+                 _mm_mul_pd(b01, _mm_sub_pd(_mm_mul_pd(b01, b22), _mm_mul_pd(b12, b02)))),
+      _mm_mul_pd(b02, _mm_sub_pd(_mm_mul_pd(b01, b12), _mm_mul_pd(b11, b02))));
+  const __m128d half_det = _mm_mul_pd(_mm_set1_pd(0.5), det);
+  const __m128d minus_one = _mm_set1_pd(-1.0);  // std::clamp: below -1, else above 1, else itself (NaN too)
+  const __m128d rc = selectPd(_mm_cmplt_pd(half_det, minus_one), minus_one,
+                              selectPd(_mm_cmplt_pd(one, half_det), one, half_det));
+  alignas(16) double rv[2], cv[2] = {1.0, 1.0};
+  _mm_store_pd(rv, rc);
+  const int spread_mask = _mm_movemask_pd(spread);
+  for (int k = 0; k < 2; ++k)
+    if (spread_mask & (1 << k)) cv[k] = std::cos(std::acos(rv[k]) * (1.0 / 3.0));
+  const __m128d c = _mm_load_pd(cv);
+  const __m128d sn = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(one, _mm_mul_pd(c, c)), zero));  // (0 < x ? x : 0)
+  __m128d w0 = _mm_add_pd(q, _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), p), c));
+  __m128d w2 = _mm_add_pd(q, _mm_mul_pd(p, _mm_sub_pd(_mm_xor_pd(c, sign), _mm_mul_pd(_mm_set1_pd(1.7320508075688772), sn))));
+  __m128d w1 = _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(_mm_set1_pd(3.0), q), w0), w2);
+  w0 = selectPd(spread, w0, q), w1 = selectPd(spread, w1, q), w2 = selectPd(spread, w2, q);
+  // solveByEigenvalues' cases
+  const __m128d minus_w2 = _mm_xor_pd(w2, sign);
+  const __m128d wmax = selectPd(_mm_cmplt_pd(w0, minus_w2), minus_w2, w0);  // std::max(w0, -w2)
+  const __m128d live = _mm_cmpgt_pd(wmax, zero);                            // else x0
+  const __m128d cut = _mm_mul_pd(_mm_set1_pd(kEigenCutoff), wmax);
+  const __m128d big1 = _mm_cmpge_pd(_mm_andnot_pd(sign, w1), cut), big2 = _mm_cmpge_pd(_mm_andnot_pd(sign, w2), cut);
+  const __m128d rank3 = _mm_and_pd(big1, big2), rank2 = _mm_andnot_pd(big2, big1);
+  // the lanes decided (x0 where wmax is not positive) and of those, the ones solved: their results
+  // as floats in lanes 0-1 of out (x, y, z)
+  __m128d done = _mm_andnot_pd(live, _mm_castsi128_pd(_mm_set1_epi32(-1))), solved = zero;
+  __m128 out[3];
+  auto take = [&](__m128d mask, const __m128 v[3]) {  // lanes of mask not yet decided take v
+    const __m128d m = _mm_andnot_pd(done, mask);
+    const __m128 mf = _mm_castsi128_ps(_mm_shuffle_epi32(_mm_castpd_si128(m), _MM_SHUFFLE(3, 1, 2, 0)));
+    for (int i = 0; i < 3; ++i) out[i] = _mm_or_ps(_mm_and_ps(mf, v[i]), _mm_andnot_ps(mf, out[i]));
+    done = _mm_or_pd(done, m), solved = _mm_or_pd(solved, m);
+  };
+  for (int i = 0; i < 3; ++i) out[i] = _mm_setzero_ps();
+  auto finish = [&](const __m128d y[3], __m128 v[3]) {  // float(x0 + y)
+    for (int i = 0; i < 3; ++i) v[i] = _mm_cvtpd_ps(_mm_add_pd(xd[i], y[i]));
+  };
+  // full rank (solveSymmetric(a, r), solved by the caller)
+  take(_mm_and_pd(rank3, full_ok), full_x);
+  // rank 2: the dropped direction v (eigenvalue w2) taken out of r, a lifted along it
+  __m128d rs[3] = {r[0], r[1], r[2]};  // the residual the rank-1 case sees
+  if (_mm_movemask_pd(_mm_andnot_pd(done, rank2))) {
+    __m128d v[3];
+    const __m128d vok = _mm_and_pd(rank2, eigenvector2(a, w2, v));
+    const __m128d d = _mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], r[0]), _mm_mul_pd(v[1], r[1])), _mm_mul_pd(v[2], r[2]));
+    __m128d r2[3];
+    for (int i = 0; i < 3; ++i) r2[i] = _mm_sub_pd(r[i], _mm_mul_pd(d, v[i]));
+    const __m128d lift = _mm_sub_pd(w0, w2);
+    __m128d lv[3];
+    for (int i = 0; i < 3; ++i) lv[i] = _mm_mul_pd(lift, v[i]);
+    // m[i][j] = a[i][j] + ((w0 - w2) v[i]) v[j], the upper triangle as solveSymmetric reads it
+    const __m128d m[6] = {_mm_add_pd(a00, _mm_mul_pd(lv[0], v[0])), _mm_add_pd(a01, _mm_mul_pd(lv[0], v[1])),
+                          _mm_add_pd(a02, _mm_mul_pd(lv[0], v[2])), _mm_add_pd(a11, _mm_mul_pd(lv[1], v[1])),
+                          _mm_add_pd(a12, _mm_mul_pd(lv[1], v[2])), _mm_add_pd(a22, _mm_mul_pd(lv[2], v[2]))};
+    __m128d y[3];
+    const __m128d ok = _mm_and_pd(vok, solveSymmetric2(m, r2, y));
+    __m128 xs[3];
+    finish(y, xs);
+    take(ok, xs);
+    for (int i = 0; i < 3; ++i) rs[i] = selectPd(vok, r2[i], r[i]);
+  }
+  // rank 1 (and the cases above that did not solve): along the dominant direction
+  if (_mm_movemask_pd(done) != 3) {
+    __m128d v[3];
+    const __m128d vok = eigenvector2(a, w0, v);
+    const __m128d d =
+        _mm_div_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], rs[0]), _mm_mul_pd(v[1], rs[1])), _mm_mul_pd(v[2], rs[2])), w0);
+    __m128d y[3];
+    for (int i = 0; i < 3; ++i) y[i] = _mm_mul_pd(v[i], d);
+    __m128 xs[3];
+    finish(y, xs);
+    take(vok, xs);
+  }
+  alignas(16) float px[4], py[4], pz[4];
+  _mm_store_ps(px, out[0]), _mm_store_ps(py, out[1]), _mm_store_ps(pz, out[2]);
+  const int solved_mask = _mm_movemask_pd(solved);
+  for (int k = 0; k < 2; ++k) x[k] = (solved_mask & (1 << k)) ? glm::vec3(px[k], py[k], pz[k]) : x0[k];
+}
+
 // solveQuadric for the clusters s[0] and s[1] (means x0[0], x0[1]) in the two lanes of SSE2
 // doubles, for its two cheap cases: the zero residual (x0) and the closed-form full rank, with its
 // operations in its order (the adjugate's cofactors are the full-rank test's minors, computed
@@ -483,6 +651,13 @@ SCENELOD_ALWAYS_INLINE void solveQuadric2Body(const Sums* s, const glm::vec3* x0
   _mm_store_ps(py, solved(xy, c01, m11, c12));
   _mm_store_ps(pz, solved(xz, c02, c12, m22));
   const int still_mask = _mm_movemask_pd(still), full_mask = _mm_movemask_pd(full);
+  if (g_eigen_lanes && (still_mask | full_mask) == 0) {  // both lanes need the eigenvalues
+    const __m128d am[6] = {a00, a01, a02, a11, a12, a22}, rm[3] = {r0, r1, r2}, xm[3] = {xx, xy, xz};
+    const __m128 fx[3] = {_mm_load_ps(px), _mm_load_ps(py), _mm_load_ps(pz)};
+    const __m128d det_ok = _mm_cmpgt_pd(_mm_andnot_pd(sign, det), zero);  // solveSymmetric's test
+    solveByEigenvalues2(am, rm, xm, fx, det_ok, x0, x);
+    return;
+  }
   for (int k = 0; k < 2; ++k) {
     if (still_mask & (1 << k)) {
       x[k] = x0[k];
