@@ -273,8 +273,18 @@ inline VertexArrays vertexArrays(const PreparedMesh& p) {
 #if defined(__SSE2__)
 // one vertex's terms of its cluster's sums, one register per four-float group of Sums (ws, sc,
 // q[0..3], q[4..7], q[8..11]); q0, q4 and q8 are zero without face sums
+// q0..q7 as one eight-float generic vector: in the AVX2 variants one sign extension, conversion,
+// product and add of 256 bits (vpmovsxwd, vcvtdq2ps, vmulps, vaddps), where the SSE2 form takes
+// two unpacks, two shifts and two of each of the others; the baseline lowers it to its four-wide
+// operations (the same per lane, so the same bits either way)
+typedef float Float8 __attribute__((vector_size(32)));
+typedef int32_t Int8 __attribute__((vector_size(32)));
+typedef int16_t Short8 __attribute__((vector_size(16)));
+typedef float Float4 __attribute__((vector_size(16)));
 struct Terms {
-  __m128 ws, sc, q0, q4, q8;
+  __m128 ws, sc;
+  Float8 q07;
+  __m128 q8;
 };
 
 // `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
@@ -293,16 +303,18 @@ SCENELOD_ALWAYS_INLINE Terms vertexTerms(const VertexArrays& in, size_t v, __m12
   const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
   t.ws = _mm_mul_ps(d4, _mm_set1_ps(w));
   t.sc = d4;
-  t.q0 = t.q4 = t.q8 = _mm_setzero_ps();
+  t.q07 = Float8{};
+  t.q8 = _mm_setzero_ps();
   if (have_face_sums) {
     // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
     const VertexFaceSums& f = in.face_sums[v];
-    const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
-    const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
-    const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
-    const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
-    const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
-    t.q0 = lo, t.q4 = hi;
+    const float scale = f.area * (1.0f / 32767.0f);
+    Short8 q16;
+    std::memcpy(&q16, f.q, sizeof q16);
+    t.q07 = __builtin_convertvector(__builtin_convertvector(q16, Int8), Float8) * scale;
+    const __m128 lo = __m128(Float4(__builtin_shufflevector(t.q07, t.q07, 0, 1, 2, 3)));
+    const __m128 hi = __m128(Float4(__builtin_shufflevector(t.q07, t.q07, 4, 5, 6, 7)));
+    const float fa8 = float(f.q[8]) * scale;
     // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
     // (the quadric part is unused but harmless for mean)
     __m128 last = _mm_set_ss(fa8);
@@ -333,8 +345,10 @@ SCENELOD_ALWAYS_INLINE void addVertex(const VertexArrays& in, size_t v, bool hav
   _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), t.ws));
   _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), t.sc));
   if (have_face_sums) {
-    _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), t.q0));
-    _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), t.q4));
+    Float8 q07;
+    std::memcpy(&q07, s.q, sizeof q07);
+    q07 += t.q07;
+    std::memcpy(s.q, &q07, sizeof q07);
     _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), t.q8));
   }
 #else
