@@ -1,4 +1,4 @@
-// synthesize's quadric solve: its two-lane eigenvalue path against the one-cluster form.
+// synthesize's quadric solve: its eigenvalue lanes against the one-cluster form.
 #include <cstring>
 #include <string>
 #include <vector>
@@ -28,8 +28,8 @@ bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
 
 }  // namespace
 
-// Quadric synthesis solving two rank-deficient clusters in lanes gives the bits of solving them one
-// at a time: flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
+// Quadric synthesis solving rank-deficient clusters four at a time in lanes gives the bits of solving
+// them one at a time: flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
 // bumpy (spheres: mostly rank 1 and 2 at fine cells), sharp (the CAD part, the box: full rank and
 // degenerate mixes) and scanned (the bunny, where it is installed), both cell shapes, coarse and
 // fine levels (the single and the grouped synthesis), baseline and AVX2 variants.
