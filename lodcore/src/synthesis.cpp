@@ -483,7 +483,8 @@ SCENELOD_ALWAYS_INLINE void sqrt4(Double4& a) {  // in place
   std::memcpy(&a, &lo, 16);
   std::memcpy(reinterpret_cast<char*>(&a) + 16, &hi, 16);
 }
-SCENELOD_ALWAYS_INLINE int bits4(const Mask4& m) {  // the lanes' sign bits (a lane test each was 28 instructions for four)
+// the lanes' sign bits (a test of each lane took 28 instructions for the four)
+SCENELOD_ALWAYS_INLINE int bits4(const Mask4& m) {
   __m128d lo, hi;
   std::memcpy(&lo, &m, 16);
   std::memcpy(&hi, reinterpret_cast<const char*>(&m) + 16, 16);
