@@ -464,9 +464,9 @@ inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const
 // The quadric solve four clusters at a time, in GCC generic vectors of four doubles: one 256-bit
 // operation a step in the AVX2 variants, two SSE2 ones in the baseline (GCC lowers them), the same
 // operations lane by lane either way. The square roots and lane masks go through SSE2 halves
-// (generic vectors have neither). Two clusters at a time in SSE2 doubles (b2a0074) took 277
-// instructions a cluster on the 1 M sphere's 10 % level, where nearly every cluster needs the
-// eigenvalues; these take 213 (acos and cos not counted).
+// (generic vectors have neither). On the 1 M sphere's 10 % level, where nearly every cluster needs
+// the eigenvalues, the solve took 410 instructions a cluster as pairs for the cheap cases and then
+// one cluster at a time, 277 as pairs throughout, and takes 209 so (acos and cos not counted).
 // (32-byte vectors are passed by reference and returned through references: by value, without AVX,
 // GCC warns that the ABI changes, -Wpsabi)
 typedef double Double4 __attribute__((vector_size(32)));
@@ -492,7 +492,7 @@ SCENELOD_ALWAYS_INLINE int bits4(const Mask4& m) {
 }
 
 // eigenvector in four lanes: the same cross products, norms and first-widest choice (strict >, as
-// there), the unit vector in v; the mask of the lanes where the widest norm is > 0
+// there), the unit vector in v; in ok the mask of the lanes where the widest norm is > 0
 SCENELOD_ALWAYS_INLINE void eigenvector4(const Double4 a[6], const Double4& l, Double4 v[3], Mask4& ok) {
   const Double4 r0[3] = {a[0] - l, a[1], a[2]};
   const Double4 r1[3] = {a[1], a[3] - l, a[4]};
@@ -519,7 +519,7 @@ SCENELOD_ALWAYS_INLINE void eigenvector4(const Double4 a[6], const Double4& l, D
 }
 
 // solveSymmetric's y = m^-1 r in four lanes (m's upper triangle m00, m01, m02, m11, m12, m22), with
-// its operations; the mask of the lanes where m is not singular
+// its operations; in ok the mask of the lanes where m is not singular
 SCENELOD_ALWAYS_INLINE void solveSymmetric4(const Double4 m[6], const Double4 r[3], Double4 y[3], Mask4& ok) {
   const Double4 c00 = m[3] * m[5] - m[4] * m[4];
   const Double4 c01 = m[2] * m[4] - m[1] * m[5];
