@@ -246,20 +246,21 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   for (uint32_t c : e.edges) needs_vertex[c] = 1;
   for (uint32_t c : e.points) needs_vertex[c] = 1;
 
+  // each cluster's output vertices are base_vertex[c] .. the next used cluster's base_vertex
   std::vector<uint32_t> base_vertex(nc, kNone);
   // one vertex per used cluster, plus its copies split at creases (a few per cent on scanned meshes):
-  // reserving that, not the cluster count, keeps the arrays from doubling on the first split
+  // reserving that, not the cluster count, keeps the normals from doubling on the first split. Only
+  // the normals are made in the cluster loop; the positions and colours, copies of the cluster's,
+  // are made after it at the exact count (made beside the normals, the three arrays doubled where
+  // the splits outgrew the reserve, as on the 1 M sphere's 10 % level, and all three were copied
+  // again by shrink_to_fit: 3.9 MB of copies there).
   size_t used_count = 0;
   for (size_t c = 0; c < nc; ++c) used_count += offsets[c + 1] != offsets[c] || needs_vertex[c];
   const size_t expected_vertices = used_count + used_count / 16 + 16;
-  out.positions.reserve(expected_vertices);
   out.normals.reserve(expected_vertices);
-  if (colors) out.colors.reserve(expected_vertices);
-  auto addVertex = [&](uint32_t c, const glm::vec3& n) {
-    out.positions.push_back(r.positions[c]);
+  auto addVertex = [&](const glm::vec3& n) {
     out.normals.push_back(n);
-    if (colors) out.colors.push_back(r.colors[c]);
-    return static_cast<uint32_t>(out.positions.size() - 1);
+    return static_cast<uint32_t>(out.normals.size() - 1);
   };
   // the sufficient test of smoothCluster: faces within alpha of their mean direction are within
   // 2 alpha of each other; 2 alpha is the crease angle less a margin that covers the rounding of
@@ -287,10 +288,10 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       __builtin_prefetch(&e.triangles[last], 1);
     }
     const uint32_t b = offsets[c], en = offsets[c + 1];
-    const uint32_t first_vertex = static_cast<uint32_t>(out.positions.size());
+    const uint32_t first_vertex = static_cast<uint32_t>(out.normals.size());
     const size_t k = en - b;
     if (k == 0) {
-      if (needs_vertex[c]) base_vertex[c] = addVertex(c, r.normals[c]);
+      if (needs_vertex[c]) base_vertex[c] = addVertex(r.normals[c]);
       continue;
     }
 #if defined(__SSE2__)
@@ -313,7 +314,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       _MM_TRANSPOSE4_PS(x1, y1, z1, w1);
       glm::vec3 n;  // as smoothCluster
       if (fast && smoothSmall(row, x0, y0, z0, w0, x1, y1, z1, w1, k, cos_ref, n)) {
-        const uint32_t v = addVertex(c, n);
+        const uint32_t v = addVertex(n);
         for (uint32_t j = 0; j < kSmall; ++j) e.triangles[corner_of[j]] = v;
         base_vertex[c] = v;
         continue;
@@ -324,7 +325,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       uint32_t local[kSmall];
       glm::vec3 new_normals[kSmall];
       const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, new_normals);
-      for (uint32_t q = 0; q < fresh; ++q) addVertex(c, new_normals[q]);
+      for (uint32_t q = 0; q < fresh; ++q) addVertex(new_normals[q]);
       for (uint32_t j = 0; j < kSmall; ++j) e.triangles[corner_of[j]] = first_vertex + local[j];
       base_vertex[c] = first_vertex;
       continue;
@@ -340,7 +341,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       // same ordered sum (see smoothCluster), so the cluster takes one vertex
       glm::vec3 n;
       if (fast && smoothCluster(cf, k, cos_ref, n)) {
-        const uint32_t v = addVertex(c, n);
+        const uint32_t v = addVertex(n);
         for (uint32_t i = b; i < en; ++i) e.triangles[corners[i]] = v;
         base_vertex[c] = v;
         continue;
@@ -353,12 +354,12 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       const float l = glm::length(n);
       n = l > 0.0f ? n / l : r.normals[c];
       uint32_t v = kNone;
-      for (uint32_t q = first_vertex; q < out.positions.size(); ++q)
+      for (uint32_t q = first_vertex; q < out.normals.size(); ++q)
         if (out.normals[q] == n) {
           v = q;
           break;
         }
-      if (v == kNone) v = addVertex(c, n);
+      if (v == kNone) v = addVertex(n);
       // each corner's cluster id is no longer read once the corner lists exist: the output
       // vertex takes its place, so the output triangles need no second array
       e.triangles[corners[i]] = v;
@@ -366,11 +367,27 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
     base_vertex[c] = first_vertex;
   }
   face.reset();
-  // split vertices may have grown the arrays past the reserve: the chain keeps every level, so
-  // give back the slack
-  out.positions.shrink_to_fit();
+  corners.reset();
+  // the chain keeps every level: the normals give back the reserve's slack
   out.normals.shrink_to_fit();
-  out.colors.shrink_to_fit();
+  {
+    const size_t vertex_count = out.normals.size();
+    out.positions.reserve(vertex_count);
+    if (colors) out.colors.reserve(vertex_count);
+    uint32_t prev = kNone;  // the last cluster seen with vertices: its run ends where the next one's starts
+    auto fill = [&](uint32_t c, size_t end) {  // (vector's fill insert took about 60 instructions a call)
+      const glm::vec3 p = r.positions[c];
+      for (size_t v = out.positions.size(); v < end; ++v) out.positions.push_back(p);
+      if (colors)
+        for (size_t v = out.colors.size(); v < end; ++v) out.colors.push_back(r.colors[c]);
+    };
+    for (uint32_t c = 0; c < nc; ++c) {
+      if (base_vertex[c] == kNone) continue;
+      if (prev != kNone) fill(prev, base_vertex[c]);
+      prev = c;
+    }
+    if (prev != kNone) fill(prev, vertex_count);
+  }
   out.triangles = std::move(e.triangles);
   out.triangles.shrink_to_fit();  // elimination reserved for about 2 triangles per cluster
   out.edges.resize(e.edges.size());

@@ -80,6 +80,22 @@ bool useAvx2Paths(bool on) {
 
 namespace {
 
+// whether the quadric solve takes the clusters that need their eigenvalues four at a time in lanes
+// (solveByEigenvalues4) or one at a time (solveByEigenvalues), which give the same bits
+bool g_eigen_lanes = true;
+
+}  // namespace
+
+// private test hook (declared by tests/lodcore/synthesis_test.cpp): the lanes on or off for every
+// later call; returns the previous choice; not thread-safe
+bool useEigenvalueLanes(bool on) {
+  const bool was = g_eigen_lanes;
+  g_eigen_lanes = on;
+  return was;
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -257,8 +273,18 @@ inline VertexArrays vertexArrays(const PreparedMesh& p) {
 #if defined(__SSE2__)
 // one vertex's terms of its cluster's sums, one register per four-float group of Sums (ws, sc,
 // q[0..3], q[4..7], q[8..11]); q0, q4 and q8 are zero without face sums
+// q0..q7 as one eight-float generic vector: in the AVX2 variants one sign extension, conversion,
+// product and add of 256 bits (vpmovsxwd, vcvtdq2ps, vmulps, vaddps), where the SSE2 form takes
+// two unpacks, two shifts and two of each of the others; the baseline lowers it to its four-wide
+// operations (the same per lane, so the same bits either way)
+typedef float Float8 __attribute__((vector_size(32)));
+typedef int32_t Int8 __attribute__((vector_size(32)));
+typedef int16_t Short8 __attribute__((vector_size(16)));
+typedef float Float4 __attribute__((vector_size(16)));
 struct Terms {
-  __m128 ws, sc, q0, q4, q8;
+  __m128 ws, sc;
+  Float8 q07;
+  __m128 q8;
 };
 
 // `centre`: the cluster's centre in lanes 0-2 (lane 3 is masked off)
@@ -277,16 +303,18 @@ SCENELOD_ALWAYS_INLINE Terms vertexTerms(const VertexArrays& in, size_t v, __m12
   const __m128 d4 = _mm_or_ps(_mm_and_ps(d, xyz_mask), one_w);
   t.ws = _mm_mul_ps(d4, _mm_set1_ps(w));
   t.sc = d4;
-  t.q0 = t.q4 = t.q8 = _mm_setzero_ps();
+  t.q07 = Float8{};
+  t.q8 = _mm_setzero_ps();
   if (have_face_sums) {
     // decodeFaceSums in lanes: q[0..7] sign-extended to int32, converted and scaled
     const VertexFaceSums& f = in.face_sums[v];
-    const __m128 scale = _mm_set1_ps(f.area * (1.0f / 32767.0f));
-    const __m128i q16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f.q));
-    const __m128 lo = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(q16, q16), 16)), scale);
-    const __m128 hi = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(q16, q16), 16)), scale);
-    const float fa8 = float(f.q[8]) * _mm_cvtss_f32(scale);
-    t.q0 = lo, t.q4 = hi;
+    const float scale = f.area * (1.0f / 32767.0f);
+    Short8 q16;
+    std::memcpy(&q16, f.q, sizeof q16);
+    t.q07 = __builtin_convertvector(__builtin_convertvector(q16, Int8), Float8) * scale;
+    const __m128 lo = __m128(Float4(__builtin_shufflevector(t.q07, t.q07, 0, 1, 2, 3)));
+    const __m128 hi = __m128(Float4(__builtin_shufflevector(t.q07, t.q07, 4, 5, 6, 7)));
+    const float fa8 = float(f.q[8]) * scale;
     // last group (normal z, b x, b y, b z) += (fa8, -t): b_i -= t_i = (A_i0 d.x + A_i1 d.y) + A_i2 d.z
     // (the quadric part is unused but harmless for mean)
     __m128 last = _mm_set_ss(fa8);
@@ -317,8 +345,10 @@ SCENELOD_ALWAYS_INLINE void addVertex(const VertexArrays& in, size_t v, bool hav
   _mm_storeu_ps(s.ws, _mm_add_ps(_mm_loadu_ps(s.ws), t.ws));
   _mm_storeu_ps(s.sc, _mm_add_ps(_mm_loadu_ps(s.sc), t.sc));
   if (have_face_sums) {
-    _mm_storeu_ps(s.q, _mm_add_ps(_mm_loadu_ps(s.q), t.q0));
-    _mm_storeu_ps(s.q + 4, _mm_add_ps(_mm_loadu_ps(s.q + 4), t.q4));
+    Float8 q07;
+    std::memcpy(&q07, s.q, sizeof q07);
+    q07 += t.q07;
+    std::memcpy(s.q, &q07, sizeof q07);
     _mm_storeu_ps(s.q + 8, _mm_add_ps(_mm_loadu_ps(s.q + 8), t.q8));
   }
 #else
@@ -431,83 +461,258 @@ inline glm::vec3 quadricRepresentative(const Sums& s, const glm::vec3& x0, const
 }
 
 #if defined(__SSE2__)
-// solveQuadric for the clusters s[0] and s[1] (means x0[0], x0[1]) in the two lanes of SSE2
-// doubles, for its two cheap cases: the zero residual (x0) and the closed-form full rank, with its
-// operations in its order (the adjugate's cofactors are the full-rank test's minors, computed
-// once), so bit-identical. A lane in neither case (a rank the eigenvalues decide, about a quarter
-// of the clusters at the bunny's 50 % level) calls solveQuadric itself.
-SCENELOD_ALWAYS_INLINE void solveQuadric2Body(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
-  // (lane 0, lane 1) of float f of Sums, and of the means, widened to double
-  const __m128 q0 = _mm_loadu_ps(s[0].q), q1 = _mm_loadu_ps(s[1].q);
-  const __m128 q0lo = _mm_unpacklo_ps(q0, q1), q0hi = _mm_unpackhi_ps(q0, q1);  // (xx, xx, xy, xy), (xz, xz, yy, yy)
-  const __m128 q4 = _mm_unpacklo_ps(_mm_loadu_ps(s[0].q + 4), _mm_loadu_ps(s[1].q + 4));  // (yz, yz, zz, zz)
-  const __m128 q8hi = _mm_unpackhi_ps(_mm_loadu_ps(s[0].q + 8), _mm_loadu_ps(s[1].q + 8));  // (b1, b1, b2, b2)
-  const __m128 b0f = _mm_unpacklo_ps(_mm_load_ss(s[0].q + 9), _mm_load_ss(s[1].q + 9));
-  const __m128d a00 = _mm_cvtps_pd(q0lo), a01 = _mm_cvtps_pd(_mm_movehl_ps(q0lo, q0lo));
-  const __m128d a02 = _mm_cvtps_pd(q0hi), a11 = _mm_cvtps_pd(_mm_movehl_ps(q0hi, q0hi));
-  const __m128d a12 = _mm_cvtps_pd(q4), a22 = _mm_cvtps_pd(_mm_movehl_ps(q4, q4));
-  const __m128d b0 = _mm_cvtps_pd(b0f), b1 = _mm_cvtps_pd(q8hi), b2 = _mm_cvtps_pd(_mm_movehl_ps(q8hi, q8hi));
+// The quadric solve four clusters at a time, in GCC generic vectors of four doubles: one 256-bit
+// operation a step in the AVX2 variants, two SSE2 ones in the baseline (GCC lowers them), the same
+// operations lane by lane either way. The square roots and lane masks go through SSE2 halves
+// (generic vectors have neither). On the 1 M sphere's 10 % level, where nearly every cluster needs
+// the eigenvalues, the solve took 410 instructions a cluster as pairs for the cheap cases and then
+// one cluster at a time, 277 as pairs throughout, and takes 209 so (acos and cos not counted).
+// (32-byte vectors are passed by reference and returned through references: by value, without AVX,
+// GCC warns that the ABI changes, -Wpsabi)
+typedef double Double4 __attribute__((vector_size(32)));
+typedef int64_t Mask4 __attribute__((vector_size(32)));
+typedef float Float4v __attribute__((vector_size(16)));
+
+// (selects are the vector conditional m ? a : b, lane by lane; |a| is a & kAbs4)
+const Mask4 kAbs4 = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+SCENELOD_ALWAYS_INLINE void sqrt4(Double4& a) {  // in place
+  __m128d lo, hi;
+  std::memcpy(&lo, &a, 16);
+  std::memcpy(&hi, reinterpret_cast<const char*>(&a) + 16, 16);
+  lo = _mm_sqrt_pd(lo), hi = _mm_sqrt_pd(hi);
+  std::memcpy(&a, &lo, 16);
+  std::memcpy(reinterpret_cast<char*>(&a) + 16, &hi, 16);
+}
+// the lanes' sign bits (a test of each lane took 28 instructions for the four)
+SCENELOD_ALWAYS_INLINE int bits4(const Mask4& m) {
+  __m128d lo, hi;
+  std::memcpy(&lo, &m, 16);
+  std::memcpy(&hi, reinterpret_cast<const char*>(&m) + 16, 16);
+  return _mm_movemask_pd(lo) | _mm_movemask_pd(hi) << 2;
+}
+
+// eigenvector in four lanes: the same cross products, norms and first-widest choice (strict >, as
+// there), the unit vector in v; in ok the mask of the lanes where the widest norm is > 0
+SCENELOD_ALWAYS_INLINE void eigenvector4(const Double4 a[6], const Double4& l, Double4 v[3], Mask4& ok) {
+  const Double4 r0[3] = {a[0] - l, a[1], a[2]};
+  const Double4 r1[3] = {a[1], a[3] - l, a[4]};
+  const Double4 r2[3] = {a[2], a[4], a[5] - l};
+  auto cross = [](const Double4* p, const Double4* q, Double4* c) {
+    c[0] = p[1] * q[2] - p[2] * q[1];
+    c[1] = p[2] * q[0] - p[0] * q[2];
+    c[2] = p[0] * q[1] - p[1] * q[0];
+  };
+  Double4 c01[3], c02[3], c12[3];
+  cross(r0, r1, c01), cross(r0, r2, c02), cross(r1, r2, c12);
+  Double4 n = c01[0] * c01[0] + c01[1] * c01[1] + c01[2] * c01[2];
+  const Double4 n02 = c02[0] * c02[0] + c02[1] * c02[1] + c02[2] * c02[2];
+  const Double4 n12 = c12[0] * c12[0] + c12[1] * c12[1] + c12[2] * c12[2];
+  const Mask4 g02 = n02 > n;
+  n = g02 ? n02 : n;
+  const Mask4 g12 = n12 > n;
+  n = g12 ? n12 : n;
+  Double4 root = n;
+  sqrt4(root);
+  const Double4 inv = 1.0 / root;
+  for (int i = 0; i < 3; ++i) v[i] = (g12 ? c12[i] : (g02 ? c02[i] : c01[i])) * inv;
+  ok = n > 0.0;
+}
+
+// solveSymmetric's y = m^-1 r in four lanes (m's upper triangle m00, m01, m02, m11, m12, m22), with
+// its operations; in ok the mask of the lanes where m is not singular
+SCENELOD_ALWAYS_INLINE void solveSymmetric4(const Double4 m[6], const Double4 r[3], Double4 y[3], Mask4& ok) {
+  const Double4 c00 = m[3] * m[5] - m[4] * m[4];
+  const Double4 c01 = m[2] * m[4] - m[1] * m[5];
+  const Double4 c02 = m[1] * m[4] - m[2] * m[3];
+  const Double4 c11 = m[0] * m[5] - m[2] * m[2];
+  const Double4 c12 = m[1] * m[2] - m[0] * m[4];
+  const Double4 c22 = m[0] * m[3] - m[1] * m[1];
+  const Double4 det = m[0] * c00 + m[1] * c01 + m[2] * c02;
+  const Double4 id = 1.0 / det;
+  y[0] = (c00 * r[0] + c01 * r[1] + c02 * r[2]) * id;
+  y[1] = (c01 * r[0] + c11 * r[1] + c12 * r[2]) * id;
+  y[2] = (c02 * r[0] + c12 * r[1] + c22 * r[2]) * id;
+  ok = Double4(Mask4(det) & kAbs4) > 0.0;
+}
+
+// solveByEigenvalues in four lanes, for the lanes of `want` (a: a00, a01, a02, a11, a12, a22; r the
+// residual; xd the means widened; full_x: the full-rank solution, as solveSymmetric(a, r) gives it,
+// and its mask): the scalar form's operations lane by lane in its order (its std::clamp, std::max,
+// the rank-2 lift of the upper triangle, a failed rank-2 solve falling back to rank 1 with the
+// reduced residual), its branches as masks (each case skipped when no lane takes it), acos and cos
+// called per lane as it calls them, so bit-identical. The solved lanes' representatives (relative
+// to the centre) go to xs as floats; returns their bits (the others keep x0).
+SCENELOD_ALWAYS_INLINE int solveByEigenvalues4(const Double4 a[6], const Double4 r[3], const Double4 xd[3],
+                                               const Float4v full_x[3], const Mask4& full_ok, int want,
+                                               Float4v xs[3]) {
+  const Double4 a00 = a[0], a01 = a[1], a02 = a[2], a11 = a[3], a12 = a[4], a22 = a[5];
+  const Double4 q = (a00 + a11 + a22) * (1.0 / 3.0);
+  const Double4 p1 = a01 * a01 + a02 * a02 + a12 * a12;
+  const Double4 d0 = a00 - q, d1 = a11 - q, d2 = a22 - q;
+  const Double4 p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * p1;
+  const Mask4 spread = p2 > 0.0;
+  Double4 p = p2 * (1.0 / 6.0);
+  sqrt4(p);
+  const Double4 ip = 1.0 / p;
+  const Double4 b00 = d0 * ip, b11 = d1 * ip, b22 = d2 * ip;
+  const Double4 b01 = a01 * ip, b02 = a02 * ip, b12 = a12 * ip;
+  const Double4 det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02);
+  const Double4 half_det = 0.5 * det;
+  const Double4 minus_one = Double4{} - 1.0, one = Double4{} + 1.0;
+  const Double4 rc = half_det < minus_one ? minus_one : (one < half_det ? one : half_det);
+  alignas(32) double rv[4], cv[4] = {1.0, 1.0, 1.0, 1.0};
+  std::memcpy(rv, &rc, sizeof rv);
+  const int acos_lanes = bits4(spread) & want;
+  for (int k = 0; k < 4; ++k)
+    if (acos_lanes & (1 << k)) cv[k] = std::cos(std::acos(rv[k]) * (1.0 / 3.0));
+  Double4 c;
+  std::memcpy(&c, cv, sizeof c);
+  const Double4 sq = 1.0 - c * c;
+  Double4 sn = sq > 0.0 ? sq : Double4{};  // std::max(0, x): (0 < x ? x : 0)
+  sqrt4(sn);
+  Double4 w0 = q + 2.0 * p * c;
+  Double4 w2 = q + p * (-c - 1.7320508075688772 * sn);
+  Double4 w1 = 3.0 * q - w0 - w2;
+  w0 = spread ? w0 : q, w1 = spread ? w1 : q, w2 = spread ? w2 : q;
+  const Double4 minus_w2 = -w2;
+  const Double4 wmax = w0 < minus_w2 ? minus_w2 : w0;
+  const Mask4 live = wmax > 0.0;
+  const Double4 cut = kEigenCutoff * wmax;
+  const Mask4 big1 = Double4(Mask4(w1) & kAbs4) >= cut, big2 = Double4(Mask4(w2) & kAbs4) >= cut;
+  const Mask4 rank3 = big1 & big2, rank2 = big1 & ~big2;
+  Mask4 done = ~live, solved = Mask4{};
+  for (int k = 0; k < 4; ++k)
+    if (!(want & (1 << k))) done[k] = -1;  // lanes not asked for: never taken
+  Float4v out[3] = {Float4v{}, Float4v{}, Float4v{}};
+  typedef int32_t Mask4f __attribute__((vector_size(16)));
+  auto take = [&](const Mask4& mask, const Float4v v[3]) {
+    const Mask4 m = mask & ~done;
+    const Mask4f mf = __builtin_convertvector(m, Mask4f);
+    for (int i = 0; i < 3; ++i) out[i] = Float4v((Mask4f(v[i]) & mf) | (Mask4f(out[i]) & ~mf));
+    done |= m, solved |= m;
+  };
+  auto finish = [&](const Double4 y[3], Float4v v[3]) {
+    for (int i = 0; i < 3; ++i) v[i] = __builtin_convertvector(xd[i] + y[i], Float4v);
+  };
+  take(rank3 & full_ok, full_x);
+  Double4 rs[3] = {r[0], r[1], r[2]};
+  if (bits4(rank2 & ~done)) {
+    Double4 v[3];
+    Mask4 vok;
+    eigenvector4(a, w2, v, vok);
+    vok &= rank2;
+    const Double4 d = v[0] * r[0] + v[1] * r[1] + v[2] * r[2];
+    Double4 r2[3];
+    for (int i = 0; i < 3; ++i) r2[i] = r[i] - d * v[i];
+    const Double4 lift = w0 - w2;
+    Double4 lv[3];
+    for (int i = 0; i < 3; ++i) lv[i] = lift * v[i];
+    const Double4 m[6] = {a00 + lv[0] * v[0], a01 + lv[0] * v[1], a02 + lv[0] * v[2],
+                          a11 + lv[1] * v[1], a12 + lv[1] * v[2], a22 + lv[2] * v[2]};
+    Double4 y[3];
+    Mask4 ok;
+    solveSymmetric4(m, r2, y, ok);
+    ok &= vok;
+    Float4v x2[3];
+    finish(y, x2);
+    take(ok, x2);
+    for (int i = 0; i < 3; ++i) rs[i] = vok ? r2[i] : r[i];
+  }
+  if (bits4(~done)) {
+    Double4 v[3];
+    Mask4 vok;
+    eigenvector4(a, w0, v, vok);
+    const Double4 d = (v[0] * rs[0] + v[1] * rs[1] + v[2] * rs[2]) / w0;
+    Double4 y[3];
+    for (int i = 0; i < 3; ++i) y[i] = v[i] * d;
+    Float4v x1[3];
+    finish(y, x1);
+    take(vok, x1);
+  }
+  for (int i = 0; i < 3; ++i) xs[i] = out[i];
+  return bits4(solved);
+}
+
+// solveQuadric for the clusters s[0..3] (means x0[0..3]) in four lanes: the zero residual (x0) and
+// the closed-form full rank with its operations in its order (the adjugate's cofactors are the
+// full-rank test's minors, computed once), so bit-identical; the lanes in neither case (a rank the
+// eigenvalues decide: about a quarter of the clusters at the bunny's 50 % level, nearly all on the
+// 1 M sphere's 10 %) go to solveByEigenvalues4 together, or one at a time to solveByEigenvalues
+// with the lanes off
+SCENELOD_ALWAYS_INLINE void solveQuadric4Body(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  // the four clusters' floats transposed into lanes, then widened (a lane insert each took twice the
+  // instructions)
+  auto widen = [](__m128 v, Double4& d) {
+    Float4v f;
+    std::memcpy(&f, &v, sizeof f);
+    d = __builtin_convertvector(f, Double4);
+  };
   auto load3 = [](const glm::vec3& v) {  // (x, y, z, 0), 8 + 4 bytes as they were stored
     return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&v.x)), _mm_load_ss(&v.z));
   };
-  const __m128 m0 = load3(x0[0]), m1 = load3(x0[1]);
-  const __m128 mlo = _mm_unpacklo_ps(m0, m1), mhi = _mm_unpackhi_ps(m0, m1);  // (x, x, y, y), (z, z, 0, 0)
-  const __m128d xx = _mm_cvtps_pd(mlo), xy = _mm_cvtps_pd(_mm_movehl_ps(mlo, mlo)), xz = _mm_cvtps_pd(mhi);
-  const __m128d sign = _mm_set1_pd(-0.0), zero = _mm_setzero_pd();
-  auto row = [&](__m128d p, __m128d q, __m128d r, __m128d b) {  // -(p x + q y + r z + b)
-    return _mm_xor_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(p, xx), _mm_mul_pd(q, xy)), _mm_mul_pd(r, xz)), b),
-                      sign);
-  };
-  const __m128d r0 = row(a00, a01, a02, b0), r1 = row(a01, a11, a12, b1), r2 = row(a02, a12, a22, b2);
-  const __m128d still = _mm_and_pd(_mm_and_pd(_mm_cmpeq_pd(r0, zero), _mm_cmpeq_pd(r1, zero)), _mm_cmpeq_pd(r2, zero));
-  const __m128d tr = _mm_add_pd(_mm_add_pd(a00, a11), a22);
-  const __m128d m00 = _mm_sub_pd(_mm_mul_pd(a11, a22), _mm_mul_pd(a12, a12));
-  const __m128d m11 = _mm_sub_pd(_mm_mul_pd(a00, a22), _mm_mul_pd(a02, a02));
-  const __m128d m22 = _mm_sub_pd(_mm_mul_pd(a00, a11), _mm_mul_pd(a01, a01));
-  const __m128d c01 = _mm_sub_pd(_mm_mul_pd(a02, a12), _mm_mul_pd(a01, a22));
-  const __m128d c02 = _mm_sub_pd(_mm_mul_pd(a01, a12), _mm_mul_pd(a02, a11));
-  const __m128d c12 = _mm_sub_pd(_mm_mul_pd(a01, a02), _mm_mul_pd(a00, a12));
-  const __m128d c1 = _mm_add_pd(_mm_add_pd(m00, m11), m22);
-  const __m128d det = _mm_add_pd(_mm_add_pd(_mm_mul_pd(a00, m00), _mm_mul_pd(a01, c01)), _mm_mul_pd(a02, c02));
-  // solveQuadric's test, then solveSymmetric's (det >= a threshold >= 0 and det != 0: det > 0)
-  const __m128d thr = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(kFullRankMargin * kEigenCutoff), tr), c1);
-  const __m128d full = _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(tr, zero), _mm_cmpgt_pd(c1, zero)),
-                                  _mm_and_pd(_mm_cmpge_pd(det, thr), _mm_cmpgt_pd(det, zero)));
-  const __m128d id = _mm_div_pd(_mm_set1_pd(1.0), det);
-  auto solved = [&](__m128d x, __m128d p, __m128d q, __m128d r) {  // float(x + (p r0 + q r1 + r r2) / det)
-    return _mm_cvtpd_ps(
-        _mm_add_pd(x, _mm_mul_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(p, r0), _mm_mul_pd(q, r1)), _mm_mul_pd(r, r2)), id)));
-  };
-  alignas(16) float px[4], py[4], pz[4];
-  _mm_store_ps(px, solved(xx, m00, c01, c02));
-  _mm_store_ps(py, solved(xy, c01, m11, c12));
-  _mm_store_ps(pz, solved(xz, c02, c12, m22));
-  const int still_mask = _mm_movemask_pd(still), full_mask = _mm_movemask_pd(full);
-  for (int k = 0; k < 2; ++k) {
+  __m128 q00 = _mm_loadu_ps(s[0].q), q01 = _mm_loadu_ps(s[1].q), q02 = _mm_loadu_ps(s[2].q), q03 = _mm_loadu_ps(s[3].q);
+  __m128 q40 = _mm_loadu_ps(s[0].q + 4), q41 = _mm_loadu_ps(s[1].q + 4), q42 = _mm_loadu_ps(s[2].q + 4),
+         q43 = _mm_loadu_ps(s[3].q + 4);
+  __m128 q80 = _mm_loadu_ps(s[0].q + 8), q81 = _mm_loadu_ps(s[1].q + 8), q82 = _mm_loadu_ps(s[2].q + 8),
+         q83 = _mm_loadu_ps(s[3].q + 8);
+  __m128 m0 = load3(x0[0]), m1 = load3(x0[1]), m2 = load3(x0[2]), m3 = load3(x0[3]);
+  _MM_TRANSPOSE4_PS(q00, q01, q02, q03);  // xx, xy, xz, yy
+  _MM_TRANSPOSE4_PS(q40, q41, q42, q43);  // yz, zz, (normal x, y)
+  _MM_TRANSPOSE4_PS(q80, q81, q82, q83);  // (normal z), b0, b1, b2
+  _MM_TRANSPOSE4_PS(m0, m1, m2, m3);      // x, y, z, 0
+  Double4 a00, a01, a02, a11, a12, a22, b0, b1, b2, xx, xy, xz;
+  widen(q00, a00), widen(q01, a01), widen(q02, a02), widen(q03, a11), widen(q40, a12), widen(q41, a22);
+  widen(q81, b0), widen(q82, b1), widen(q83, b2), widen(m0, xx), widen(m1, xy), widen(m2, xz);
+  const Double4 r0 = -(a00 * xx + a01 * xy + a02 * xz + b0);
+  const Double4 r1 = -(a01 * xx + a11 * xy + a12 * xz + b1);
+  const Double4 r2 = -(a02 * xx + a12 * xy + a22 * xz + b2);
+  const Mask4 still = (r0 == 0.0) & (r1 == 0.0) & (r2 == 0.0);
+  const Double4 tr = a00 + a11 + a22;
+  const Double4 m00 = a11 * a22 - a12 * a12, m11 = a00 * a22 - a02 * a02, m22 = a00 * a11 - a01 * a01;
+  const Double4 c01 = a02 * a12 - a01 * a22, c02 = a01 * a12 - a02 * a11, c12 = a01 * a02 - a00 * a12;
+  const Double4 c1 = m00 + m11 + m22;
+  const Double4 det = a00 * m00 + a01 * c01 + a02 * c02;
+  const Double4 thr = kFullRankMargin * kEigenCutoff * tr * c1;
+  const Mask4 full = (tr > 0.0) & (c1 > 0.0) & (det >= thr) & (det > 0.0);
+  const Double4 id = 1.0 / det;
+  const Float4v px = __builtin_convertvector(xx + (m00 * r0 + c01 * r1 + c02 * r2) * id, Float4v);
+  const Float4v py = __builtin_convertvector(xy + (c01 * r0 + m11 * r1 + c12 * r2) * id, Float4v);
+  const Float4v pz = __builtin_convertvector(xz + (c02 * r0 + c12 * r1 + m22 * r2) * id, Float4v);
+  const int still_mask = bits4(still), full_mask = bits4(full);
+  const int eigen = ~(still_mask | full_mask) & 15;
+  int lanes = 0;
+  Float4v ex[3];
+  if (eigen && g_eigen_lanes) {
+    const Double4 am[6] = {a00, a01, a02, a11, a12, a22}, rm[3] = {r0, r1, r2}, xm[3] = {xx, xy, xz};
+    const Float4v fx[3] = {px, py, pz};
+    const Mask4 det_ok = Double4(Mask4(det) & kAbs4) > 0.0;  // solveSymmetric's test
+    lanes = solveByEigenvalues4(am, rm, xm, fx, det_ok, eigen, ex);
+  }
+  for (int k = 0; k < 4; ++k) {
     if (still_mask & (1 << k)) {
       x[k] = x0[k];
     } else if (full_mask & (1 << k)) {
       x[k] = glm::vec3(px[k], py[k], pz[k]);
-    } else {  // the lane's matrix and residual, as solveQuadric has them at this point
-      auto lane = [k](__m128d v) { return _mm_cvtsd_f64(k == 0 ? v : _mm_unpackhi_pd(v, v)); };
-      const double l01 = lane(a01), l02 = lane(a02), l12 = lane(a12);
-      const double a3[3][3] = {{lane(a00), l01, l02}, {l01, lane(a11), l12}, {l02, l12, lane(a22)}};
-      double r3[3] = {lane(r0), lane(r1), lane(r2)};
+    } else if (g_eigen_lanes) {
+      x[k] = (lanes & (1 << k)) ? glm::vec3(ex[0][k], ex[1][k], ex[2][k]) : x0[k];
+    } else {
+      const double a3[3][3] = {{a00[k], a01[k], a02[k]}, {a01[k], a11[k], a12[k]}, {a02[k], a12[k], a22[k]}};
+      double r3[3] = {r0[k], r1[k], r2[k]};
       x[k] = solveByEigenvalues(a3, r3, x0[k]);
     }
   }
 }
-
 // the baseline and the AVX2 variant (see synthesizeGrouped); avx2 picks the latter
-void solveQuadric2Sse2(const Sums* s, const glm::vec3* x0, glm::vec3* x) { solveQuadric2Body(s, x0, x); }
-SCENELOD_AVX2_TARGET void solveQuadric2Avx2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
-  solveQuadric2Body(s, x0, x);
+void solveQuadric4Sse2(const Sums* s, const glm::vec3* x0, glm::vec3* x) { solveQuadric4Body(s, x0, x); }
+SCENELOD_AVX2_TARGET void solveQuadric4Avx2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  solveQuadric4Body(s, x0, x);
 }
 template <bool avx2>
-inline void solveQuadric2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
-  if (avx2) solveQuadric2Avx2(s, x0, x);
-  else solveQuadric2Sse2(s, x0, x);
+inline void solveQuadric4(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
+  if (avx2) solveQuadric4Avx2(s, x0, x);
+  else solveQuadric4Sse2(s, x0, x);
 }
+
 #endif
 
 inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_color, glm::vec3& out) {
@@ -591,8 +796,7 @@ SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const A
     if (quadric) {
 #if defined(__SSE2__)
       glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
-      solveQuadric2<avx2>(s, position, x);
-      solveQuadric2<avx2>(s + 2, position + 2, x + 2);
+      solveQuadric4<avx2>(s, position, x);
       for (uint32_t k = 0; k < 4; ++k) position[k] = clampToCell(s[k], x[k], a, half);
 #else
       for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
@@ -699,11 +903,10 @@ SCENELOD_ALWAYS_INLINE void synthesizeSingleBody(const PreparedMesh& p, const As
   if (quadric) {
     uint32_t c = 0;
 #if defined(__SSE2__)
-    for (; c + 2 <= nc; c += 2) {
-      glm::vec3 x[2];
-      solveQuadric2<avx2>(&sums[c], &out.positions[c], x);
-      out.positions[c] = clampToCell(sums[c], x[0], a, half);
-      out.positions[c + 1] = clampToCell(sums[c + 1], x[1], a, half);
+    for (; c + 4 <= nc; c += 4) {
+      glm::vec3 x[4];
+      solveQuadric4<avx2>(&sums[c], &out.positions[c], x);
+      for (uint32_t k = 0; k < 4; ++k) out.positions[c + k] = clampToCell(sums[c + k], x[k], a, half);
     }
 #endif
     for (; c < nc; ++c) out.positions[c] = quadricRepresentative(sums[c], out.positions[c], a, half);

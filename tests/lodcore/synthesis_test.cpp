@@ -1,0 +1,75 @@
+// synthesize's quadric solve: its eigenvalue lanes against the one-cluster form.
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/cluster.h"
+#include "scenelod/lodcore/obj_io.h"
+#include "test_support.h"
+
+using namespace scenelod;
+
+// private test hooks of lodcore (lodcore/src/synthesis.cpp): the eigenvalue lanes of the quadric
+// solve, and the AVX2 variants, on or off for every later call; each returns the previous choice
+namespace scenelod::detail {
+bool useEigenvalueLanes(bool on);
+bool useAvx2Paths(bool on);
+}  // namespace scenelod::detail
+
+namespace {
+
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+}  // namespace
+
+// Quadric synthesis solving rank-deficient clusters four at a time in lanes gives the bits of solving
+// them one at a time: flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
+// bumpy (spheres: mostly rank 1 and 2 at fine cells), sharp (the CAD part, the box: full rank and
+// degenerate mixes) and scanned (the bunny, where it is installed), both cell shapes, coarse and
+// fine levels (the single and the grouped synthesis), baseline and AVX2 variants.
+TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  meshes.emplace_back("bumpy", test::makeBumpySphere(90, 120));
+  meshes.emplace_back("sphere", test::makeSphere(glm::vec3(0.3f, -0.2f, 0.1f), 0.8f, 60, 80));
+  meshes.emplace_back("grid", test::makeGrid(60, 1.0f));
+  meshes.emplace_back("cylinder", test::makeCylinder(-0.5f, 0.5f, 0.3f, 40, 60));
+  meshes.emplace_back("box", test::makeBox(glm::vec3(-0.4f), glm::vec3(0.5f), 12));
+  meshes.emplace_back("cad", test::makeCadPart());
+  {
+    Mesh bunny;
+    if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
+      meshes.emplace_back("bunny", std::move(bunny));
+  }
+  const bool was_lanes = detail::useEigenvalueLanes(true);
+  const bool was_avx2 = detail::useAvx2Paths(true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes)
+    for (bool avx2 : {false, true})
+      for (CellShape shape : {CellShape::kCube, CellShape::kSphere})
+        for (float w : {0.008f, 0.02f, 0.05f, 0.15f}) {
+          ClusterParams p;
+          p.synthesis = Synthesis::kQuadric;
+          p.cell_shape = shape;
+          p.cell_width = w;
+          detail::useAvx2Paths(avx2);
+          Mesh lanes, one;
+          detail::useEigenvalueLanes(true);
+          ASSERT_TRUE(clusterMesh(m, p, lanes).ok());
+          detail::useEigenvalueLanes(false);
+          ASSERT_TRUE(clusterMesh(m, p, one).ok());
+          SCOPED_TRACE(name + (avx2 ? " avx2 " : " sse2 ") + cellShapeName(shape) + " w=" + std::to_string(w));
+          EXPECT_TRUE(sameBits(lanes.positions, one.positions));
+          EXPECT_TRUE(sameBits(lanes.normals, one.normals));
+          EXPECT_TRUE(sameBits(lanes.triangles, one.triangles));
+          levels += one.triangleCount() > 0;
+        }
+  detail::useEigenvalueLanes(was_lanes);
+  detail::useAvx2Paths(was_avx2);
+  EXPECT_GE(levels, 6u * 16u);
+}
