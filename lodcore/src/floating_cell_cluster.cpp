@@ -887,22 +887,29 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     l.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(l.q4, reach4), slack4)), lo_cube4);
     return l;
   };
-  // bricked heads: the next vertex's range and bricks.locate8, a vertex ahead
+  // the next vertex's range and where its heads are (bricks.locate8, or the offset of its first
+  // cube in the flat array), a vertex ahead
   const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
   Located ahead{};
   __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
-  if (kBricks && n > 0) {
-    ahead = locate(sorted[0]);
-    bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
-  }
+  size_t ahead_offset = 0;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    ahead = locate(sorted[k]);
+    if (kBricks) {
+      bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
+    } else {
+      // lo >= 0: lo_cube is 3 cubes below the box
+      ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
+                     size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
+    }
+  };
+  if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
-    const Located here = kBricks ? ahead : locate(pv);
+    const Located here = ahead;
     const __m256i brick_of = ahead_bricks, in_brick = ahead_in_brick;
-    if (kBricks && i + 1 < n) {
-      ahead = locate(sorted[i + 1]);
-      bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
-    }
+    const size_t offset = ahead_offset;
+    if (i + 1 < n) plan(i + 1);
     const __m128 q4 = here.q4;
     const __m128i lo4 = here.lo4, hi4 = here.hi4;
     const __m128i span = _mm_sub_epi32(hi4, lo4);
@@ -919,7 +926,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
       // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
       // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
-      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
       found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
@@ -928,7 +935,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
       // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
-      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
       found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
