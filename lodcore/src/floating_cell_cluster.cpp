@@ -1287,11 +1287,25 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
   const size_t n = p.order.size();
   std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
   const glm::vec3* sorted = sortedPositions(p, local);
+  // the next vertex's range and the offset of its first head, a vertex ahead (as in assignDenseAvx2T)
+  Located ahead{};
+  size_t ahead_offset = 0;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    const glm::vec3 pk = sorted[k];
+    ahead.q4 = _mm_mul_ps(_mm_setr_ps(pk.x, pk.y, pk.z, 0.0f), inv4);
+    ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, half4), slack4)), lo_cube4);
+    ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, half4), slack4)), lo_cube4);
+    // lo >= 0: lo_cube is 3 cubes below the box
+    ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
+                   size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
+  };
+  if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
-    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
-    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+    const __m128 q4 = ahead.q4;
+    const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
+    const size_t first = ahead_offset;
+    if (i + 1 < n) plan(i + 1);
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, then 8 sentinels of padding
     uint32_t* list = found;
@@ -1300,7 +1314,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
     const bool narrow =
         (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
     if (narrow) {
-      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const uint32_t* base = grid.head.data() + first;
       for (int k = 0; k < 8; ++k) {
         const uint32_t h = base[offset[k]];
         _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
