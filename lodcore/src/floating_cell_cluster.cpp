@@ -1017,12 +1017,12 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // heads (larger meshes) stream the copy
   std::vector<glm::vec3> local;
   const auto sorted = positionsInOrder<Head>(p, local);
-  // the next vertex's range, the place of its cube in the cache (cache.find with the three axes at
-  // once: the scalar form took 30 instructions a vertex) and the offset of its first head, a vertex
-  // ahead (as in assignDenseAvx2T; the bricks themselves may be allocated meanwhile)
+  // the next vertex's range and the place of its cube in the cache (cache.find with the three axes
+  // at once: the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T;
+  // the bricks themselves may be allocated meanwhile). The first head's offset, needed by the few
+  // vertices that gather, is not (ahead, it cost 9 instructions a vertex)
   Located ahead{};
   uint32_t ahead_brick = 0, ahead_in_brick = 0;
-  size_t ahead_offset = 0;
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     const glm::vec3 pk = sorted[k];
     // the range of cubes along the three axes at once, with the scalar path's operations per lane
@@ -1039,9 +1039,6 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     is = _mm_or_si128(is, _mm_shuffle_epi32(is, _MM_SHUFFLE(2, 3, 0, 1)));
     ahead_brick = uint32_t(_mm_cvtsi128_si32(bs));
     ahead_in_brick = uint32_t(_mm_cvtsi128_si32(is));
-    // lo >= 0: lo_cube is 3 cubes below the box
-    ahead_offset = size_t(uint32_t(_mm_extract_epi32(lo4, 2))) * sz + size_t(uint32_t(_mm_extract_epi32(lo4, 1))) * sy +
-                   size_t(uint32_t(_mm_cvtsi128_si32(lo4)));
   };
   if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
@@ -1049,7 +1046,6 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     const __m128 q4 = ahead.q4;
     const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
     const uint32_t brick_at = ahead_brick, in_brick = ahead_in_brick;
-    const size_t first = ahead_offset;
     if (i + 1 < n) plan(i + 1);
     const __m128i span = _mm_sub_epi32(hi4, lo4);
     const bool span2 = (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7;
@@ -1062,7 +1058,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
       uint16_t e = slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
       if (e == 0) {  // the cube's first vertex: its cells from the heads and lists, by index
         const uint32_t heads =
-            gatherRows27(head.data() + first, row_offset, found);
+            gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
         uint32_t listed[27 * 8];
         uint32_t count = 0;
         for (uint32_t j = 0; j < heads; ++j)
@@ -1083,7 +1079,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     }
     if (!tested) {  // the general path (reach 1: 3 or 4 cubes per axis)
       if (span2) {
-        found_count = gatherRows27(head.data() + first, row_offset, found);
+        found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
         for (int32_t z = lo[2]; z <= hi[2]; ++z)
