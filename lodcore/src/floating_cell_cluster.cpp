@@ -317,15 +317,16 @@ std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_al
 }
 
 #if defined(SCENELOD_FLOATING_AVX2)
-// For a mask of the non-empty heads of two rows (lanes 0-2 and 4-6 of a pair of 4-head loads), the
-// lane indices that pack them to the front, one byte each: 128 entries of 8 bytes (1 KB)
+// For a mask of the non-empty heads among 8 lanes (two rows: lanes 0-2 and 4-6 of a pair of 4-head
+// loads; the 2 x 2 x 2 bricked heads: all 8), the lane indices that pack them to the front, one byte
+// each: 256 entries of 8 bytes (2 KB)
 struct PackTable {
-  uint64_t idx[128];
+  uint64_t idx[256];
   constexpr PackTable() : idx() {
-    for (uint32_t m = 0; m < 128; ++m) {
+    for (uint32_t m = 0; m < 256; ++m) {
       uint64_t v = 0;
       int k = 0;
-      for (uint32_t lane = 0; lane < 7; ++lane)
+      for (uint32_t lane = 0; lane < 8; ++lane)
         if (m >> lane & 1u) v |= uint64_t(lane) << (8 * k++);
       idx[m] = v;
     }
@@ -371,6 +372,12 @@ SCENELOD_FLOATING_AVX2_TARGET inline __m128i floorToInt4(__m128 x) {
   const __m128i t = _mm_cvttps_epi32(x);
   return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
 }
+
+// a vertex's position in grid units and its searched range of cubes (lo, hi), x, y, z in lanes 0-2
+struct Located {
+  __m128 q4;
+  __m128i lo4, hi4;
+};
 
 // cells a and b as the two halves of a vector
 template <typename CellRecord>
@@ -540,6 +547,47 @@ class BrickHeads {
         }
     return count;
   }
+#if defined(SCENELOD_FLOATING_AVX2)
+  // gather's 2 x 2 x 2 case on AVX2 from lo4 (lanes x, y, z), in two steps. locate8: the 8 cubes'
+  // brick positions and in-brick indices, from the brick and in-brick parts of both cubes of each
+  // axis in one vector, summed by permutations (the scalar form took ~90 instructions a vertex at the
+  // bunny's 50 % level); `strides` from brickStrides(). It depends on the vertex alone, so the caller
+  // runs it a vertex ahead: its ~25 cycles of latency (vpmulld, vpermd, the stores' forwarding) in
+  // front of the heads' loads made the level slower (2.29 -> 2.38 ms) with 2.4 M fewer instructions.
+  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void locate8(__m128i lo4, __m256i strides, __m256i& bricks,
+                                                                    __m256i& in_brick) const {
+    const __m256i c = _mm256_add_epi32(_mm256_broadcastsi128_si256(lo4), _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
+    const __m256i b = _mm256_mullo_epi32(_mm256_srai_epi32(c, 2), strides);
+    const __m256i in =
+        _mm256_sllv_epi32(_mm256_and_si256(c, _mm256_set1_epi32(3)), _mm256_setr_epi32(0, 2, 4, 0, 0, 2, 4, 0));
+    // lane k takes x + (k & 1), y + (k >> 1 & 1), z + (k >> 2)
+    const __m256i px = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4), py = _mm256_setr_epi32(1, 1, 5, 5, 1, 1, 5, 5),
+                  pz = _mm256_setr_epi32(2, 2, 2, 2, 6, 6, 6, 6);
+    bricks = _mm256_add_epi32(_mm256_add_epi32(_mm256_permutevar8x32_epi32(b, px), _mm256_permutevar8x32_epi32(b, py)),
+                              _mm256_permutevar8x32_epi32(b, pz));
+    in_brick = _mm256_or_si256(_mm256_or_si256(_mm256_permutevar8x32_epi32(in, px), _mm256_permutevar8x32_epi32(in, py)),
+                               _mm256_permutevar8x32_epi32(in, pz));
+  }
+  // heads8: the non-empty heads of the cubes locate8 gave into found (8 entries written); their count
+  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t heads8(__m256i bricks, __m256i in_brick,
+                                                                       uint32_t* found) const {
+    alignas(32) uint32_t bk[8], ik[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(bk), bricks);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(ik), in_brick);
+    uint32_t count = 0;
+    for (int k = 0; k < 8; ++k) {
+      const uint32_t h = heads_[size_t(top_[bk[k]]) << 6 | ik[k]];
+      found[count] = h;
+      count += h != 0;
+    }
+    return count;
+  }
+  // locate8's strides of the bricks along x, y, z for the cubes lo and lo + 1
+  SCENELOD_FLOATING_AVX2_TARGET __m256i brickStrides() const {
+    const int32_t sy = int32_t(bx_), sz = int32_t(bx_ * by_);
+    return _mm256_setr_epi32(1, sy, sz, 0, 1, sy, sz, 0);
+  }
+#endif
 
  private:
   size_t brick(int32_t x, int32_t y, int32_t z) const {
@@ -830,24 +878,55 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   // heads (larger meshes) stream the copy
   std::vector<glm::vec3> local;
   const auto sorted = positionsInOrder<Head>(p, local);
+  // the range of cubes along the three axes at once, with the scalar path's operations per lane
+  // ((q - reach) - slack and floorToInt's truncation and correction)
+  auto locate = [&](const glm::vec3& pv) SCENELOD_FLOATING_AVX2_TARGET {
+    Located l;
+    l.q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+    l.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(l.q4, reach4), slack4)), lo_cube4);
+    l.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(l.q4, reach4), slack4)), lo_cube4);
+    return l;
+  };
+  // the next vertex's range and where its heads are (bricks.locate8, or the offset of its first
+  // cube in the flat array), a vertex ahead
+  const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
+  Located ahead{};
+  __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
+  size_t ahead_offset = 0;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    ahead = locate(sorted[k]);
+    if (kBricks) {
+      bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
+    } else {
+      // lo >= 0: lo_cube is 3 cubes below the box
+      ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
+                     size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
+    }
+  };
+  if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
-    // the range of cubes along the three axes at once, with the scalar path's operations per lane
-    // ((q - reach) - slack and floorToInt's truncation and correction)
-    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
-    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    const Located here = ahead;
+    const __m256i brick_of = ahead_bricks, in_brick = ahead_in_brick;
+    const size_t offset = ahead_offset;
+    if (i + 1 < n) plan(i + 1);
+    const __m128 q4 = here.q4;
+    const __m128i lo4 = here.lo4, hi4 = here.hi4;
     const __m128i span = _mm_sub_epi32(hi4, lo4);
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     if (kBricks) {
-      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-      found_count = bricks.gather(lo, hi, found);
+      if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
+        found_count = bricks.heads8(brick_of, in_brick, found);
+      } else {
+        const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+        found_count = bricks.gather(lo, hi, found);
+      }
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
       // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
       // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
-      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
       found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
@@ -856,7 +935,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
       // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
-      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const Stored* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
       found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
@@ -938,13 +1017,36 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // heads (larger meshes) stream the copy
   std::vector<glm::vec3> local;
   const auto sorted = positionsInOrder<Head>(p, local);
-  for (size_t i = 0; i < n; ++i) {
-    const glm::vec3 pv = sorted[i];
+  // the next vertex's range and the place of its cube in the cache (cache.find with the three axes
+  // at once: the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T;
+  // the bricks themselves may be allocated meanwhile). The first head's offset, needed by the few
+  // vertices that gather, is not (ahead, it cost 9 instructions a vertex)
+  Located ahead{};
+  uint32_t ahead_brick = 0, ahead_in_brick = 0;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    const glm::vec3 pk = sorted[k];
     // the range of cubes along the three axes at once, with the scalar path's operations per lane
     // ((q - reach) - slack and floorToInt's truncation and correction)
-    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
-    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    ahead.q4 = _mm_mul_ps(_mm_setr_ps(pk.x, pk.y, pk.z, 0.0f), inv4);
+    ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, reach4), slack4)), lo_cube4);
+    ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, reach4), slack4)), lo_cube4);
+    const __m128i lo4 = ahead.lo4;
+    const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
+    const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
+    __m128i bs = _mm_add_epi32(bm, _mm_shuffle_epi32(bm, _MM_SHUFFLE(1, 0, 3, 2)));
+    __m128i is = _mm_or_si128(im, _mm_shuffle_epi32(im, _MM_SHUFFLE(1, 0, 3, 2)));
+    bs = _mm_add_epi32(bs, _mm_shuffle_epi32(bs, _MM_SHUFFLE(2, 3, 0, 1)));
+    is = _mm_or_si128(is, _mm_shuffle_epi32(is, _MM_SHUFFLE(2, 3, 0, 1)));
+    ahead_brick = uint32_t(_mm_cvtsi128_si32(bs));
+    ahead_in_brick = uint32_t(_mm_cvtsi128_si32(is));
+  };
+  if (n > 0) plan(0);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = sorted[i];
+    const __m128 q4 = ahead.q4;
+    const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
+    const uint32_t brick_at = ahead_brick, in_brick = ahead_in_brick;
+    if (i + 1 < n) plan(i + 1);
     const __m128i span = _mm_sub_epi32(hi4, lo4);
     const bool span2 = (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7;
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
@@ -953,14 +1055,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     uint32_t best = kNone;
     bool tested = false;
     if (span2) {
-      // cache.find with the three axes at once (the scalar form took 30 instructions a vertex)
-      const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
-      const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
-      __m128i bs = _mm_add_epi32(bm, _mm_shuffle_epi32(bm, _MM_SHUFFLE(1, 0, 3, 2)));
-      __m128i is = _mm_or_si128(im, _mm_shuffle_epi32(im, _MM_SHUFFLE(1, 0, 3, 2)));
-      bs = _mm_add_epi32(bs, _mm_shuffle_epi32(bs, _MM_SHUFFLE(2, 3, 0, 1)));
-      is = _mm_or_si128(is, _mm_shuffle_epi32(is, _MM_SHUFFLE(2, 3, 0, 1)));
-      uint16_t e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(bs))]) << 6 | uint32_t(_mm_cvtsi128_si32(is))];
+      uint16_t e = slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
       if (e == 0) {  // the cube's first vertex: its cells from the heads and lists, by index
         const uint32_t heads =
             gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
@@ -984,8 +1079,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     }
     if (!tested) {  // the general path (reach 1: 3 or 4 cubes per axis)
       if (span2) {
-        found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset,
-                                   found);
+        found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
         for (int32_t z = lo[2]; z <= hi[2]; ++z)
@@ -1208,11 +1302,25 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
   const size_t n = p.order.size();
   std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
   const glm::vec3* sorted = sortedPositions(p, local);
+  // the next vertex's range and the offset of its first head, a vertex ahead (as in assignDenseAvx2T)
+  Located ahead{};
+  size_t ahead_offset = 0;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    const glm::vec3 pk = sorted[k];
+    ahead.q4 = _mm_mul_ps(_mm_setr_ps(pk.x, pk.y, pk.z, 0.0f), inv4);
+    ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, half4), slack4)), lo_cube4);
+    ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, half4), slack4)), lo_cube4);
+    // lo >= 0: lo_cube is 3 cubes below the box
+    ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
+                   size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
+  };
+  if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
-    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
-    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+    const __m128 q4 = ahead.q4;
+    const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
+    const size_t first = ahead_offset;
+    if (i + 1 < n) plan(i + 1);
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, then 8 sentinels of padding
     uint32_t* list = found;
@@ -1221,7 +1329,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
     const bool narrow =
         (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
     if (narrow) {
-      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const uint32_t* base = grid.head.data() + first;
       for (int k = 0; k < 8; ++k) {
         const uint32_t h = base[offset[k]];
         _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),

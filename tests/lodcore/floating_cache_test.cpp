@@ -1,5 +1,6 @@
-// The floating-cell assignment's candidate cache (floating_cell_cluster.cpp, CandidateCache): the
-// AVX2 flat grid of side w/2 with and without it, and the SSE2 path, choose the same cells.
+// The floating-cell assignment's AVX2 fast paths (floating_cell_cluster.cpp): the candidate cache
+// (CandidateCache: the AVX2 flat grid of side w/2 with and without it, and the SSE2 path) and the
+// bricked heads' 2 x 2 x 2 gather (BrickHeads::gather8) choose the same cells as the SSE2 path.
 #include <string>
 
 #include <gtest/gtest.h>
@@ -62,7 +63,53 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
   }
 }
 
+// every rule and shape: the AVX2 run on short heads in bricks where they are taken (fine widths:
+// cubes of side w, a flat array of short heads over 16 bytes per vertex), the SSE2 run on the same
+// bricks and the SSE2 run on flat 32-bit heads give the same cells in the same order
+void expectSameCellsInBricks(const Mesh& m, std::initializer_list<float> widths) {
+  PreparedMesh p;
+  ClusterParams params;
+  ASSERT_TRUE(prepareMesh(m, params, p).ok());
+  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                 Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+    for (float w : widths) {
+      SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
+      params.method = c.method;
+      params.cell_shape = c.shape;
+      params.cell_width = w;
+      ClusterAssignment plain, sse_bricks, avx_bricks;
+      detail::setFloatingPathsForTest(false, false, false);
+      const bool plain_ok = assignClusters(p, params, plain).ok();
+      detail::setFloatingPathsForTest(false, true, true);
+      const bool sse_ok = assignClusters(p, params, sse_bricks).ok();
+      detail::setFloatingPathsForTest(true, true, true);
+      const bool avx_ok = assignClusters(p, params, avx_bricks).ok();
+      ASSERT_TRUE(plain_ok && sse_ok && avx_ok);
+      EXPECT_GT(plain.heaviest.size(), 1u);
+      EXPECT_EQ(sse_bricks.heaviest, plain.heaviest);
+      EXPECT_EQ(sse_bricks.cluster_of, plain.cluster_of);
+      EXPECT_EQ(avx_bricks.heaviest, plain.heaviest);
+      EXPECT_EQ(avx_bricks.cluster_of, plain.cluster_of);
+    }
+  }
+}
+
 }  // namespace
+
+TEST(FloatingCell, BrickedHeadsChooseTheSameCellsOnTheBunny) {
+  SCENELOD_REQUIRE_BUNNY();
+  Mesh bunny;
+  ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+  // the bunny's 50 % level and finer and coarser widths around it
+  expectSameCellsInBricks(bunny, {0.0267405026f, 0.015f, 0.02f, 0.035f});
+}
+
+TEST(FloatingCell, BrickedHeadsChooseTheSameCellsOnGeneratedMeshes) {
+  // 40 k vertices on the sphere of radius ~1; the CAD part puts vertices exactly on cube faces
+  expectSameCellsInBricks(test::makeBumpySphere(200, 200), {0.025f, 0.03f, 0.035f});
+  expectSameCellsInBricks(test::makeCadPart(), {0.01f, 0.02f, 0.03f});
+}
 
 TEST(FloatingCell, CandidateCacheChoosesTheSameCellsOnTheBunny) {
   SCENELOD_REQUIRE_BUNNY();
