@@ -349,7 +349,17 @@ void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, 
 // 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
 // their ids fit the blocks' 16 bits
 constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
+
+bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
 }  // namespace
+
+// test hook (declared by tests/lodcore/elimination_test.cpp): false lists every candidate edge in the
+// chained lists, whatever the cluster count, for every later call; returns the previous choice
+bool useEdgeBlocks(bool on) {
+  const bool was = g_edge_blocks;
+  g_edge_blocks = on;
+  return was;
+}
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
@@ -416,7 +426,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
   const size_t listed = keep_edges || input_edges ? nc : 0;
-  EdgeLists edge_lists(listed, listed * 32 <= kEdgeBlockBytes);
+  EdgeLists edge_lists(listed, g_edge_blocks && listed * 32 <= kEdgeBlockBytes);
   // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
   // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
   // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
