@@ -132,14 +132,16 @@ class EdgeLists {
     lo ^= flip;
     hi ^= flip;
   }
-  // The first kWalkDepth nodes are read whatever the list's length (node 0 ends a list and links to
-  // itself) and the match picked without a branch; a branch only where the list goes on past them.
-  // (The loop's exits mispredicted: 1 M sphere 10 %, 535 k of the elimination's 591 k mispredicts.)
-  // (out of line: inlined into find, the walk took find itself out of line on the bunny's levels,
-  // 13.3 -> 15.0 M instructions at 50 %)
+  // with blocks, the edges chained after a full block (out of line: inlined into find, the walk
+  // took find itself out of line on the bunny's levels, 13.3 -> 15.0 M instructions at 50 %)
   __attribute__((noinline)) uint32_t walkBeyondBlock(uint32_t lo, uint32_t hi) const {
     return node_id_[walkNodes(lo, hi)];  // (node 0: kNone)
   }
+  // The node of edge (lo, hi) in lo's list, or kNoNode. The first kWalkDepth nodes are read whatever
+  // the list's length (node 0 ends a list and links to itself) and the match picked without a
+  // branch; a branch only where the list goes on past them. (The loop's exits mispredicted: 1 M
+  // sphere 10 %, 535 k of the elimination's 591 k mispredicts. Three nodes: there 96 % of the walks
+  // end within them; four were no faster.)
   SCENELOD_ALWAYS_INLINE uint32_t walkNodes(uint32_t lo, uint32_t hi) const {
     const uint32_t* next = node_next_.get();
     const uint32_t* his = node_hi_.get();
