@@ -177,6 +177,8 @@ TEST(Elimination, InputEdgesAndPointsAreClusteredToo) {
 // (the elimination's classification among them) for every later call; returns the previous choice
 namespace scenelod::detail {
 bool useAvx2Paths(bool on);
+// (lodcore/src/elimination.cpp) false: every candidate edge in the chained lists; returns the previous choice
+bool useEdgeBlocks(bool on);
 }
 
 namespace {
@@ -325,4 +327,75 @@ TEST(ThickEdge, DynamicNormalIsPerpendicularAndFacesTheCamera) {
   EXPECT_EQ(dynamicNormal(v1, v2, 0.5f * v2), glm::vec3(0.0f));           // camera on the edge's line
   EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.5f, 0.1f), 5.0f);
   EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.01f, 0.1f), 1.0f);
+}
+
+// The chained edge lists (used alone above 2^15 clusters; walked three nodes deep without a branch,
+// new edges linked without one) give the bits of the per-cluster blocks: forced on meshes small
+// enough for blocks, with lists longer than three nodes (the hubs of spokes), input edges with
+// thicknesses beside collapsed triangles, uncovered edges (thickness), edges or points not kept.
+TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  if (test::fileExists(test::bunnyPath())) {
+    Mesh bunny;
+    ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+    meshes.emplace_back("bunny", std::move(bunny));
+  }
+  Mesh sheet;
+  test::appendMesh(sheet, test::makeBox({20, 20, 20}, {28, 28, 28}, 30));
+  for (int k = 0; k < 5; ++k)
+    test::appendMesh(sheet, test::makeCylinder(0.0f, 6.0f, 0.05f, 24, 16 + k, glm::vec3(0.0f, 0.5f * k, 0.0f)));
+  meshes.emplace_back("box and cylinders", std::move(sheet));
+  Mesh sphere = test::makeBumpySphere(90, 121);
+  for (uint32_t v = 0; v + 7 < sphere.positions.size(); v += 7) {  // input edges across the surface
+    sphere.edges.insert(sphere.edges.end(), {v, v + 7});
+    sphere.edge_thickness.push_back(0.001f * float(v % 13));
+  }
+  meshes.emplace_back("bumpy sphere with edges", std::move(sphere));
+  Mesh hubs;  // 40 hubs of 24 spokes, each spoke two slivers collapsing onto one edge
+  for (int h = 0; h < 40; ++h) {
+    const glm::vec3 c(30.0f * float(h % 8), 30.0f * float(h / 8), 0.0f);
+    const uint32_t hub = static_cast<uint32_t>(hubs.positions.size());
+    hubs.positions.insert(hubs.positions.end(), {c, c + glm::vec3(0.01f, 0, 0)});
+    for (int i = 0; i < 24; ++i) {
+      const float a = 6.2831853f * float(i) / 24.0f;
+      const glm::vec3 tip = c + glm::vec3(10.0f * std::cos(a), 10.0f * std::sin(a), 0.0f);
+      const uint32_t v = static_cast<uint32_t>(hubs.positions.size());
+      hubs.positions.insert(hubs.positions.end(), {tip, tip + glm::vec3(0, 0, 0.01f), tip + glm::vec3(0, 0, 0.02f)});
+      hubs.triangles.insert(hubs.triangles.end(), {hub, v, v + 1, hub + 1, v + 2, v});
+    }
+  }
+  meshes.emplace_back("hubs", std::move(hubs));
+  meshes.emplace_back("finer bumpy sphere", test::makeBumpySphere(300, 400));
+  const bool was = detail::useEdgeBlocks(true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (const glm::vec3& q : m.positions) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    const float diagonal = glm::length(hi - lo);
+    for (float f : {0.002f, 0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 3; ++keep) {
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        Mesh blocks, chained;
+        detail::useEdgeBlocks(true);
+        ASSERT_TRUE(clusterMesh(m, p, blocks).ok());
+        detail::useEdgeBlocks(false);
+        ASSERT_TRUE(clusterMesh(m, p, chained).ok());
+        SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
+        EXPECT_TRUE(sameBits(chained.positions, blocks.positions));
+        EXPECT_TRUE(sameBits(chained.normals, blocks.normals));
+        EXPECT_TRUE(sameBits(chained.triangles, blocks.triangles));
+        EXPECT_TRUE(sameBits(chained.edges, blocks.edges));
+        EXPECT_TRUE(sameBits(chained.edge_thickness, blocks.edge_thickness));
+        EXPECT_TRUE(sameBits(chained.points, blocks.points));
+        levels += blocks.edgeCount() > 0;
+      }
+  }
+  detail::useEdgeBlocks(was);
+  EXPECT_GE(levels, 20u);
 }
