@@ -205,16 +205,16 @@ struct alignas(16) LaneScratch {
 };
 
 // coordinate c of four points, one per lane
-inline __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
+SCENELOD_ALWAYS_INLINE __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
 
 // the lanes of bits 0..3 of `bits` set, as a float mask
-inline __m128 bitLanes(uint32_t bits) {
+SCENELOD_ALWAYS_INLINE __m128 bitLanes(uint32_t bits) {
   const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
   return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(static_cast<int>(bits)), bit), bit));
 }
 
 // lanes of `keep` take x, the others NaN (all bits set)
-inline __m128 orNan(__m128 keep, __m128 x) {
+SCENELOD_ALWAYS_INLINE __m128 orNan(__m128 keep, __m128 x) {
   return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1))));
 }
 
@@ -224,7 +224,7 @@ inline __m128 orNan(__m128 keep, __m128 x) {
 
 // min(dot, best) for the four pairs (lane l of p, lane l of q): dot if dot < best, so a NaN dot keeps
 // best (minps returns its second operand unless the first is less), as std::min(best, dot) does
-inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
+SCENELOD_ALWAYS_INLINE __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
   const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(px, qx), _mm_mul_ps(py, qy)), _mm_mul_ps(pz, qz));
   return _mm_min_ps(d, best);
 }
@@ -233,7 +233,7 @@ inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __
 // `live_blocks` hold vectors, and their unused lanes are NaN. Every pair of lanes meets in some
 // rotation: within a block rotations by 1 and 2, between two blocks all four.
 // inlined at both calls (directions, normals), which the compiler may then interleave
-inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, const float* y, const float* z,
+SCENELOD_ALWAYS_INLINE float minPairDotBlocks(const float* x, const float* y, const float* z,
                                                            uint32_t live_blocks) {
   // four running minima, so that the minps do not wait on each other (the minimum does not depend
   // on the order, up to the sign of a zero)
@@ -262,7 +262,7 @@ inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, con
 }
 
 struct LaneRow {
-  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area
+  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused)
   float longest;       // longest incident edge
   float cos_dirs;      // minPairDot of the directions (1 when fewer than two)
   float cos_normals;   // minPairDot of the face normals, when asked
@@ -275,8 +275,8 @@ struct LaneRow {
 // NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
 // candidate block c < NB: the a of incidence block c, else the b of block c - NB.
 template <size_t NB>
-bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
-                   LaneScratch& s, LaneRow& out) {
+SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r,
+                                              bool want_normals, LaneScratch& s, LaneRow& out) {
   constexpr size_t nb = NB;
   __m128i cand[2 * NB];
   const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
@@ -395,8 +395,12 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
     __m128 t4 = _mm_and_ps(face, _mm_mul_ps(any, nz)), t5 = _mm_and_ps(face, _mm_mul_ps(anz, nz));
     __m128 t6 = _mm_and_ps(face, anx), t7 = _mm_and_ps(face, any);
     _MM_TRANSPOSE4_PS(t4, t5, t6, t7);
-    __m128 t8 = _mm_and_ps(face, anz), t9 = _mm_and_ps(face, area), t10 = zero, t11 = zero;
-    _MM_TRANSPOSE4_PS(t8, t9, t10, t11);
+    // the last two columns (normal z, area) need lanes 0 and 1 of q2 only: the pairs of incidence
+    // l in lanes 0, 1 of t8 .. t11, lanes 2, 3 of q2 unused (a transpose with two zero columns
+    // compiled, for AVX2, to a vmovq register move that valgrind 3.19 cannot decode)
+    const __m128 t8_9 = _mm_and_ps(face, anz), t9_9 = _mm_and_ps(face, area);
+    const __m128 t8 = _mm_unpacklo_ps(t8_9, t9_9), t10 = _mm_unpackhi_ps(t8_9, t9_9);
+    const __m128 t9 = _mm_movehl_ps(t8, t8), t11 = _mm_movehl_ps(t10, t10);
     q0 = _mm_add_ps(q0, t0), q1 = _mm_add_ps(q1, t4), q2 = _mm_add_ps(q2, t8);
     q0 = _mm_add_ps(q0, t1), q1 = _mm_add_ps(q1, t5), q2 = _mm_add_ps(q2, t9);
     q0 = _mm_add_ps(q0, t2), q1 = _mm_add_ps(q1, t6), q2 = _mm_add_ps(q2, t10);
@@ -437,16 +441,23 @@ bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_
   return true;
 }
 
-bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
-                   LaneScratch& s, LaneRow& out) {
-  static_assert(kLaneRow == 16, "one instance per block count");
-  switch ((r + 3) / 4) {
-    case 1: return gradeRowLanes<1>(pos, v, row, r, want_normals, s, out);
-    case 2: return gradeRowLanes<2>(pos, v, row, r, want_normals, s, out);
-    case 3: return gradeRowLanes<3>(pos, v, row, r, want_normals, s, out);
-    default: return gradeRowLanes<4>(pos, v, row, r, want_normals, s, out);
+// one instance per block count, in the baseline and (where the CPU has AVX2, detail::avx2Paths)
+// in an AVX2 build of the same source: VEX encoding, no FMA, so the same bits with fewer
+// instructions (three-operand forms spare the register copies; bunny: see docs/bench/clustering.md)
+#define SCENELOD_GRADE_ROW_LANES(name, attributes)                                                    \
+  attributes bool name(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals, \
+                       LaneScratch& s, LaneRow& out) {                                                 \
+    static_assert(kLaneRow == 16, "one instance per block count");                                    \
+    switch ((r + 3) / 4) {                                                                             \
+      case 1: return gradeRowLanesBody<1>(pos, v, row, r, want_normals, s, out);                       \
+      case 2: return gradeRowLanesBody<2>(pos, v, row, r, want_normals, s, out);                       \
+      case 3: return gradeRowLanesBody<3>(pos, v, row, r, want_normals, s, out);                       \
+      default: return gradeRowLanesBody<4>(pos, v, row, r, want_normals, s, out);                      \
+    }                                                                                                  \
   }
-}
+SCENELOD_GRADE_ROW_LANES(gradeRowLanes, )
+SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET)
+#undef SCENELOD_GRADE_ROW_LANES
 #endif
 
 // Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
@@ -485,6 +496,9 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   std::mutex longest_mutex;
   float longest_edge = 0.0f;
   glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
+#if defined(__SSE2__)
+  const auto lanes_fn = detail::avx2Paths() ? gradeRowLanesAvx2 : gradeRowLanes;
+#endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
     std::vector<glm::vec3> dirs, normals;
@@ -512,7 +526,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
       hi = glm::max(hi, pv);
 #if defined(__SSE2__)
       if (!colors && row <= kLaneRow &&
-          gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
+          lanes_fn(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
         if (out.sums) out.sums[v].encode(lr.sums[9], lr.sums);
         range_longest = std::max(range_longest, lr.longest);
         finish(v, lr.longest, lr.any_dir, lr.cos_dirs, lr.boundary, [&] { return lr.cos_normals; });
