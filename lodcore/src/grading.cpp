@@ -15,6 +15,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -261,6 +264,20 @@ SCENELOD_ALWAYS_INLINE float minPairDotBlocks(const float* x, const float* y, co
   return _mm_cvtss_f32(best);
 }
 
+// the coordinates of the four points pos[idx[0..3]] as columns, by three AVX2 gathers (the same
+// floats as loading the points one by one). Not forced inline: it is inlined where the caller is
+// built for AVX2 (gradeRowLanesAvx2) and called only from there. Indices below 2^31 / 3
+// (gradeAndSum checks the vertex count), so that 3 x index fits the gather's int32 offsets.
+SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint32_t* idx, __m128& x, __m128& y,
+                                               __m128& z) {
+  const __m128i i = _mm_load_si128(reinterpret_cast<const __m128i*>(idx));
+  const __m128i i3 = _mm_add_epi32(i, _mm_add_epi32(i, i));
+  const float* base = &pos[0].x;
+  x = _mm_i32gather_ps(base, i3, 4);
+  y = _mm_i32gather_ps(base + 1, i3, 4);
+  z = _mm_i32gather_ps(base + 2, i3, 4);
+}
+
 struct LaneRow {
   float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused)
   float longest;       // longest incident edge
@@ -274,7 +291,7 @@ struct LaneRow {
 // row holds an input edge. `row` may be read up to the next multiple of 4.
 // NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
 // candidate block c < NB: the a of incidence block c, else the b of block c - NB.
-template <size_t NB>
+template <size_t NB, bool kGather>
 SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r,
                                               bool want_normals, LaneScratch& s, LaneRow& out) {
   constexpr size_t nb = NB;
@@ -369,16 +386,22 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
   int any_dir = 0;
   #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
-    glm::vec3 pa[4], pb[4];
-    #pragma GCC unroll 8
-    for (int l = 0; l < 4; ++l) {
-      pa[l] = pos[s.ia[4 * k + l]];
-      pb[l] = pos[s.ib[4 * k + l]];
+    __m128 ax, ay, az, bx, by, bz;  // the corners a and b, one incidence per lane
+    if constexpr (kGather) {
+      gatherColumns(pos, s.ia + 4 * k, ax, ay, az);
+      gatherColumns(pos, s.ib + 4 * k, bx, by, bz);
+    } else {
+      glm::vec3 pa[4], pb[4];
+      #pragma GCC unroll 8
+      for (int l = 0; l < 4; ++l) {
+        pa[l] = pos[s.ia[4 * k + l]];
+        pb[l] = pos[s.ib[4 * k + l]];
+      }
+      ax = column(pa, 0), ay = column(pa, 1), az = column(pa, 2);
+      bx = column(pb, 0), by = column(pb, 1), bz = column(pb, 2);
     }
-    const __m128 ux = _mm_sub_ps(column(pa, 0), vx), uy = _mm_sub_ps(column(pa, 1), vy);
-    const __m128 uz = _mm_sub_ps(column(pa, 2), vz);
-    const __m128 wx = _mm_sub_ps(column(pb, 0), vx), wy = _mm_sub_ps(column(pb, 1), vy);
-    const __m128 wz = _mm_sub_ps(column(pb, 2), vz);
+    const __m128 ux = _mm_sub_ps(ax, vx), uy = _mm_sub_ps(ay, vy), uz = _mm_sub_ps(az, vz);
+    const __m128 wx = _mm_sub_ps(bx, vx), wy = _mm_sub_ps(by, vy), wz = _mm_sub_ps(bz, vz);
     // glm::cross(u, w), glm::length, / as in the scalar pass
     const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, wz), _mm_mul_ps(wy, uz));
     const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, wx), _mm_mul_ps(wz, ux));
@@ -442,21 +465,23 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
 }
 
 // one instance per block count, in the baseline and (where the CPU has AVX2, detail::avx2Paths)
-// in an AVX2 build of the same source: VEX encoding, no FMA, so the same bits with fewer
-// instructions (three-operand forms spare the register copies; bunny: see docs/bench/clustering.md)
-#define SCENELOD_GRADE_ROW_LANES(name, attributes)                                                    \
+// in an AVX2 build of the same source with gathers for the corner positions: VEX encoding, no FMA,
+// so the same bits with fewer instructions (bunny, the grading pass: 48.8 M instructions, 40.1 M
+// built for AVX2, 37.5 M with the gathers; its time did not change measurably, 3.3 ms on one thread
+// either way: the pass is bound by its shuffles, not by the instruction count)
+#define SCENELOD_GRADE_ROW_LANES(name, attributes, gather)                                         \
   attributes bool name(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals, \
-                       LaneScratch& s, LaneRow& out) {                                                 \
-    static_assert(kLaneRow == 16, "one instance per block count");                                    \
-    switch ((r + 3) / 4) {                                                                             \
-      case 1: return gradeRowLanesBody<1>(pos, v, row, r, want_normals, s, out);                       \
-      case 2: return gradeRowLanesBody<2>(pos, v, row, r, want_normals, s, out);                       \
-      case 3: return gradeRowLanesBody<3>(pos, v, row, r, want_normals, s, out);                       \
-      default: return gradeRowLanesBody<4>(pos, v, row, r, want_normals, s, out);                      \
-    }                                                                                                  \
+                       LaneScratch& s, LaneRow& out) {                                                \
+    static_assert(kLaneRow == 16, "one instance per block count");                                   \
+    switch ((r + 3) / 4) {                                                                            \
+      case 1: return gradeRowLanesBody<1, gather>(pos, v, row, r, want_normals, s, out);              \
+      case 2: return gradeRowLanesBody<2, gather>(pos, v, row, r, want_normals, s, out);              \
+      case 3: return gradeRowLanesBody<3, gather>(pos, v, row, r, want_normals, s, out);              \
+      default: return gradeRowLanesBody<4, gather>(pos, v, row, r, want_normals, s, out);             \
+    }                                                                                                 \
   }
-SCENELOD_GRADE_ROW_LANES(gradeRowLanes, )
-SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET)
+SCENELOD_GRADE_ROW_LANES(gradeRowLanes, , false)
+SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET, true)
 #undef SCENELOD_GRADE_ROW_LANES
 #endif
 
@@ -497,7 +522,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   float longest_edge = 0.0f;
   glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
 #if defined(__SSE2__)
-  const auto lanes_fn = detail::avx2Paths() ? gradeRowLanesAvx2 : gradeRowLanes;
+  const auto lanes_fn = detail::avx2Paths() && vn < (size_t(1) << 31) / 3 ? gradeRowLanesAvx2 : gradeRowLanes;
 #endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
