@@ -278,6 +278,29 @@ SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint3
   z = _mm_i32gather_ps(base + 2, i3, 4);
 }
 
+// minPairDotBlocks over two blocks (8 lanes, every lane a vector or NaN) in 256-bit registers:
+// lane i against lane (i + k) % 8 for k = 1..4 meets every pair; each dot product is the same
+// expression as minDot's (and symmetric in its two vectors), the minimum independent of the order,
+// so the same result. 4 dot products of 8 lanes and 12 permutes, where the blocks took 8 of 4 lanes
+// and 21 shuffles. Built for AVX2 and, like gatherColumns, inlined only into gradeRowLanesAvx2.
+SCENELOD_AVX2_TARGET inline float minPairDot8(const float* x, const float* y, const float* z) {
+  const __m256 px = _mm256_loadu_ps(x), py = _mm256_loadu_ps(y), pz = _mm256_loadu_ps(z);
+  __m256 best = _mm256_set1_ps(1.0f);
+  #pragma GCC unroll 4
+  for (int k = 1; k <= 4; ++k) {
+    const __m256i rot = _mm256_setr_epi32(k % 8, (k + 1) % 8, (k + 2) % 8, (k + 3) % 8, (k + 4) % 8, (k + 5) % 8,
+                                          (k + 6) % 8, (k + 7) % 8);
+    const __m256 qx = _mm256_permutevar8x32_ps(px, rot), qy = _mm256_permutevar8x32_ps(py, rot);
+    const __m256 qz = _mm256_permutevar8x32_ps(pz, rot);
+    const __m256 d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, qx), _mm256_mul_ps(py, qy)), _mm256_mul_ps(pz, qz));
+    best = _mm256_min_ps(d, best);  // a NaN dot keeps best, as in minDot
+  }
+  __m128 b = _mm_min_ps(_mm256_castps256_ps128(best), _mm256_extractf128_ps(best, 1));
+  b = _mm_min_ps(b, SCENELOD_ROT_PS(b, 2));
+  b = _mm_min_ps(b, SCENELOD_ROT_PS(b, 1));
+  return _mm_cvtss_f32(b);
+}
+
 struct LaneRow {
   float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused)
   float longest;       // longest incident edge
@@ -383,6 +406,7 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
   __m128 q0 = zero, q1 = zero, q2 = zero;  // quadric xx xy xz yy; yz zz, normal x y; normal z, area
   __m128 longest = zero;
   uint32_t normal_blocks = 0, dir_blocks = 0;  // the blocks holding some normal, some direction
+  uint32_t dir_stored = 0;                      // the candidate blocks whose directions were stored
   int any_dir = 0;
   #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
@@ -450,6 +474,7 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
       const int used = _mm_movemask_ps(use);
       any_dir |= used;
       dir_blocks |= static_cast<uint32_t>(used != 0) << c;
+      dir_stored |= 1u << c;
     }
   }
   _mm_storeu_ps(out.sums, q0);
@@ -459,8 +484,17 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
   longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
   out.longest = _mm_cvtss_f32(longest);
   out.any_dir = any_dir != 0;
-  out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
-  out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
+  // rows of 5 to 8 corners (most): in the AVX2 build the two blocks as one 8-lane vector, when
+  // every direction is in the first two candidate blocks (the a of a closed fan) and both were stored
+  if constexpr (kGather && NB == 2) {
+    out.cos_dirs = (dir_blocks >> 2) == 0 && (dir_stored & 2u)
+                       ? minPairDot8(s.dir[0], s.dir[1], s.dir[2])
+                       : minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
+    out.cos_normals = want_normals ? minPairDot8(s.nrm[0], s.nrm[1], s.nrm[2]) : 1.0f;  // both blocks stored
+  } else {
+    out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
+    out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
+  }
   return true;
 }
 
