@@ -208,16 +208,16 @@ struct alignas(16) LaneScratch {
 };
 
 // coordinate c of four points, one per lane
-SCENELOD_ALWAYS_INLINE __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
+inline __m128 column(const glm::vec3 p[4], int c) { return _mm_setr_ps(p[0][c], p[1][c], p[2][c], p[3][c]); }
 
 // the lanes of bits 0..3 of `bits` set, as a float mask
-SCENELOD_ALWAYS_INLINE __m128 bitLanes(uint32_t bits) {
+inline __m128 bitLanes(uint32_t bits) {
   const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
   return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(static_cast<int>(bits)), bit), bit));
 }
 
 // lanes of `keep` take x, the others NaN (all bits set)
-SCENELOD_ALWAYS_INLINE __m128 orNan(__m128 keep, __m128 x) {
+inline __m128 orNan(__m128 keep, __m128 x) {
   return _mm_or_ps(_mm_and_ps(keep, x), _mm_andnot_ps(keep, _mm_castsi128_ps(_mm_set1_epi32(-1))));
 }
 
@@ -227,7 +227,7 @@ SCENELOD_ALWAYS_INLINE __m128 orNan(__m128 keep, __m128 x) {
 
 // min(dot, best) for the four pairs (lane l of p, lane l of q): dot if dot < best, so a NaN dot keeps
 // best (minps returns its second operand unless the first is less), as std::min(best, dot) does
-SCENELOD_ALWAYS_INLINE __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
+inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __m128 qy, __m128 qz) {
   const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(px, qx), _mm_mul_ps(py, qy)), _mm_mul_ps(pz, qz));
   return _mm_min_ps(d, best);
 }
@@ -315,7 +315,7 @@ struct LaneRow {
 // NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
 // candidate block c < NB: the a of incidence block c, else the b of block c - NB.
 template <size_t NB, bool kGather>
-SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r,
+inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r,
                                               bool want_normals, LaneScratch& s, LaneRow& out) {
   constexpr size_t nb = NB;
   __m128i cand[2 * NB];
@@ -515,7 +515,7 @@ SCENELOD_ALWAYS_INLINE bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, 
     }                                                                                                 \
   }
 SCENELOD_GRADE_ROW_LANES(gradeRowLanes, , false)
-SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET, true)
+SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET __attribute__((flatten)), true)
 #undef SCENELOD_GRADE_ROW_LANES
 #endif
 
