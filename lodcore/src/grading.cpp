@@ -236,7 +236,7 @@ inline __m128 minDot(__m128 best, __m128 px, __m128 py, __m128 pz, __m128 qx, __
 // `live_blocks` hold vectors, and their unused lanes are NaN. Every pair of lanes meets in some
 // rotation: within a block rotations by 1 and 2, between two blocks all four.
 // inlined at both calls (directions, normals), which the compiler may then interleave
-SCENELOD_ALWAYS_INLINE float minPairDotBlocks(const float* x, const float* y, const float* z,
+inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, const float* y, const float* z,
                                                            uint32_t live_blocks) {
   // four running minima, so that the minps do not wait on each other (the minimum does not depend
   // on the order, up to the sign of a zero)
@@ -265,8 +265,8 @@ SCENELOD_ALWAYS_INLINE float minPairDotBlocks(const float* x, const float* y, co
 }
 
 // the coordinates of the four points pos[idx[0..3]] as columns, by three AVX2 gathers (the same
-// floats as loading the points one by one). Not forced inline: it is inlined where the caller is
-// built for AVX2 (gradeRowLanesAvx2) and called only from there. Indices below 2^31 / 3
+// floats as loading the points one by one). Called only from gradeRowLanesAvx2, whose flatten
+// attribute inlines it (an always-inline AVX2 function cannot go into the baseline body's template). Indices below 2^31 / 3
 // (gradeAndSum checks the vertex count), so that 3 x index fits the gather's int32 offsets.
 SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint32_t* idx, __m128& x, __m128& y,
                                                __m128& z) {
@@ -282,7 +282,7 @@ SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint3
 // lane i against lane (i + k) % 8 for k = 1..4 meets every pair; each dot product is the same
 // expression as minDot's (and symmetric in its two vectors), the minimum independent of the order,
 // so the same result. 4 dot products of 8 lanes and 12 permutes, where the blocks took 8 of 4 lanes
-// and 21 shuffles. Built for AVX2 and, like gatherColumns, inlined only into gradeRowLanesAvx2.
+// and 21 shuffles. Like gatherColumns, inlined only into gradeRowLanesAvx2.
 SCENELOD_AVX2_TARGET inline float minPairDot8(const float* x, const float* y, const float* z) {
   const __m256 px = _mm256_loadu_ps(x), py = _mm256_loadu_ps(y), pz = _mm256_loadu_ps(z);
   __m256 best = _mm256_set1_ps(1.0f);
@@ -315,8 +315,8 @@ struct LaneRow {
 // NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
 // candidate block c < NB: the a of incidence block c, else the b of block c - NB.
 template <size_t NB, bool kGather>
-inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r,
-                                              bool want_normals, LaneScratch& s, LaneRow& out) {
+inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                              LaneScratch& s, LaneRow& out) {
   constexpr size_t nb = NB;
   __m128i cand[2 * NB];
   const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
@@ -499,10 +499,11 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
 }
 
 // one instance per block count, in the baseline and (where the CPU has AVX2, detail::avx2Paths)
-// in an AVX2 build of the same source with gathers for the corner positions: VEX encoding, no FMA,
+// in an AVX2 build of the same source with gathers and 8-lane pair searches: VEX encoding, no FMA,
 // so the same bits with fewer instructions (bunny, the grading pass: 48.8 M instructions, 40.1 M
-// built for AVX2, 37.5 M with the gathers; its time did not change measurably, 3.3 ms on one thread
-// either way: the pass is bound by its shuffles, not by the instruction count)
+// built for AVX2, 37.5 M with the gathers, 32.7 M with minPairDot8). Its time did not follow: about
+// 90 ns per lane row on either build, also on a 2 k-vertex mesh in cache and with the divisions
+// replaced by reciprocals (probes, not kept), so the count is not what bounds it.
 #define SCENELOD_GRADE_ROW_LANES(name, attributes, gather)                                         \
   attributes bool name(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals, \
                        LaneScratch& s, LaneRow& out) {                                                \
