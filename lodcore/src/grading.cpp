@@ -278,13 +278,13 @@ SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint3
   z = _mm_i32gather_ps(base + 2, i3, 4);
 }
 
-// minPairDotBlocks over two blocks (8 lanes, every lane a vector or NaN) in 256-bit registers:
+// minPairDotBlocks over two blocks (8 lanes, every lane a vector or NaN; x[0] lanes 0..3) in 256-bit registers:
 // lane i against lane (i + k) % 8 for k = 1..4 meets every pair; each dot product is the same
 // expression as minDot's (and symmetric in its two vectors), the minimum independent of the order,
 // so the same result. 4 dot products of 8 lanes and 12 permutes, where the blocks took 8 of 4 lanes
 // and 21 shuffles. Like gatherColumns, inlined only into gradeRowLanesAvx2.
-SCENELOD_AVX2_TARGET inline float minPairDot8(const float* x, const float* y, const float* z) {
-  const __m256 px = _mm256_loadu_ps(x), py = _mm256_loadu_ps(y), pz = _mm256_loadu_ps(z);
+SCENELOD_AVX2_TARGET inline float minPairDot8(const __m128 (&x)[2], const __m128 (&y)[2], const __m128 (&z)[2]) {
+  const __m256 px = _mm256_set_m128(x[1], x[0]), py = _mm256_set_m128(y[1], y[0]), pz = _mm256_set_m128(z[1], z[0]);
   __m256 best = _mm256_set1_ps(1.0f);
   #pragma GCC unroll 4
   for (int k = 1; k <= 4; ++k) {
@@ -408,6 +408,10 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
   uint32_t normal_blocks = 0, dir_blocks = 0;  // the blocks holding some normal, some direction
   uint32_t dir_stored = 0;                      // the candidate blocks whose directions were stored
   int any_dir = 0;
+  // the directions of candidate blocks 0, 1 and the normals of blocks 0, 1 again, kept in registers
+  // for minPairDot8: its 256-bit loads of two 128-bit stores could not be forwarded from the store
+  // buffer (they waited for the stores to reach the cache, on each row's dependency chain)
+  __m128 ra[3][2] = {{zero, zero}, {zero, zero}, {zero, zero}}, rn[3][2];
   #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
     __m128 ax, ay, az, bx, by, bz;  // the corners a and b, one incidence per lane
@@ -453,9 +457,11 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
     q0 = _mm_add_ps(q0, t2), q1 = _mm_add_ps(q1, t6), q2 = _mm_add_ps(q2, t10);
     q0 = _mm_add_ps(q0, t3), q1 = _mm_add_ps(q1, t7), q2 = _mm_add_ps(q2, t11);
     if (want_normals) {
-      _mm_store_ps(s.nrm[0] + 4 * k, orNan(face, nx));
-      _mm_store_ps(s.nrm[1] + 4 * k, orNan(face, ny));
-      _mm_store_ps(s.nrm[2] + 4 * k, orNan(face, nz));
+      const __m128 fx = orNan(face, nx), fy = orNan(face, ny), fz = orNan(face, nz);
+      _mm_store_ps(s.nrm[0] + 4 * k, fx);
+      _mm_store_ps(s.nrm[1] + 4 * k, fy);
+      _mm_store_ps(s.nrm[2] + 4 * k, fz);
+      if (k < 2) rn[0][k] = fx, rn[1][k] = fy, rn[2][k] = fz;
       normal_blocks |= static_cast<uint32_t>(_mm_movemask_ps(face) != 0) << k;
     }
     // directions to the distinct neighbours: the a of block k (candidate block k), the b (nb + k)
@@ -468,9 +474,12 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
       const __m128 len = _mm_sqrt_ps(len2);
       const __m128 use = _mm_and_ps(bitLanes(first >> (4 * c)), _mm_cmpgt_ps(len, zero));
       longest = _mm_max_ps(longest, _mm_and_ps(use, len));
-      _mm_store_ps(s.dir[0] + 4 * c, orNan(use, _mm_div_ps(dx, len)));
-      _mm_store_ps(s.dir[1] + 4 * c, orNan(use, _mm_div_ps(dy, len)));
-      _mm_store_ps(s.dir[2] + 4 * c, orNan(use, _mm_div_ps(dz, len)));
+      const __m128 ex = orNan(use, _mm_div_ps(dx, len)), ey = orNan(use, _mm_div_ps(dy, len));
+      const __m128 ez = orNan(use, _mm_div_ps(dz, len));
+      _mm_store_ps(s.dir[0] + 4 * c, ex);
+      _mm_store_ps(s.dir[1] + 4 * c, ey);
+      _mm_store_ps(s.dir[2] + 4 * c, ez);
+      if (c < 2) ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
       const int used = _mm_movemask_ps(use);
       any_dir |= used;
       dir_blocks |= static_cast<uint32_t>(used != 0) << c;
@@ -488,9 +497,9 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
   // every direction is in the first two candidate blocks (the a of a closed fan) and both were stored
   if constexpr (kGather && NB == 2) {
     out.cos_dirs = (dir_blocks >> 2) == 0 && (dir_stored & 2u)
-                       ? minPairDot8(s.dir[0], s.dir[1], s.dir[2])
+                       ? minPairDot8(ra[0], ra[1], ra[2])
                        : minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
-    out.cos_normals = want_normals ? minPairDot8(s.nrm[0], s.nrm[1], s.nrm[2]) : 1.0f;  // both blocks stored
+    out.cos_normals = want_normals ? minPairDot8(rn[0], rn[1], rn[2]) : 1.0f;  // both blocks stored
   } else {
     out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
     out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
