@@ -1,4 +1,5 @@
 // Grading (Low & Tan 1997 §3.1; Rossignac & Borrel 1993) on constructed vertices.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -208,15 +209,45 @@ namespace scenelod::detail {
 bool useAvx2Paths(bool on);
 }
 
-// The four-lane grading pass built for AVX2 (where the CPU has it) gives the baseline build's bits:
-// weights, order, sorted positions and face sums, with and without the boost, on the bunny, a bumpy
-// sphere, a CAD part (creases) and an open grid (boundaries); on a CPU without AVX2 both runs take
-// the baseline.
+namespace {
+
+// the vertices renumbered at random (triangles, edges and points remapped), and with `collapse`,
+// every collapse-th vertex moved onto another's position (zero-length edges, zero-area faces)
+Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
+  const size_t vn = in.vertexCount();
+  std::vector<uint32_t> to(vn);
+  for (size_t v = 0; v < vn; ++v) to[v] = static_cast<uint32_t>(v);
+  std::mt19937 rng(seed);
+  std::shuffle(to.begin(), to.end(), rng);
+  Mesh m = in;
+  for (size_t v = 0; v < vn; ++v) m.positions[to[v]] = in.positions[v];
+  if (!in.colors.empty())
+    for (size_t v = 0; v < vn; ++v) m.colors[to[v]] = in.colors[v];
+  for (uint32_t& i : m.triangles) i = to[i];
+  for (uint32_t& i : m.edges) i = to[i];
+  for (uint32_t& i : m.points) i = to[i];
+  if (collapse)
+    for (size_t v = collapse; v < vn; v += collapse) m.positions[v] = m.positions[v - 1];
+  return m;
+}
+
+}  // namespace
+
+// The grading pass built for AVX2 (where the CPU has it: four lanes per row, or two rows of 5 to 8
+// corners side by side in eight lanes) gives the baseline build's bits: weights, order, sorted
+// positions and face sums, with and without the boost, on the bunny, a bumpy sphere, a CAD part
+// (creases) and an open grid (boundaries), and on copies with their vertices renumbered (so that
+// rows of any kind meet in a pair) and partly collapsed (degenerate edges and faces); on a CPU
+// without AVX2 both runs take the baseline.
 TEST(Grading, Avx2PathsGiveTheBaselineBits) {
   std::vector<Mesh> meshes = {test::makeBumpySphere(60, 80), test::makeCadPart(), test::makeGrid(30, 2.0f)};
   if (test::fileExists(test::bunnyPath())) {
     meshes.emplace_back();
     ASSERT_TRUE(readObj(test::bunnyPath(), meshes.back()).ok());
+  }
+  for (size_t i = 0, n = meshes.size(); i < n; ++i) {
+    meshes.push_back(shuffledVertices(meshes[i], 7u + static_cast<uint32_t>(i), 0));
+    meshes.push_back(shuffledVertices(meshes[i], 11u + static_cast<uint32_t>(i), 7));
   }
   const bool was = detail::useAvx2Paths(true);
   for (size_t i = 0; i < meshes.size(); ++i)
