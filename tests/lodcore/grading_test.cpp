@@ -1,4 +1,5 @@
 // Grading (Low & Tan 1997 §3.1; Rossignac & Borrel 1993) on constructed vertices.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -6,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include "lodcore/generated_meshes.h"
+#include "scenelod/lodcore/obj_io.h"
+#include "test_support.h"
 #include "scenelod/lodcore/cluster.h"
 
 using namespace scenelod;
@@ -198,4 +201,80 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
         EXPECT_EQ(a.surface_area, b.surface_area) << i;
       }
   }
+}
+
+// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
+// for every later call; returns the previous choice
+namespace scenelod::detail {
+bool useAvx2Paths(bool on);
+}
+
+namespace {
+
+// the vertices renumbered at random (triangles, edges and points remapped), and with `collapse`,
+// every collapse-th vertex moved onto another's position (zero-length edges, zero-area faces)
+Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
+  const size_t vn = in.vertexCount();
+  std::vector<uint32_t> to(vn);
+  for (size_t v = 0; v < vn; ++v) to[v] = static_cast<uint32_t>(v);
+  std::mt19937 rng(seed);
+  std::shuffle(to.begin(), to.end(), rng);
+  Mesh m = in;
+  for (size_t v = 0; v < vn; ++v) m.positions[to[v]] = in.positions[v];
+  if (!in.colors.empty())
+    for (size_t v = 0; v < vn; ++v) m.colors[to[v]] = in.colors[v];
+  for (uint32_t& i : m.triangles) i = to[i];
+  for (uint32_t& i : m.edges) i = to[i];
+  for (uint32_t& i : m.points) i = to[i];
+  if (collapse)
+    for (size_t v = collapse; v < vn; v += collapse) m.positions[v] = m.positions[v - 1];
+  return m;
+}
+
+}  // namespace
+
+// The grading pass built for AVX2 (where the CPU has it: four lanes per row, or two rows of 5 to 8
+// corners side by side in eight lanes) gives the baseline build's bits: weights, order, sorted
+// positions and face sums, with and without the boost, on the bunny, a bumpy sphere, a CAD part
+// (creases) and an open grid (boundaries), and on copies with their vertices renumbered (so that
+// rows of any kind meet in a pair) and partly collapsed (degenerate edges and faces); on a CPU
+// without AVX2 both runs take the baseline.
+TEST(Grading, Avx2PathsGiveTheBaselineBits) {
+  std::vector<Mesh> meshes = {test::makeBumpySphere(60, 80), test::makeCadPart(), test::makeGrid(30, 2.0f)};
+  if (test::fileExists(test::bunnyPath())) {
+    meshes.emplace_back();
+    ASSERT_TRUE(readObj(test::bunnyPath(), meshes.back()).ok());
+  }
+  for (size_t i = 0, n = meshes.size(); i < n; ++i) {
+    meshes.push_back(shuffledVertices(meshes[i], 7u + static_cast<uint32_t>(i), 0));
+    meshes.push_back(shuffledVertices(meshes[i], 11u + static_cast<uint32_t>(i), 7));
+  }
+  const bool was = detail::useAvx2Paths(true);
+  for (size_t i = 0; i < meshes.size(); ++i)
+    for (Grading g : {Grading::kLowTan, Grading::kRossignac})
+      for (bool boost : {true, false}) {
+        ClusterParams params;
+        params.grading = g;
+        params.boost_features = boost;
+        PreparedMesh wide, base;
+        detail::useAvx2Paths(true);
+        ASSERT_TRUE(prepareMesh(meshes[i], params, wide).ok());
+        detail::useAvx2Paths(false);
+        ASSERT_TRUE(prepareMesh(meshes[i], params, base).ok());
+        SCOPED_TRACE("mesh " + std::to_string(i) + " " + gradingName(g) + (boost ? " boost" : ""));
+        ASSERT_EQ(wide.weights.size(), base.weights.size());
+        ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
+        EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
+        for (size_t v = 0; v < base.face_sums.size(); ++v) {
+          ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
+          for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
+        }
+        EXPECT_EQ(wide.order, base.order);
+        ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
+        EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
+                              base.sorted_positions.size() * sizeof(glm::vec3)), 0);
+        EXPECT_EQ(wide.longest_edge, base.longest_edge);
+        EXPECT_GT(base.longest_edge, 0.0f);
+      }
+  detail::useAvx2Paths(was);
 }
