@@ -85,19 +85,20 @@ void cornerNormals(const ClusterFaces& f, size_t k, float cos_crease, glm::vec3*
 // lanes' d >= cos_crease for every pair.
 
 #if defined(__SSE2__)
-// Clusters of at most this many corners (99 % at the bunny's 50 % level) take a fixed-size path.
+// Listed clusters (those failing the smooth test) of at most this many corners take a fixed-size path.
 constexpr uint32_t kSmall = 8;
 
 // The corner loop of buildOutputMesh for a cluster of k <= kSmall faces held in f, zero-padded to
 // kSmall: writes each corner's output vertex to local[0 .. kSmall) (indices from the cluster's first
 // vertex; entries past k repeat corner k - 1's) and the normals of the new vertices, in order, to
-// new_normals; returns their count. The same values as that loop: the sums of cornerNormals over
+// new_normals (which must hold kSmall: the entries past the count are written too); returns
+// their count. The same values as that loop: the sums of cornerNormals over
 // all kSmall faces (a zero face adds +0), normalised lane by lane as glm::length and the division
 // do (the fallback where the length is 0), and each corner takes the vertex of the first earlier
 // corner with an equal normal (== is transitive away from NaN, which equals nothing), else a new
 // one; the pairs are compared in lanes, without a branch per pair.
 uint32_t smallCorners(const ClusterFaces& f, size_t k, float cos_crease, const glm::vec3& fallback,
-                      uint32_t local[kSmall], glm::vec3 new_normals[kSmall]) {
+                      uint32_t local[kSmall], glm::vec3* new_normals) {
   const __m128 cosv = _mm_set1_ps(cos_crease);
   const __m128 fx = _mm_set1_ps(fallback.x), fy = _mm_set1_ps(fallback.y), fz = _mm_set1_ps(fallback.z);
   __m128 gx[2], gy[2], gz[2];
@@ -309,7 +310,10 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   // the listed clusters' vertex normals, in cluster order; each one's vertex count in base_vertex
   // until the output loop below gives it its first vertex
   std::vector<uint32_t> base_vertex(nc, kNone);
-  std::vector<glm::vec3> split_normals;
+  // at most one per listed corner, plus 8 (kSmall): the small path writes a candidate normal per
+  // corner in place, past its count; written, not zeroed (a vector grown by insert took 210 k instructions at the 1 M sphere's 1 % level)
+  std::unique_ptr<glm::vec3[]> split_normals(new glm::vec3[listed + 8]);
+  size_t split_count = 0;
   {
     ClusterFaces cf;
     std::vector<glm::vec3> sums;  // per corner of the current cluster
@@ -317,7 +321,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
       const uint32_t b = offsets[c], en = offsets[c + 1];
       if (b == en) continue;
       const size_t k = en - b;
-      const size_t first = split_normals.size();
+      const size_t first = split_count;
 #if defined(__SSE2__)
       if (k <= kSmall) {
         // fixed trip counts: the loop exits of a varying k were about four mispredicted branches per
@@ -338,9 +342,8 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
         _mm_storeu_ps(&cf.x[0], x0), _mm_storeu_ps(&cf.y[0], y0), _mm_storeu_ps(&cf.z[0], z0), _mm_storeu_ps(&cf.w[0], w0);
         _mm_storeu_ps(&cf.x[4], x1), _mm_storeu_ps(&cf.y[4], y1), _mm_storeu_ps(&cf.z[4], z1), _mm_storeu_ps(&cf.w[4], w1);
         uint32_t local[kSmall];
-        glm::vec3 new_normals[kSmall];
-        const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, new_normals);
-        split_normals.insert(split_normals.end(), new_normals, new_normals + fresh);
+        const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, &split_normals[first]);
+        split_count += fresh;
         for (uint32_t j = 0; j < kSmall; ++j) local_vertex[b + std::min<uint32_t>(j, uint32_t(k) - 1)] = local[j];
         base_vertex[c] = fresh;
         continue;
@@ -358,15 +361,15 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
         const float l = glm::length(n);
         n = l > 0.0f ? n / l : r.normals[c];
         size_t v = first;
-        while (v < split_normals.size() && !(split_normals[v] == n)) ++v;
-        if (v == split_normals.size()) split_normals.push_back(n);
+        while (v < split_count && !(split_normals[v] == n)) ++v;
+        if (v == split_count) split_normals[split_count++] = n;
         local_vertex[i] = static_cast<uint32_t>(v - first);
       }
-      base_vertex[c] = static_cast<uint32_t>(split_normals.size() - first);
+      base_vertex[c] = static_cast<uint32_t>(split_count - first);
     }
   }
   face.reset();
-  vertex_count += split_normals.size();
+  vertex_count += split_count;
 
   // each cluster's output vertices are base_vertex[c] .. the next used cluster's base_vertex: one
   // for a smooth cluster or one only used by edges and points, the split ones' copies in order
@@ -378,7 +381,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
     glm::vec3* positions = out.positions.data();
     glm::vec3* out_colors = out.colors.data();
     uint32_t v = 0;
-    const glm::vec3* split = split_normals.data();
+    const glm::vec3* split = split_normals.get();
     for (uint32_t c = 0; c < nc; ++c) {
       uint32_t n;
       if (smooth[c]) n = 1, normals[v] = glm::vec3(mean[c]);
