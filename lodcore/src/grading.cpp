@@ -745,7 +745,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   const glm::vec3* pos = mesh.positions.data();
   const bool colors = out.color_sums && !mesh.colors.empty();
 
-  const bool want_normals = grading == Grading::kLowTan && boost_features;  // the crease term
+  [[maybe_unused]] const bool want_normals = grading == Grading::kLowTan && boost_features;  // the crease term
   // the angular factor and the weight of vertex v from its longest edge, whether some edge has a
   // direction, the widest pair of directions, the boundary flag and (called only when needed) the
   // widest pair of face normals
