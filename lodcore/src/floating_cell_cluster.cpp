@@ -447,6 +447,52 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid)
   const int32_t id0 = _mm_cvtsi128_si32(s);
   return id0 == 0x7fffffff ? kNone : uint32_t(id0);
 }
+
+// The AVX2 flat-grid loops' shared steps (inlined into each). The non-empty heads of the cubes
+// lo..hi along each axis, any span (the uncommon case: a vertex within the slack of a cube face),
+// appended to `found` without a branch per head.
+template <typename Stored>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherHeadsAnySpan(const Stored* head, size_t sy, size_t sz,
+                                                                                 const int32_t lo[3], const int32_t hi[3],
+                                                                                 uint32_t* found, uint32_t found_count) {
+  for (int32_t z = lo[2]; z <= hi[2]; ++z)
+    for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+      const Stored* row = head + size_t(z) * sz + size_t(y) * sy;
+      for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+        found[found_count] = row[x];
+        found_count += row[x] != 0;
+      }
+    }
+  return found_count;
+}
+
+// The cell a vertex at pv joins among the listed cells `found` (padded as testCellLanes8 reads it;
+// 64 + 8 entries) and their successors along the lists, one round of 8 lanes per step, or kNone.
+template <bool kCube, bool kNearest, typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t bestListedCell8(const CellRecord* cells, uint32_t* found,
+                                                                              uint32_t found_count, const glm::vec3& pv,
+                                                                              const JoinRule& rule) {
+  const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
+  __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  __m256i bid = _mm256_set1_epi32(0x7fffffff);
+  uint32_t* list = found;
+  uint32_t list_count = found_count;
+  uint32_t successors[64 + 8];
+  for (;;) {
+    const __m256i chained = testCellLanes8<kCube, kNearest>(cells, list, list_count, px, py, pz, rule, bd2, bid);
+    if (_mm256_testz_si256(chained, chained)) break;
+    uint32_t* next_list = list == found ? successors : found;
+    uint32_t next_count = 0;
+    for (uint32_t j = 0; j < list_count; ++j) {
+      const uint32_t c = cells[list[j]].next;
+      next_list[next_count] = c;
+      next_count += c != 0;
+    }
+    list = next_list;
+    list_count = next_count;
+  }
+  return laneBest8<kNearest>(bd2, bid);
+}
 #endif
 
 #if defined(SCENELOD_FLOATING_AVX2)
@@ -941,36 +987,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
       found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
     } else {
       const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-      for (int32_t z = lo[2]; z <= hi[2]; ++z)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
-          for (int32_t x = lo[0]; x <= hi[0]; ++x) {
-            found[found_count] = row[x];
-            found_count += row[x] != 0;
-          }
-        }
+      found_count = gatherHeadsAnySpan(head.data(), sy, sz, lo, hi, found, found_count);
     }
-    const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
-    __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-    __m256i bid = _mm256_set1_epi32(0x7fffffff);
-    uint32_t* list = found;
-    uint32_t list_count = found_count;
-    uint32_t successors[64 + 8];
-    for (;;) {
-      const __m256i chained =
-          testCellLanes8<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
-      if (_mm256_testz_si256(chained, chained)) break;
-      uint32_t* next_list = list == found ? successors : found;
-      uint32_t next_count = 0;
-      for (uint32_t j = 0; j < list_count; ++j) {
-        const uint32_t c = cells[list[j]].next;
-        next_list[next_count] = c;
-        next_count += c != 0;
-      }
-      list = next_list;
-      list_count = next_count;
-    }
-    uint32_t best = laneBest8<kNearest>(bd2, bid);
+    uint32_t best = bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
     if (best == kNone) {
       best = out.cluster_count++;
       out.heaviest.push_back(p.order[i]);
@@ -996,7 +1015,6 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   auto& cells = grid.cells;
   auto& head = grid.head;
   const size_t sy = grid.sy, sz = grid.sz;
-  using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;
   const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
@@ -1087,36 +1105,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
         found_count = gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-        for (int32_t z = lo[2]; z <= hi[2]; ++z)
-          for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-            const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
-            for (int32_t x = lo[0]; x <= hi[0]; ++x) {
-              found[found_count] = row[x];
-              found_count += row[x] != 0;
-            }
-          }
+        found_count = gatherHeadsAnySpan(head.data(), sy, sz, lo, hi, found, found_count);
       }
-      const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
-      __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-      __m256i bid = _mm256_set1_epi32(0x7fffffff);
-      uint32_t* list = found;
-      uint32_t list_count = found_count;
-      uint32_t successors[64 + 8];
-      for (;;) {
-        const __m256i chained =
-            testCellLanes8<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
-        if (_mm256_testz_si256(chained, chained)) break;
-        uint32_t* next_list = list == found ? successors : found;
-        uint32_t next_count = 0;
-        for (uint32_t j = 0; j < list_count; ++j) {
-          const uint32_t c = cells[list[j]].next;
-          next_list[next_count] = c;
-          next_count += c != 0;
-        }
-        list = next_list;
-        list_count = next_count;
-      }
-      best = laneBest8<kNearest>(bd2, bid);
+      best = bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
     }
     if (best == kNone) {
       best = out.cluster_count++;
