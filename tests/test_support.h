@@ -1,7 +1,9 @@
 #pragma once
 // Paths to real models for tests, and skips with a clear message when they are absent.
 #include <cstdlib>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,6 +11,13 @@
 #include <gtest/gtest.h>
 
 namespace scenelod::test {
+
+// whether two arrays hold the same bytes (bit-identical results of two code paths; NaN-safe,
+// unlike ==)
+template <typename T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
 
 inline bool fileExists(const std::string& path) {
   struct stat st;

@@ -14,6 +14,7 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/eval/consistency.h"
 #include "scenelod/lodcore/cluster.h"
+#include "test_support.h"
 
 using namespace scenelod;
 
@@ -284,10 +285,7 @@ bool useAvx2Paths(bool on);
 
 namespace {
 
-template <typename T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
+using test::sameBits;
 
 }  // namespace
 

@@ -183,10 +183,7 @@ bool useEdgeBlocks(bool on);
 
 namespace {
 
-template <typename T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
+using test::sameBits;
 
 // the mesh with its vertex ids and its triangles in a scrambled order (a fixed LCG), so that
 // neighbouring triangles no longer share cache lines of the cluster ids

@@ -21,10 +21,7 @@ bool useAvx2Paths(bool on);
 
 namespace {
 
-template <typename T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
+using test::sameBits;
 
 }  // namespace
 
