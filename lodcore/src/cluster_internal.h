@@ -118,6 +118,23 @@ struct Assignment {
   }
 };
 
+// For each 8-bit lane mask, the indices of its set lanes in order, one byte each: the permutation
+// that packs the selected lanes of an 8-lane vector to the front (the AVX2 compactions of the
+// floating-cell heads and of the elimination's classes; 2 KB, built at compile time)
+struct LaneCompaction {
+  uint64_t lanes[256];
+  constexpr LaneCompaction() : lanes() {
+    for (uint32_t mask = 0; mask < 256; ++mask) {
+      uint64_t packed = 0;
+      int n = 0;
+      for (uint32_t lane = 0; lane < 8; ++lane)
+        if (mask & (1u << lane)) packed |= uint64_t(lane) << (8 * n++);
+      lanes[mask] = packed;
+    }
+  }
+};
+inline constexpr LaneCompaction kLaneCompaction;
+
 // floor to int32 without a libm call (inputs are checked to stay within +-2^30)
 inline int32_t floorToInt(float x) {
   const int32_t i = static_cast<int32_t>(x);

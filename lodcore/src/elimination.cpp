@@ -264,22 +264,7 @@ bool coherentOrder(const uint32_t* tri, size_t tn) {
 #endif
 
 #if defined(__x86_64__) || defined(__i386__)
-// per 8-bit lane mask: the set lanes' indices in order, one byte each (the compaction's permutation)
-struct CompactionTable {
-  uint64_t lanes[256];
-  constexpr CompactionTable() : lanes() {
-    for (uint32_t mask = 0; mask < 256; ++mask) {
-      uint64_t packed = 0;
-      int n = 0;
-      for (uint32_t lane = 0; lane < 8; ++lane)
-        if (mask & (1u << lane)) packed |= uint64_t(lane) << (8 * n++);
-      lanes[mask] = packed;
-    }
-  }
-};
-constexpr CompactionTable kCompaction;
-
-// stores the lanes of `v` that `perm` (a row of kCompaction) selects at dst[0, its count), in lane
+// stores the lanes of `v` that `perm` (a row of kLaneCompaction) selects at dst[0, its count), in lane
 // order; all 8 lanes are written
 SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m256i v, __m256i perm) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, perm));
@@ -321,9 +306,9 @@ SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const ui
     const uint32_t any = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(e01, e12), e02))));
     const uint32_t point = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(e01, e12))));
     const uint32_t kept = ~any & 0xFFu, edge = any & ~point;
-    const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[kept])));
-    const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[edge])));
-    const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompaction.lanes[point])));
+    const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[kept])));
+    const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[edge])));
+    const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[point])));
     storeCompacted(l.kept[0] + nk, c0, pk);
     storeCompacted(l.kept[1] + nk, c1, pk);
     storeCompacted(l.kept[2] + nk, c2, pk);

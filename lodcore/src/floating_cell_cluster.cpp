@@ -317,22 +317,8 @@ std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_al
 }
 
 #if defined(SCENELOD_FLOATING_AVX2)
-// For a mask of the non-empty heads among 8 lanes (two rows: lanes 0-2 and 4-6 of a pair of 4-head
-// loads; the 2 x 2 x 2 bricked heads: all 8), the lane indices that pack them to the front, one byte
-// each: 256 entries of 8 bytes (2 KB)
-struct PackTable {
-  uint64_t idx[256];
-  constexpr PackTable() : idx() {
-    for (uint32_t m = 0; m < 256; ++m) {
-      uint64_t v = 0;
-      int k = 0;
-      for (uint32_t lane = 0; lane < 8; ++lane)
-        if (m >> lane & 1u) v |= uint64_t(lane) << (8 * k++);
-      idx[m] = v;
-    }
-  }
-};
-constexpr PackTable kPack;
+// The packing of the non-empty heads among 8 lanes (two rows: lanes 0-2 and 4-6 of a pair of
+// 4-head loads; the 2 x 2 x 2 bricked heads: all 8) takes kLaneCompaction's row of their mask.
 
 // four list heads as 32-bit lanes
 SCENELOD_FLOATING_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
@@ -349,7 +335,7 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Hea
   const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(loadHeads4(r0)), loadHeads4(r1), 1);
   const uint32_t zero = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
   const uint32_t m = ~zero & valid;
-  const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPack.idx[m])));
+  const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[m])));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(found + count), _mm256_permutevar8x32_epi32(v, perm));
   return count + uint32_t(_mm_popcnt_u32(m));
 }
