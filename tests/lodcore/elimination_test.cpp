@@ -207,6 +207,26 @@ Mesh scrambled(const Mesh& in) {
   return m;
 }
 
+// the diagonal of the box of every position
+float positionsDiagonal(const Mesh& m) {
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (const glm::vec3& q : m.positions) {
+    lo = glm::min(lo, q);
+    hi = glm::max(hi, q);
+  }
+  return glm::length(hi - lo);
+}
+
+// every array of two clusterings bit for bit
+void expectSameBits(const Mesh& a, const Mesh& b) {
+  EXPECT_TRUE(sameBits(a.positions, b.positions));
+  EXPECT_TRUE(sameBits(a.normals, b.normals));
+  EXPECT_TRUE(sameBits(a.triangles, b.triangles));
+  EXPECT_TRUE(sameBits(a.edges, b.edges));
+  EXPECT_TRUE(sameBits(a.edge_thickness, b.edge_thickness));
+  EXPECT_TRUE(sameBits(a.points, b.points));
+}
+
 // the bunny (where installed) and thin cylinders beside a box (uncovered edges: thickness), the
 // first meshes of the tests comparing two elimination paths
 void addBunnyAndSheet(std::vector<std::pair<std::string, Mesh>>& meshes) {
@@ -239,12 +259,7 @@ TEST(Elimination, Avx2ClassificationGivesTheBaselineBits) {
   const bool was = detail::useAvx2Paths(true);
   size_t levels = 0;
   for (const auto& [name, m] : meshes) {
-    glm::vec3 lo(1e30f), hi(-1e30f);
-    for (const glm::vec3& q : m.positions) {
-      lo = glm::min(lo, q);
-      hi = glm::max(hi, q);
-    }
-    const float diagonal = glm::length(hi - lo);
+    const float diagonal = positionsDiagonal(m);
     for (float f : {0.004f, 0.015f, 0.05f, 0.15f})
       for (int keep = 0; keep < 3; ++keep) {
         if (m.positions.size() > (size_t(1) << 18) && keep != 0) continue;  // (the test's time)
@@ -259,12 +274,7 @@ TEST(Elimination, Avx2ClassificationGivesTheBaselineBits) {
         ASSERT_TRUE(clusterMesh(m, p, base).ok());
         SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
         ASSERT_GT(base.triangleCount(), 0u);
-        EXPECT_TRUE(sameBits(wide.positions, base.positions));
-        EXPECT_TRUE(sameBits(wide.normals, base.normals));
-        EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
-        EXPECT_TRUE(sameBits(wide.edges, base.edges));
-        EXPECT_TRUE(sameBits(wide.edge_thickness, base.edge_thickness));
-        EXPECT_TRUE(sameBits(wide.points, base.points));
+        expectSameBits(wide, base);
         ++levels;
       }
   }
@@ -365,12 +375,7 @@ TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
   const bool was = detail::useEdgeBlocks(true);
   size_t levels = 0;
   for (const auto& [name, m] : meshes) {
-    glm::vec3 lo(1e30f), hi(-1e30f);
-    for (const glm::vec3& q : m.positions) {
-      lo = glm::min(lo, q);
-      hi = glm::max(hi, q);
-    }
-    const float diagonal = glm::length(hi - lo);
+    const float diagonal = positionsDiagonal(m);
     for (float f : {0.002f, 0.004f, 0.015f, 0.05f, 0.15f})
       for (int keep = 0; keep < 3; ++keep) {
         ClusterParams p;
@@ -383,12 +388,7 @@ TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
         detail::useEdgeBlocks(false);
         ASSERT_TRUE(clusterMesh(m, p, chained).ok());
         SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
-        EXPECT_TRUE(sameBits(chained.positions, blocks.positions));
-        EXPECT_TRUE(sameBits(chained.normals, blocks.normals));
-        EXPECT_TRUE(sameBits(chained.triangles, blocks.triangles));
-        EXPECT_TRUE(sameBits(chained.edges, blocks.edges));
-        EXPECT_TRUE(sameBits(chained.edge_thickness, blocks.edge_thickness));
-        EXPECT_TRUE(sameBits(chained.points, blocks.points));
+        expectSameBits(chained, blocks);
         levels += blocks.edgeCount() > 0;
       }
   }
