@@ -47,6 +47,17 @@ inline void laneSums(const ClusterFaces& f, size_t i0, size_t k, __m128 cosv, __
 }
 #endif
 
+// the output's edges and points: each cluster-level edge or point at its cluster's first output
+// vertex (`base_vertex`), the edges' thicknesses moved over (zeros where the input had none)
+void carryEdgesAndPoints(Eliminated& e, const uint32_t* base_vertex, Mesh& out) {
+  out.edges.resize(e.edges.size());
+  for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];
+  out.edge_thickness = std::move(e.edge_thickness);
+  if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
+  out.points.resize(e.points.size());
+  for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];
+}
+
 // Corner normals of one cluster: for each corner i, the sum over the cluster's faces j, in order, of
 // face j's unit normal times its double area, over the faces within the crease angle of face i (and
 // face i itself). Four corners at a time, one per SIMD lane: each lane does the scalar loop's
@@ -411,12 +422,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   local_vertex.reset();
   out.triangles = std::move(e.triangles);
   out.triangles.shrink_to_fit();  // elimination reserved for about 2 triangles per cluster
-  out.edges.resize(e.edges.size());
-  for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];
-  out.edge_thickness = std::move(e.edge_thickness);
-  if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
-  out.points.resize(e.points.size());
-  for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];
+  carryEdgesAndPoints(e, base_vertex.data(), out);
 }
 
 void buildOutputMeshSse2(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {
@@ -480,12 +486,7 @@ void buildOutputMeshReference(Eliminated& e, const Representatives& r, float cre
     base_vertex[c] = first;
   }
   out.triangles = std::move(e.triangles);
-  out.edges.resize(e.edges.size());
-  for (size_t i = 0; i < e.edges.size(); ++i) out.edges[i] = base_vertex[e.edges[i]];
-  out.edge_thickness = std::move(e.edge_thickness);
-  if (out.edge_thickness.size() != out.edges.size() / 2) out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
-  out.points.resize(e.points.size());
-  for (size_t i = 0; i < e.points.size(); ++i) out.points[i] = base_vertex[e.points[i]];
+  carryEdgesAndPoints(e, base_vertex.data(), out);
 }
 
 bool g_output_reference = false;
