@@ -1296,7 +1296,6 @@ bool SelectionJob::run() {
   uint32_t* const slot_object = ctx.slot_object;
   double mandatory = coef.per_frame_ms;
   uint32_t prev_dropped = 0;  // budget mode: slots last frame "not drawn" with a benefit > 0 (settleKeys)
-  const glm::vec3* const center_of = centers.data;
   const float* const radius_of = radii.data;
   const float* const scale_of = max_scales.data;
   const float* const row_inv_w = ctx.row_inv_w;
