@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -569,6 +570,21 @@ class BrickHeads {
         }
       return count;
     }
+#if defined(__SSE2__)
+    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
+      // 3 x 3 x 3 cubes (the grid of side w/2): rows27's 9 rows of 3 heads
+      uint64_t rows[9];
+      rows27(lo, rows);
+      uint32_t count = 0;
+      for (int r = 0; r < 9; ++r)
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t h = uint32_t(rows[r] >> (16 * k)) & 0xffffu;
+          found[count] = h;
+          count += h != 0;
+        }
+      return count;
+    }
+#endif
     uint32_t count = 0;
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
       for (int32_t y = lo[1]; y <= hi[1]; ++y)
@@ -579,6 +595,120 @@ class BrickHeads {
         }
     return count;
   }
+#if defined(__SSE2__)
+  // the heads of the 3 x 3 x 3 cubes from lo as 9 rows (y fastest, then z) of 3 heads along x, 16
+  // bits each in the row's low 48 bits (x86: little-endian). The cubes lie in at most 2 x 2 x 2
+  // bricks, those of lo and lo + 3 along each axis (inside the grid: lo + 2 is at most dims - 2),
+  // looked up once; a brick's rows of 4 heads are aligned 8-byte words, so a row is two words
+  // (its part in each brick along x) funnel-shifted by lo & 3. The triple loop of get took ~1,000
+  // instructions a vertex at the bunny's chain level 2 (w = 0.0535).
+  SCENELOD_ALWAYS_INLINE void rows27(const int32_t lo[3], uint64_t rows[9]) const {
+    const size_t x[2] = {size_t(lo[0] >> 2), size_t((lo[0] + 3) >> 2)};
+    const size_t y[2] = {size_t(lo[1] >> 2) * bx_, size_t((lo[1] + 3) >> 2) * bx_};
+    const size_t z[2] = {size_t(lo[2] >> 2) * bx_ * by_, size_t((lo[2] + 3) >> 2) * bx_ * by_};
+    const uint32_t* top = top_.data();
+    const uint16_t* heads = heads_.data();
+    const uint16_t* brick[8];  // z, then y, then x: the brick of lo or of lo + 3
+    for (int k = 0; k < 8; ++k) brick[k] = heads + (size_t(top[z[k >> 2] + y[k >> 1 & 1] + x[k & 1]]) << 6);
+    // per y (and z) of the three: its brick among brick[] (0 or 2; 0 or 4) and its row in the brick
+    size_t yk[3], yi[3], zk[3], zi[3];
+    for (int k = 0; k < 3; ++k) {
+      yk[k] = size_t(((lo[1] & 3) + k) >> 2) * 2, yi[k] = size_t((lo[1] + k) & 3) << 2;
+      zk[k] = size_t(((lo[2] & 3) + k) >> 2) * 4, zi[k] = size_t((lo[2] + k) & 3) << 4;
+    }
+    const unsigned s = unsigned(lo[0] & 3) * 16;
+    for (int zz = 0; zz < 3; ++zz)
+      for (int yy = 0; yy < 3; ++yy) {
+        const uint16_t* const* pair = brick + zk[zz] + yk[yy];
+        const size_t in = zi[zz] | yi[yy];
+        uint64_t a, b;
+        std::memcpy(&a, pair[0] + in, sizeof a);
+        std::memcpy(&b, pair[1] + in, sizeof b);
+        // (b << 1) << (63 - s): no shift by 64 where s = 0 (b is then lo's brick again, unused); an
+        // unsigned __int128 funnel shift took 1.4 M more instructions (GCC tests the shift for 64)
+        rows[3 * zz + yy] = (a >> s) | ((b << 1) << (63 - s));
+      }
+  }
+#endif
+#if defined(SCENELOD_FLOATING_AVX2)
+  // gather's 3 x 3 x 3 case on AVX2 (the grid of side w/2), in two steps as locate8 and heads8.
+  // plan27: rows27's two head indices per row (the row's part in the brick of lo and of lo + 3 along
+  // x), from the 8 bricks' numbers looked up once and spread to the rows by permutations. It may
+  // run a vertex ahead: the bricks' numbers change only where a brick is allocated, which
+  // heads27 sees (the heads' size) and then plans again.
+  struct Plan27 {
+    alignas(32) uint32_t a[8];  // rows 0-7 (y fastest, then z): head index of the row's first 4 cubes in lo's brick
+    alignas(32) uint32_t b[8];  // the same in the brick of lo + 3
+    uint32_t a8, b8;            // row 8
+    __m128i lo4;                // the cubes planned for
+    __m128i shift;              // 16 (lo & 3) and 64 - 16 (lo & 3) bits, per 64-bit lane
+    size_t brick_count;         // the heads' size when planned
+  };
+  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void plan27(__m128i lo4, __m256i strides, Plan27& p) const {
+    // lanes 0-2 the bricks of lo, 4-6 those of lo + 3 (inside the grid: lo + 2 is at most dims - 2)
+    const __m256i c = _mm256_add_epi32(_mm256_broadcastsi128_si256(lo4), _mm256_setr_epi32(0, 0, 0, 0, 3, 3, 3, 3));
+    const __m256i b = _mm256_mullo_epi32(_mm256_srai_epi32(c, 2), strides);
+    const __m256i px = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4), py = _mm256_setr_epi32(1, 1, 5, 5, 1, 1, 5, 5),
+                  pz = _mm256_setr_epi32(2, 2, 2, 2, 6, 6, 6, 6);
+    alignas(32) uint32_t pos[8];  // brick k takes x of lo or lo + 3 by k & 1, y by k >> 1 & 1, z by k >> 2
+    _mm256_store_si256(reinterpret_cast<__m256i*>(pos),
+                       _mm256_add_epi32(_mm256_add_epi32(_mm256_permutevar8x32_epi32(b, px), _mm256_permutevar8x32_epi32(b, py)),
+                                        _mm256_permutevar8x32_epi32(b, pz)));
+    const uint32_t* top = top_.data();
+    alignas(32) uint32_t first[8];  // the bricks' first head indices
+    for (int k = 0; k < 8; ++k) first[k] = top[pos[k]] << 6;
+    const __m256i base = _mm256_load_si256(reinterpret_cast<const __m256i*>(first));
+    // row r < 8 is (y, z) = (lo + r % 3, lo + r / 3): its y and z brick (sel: 0/2 + 0/4) and its row
+    // in them (in); lanes as y & 3 and z & 3 offsets from lo's
+    const __m256i ly = _mm256_set1_epi32(_mm_extract_epi32(lo4, 1) & 3), lz = _mm256_set1_epi32(_mm_extract_epi32(lo4, 2) & 3);
+    const __m256i y = _mm256_add_epi32(ly, _mm256_setr_epi32(0, 1, 2, 0, 1, 2, 0, 1));
+    const __m256i z = _mm256_add_epi32(lz, _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2));
+    const __m256i three = _mm256_set1_epi32(3);
+    const __m256i sel = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(z, 2), 2), _mm256_slli_epi32(_mm256_srli_epi32(y, 2), 1));
+    const __m256i in = _mm256_or_si256(_mm256_slli_epi32(_mm256_and_si256(z, three), 4), _mm256_slli_epi32(_mm256_and_si256(y, three), 2));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(p.a), _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, sel), in));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(p.b),
+                       _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, _mm256_add_epi32(sel, _mm256_set1_epi32(1))), in));
+    const uint32_t y8 = uint32_t(_mm_extract_epi32(lo4, 1) & 3) + 2, z8 = uint32_t(_mm_extract_epi32(lo4, 2) & 3) + 2;
+    const uint32_t sel8 = (z8 >> 2) * 4 + (y8 >> 2) * 2, in8 = (z8 & 3) << 4 | (y8 & 3) << 2;
+    p.a8 = first[sel8] + in8;
+    p.b8 = first[sel8 + 1] + in8;
+    const int64_t s = int64_t(_mm_cvtsi128_si32(lo4) & 3) * 16;
+    p.shift = _mm_set_epi64x(64 - s, s);
+    p.lo4 = lo4;
+    p.brick_count = heads_.size();
+  }
+  // heads27: the non-empty heads of the cubes plan27 gave into found (8 entries written past the
+  // count), their count; each pair of rows packed as packRows packs the flat grid's
+  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t heads27(Plan27& p, __m256i strides, uint32_t* found) const {
+    if (p.brick_count != heads_.size()) plan27(p.lo4, strides, p);  // a brick was allocated since
+    const uint16_t* h = heads_.data();
+    const __m128i sa = _mm_unpacklo_epi64(p.shift, p.shift), sb = _mm_unpackhi_epi64(p.shift, p.shift);
+    auto row = [&](uint32_t a, uint32_t b) SCENELOD_FLOATING_AVX2_TARGET {
+      uint64_t wa, wb;
+      std::memcpy(&wa, h + a, sizeof wa);
+      std::memcpy(&wb, h + b, sizeof wb);
+      return std::pair<uint64_t, uint64_t>(wa, wb);
+    };
+    uint32_t count = 0;
+    for (int r = 0; r < 9; r += 2) {
+      const auto r0 = r < 8 ? row(p.a[r], p.b[r]) : row(p.a8, p.b8);
+      const auto r1 = r < 8 ? row(p.a[r + 1], p.b[r + 1]) : r0;
+      const __m128i wa = _mm_set_epi64x(int64_t(r1.first), int64_t(r0.first));
+      const __m128i wb = _mm_set_epi64x(int64_t(r1.second), int64_t(r0.second));
+      // the funnel shift: a shift by 64 gives 0, so b drops out where lo & 3 = 0
+      const __m256i v = _mm256_cvtepu16_epi32(_mm_or_si128(_mm_srlv_epi64(wa, sa), _mm_sllv_epi64(wb, sb)));
+      const uint32_t zero =
+          uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
+      const uint32_t m = ~zero & (r < 8 ? 0x77u : 0x07u);
+      const __m256i perm =
+          _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[m])));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(found + count), _mm256_permutevar8x32_epi32(v, perm));
+      count += uint32_t(_mm_popcnt_u32(m));
+    }
+    return count;
+  }
+#endif
 #if defined(SCENELOD_FLOATING_AVX2)
   // gather's 2 x 2 x 2 case on AVX2 from lo4 (lanes x, y, z), in two steps. locate8: the 8 cubes'
   // brick positions and in-brick indices, from the brick and in-brick parts of both cubes of each
@@ -922,12 +1052,17 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   // the next vertex's range and where its heads are (bricks.locate8, or the offset of its first
   // cube in the flat array), a vertex ahead
   const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
+  // bricked cubes of side w/2 search 3 x 3 x 3 cubes (bricks.plan27), those of side w 2 x 2 x 2
+  const bool bricks27 = kBricks && reach == 1.0f;
   Located ahead{};
   __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
+  BrickHeads::Plan27 plans[2];  // the current vertex's and the next one's
   size_t ahead_offset = 0;
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     ahead = locate(sorted[k]);
-    if (kBricks) {
+    if (bricks27) {
+      bricks.plan27(ahead.lo4, brick_strides, plans[k & 1]);
+    } else if (kBricks) {
       bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
     } else {
       // lo >= 0: lo_cube is 3 cubes below the box
@@ -949,8 +1084,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     if (kBricks) {
-      if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
-        found_count = bricks.heads8(brick_of, in_brick, found);
+      const int span_mask = bricks27 ? _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2))))
+                                     : _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1))));
+      if ((span_mask & 7) == 7) {
+        found_count = bricks27 ? bricks.heads27(plans[i & 1], brick_strides, found) : bricks.heads8(brick_of, in_brick, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
         found_count = bricks.gather(lo, hi, found);

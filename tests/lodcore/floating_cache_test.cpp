@@ -111,6 +111,22 @@ TEST(FloatingCell, BrickedHeadsChooseTheSameCellsOnGeneratedMeshes) {
   expectSameCellsInBricks(test::makeCadPart(), {0.01f, 0.02f, 0.03f});
 }
 
+// the bricked grid of side w/2 (3 x 3 x 3 cubes: BrickHeads::rows27 on SSE2, plan27/heads27 on
+// AVX2), taken where its flat short heads would pass 16 bytes per vertex but fit the dense budget:
+// the bunny's chain level 2 (w = 0.0535) and around it, the sphere at 0.055-0.065, the CAD part
+// (vertices on cube faces, 1 k vertices: bricks allocated between a vertex's plan and its gather)
+TEST(FloatingCell, BrickedHalfWidthCubesChooseTheSameCellsOnGeneratedMeshes) {
+  expectSameCellsInBricks(test::makeBumpySphere(200, 200), {0.055f, 0.06f, 0.065f});
+  expectSameCellsInBricks(test::makeCadPart(), {0.1f, 0.12f, 0.14f});
+}
+
+TEST(FloatingCell, BrickedHalfWidthCubesChooseTheSameCellsOnTheBunny) {
+  SCENELOD_REQUIRE_BUNNY();
+  Mesh bunny;
+  ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+  expectSameCellsInBricks(bunny, {0.05f, 0.0534810051f, 0.06f});
+}
+
 TEST(FloatingCell, CandidateCacheChoosesTheSameCellsOnTheBunny) {
   SCENELOD_REQUIRE_BUNNY();
   Mesh bunny;
