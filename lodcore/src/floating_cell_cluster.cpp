@@ -529,12 +529,15 @@ struct Bricked {};  // the head type of assignDenseT over BrickHeads
 class BrickHeads {
  public:
   // `expected` cells (0: no grid); bricks reserved for one per 16 of them (15.4 and 16.3 cells per
-  // brick were measured on the bunny's 50 % level and at w = 0.02; more only regrows the array)
-  BrickHeads(const size_t dims[3], size_t expected)
+  // brick were measured on the bunny's 50 % level and at w = 0.02; more only regrows the array), or
+  // per 5.5 for cubes of side w/2 (`half_width`: 6.3-6.8 expected cells per brick on the bunny at
+  // w = 0.05-0.06 and the sphere at 0.055-0.065; one per 16 regrew twice, the bunny's chain level 2
+  // to 1,744 bricks for 990 used)
+  BrickHeads(const size_t dims[3], size_t expected, bool half_width)
       : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), bz_((dims[2] + 3) / 4) {
     if (expected == 0) return;
     top_.assign(bx_ * by_ * bz_, 0);
-    heads_.reserve((expected / 16 + 16) * 64);
+    heads_.reserve(((half_width ? expected * 2 / 11 : expected / 16) + 16) * 64);
     heads_.assign(64, 0);
   }
   uint32_t get(int32_t x, int32_t y, int32_t z) const {
@@ -785,8 +788,10 @@ struct DenseGrid {
   static constexpr bool kBricks = std::is_same_v<Head, Bricked>;
   using Stored = std::conditional_t<kBricks, uint16_t, Head>;
 
-  DenseGrid(const size_t dims[3], size_t expected)
-      : sy(dims[0]), sz(dims[0] * dims[1]), head(kBricks ? 0 : sz * dims[2], 0), bricks(dims, kBricks ? expected : 0) {
+  // half_width: cubes of side w/2 (the bricks' reservation)
+  DenseGrid(const size_t dims[3], size_t expected, bool half_width = false)
+      : sy(dims[0]), sz(dims[0] * dims[1]), head(kBricks ? 0 : sz * dims[2], 0),
+        bricks(dims, kBricks ? expected : 0, half_width) {
     cells.reserve(expected + 1);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     cells.push_back({nan, nan, nan, 0});
@@ -914,7 +919,7 @@ class CandidateCache {
 template <bool kCube, bool kNearest, typename Head>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
-  DenseGrid<Head> grid(dims, expected);
+  DenseGrid<Head> grid(dims, expected, reach == 1.0f);
   auto& cells = grid.cells;
   auto& head = grid.head;
   auto& bricks = grid.bricks;
@@ -1020,7 +1025,7 @@ template <bool kCube, bool kNearest, typename Head>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
-  DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
+  DenseGrid<Head> grid(dims, expected, reach == 1.0f);  // as in assignDenseT
   auto& cells = grid.cells;
   auto& head = grid.head;
   auto& bricks = grid.bricks;
