@@ -1020,11 +1020,13 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 #if defined(SCENELOD_FLOATING_AVX2)
 // assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
-// are tested 8 at a time
-template <bool kCube, bool kNearest, typename Head>
-SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
-                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
-                                           size_t expected, Assignment& out) {
+// are tested 8 at a time. kBricks27: bricked cubes of side w/2 (3 x 3 x 3 searched, bricks.plan27),
+// else of side w (2 x 2 x 2, bricks.locate8); a compile-time choice, as the run-time one cost the
+// bunny's 50 % level 0.2 M instructions
+template <bool kCube, bool kNearest, typename Head, bool kBricks27>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
+                                                       const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                       size_t expected, Assignment& out) {
   DenseGrid<Head> grid(dims, expected, reach == 1.0f);  // as in assignDenseT
   auto& cells = grid.cells;
   auto& head = grid.head;
@@ -1057,15 +1059,13 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   // the next vertex's range and where its heads are (bricks.locate8, or the offset of its first
   // cube in the flat array), a vertex ahead
   const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
-  // bricked cubes of side w/2 search 3 x 3 x 3 cubes (bricks.plan27), those of side w 2 x 2 x 2
-  const bool bricks27 = kBricks && reach == 1.0f;
   Located ahead{};
   __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
   BrickHeads::Plan27 plans[2];  // the current vertex's and the next one's
   size_t ahead_offset = 0;
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     ahead = locate(sorted[k]);
-    if (bricks27) {
+    if (kBricks27) {
       bricks.plan27(ahead.lo4, brick_strides, plans[k & 1]);
     } else if (kBricks) {
       bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
@@ -1089,10 +1089,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     if (kBricks) {
-      const int span_mask = bricks27 ? _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2))))
-                                     : _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1))));
-      if ((span_mask & 7) == 7) {
-        found_count = bricks27 ? bricks.heads27(plans[i & 1], brick_strides, found) : bricks.heads8(brick_of, in_brick, found);
+      if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(kBricks27 ? 2 : 1)))) & 7) == 7) {
+        found_count = kBricks27 ? bricks.heads27(plans[i & 1], brick_strides, found) : bricks.heads8(brick_of, in_brick, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
         found_count = bricks.gather(lo, hi, found);
@@ -1127,6 +1125,16 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
     }
     out.cluster_of[p.order[i]] = best;
   }
+}
+template <bool kCube, bool kNearest, typename Head>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                           size_t expected, Assignment& out) {
+  if (DenseGrid<Head>::kBricks && reach == 1.0f)
+    assignDenseAvx2Impl<kCube, kNearest, Head, DenseGrid<Head>::kBricks>(p, cube_width, reach, lo_cube, dims, rule,
+                                                                         expected, out);
+  else
+    assignDenseAvx2Impl<kCube, kNearest, Head, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 #endif
 
