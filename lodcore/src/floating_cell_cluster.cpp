@@ -520,6 +520,30 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t testEntry8(const C
 }
 #endif
 
+#if defined(SCENELOD_FLOATING_AVX2)
+// BrickHeads::plan27's rows of 3 x 3 x 3 cubes for each lo & 3 along y and z (index z << 2 | y):
+// row r, (y, z) = (lo + r % 3, lo + r / 3), lies in brick `brick` among the 8 (2 for the y of
+// lo + 3, 4 for its z; its x adds 1) at head `row` of it. A table read instead of ~20 vector
+// operations a vertex.
+struct RowPlan {
+  uint8_t brick[16], row[16];  // rows 0-8, then padding (loaded 8 at a time)
+};
+struct RowPlans {
+  RowPlan plan[16];
+};
+constexpr RowPlans makeRowPlans() {
+  RowPlans t{};
+  for (int k = 0; k < 16; ++k)
+    for (int r = 0; r < 9; ++r) {
+      const int y = (k & 3) + r % 3, z = (k >> 2) + r / 3;
+      t.plan[k].brick[r] = uint8_t((z >> 2) * 4 + (y >> 2) * 2);
+      t.plan[k].row[r] = uint8_t((z & 3) << 4 | (y & 3) << 2);
+    }
+  return t;
+}
+constexpr RowPlans kRowPlans = makeRowPlans();
+#endif
+
 // List heads of 16 bits in bricks of 4 x 4 x 4 grid cubes (128 bytes), a brick allocated when a cell
 // is first listed in it; bricks listing no cell are all brick 0 (empty), so a sparse grid (a fine
 // level's surface in its box) takes the bricks its cells touch, not its whole box: the bunny's 50 %
@@ -661,21 +685,14 @@ class BrickHeads {
     alignas(32) uint32_t first[8];  // the bricks' first head indices
     for (int k = 0; k < 8; ++k) first[k] = top[pos[k]] << 6;
     const __m256i base = _mm256_load_si256(reinterpret_cast<const __m256i*>(first));
-    // row r < 8 is (y, z) = (lo + r % 3, lo + r / 3): its y and z brick (sel: 0/2 + 0/4) and its row
-    // in them (in); lanes as y & 3 and z & 3 offsets from lo's
-    const __m256i ly = _mm256_set1_epi32(_mm_extract_epi32(lo4, 1) & 3), lz = _mm256_set1_epi32(_mm_extract_epi32(lo4, 2) & 3);
-    const __m256i y = _mm256_add_epi32(ly, _mm256_setr_epi32(0, 1, 2, 0, 1, 2, 0, 1));
-    const __m256i z = _mm256_add_epi32(lz, _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2));
-    const __m256i three = _mm256_set1_epi32(3);
-    const __m256i sel = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(z, 2), 2), _mm256_slli_epi32(_mm256_srli_epi32(y, 2), 1));
-    const __m256i in = _mm256_or_si256(_mm256_slli_epi32(_mm256_and_si256(z, three), 4), _mm256_slli_epi32(_mm256_and_si256(y, three), 2));
+    const RowPlan& rows = kRowPlans.plan[(_mm_extract_epi32(lo4, 2) & 3) << 2 | (_mm_extract_epi32(lo4, 1) & 3)];
+    const __m256i sel = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows.brick)));
+    const __m256i in = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows.row)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(p.a), _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, sel), in));
     _mm256_store_si256(reinterpret_cast<__m256i*>(p.b),
                        _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, _mm256_add_epi32(sel, _mm256_set1_epi32(1))), in));
-    const uint32_t y8 = uint32_t(_mm_extract_epi32(lo4, 1) & 3) + 2, z8 = uint32_t(_mm_extract_epi32(lo4, 2) & 3) + 2;
-    const uint32_t sel8 = (z8 >> 2) * 4 + (y8 >> 2) * 2, in8 = (z8 & 3) << 4 | (y8 & 3) << 2;
-    p.a8 = first[sel8] + in8;
-    p.b8 = first[sel8 + 1] + in8;
+    p.a8 = first[rows.brick[8]] + rows.row[8];
+    p.b8 = first[rows.brick[8] + 1] + rows.row[8];
     const int64_t s = int64_t(_mm_cvtsi128_si32(lo4) & 3) * 16;
     p.shift = _mm_set_epi64x(64 - s, s);
     p.lo4 = lo4;
