@@ -29,6 +29,7 @@
 #include <cstring>
 #include <limits>
 #include <type_traits>
+#include <utility>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -664,8 +665,8 @@ class BrickHeads {
   // run a vertex ahead: the bricks' numbers change only where a brick is allocated, which
   // heads27 sees (the heads' size) and then plans again.
   struct Plan27 {
-    alignas(32) uint32_t a[8];  // rows 0-7 (y fastest, then z): head index of the row's first 4 cubes in lo's brick
-    alignas(32) uint32_t b[8];  // the same in the brick of lo + 3
+    alignas(32) uint32_t a[8];  // rows 0-7 (y fastest, then z): index of the row's 4-head word in lo's brick
+    alignas(32) uint32_t b[8];  // the same in the brick of lo + 3 along x
     uint32_t a8, b8;            // row 8
     __m128i lo4;                // the cubes planned for
     __m128i shift;              // 16 (lo & 3) and 64 - 16 (lo & 3) bits, per 64-bit lane
@@ -1073,8 +1074,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
     l.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(l.q4, reach4), slack4)), lo_cube4);
     return l;
   };
-  // the next vertex's range and where its heads are (bricks.locate8, or the offset of its first
-  // cube in the flat array), a vertex ahead
+  // the next vertex's range and where its heads are (bricks.plan27 or bricks.locate8, or the offset
+  // of its first cube in the flat array), a vertex ahead
   const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
   Located ahead{};
   __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
