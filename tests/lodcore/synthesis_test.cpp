@@ -30,8 +30,9 @@ using test::sameBits;
 
 }  // namespace
 
-// Quadric synthesis solving rank-deficient clusters four at a time in lanes gives the bits of solving
-// them one at a time: flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
+// Quadric synthesis solving rank-deficient clusters four at a time in lanes, and clamping floating
+// cells' representatives in lanes, gives the bits of solving and clamping them one at a time (the
+// lanes off; a clamp's bounds computed as -w/2 and w/2 instead of cellBox's (c -+ w/2) - c fail 12 checks): flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
 // bumpy (spheres: mostly rank 1 and 2 at fine cells), sharp (the CAD part, the box: full rank and
 // degenerate mixes) and scanned (the bunny, where it is installed), both cell shapes, coarse and
 // fine levels (the single and the grouped synthesis), baseline and AVX2 variants.
