@@ -96,6 +96,22 @@ bool useEigenvalueLanes(bool on) {
 
 namespace {
 
+// whether synthesize takes the grouped pass at fine levels (off: the single pass at every level, the
+// reference the grouped pass is compared with)
+bool g_grouped = true;
+
+}  // namespace
+
+// private test hook (declared by tests/lodcore/synthesis_test.cpp): the grouped pass allowed or not
+// for every later call; returns the previous choice; not thread-safe
+bool useGroupedSynthesis(bool on) {
+  const bool was = g_grouped;
+  g_grouped = on;
+  return was;
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -681,14 +697,37 @@ SCENELOD_ALWAYS_INLINE void solveQuadric4Body(const Sums* s, const glm::vec3* x0
   const int still_mask = bits4(still), full_mask = bits4(full);
   const int eigen = ~(still_mask | full_mask) & 15;
   int lanes = 0;
-  Float4v ex[3];
+  Float4v ex[3] = {Float4v{}, Float4v{}, Float4v{}};
   if (eigen && g_eigen_lanes) {
     const Double4 am[6] = {a00, a01, a02, a11, a12, a22}, rm[3] = {r0, r1, r2}, xm[3] = {xx, xy, xz};
     const Float4v fx[3] = {px, py, pz};
     const Mask4 det_ok = Double4(Mask4(det) & kAbs4) > 0.0;  // solveSymmetric's test
     lanes = solveByEigenvalues4(am, rm, xm, fx, det_ok, eigen, ex);
   }
-  for (int k = 0; k < 4; ++k) {
+  if (g_eigen_lanes) {
+    // each lane's result chosen by mask, the cases of the loop below in its order (x0 for a zero
+    // residual, else the full-rank solution, else the eigenvalue lanes' or x0), the same floats;
+    // a branch per lane mispredicted where full rank and eigenvalues mix at random (the bunny's 50 %
+    // level: 60 / 40 in the listed clusters)
+    typedef int32_t Mask4i __attribute__((vector_size(16)));
+    const Mask4i bit = {1, 2, 4, 8};
+    const Mask4i use_full = ((Mask4i{} + (full_mask & ~still_mask)) & bit) != 0;
+    const Mask4i use_eigen = ((Mask4i{} + lanes) & bit) != 0;
+    const Float4v p[3] = {px, py, pz}, x0v[3] = {Float4v(m0), Float4v(m1), Float4v(m2)};
+    __m128 c[4];
+    for (int i = 0; i < 3; ++i) {
+      const Float4v v = use_full ? p[i] : (use_eigen ? ex[i] : x0v[i]);
+      c[i] = __m128(v);
+    }
+    c[3] = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(c[0], c[1], c[2], c[3]);
+    for (int k = 0; k < 4; ++k) {  // 12 bytes each
+      _mm_storel_pi(reinterpret_cast<__m64*>(&x[k].x), c[k]);
+      _mm_store_ss(&x[k].z, _mm_movehl_ps(c[k], c[k]));
+    }
+    return;
+  }
+  for (int k = 0; k < 4; ++k) {  // the lanes off (test hook): the eigenvalue cases one cluster at a time
     if (still_mask & (1 << k)) {
       x[k] = x0[k];
     } else if (full_mask & (1 << k)) {
@@ -713,6 +752,47 @@ inline void solveQuadric4(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
   else solveQuadric4Sse2(s, x0, x);
 }
 
+// clampToCell for the clusters s[0..3] and their solved points x[0..3], in lanes where the cells
+// float (a uniform grid's take the scalar form: floor has no SSE2 instruction; so do all with the
+// eigenvalue lanes off, the one-cluster reference): cellBox's bounds, glm::clamp's max then min
+// ((x < lo) ? lo : x is maxps(lo, x), (hi < t) ? hi : t is minps(hi, t), NaN included), the
+// sphere's length ((x x + y y) + z z, as glm::dot), division and product, then the centre added:
+// the same operations lane by lane. Per cluster 30 instructions as the scalar form, about 10 so.
+SCENELOD_ALWAYS_INLINE void clampToCell4(const Sums* s, const glm::vec3* x, const Assignment& a, float half,
+                                         glm::vec3* out) {
+  if (a.uniform || !g_eigen_lanes) {
+    for (uint32_t k = 0; k < 4; ++k) out[k] = clampToCell(s[k], x[k], a, half);
+    return;
+  }
+  auto load3 = [](const glm::vec3& v) {  // (x, y, z, 0), 8 + 4 bytes
+    return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&v.x)), _mm_load_ss(&v.z));
+  };
+  __m128 cx = load3(s[0].centre), cy = load3(s[1].centre), cz = load3(s[2].centre), cw = load3(s[3].centre);
+  __m128 tx = load3(x[0]), ty = load3(x[1]), tz = load3(x[2]), tw = load3(x[3]);
+  _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
+  _MM_TRANSPOSE4_PS(tx, ty, tz, tw);
+  const __m128 w = _mm_set1_ps(0.5f * a.cell_width);  // as cellBox makes it
+  __m128 c[3] = {cx, cy, cz}, t[3] = {tx, ty, tz};
+  for (int i = 0; i < 3; ++i) {
+    const __m128 lo = _mm_sub_ps(_mm_sub_ps(c[i], w), c[i]), hi = _mm_sub_ps(_mm_add_ps(c[i], w), c[i]);
+    t[i] = _mm_min_ps(hi, _mm_max_ps(lo, t[i]));
+  }
+  if (a.shape == CellShape::kSphere) {
+    const __m128 h = _mm_set1_ps(half);
+    const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(t[0], t[0]), _mm_mul_ps(t[1], t[1])),
+                                            _mm_mul_ps(t[2], t[2])));
+    const __m128 over = _mm_cmpgt_ps(l, h), scale = _mm_div_ps(h, l);
+    for (int i = 0; i < 3; ++i) t[i] = _mm_or_ps(_mm_and_ps(over, _mm_mul_ps(t[i], scale)), _mm_andnot_ps(over, t[i]));
+  }
+  __m128 r0 = _mm_add_ps(c[0], t[0]), r1 = _mm_add_ps(c[1], t[1]), r2 = _mm_add_ps(c[2], t[2]), r3 = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+  const __m128 r[4] = {r0, r1, r2, r3};
+  for (int k = 0; k < 4; ++k) {  // 12 bytes each
+    _mm_storel_pi(reinterpret_cast<__m64*>(&out[k].x), r[k]);
+    _mm_store_ss(&out[k].z, _mm_movehl_ps(r[k], r[k]));
+  }
+}
+
 #endif
 
 inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_color, glm::vec3& out) {
@@ -725,12 +805,75 @@ inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_col
 constexpr size_t kGroupedSumsBytesPerVertex = 16;
 constexpr size_t kGroupedPrefetch = 8;
 
+#if defined(__SSE2__)
+// whether solveQuadric4 would find a zero residual in all four lanes, tested in floats without its
+// widening and transposes (about 150 instructions a group): a mean x0 of zeros (+-0), a linear part
+// b of zeros and a finite quadric A make every product a_ij x0_j +-0 in doubles, so r = -(+-0) == 0,
+// and the solve returns x0 (an infinite or NaN entry makes a_ij x 0 NaN: false, and the solve
+// decides). A one-vertex cluster has all three (its vertex is the centre); the normal sums in
+// lanes 6-8 are tested with A (finite for any face sums of finite area).
+SCENELOD_ALWAYS_INLINE bool zeroResiduals(const Sums* s, const glm::vec3* x0) {
+  const __m128 zero = _mm_setzero_ps();
+  __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  for (int k = 0; k < 4; ++k) {
+    const __m128 a03 = _mm_mul_ps(_mm_loadu_ps(s[k].q), zero), a47 = _mm_mul_ps(_mm_loadu_ps(s[k].q + 4), zero);
+    // (normal z, b0, b1, b2) with the normal's lane made 0
+    const __m128 b = _mm_move_ss(_mm_loadu_ps(s[k].q + 8), zero);
+    const __m128 x = _mm_movelh_ps(_mm_loadl_pi(zero, reinterpret_cast<const __m64*>(&x0[k].x)), _mm_load_ss(&x0[k].z));
+    all = _mm_and_ps(all, _mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(a03, zero), _mm_cmpeq_ps(a47, zero)),
+                                     _mm_and_ps(_mm_cmpeq_ps(b, zero), _mm_cmpeq_ps(x, zero))));
+  }
+  return _mm_movemask_ps(all) == 15;
+}
+#endif
+
+// the representatives, normals and colours of the four clusters ids[0..3] (heaviest vertices
+// h[0..3]) from their sums, stored for the first k_n (a short group's other lanes repeat its last
+// cluster): meanAndNormal4, the solve in lanes and the clamp, as the single pass finishes them
+template <bool avx2, bool colors, bool quadric, bool single>
+SCENELOD_ALWAYS_INLINE void finishGroup(const Sums* s, const float* weights, const uint32_t* h, const uint32_t* ids,
+                                        uint32_t k_n, const glm::vec4* face_color, const glm::vec4* vertex_color,
+                                        const Assignment& a, float half, bool mean, Representatives& out) {
+  glm::vec3 position[4], normal[4];
+#if defined(__SSE2__)
+  meanAndNormal4(s, weights, h, mean, quadric, position, normal);
+#else
+  for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], weights[h[k]], mean, quadric, position[k], normal[k]);
+#endif
+  if (quadric) {
+#if defined(__SSE2__)
+    glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
+    if (!single || !zeroResiduals(s, position)) solveQuadric4<avx2>(s, position, x);
+    else std::copy(position, position + 4, x);
+    clampToCell4(s, x, a, half, position);
+#else
+    for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
+#endif
+  }
+  // a fixed count, each cluster under a test that only the last group fails (a loop to k_n
+  // mispredicted its exit once per group)
+#pragma GCC unroll 4
+  for (uint32_t k = 0; k < 4; ++k) {
+    if (k >= k_n) break;
+    const uint32_t c = ids[k];
+    out.positions[c] = position[k];
+    out.normals[c] = normal[k];
+    if (colors) finishColor(face_color[k], vertex_color[k], out.colors[c]);
+  }
+}
+
 // synthesize at fine levels, where its per-cluster sums (92 bytes each: 46 per vertex at a level of
 // half the triangles) were the largest array of a level: the vertices are listed by cluster (a
 // stable counting sort, 4 bytes per vertex and per cluster) and clusters are summed four at a time
 // in locals and finished with the single pass's functions (meanAndNormal4 included), each cluster's
 // vertices in index order, so the results are bit-identical. At coarse levels the single pass is
 // faster (its sums stay in cache while this reads the vertex arrays out of order).
+// Clusters of one vertex (the bunny's 50 % level: 5,604 of 17,342) are summed apart, four at a
+// time, from their heaviest vertex (every cluster is made by its heaviest vertex, so it is the one):
+// they are not listed, and a group of four has a zero residual in every lane, which the solve
+// returns before its full-rank test and eigenvalues (about 580 instructions a group). The same
+// sums and the same functions per cluster, only grouped differently, and the lanes are
+// independent: the same bits.
 // The flags (colours, quadric synthesis, face sums present) are template arguments: tested per
 // vertex, they were a few instructions of a vertex's 90 or so.
 template <bool avx2, bool colors, bool quadric, bool have_face_sums>
@@ -742,36 +885,56 @@ SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const A
   const glm::vec3* pos = in.pos;
   const size_t vn = m.vertexCount();
   const uint32_t* cluster_of = a.cluster_of.data();
-  std::vector<uint32_t> first(size_t(nc) + 1, 0);  // where each cluster's vertices start
-  // counted without a test: an unreferenced vertex (kNone + 1 wraps to 0) counts in first[0], reset after
+  // first[c + 1]: cluster c's vertex count; then first[c]: where c's vertices start in `members`
+  std::vector<uint32_t> first(size_t(nc) + 1, 0);
+  // counted without a test: an unreferenced vertex (kNone + 1 wraps to 0) counts in first[0], unread
 #pragma GCC unroll 4
   for (size_t v = 0; v < vn; ++v) ++first[uint32_t(cluster_of[v] + 1)];
-  first[0] = 0;
-  for (uint32_t c = 0; c < nc; ++c) first[c + 1] += first[c];
-  const size_t member_count = first[nc];
+  // the clusters in the order they are summed: those of two or more vertices in id order, then
+  // those of one from the back (in reverse id order); the one-vertex clusters' cursor is members[0],
+  // a spare entry each writes once, and the others' lists start at 1. No branch: a third of the
+  // clusters have one vertex, spread out.
+  std::unique_ptr<uint32_t[]> order(new uint32_t[nc]);  // every entry is written: not zeroed
+  uint32_t listed = 1, multi_count = 0, back = nc;
+  for (uint32_t c = 0; c < nc; ++c) {
+    const uint32_t n = first[c + 1];
+    const uint32_t multi = n != 1, keep = 0u - multi;  // all ones for a listed cluster
+    first[c] = listed & keep;
+    listed += n & keep;
+    back -= 1 - multi;
+    order[multi ? multi_count : back] = c;
+    multi_count += multi;
+  }
+  const size_t member_count = listed;
   std::unique_ptr<uint32_t[]> members(new uint32_t[member_count]);  // every entry is written below: not zeroed
   for (size_t v = 0; v < vn; ++v)
     if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
+  // now first[c] is where a listed cluster c's vertices end
   const float half = 0.5f * a.cell_width;
   const uint32_t* heaviest = a.heaviest.data();
-  // Four clusters at a time: their vertices are one run of `members`, each added to its cluster's
-  // sums (slot cluster_of[v] - c0, no branch on a cluster's end, which a short, varying list
-  // mispredicts), then the four are finished in lanes as the single pass does.
   Sums s[4] = {Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f))};
   glm::vec4 face_color[4], vertex_color[4];
-  uint32_t begin = 0;  // first[c] is now where cluster c + 1 starts
-  for (uint32_t c0 = 0; c0 < nc; c0 += 4) {
-    const uint32_t k_n = std::min<uint32_t>(4, nc - c0);  // fewer in the last group
+  // Four listed clusters at a time: their vertices are one run of `members`, each added to its
+  // cluster's sums (the slot from the four ends, no branch on a cluster's end, which a short,
+  // varying list mispredicts), then the four are finished in lanes as the single pass does.
+  uint32_t begin = 1;
+  for (uint32_t g = 0; g < multi_count; g += 4) {
+    const uint32_t k_n = std::min<uint32_t>(4, multi_count - g);  // fewer in the last group
     // the centres are read out of order too: fetch those of the group after next
-    if (c0 + 12 <= nc)
-      for (uint32_t k = 8; k < 12; ++k) __builtin_prefetch(&pos[heaviest[c0 + k]]);
-    const uint32_t end = first[c0 + k_n - 1];
-    uint32_t h[4];
+    if (g + 12 <= multi_count)
+      for (uint32_t k = 8; k < 12; ++k) __builtin_prefetch(&pos[heaviest[order[g + k]]]);
+    uint32_t ids[4], h[4], e[4];
     for (uint32_t k = 0; k < 4; ++k) {
-      h[k] = heaviest[c0 + std::min(k, k_n - 1)];  // a short group repeats its last cluster (unused lanes)
+      ids[k] = order[g + std::min(k, k_n - 1)];  // a short group repeats its last cluster (unused lanes)
+      e[k] = first[ids[k]];
+      h[k] = heaviest[ids[k]];
       s[k].reset(pos[h[k]]);
       face_color[k] = vertex_color[k] = glm::vec4(0.0f);
     }
+    const uint32_t end = e[3];
+    // the slot steps on at each end (a listed cluster has at least two vertices: never two steps at
+    // once): one compare and add a vertex, where three compares against the ends took six instructions
+    uint32_t k = 0;
     for (uint32_t j = begin; j < end; ++j) {
       // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
       const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
@@ -779,7 +942,7 @@ SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const A
       __builtin_prefetch(&pos[ahead]);
       __builtin_prefetch(&in.weights[ahead]);
       const uint32_t v = members[j];
-      const uint32_t k = cluster_of[v] - c0;
+      k += uint32_t(j >= e[k]);
       addVertex(in, v, have_face_sums, quadric, s[k]);
       if (colors) {
         face_color[k] += in.face_colors[v];
@@ -787,31 +950,31 @@ SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const A
       }
     }
     begin = end;
-    glm::vec3 position[4], normal[4];
-#if defined(__SSE2__)
-    meanAndNormal4(s, in.weights, h, mean, quadric, position, normal);
-#else
-    for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], in.weights[h[k]], mean, quadric, position[k], normal[k]);
-#endif
-    if (quadric) {
-#if defined(__SSE2__)
-      glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
-      solveQuadric4<avx2>(s, position, x);
-      for (uint32_t k = 0; k < 4; ++k) position[k] = clampToCell(s[k], x[k], a, half);
-#else
-      for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
-#endif
-    }
-    // a fixed count, each cluster under a test that only the last group fails (a loop to k_n
-    // mispredicted its exit once per group)
-#pragma GCC unroll 4
+    finishGroup<avx2, colors, quadric, false>(s, in.weights, h, ids, k_n, face_color, vertex_color, a, half, mean, out);
+  }
+  // the one-vertex clusters, four at a time: each its heaviest vertex
+  for (uint32_t g = multi_count; g < nc; g += 4) {
+    const uint32_t k_n = std::min<uint32_t>(4, nc - g);
+    if (g + 12 <= nc)
+      for (uint32_t k = 8; k < 12; ++k) {
+        const uint32_t v = heaviest[order[g + k]];
+        if (have_face_sums) __builtin_prefetch(&in.face_sums[v]);
+        __builtin_prefetch(&pos[v]);
+        __builtin_prefetch(&in.weights[v]);
+      }
+    uint32_t ids[4], h[4];
     for (uint32_t k = 0; k < 4; ++k) {
-      if (k >= k_n) break;
-      const uint32_t c = c0 + k;
-      out.positions[c] = position[k];
-      out.normals[c] = normal[k];
-      if (colors) finishColor(face_color[k], vertex_color[k], out.colors[c]);
+      ids[k] = order[g + std::min(k, k_n - 1)];
+      h[k] = heaviest[ids[k]];
+      s[k].reset(pos[h[k]]);
+      addVertex(in, h[k], have_face_sums, quadric, s[k]);  // (a repeated lane's sums are not stored)
+      if (colors) {
+        // added to zeros as the listed clusters' are (+0 + x is x but for x = -0)
+        face_color[k] = glm::vec4(0.0f) + in.face_colors[h[k]];
+        vertex_color[k] = glm::vec4(0.0f) + glm::vec4(in.colors[h[k]], 1.0f);
+      }
     }
+    finishGroup<avx2, colors, quadric, true>(s, in.weights, h, ids, k_n, face_color, vertex_color, a, half, mean, out);
   }
 }
 
@@ -922,7 +1085,7 @@ SCENELOD_ALWAYS_INLINE void synthesizeSingleBody(const PreparedMesh& p, const As
     for (; c + 4 <= nc; c += 4) {
       glm::vec3 x[4];
       solveQuadric4<avx2>(&sums[c], &out.positions[c], x);
-      for (uint32_t k = 0; k < 4; ++k) out.positions[c + k] = clampToCell(sums[c + k], x[k], a, half);
+      clampToCell4(&sums[c], x, a, half, &out.positions[c]);
     }
 #endif
     for (; c < nc; ++c) out.positions[c] = quadricRepresentative(sums[c], out.positions[c], a, half);
@@ -968,7 +1131,7 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const bool quadric = synthesis == Synthesis::kQuadric;
   const bool mean = synthesis != Synthesis::kHeaviest;
   const bool have_face_sums = p.face_sums.size() == m.vertexCount();
-  if (size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
+  if (g_grouped && size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
     if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeGroupedAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
     else SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
     return;
