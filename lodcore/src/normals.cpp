@@ -421,7 +421,10 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   corners.reset();
   local_vertex.reset();
   out.triangles = std::move(e.triangles);
-  out.triangles.shrink_to_fit();  // elimination reserved for about 2 triangles per cluster
+  // elimination reserved for about 2 triangles per cluster: the slack is dropped only where it is
+  // more than an eighth of the triangles, since dropping it copies the whole array (the bunny's 50 %
+  // level: 416 KB copied, old and new at once, to free 31 KB)
+  if (out.triangles.capacity() - out.triangles.size() > out.triangles.size() / 8) out.triangles.shrink_to_fit();
   carryEdgesAndPoints(e, base_vertex.data(), out);
 }
 
