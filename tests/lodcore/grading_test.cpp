@@ -278,3 +278,58 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
       }
   detail::useAvx2Paths(was);
 }
+
+// The order is the stable sort of the referenced vertices by descending raw weight (ties by vertex
+// index) and the weights are raw / longest edge, whichever way prepareMesh sorts: on one thread
+// below 16 k referenced vertices, else two halves of the vertex range sorted side by side and
+// merged. Meshes on both sides of that size, with many ties (the flat grid's interior weighs 0),
+// unreferenced and point-only vertices scattered by a renumbering (so the halves hold unequal
+// counts), and one with every referenced vertex in the upper half.
+TEST(Grading, PreparedOrderIsTheStableSortByRawWeight) {
+  std::vector<Mesh> meshes = {test::makeBumpySphere(20, 30), test::makeBumpySphere(100, 200), test::makeGrid(150, 2.0f)};
+  if (test::fileExists(test::bunnyPath())) {
+    meshes.emplace_back();
+    ASSERT_TRUE(readObj(test::bunnyPath(), meshes.back()).ok());
+  }
+  {
+    Mesh m = test::makeGrid(150, 2.0f);
+    const size_t vn = m.vertexCount();
+    for (size_t v = 0; v < 6000; ++v) m.positions.push_back({float(v % 7), 3.0f, float(v % 5)});
+    for (size_t v = vn; v < m.vertexCount(); v += 3) m.points.push_back(static_cast<uint32_t>(v));
+    meshes.push_back(shuffledVertices(m, 5u, 0));
+    Mesh high = test::makeBumpySphere(100, 200);  // every referenced vertex above the first half
+    const uint32_t shift = static_cast<uint32_t>(high.vertexCount() + 10);
+    high.positions.insert(high.positions.begin(), shift, glm::vec3(0.0f));
+    for (uint32_t& i : high.triangles) i += shift;
+    meshes.push_back(high);
+  }
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const Mesh& m = meshes[i];
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    PreparedMesh p;
+    ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+    std::vector<float> w, raw;
+    float longest = 0.0f;
+    gradeVertices(m, Grading::kLowTan, true, w, nullptr, &longest, &raw);
+    std::vector<uint8_t> referenced(m.vertexCount(), 0);
+    for (uint32_t v : m.triangles) referenced[v] = 1;
+    for (uint32_t v : m.edges) referenced[v] = 1;
+    for (uint32_t v : m.points) referenced[v] = 1;
+    std::vector<uint32_t> expected;
+    for (size_t v = 0; v < m.vertexCount(); ++v)
+      if (referenced[v]) expected.push_back(static_cast<uint32_t>(v));
+    auto bits = [&](uint32_t v) {
+      uint32_t b;
+      std::memcpy(&b, &raw[v], sizeof b);
+      return b;
+    };
+    std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) { return bits(a) > bits(b); });
+    EXPECT_EQ(p.order, expected);
+    ASSERT_EQ(p.sorted_positions.size(), expected.size());
+    for (size_t k = 0; k < expected.size(); ++k)
+      ASSERT_EQ(std::memcmp(&p.sorted_positions[k], &m.positions[expected[k]], sizeof(glm::vec3)), 0) << k;
+    ASSERT_EQ(p.weights.size(), w.size());
+    EXPECT_EQ(std::memcmp(p.weights.data(), w.data(), w.size() * sizeof(float)), 0);
+    EXPECT_EQ(p.longest_edge, longest);
+  }
+}
