@@ -333,3 +333,67 @@ TEST(Grading, PreparedOrderIsTheStableSortByRawWeight) {
     EXPECT_EQ(p.longest_edge, longest);
   }
 }
+
+// prepareMesh checks the coordinates and the triangle and edge indices in its own first passes:
+// a bad mesh gets validateMesh's error (the same first bad element when several are bad), and the
+// PreparedMesh passed in is left as it was
+TEST(Grading, PrepareGivesValidateMeshsErrorAndLeavesTheOutputAlone) {
+  const Mesh good = test::makeBumpySphere(12, 16);
+  const size_t vn = good.vertexCount();
+  const uint32_t bad_index = static_cast<uint32_t>(vn) + 3;
+  std::vector<std::pair<std::string, Mesh>> cases;
+  auto add = [&](const std::string& name, auto&& edit) {
+    Mesh m = good;
+    edit(m);
+    cases.emplace_back(name, m);
+  };
+  add("nan vertex", [&](Mesh& m) { m.positions[7].y = std::nanf(""); });
+  add("infinite vertex and a bad index", [&](Mesh& m) {
+    m.positions[9].z = INFINITY;
+    m.positions[4].x = -INFINITY;
+    m.triangles[0] = bad_index;
+  });
+  add("two bad triangle indices", [&](Mesh& m) {
+    m.triangles[3 * 40 + 2] = bad_index;
+    m.triangles[3 * 11 + 1] = bad_index + 1;
+  });
+  add("the last triangle index", [&](Mesh& m) { m.triangles.back() = static_cast<uint32_t>(vn); });
+  add("index 2^32 - 1", [&](Mesh& m) { m.triangles[5] = UINT32_MAX; });
+  add("a bad edge index", [&](Mesh& m) { m.edges = {0, 1, 2, bad_index, bad_index, 3}; });
+  add("bad edge and triangle indices", [&](Mesh& m) {
+    m.edges = {0, bad_index};
+    m.triangles[100] = bad_index;
+  });
+  add("triangle count not a multiple of 3 and a nan", [&](Mesh& m) {
+    m.triangles.push_back(0);
+    m.positions[3].x = std::nanf("");
+  });
+  add("normals count and a bad index", [&](Mesh& m) {
+    m.normals.assign(vn - 1, glm::vec3(0, 0, 1));
+    m.triangles[0] = bad_index;
+  });
+  add("a bad point index", [&](Mesh& m) { m.points = {1, bad_index}; });
+  add("a bad point and a bad triangle index", [&](Mesh& m) {
+    m.points = {bad_index};
+    m.triangles[8] = bad_index;
+  });
+  add("a negative thickness", [&](Mesh& m) {
+    m.edges = {0, 1, 1, 2};
+    m.edge_thickness = {0.5f, -1.0f};
+  });
+  add("no vertices", [&](Mesh& m) { m.positions.clear(); });
+  PreparedMesh kept;
+  ASSERT_TRUE(prepareMesh(good, ClusterParams(), kept).ok());
+  const std::vector<uint32_t> kept_order = kept.order;
+  for (const auto& [name, m] : cases) {
+    SCOPED_TRACE(name);
+    const Error expected = validateMesh(m, "case");
+    ASSERT_FALSE(expected.ok());
+    PreparedMesh p = kept;
+    const Error e = prepareMesh(m, ClusterParams(), p, "case");
+    EXPECT_EQ(e.status, expected.status);
+    EXPECT_EQ(e.message, expected.message);
+    EXPECT_EQ(p.order, kept_order);
+    EXPECT_EQ(p.mesh, &good);
+  }
+}
