@@ -32,7 +32,7 @@ namespace scenelod {
 namespace detail {
 // lodcore/src/mesh.cpp: validateMesh's parts, for prepareMesh
 bool coordinatesFinite(const Mesh& m);
-bool indicesInRange(const Mesh& m);
+bool indicesBelow(const uint32_t* idx, size_t count, size_t vertex_count);
 Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinates_finite, bool indices_in_range);
 }  // namespace detail
 
@@ -160,20 +160,27 @@ struct IncidenceTable {
 // order (or the other end of an input edge). Serial (two halves of the triangles filled side by
 // side share the rows' cache lines and took as long as one, bunny); prepareMesh runs the surface
 // sums next to it. The table is not zeroed: every entry is written.
-// In two steps, so that prepareMesh can run other work next to each: the count per vertex, then
-// the offsets and the rows. The indices must be below the vertex count.
-void countIncidence(const Mesh& mesh, IncidenceTable& table) {
-  const size_t vn = mesh.vertexCount();
-  std::vector<uint32_t>& offsets = table.offsets;
-  offsets.assign(vn + 1, 0);
-  for (uint32_t v : mesh.triangles) ++offsets[v + 1];
-  for (uint32_t v : mesh.edges) ++offsets[v + 1];
+// In two steps, so that prepareMesh can run other work next to each: the count per vertex (split in
+// two, each half counted into its own array), then the offsets and the rows. The indices must be
+// below the vertex count.
+// the corners of triangles [t0, t1) (and, with `edges`, the input edges' ends) counted per vertex
+void countCorners(const Mesh& mesh, size_t t0, size_t t1, bool edges, uint32_t* count) {
+  const uint32_t* tri = mesh.triangles.data();
+  for (size_t k = 3 * t0; k < 3 * t1; ++k) ++count[tri[k]];
+  if (edges)
+    for (uint32_t v : mesh.edges) ++count[v];
 }
 
-void fillIncidence(const Mesh& mesh, IncidenceTable& table) {
+// the rows, from the counts in table.offsets[v + 1] plus (when not null) more[v]; `more` is freed
+// before the rows are allocated, so that it adds nothing to the prepare's peak
+void fillIncidence(const Mesh& mesh, IncidenceTable& table, std::unique_ptr<uint32_t[]> more) {
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
   std::vector<uint32_t>& offsets = table.offsets;
-  for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
+  if (more)
+    for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v] + more[v];
+  else
+    for (size_t v = 0; v < vn; ++v) offsets[v + 1] += offsets[v];
+  more.reset();
   const size_t n = offsets[vn];
   table.incidence.reset(new Incidence[n + kRowPad]);
   Incidence* incidence = table.incidence.get();
@@ -1136,8 +1143,9 @@ void gradeVertices(const Mesh& mesh, Grading grading, bool boost_features, std::
   std::vector<float> raw(vn), angular(vn);
   float longest_edge = 0.0f;
   IncidenceTable table;
-  countIncidence(mesh, table);
-  fillIncidence(mesh, table);
+  table.offsets.assign(vn + 1, 0);
+  countCorners(mesh, 0, mesh.triangleCount(), true, table.offsets.data() + 1);
+  fillIncidence(mesh, table, nullptr);
   gradeAndSum(mesh, table, grading, boost_features, {raw.data(), angular.data(), &longest_edge, nullptr, nullptr});
   const float inv = longest_edge > 0.0f ? 1.0f / longest_edge : 0.0f;
   // weights = raw * inv: rounding is monotone, so the normalised weights keep the raw order
@@ -1165,28 +1173,40 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   std::vector<uint8_t> referenced;
   IncidenceTable table;
   double area = 0.0, sum = 0.0;
-  // the indices' check and the counting sort's count pass next to the coordinates' check and the
-  // output arrays' allocation; then the sort's fill next to the surface sums, which read positions
-  // through the checked indices. Bunny on one thread, ms: index check 0.03, count 0.09 | coordinate
-  // check 0.01, allocation 0.04; fill 0.26 | sums 0.27 (before: validation 0.045, allocation 0.04,
-  // then count and fill | sums). The count pass with the check folded in (out-of-range indices
-  // counted in one more slot, std::min) took 0.13.
-  bool indices_in_range = true, coordinates_finite = true;
+  // validateMesh's scans and the counting sort's count pass, each half of the triangles checked and
+  // counted by one thread (into its own counts), the second also checking the coordinates; then
+  // the sort's fill next to the surface sums (which read positions through the checked indices)
+  // and the output arrays' allocation. Bunny, ms, best of 1000 on two threads: check + count
+  // 0.055 | 0.066, then fill 0.26 | sums + allocation 0.30; before, validation + allocation 0.08,
+  // then count + fill 0.40 | sums 0.26. The count with the index check folded in (an index out of
+  // range counted in one more slot, by std::min) took 0.13 for all triangles, against 0.03 + 0.09.
+  const size_t tn = in.triangleCount(), mid = tn / 2;
+  bool low_in_range = true, high_in_range = true, coordinates_finite = true;
+  std::unique_ptr<uint32_t[]> high_count(new uint32_t[vn]);
   tbb::parallel_invoke(
       [&] {
-        indices_in_range = detail::indicesInRange(in);
-        if (indices_in_range) countIncidence(in, table);
+        low_in_range = detail::indicesBelow(in.triangles.data(), 3 * mid, vn);
+        table.offsets.assign(vn + 1, 0);
+        if (low_in_range) countCorners(in, 0, mid, false, table.offsets.data() + 1);
       },
       [&] {
+        high_in_range = detail::indicesBelow(in.triangles.data() + 3 * mid, 3 * (tn - mid), vn) &&
+                        detail::indicesBelow(in.edges.data(), in.edges.size(), vn);
         coordinates_finite = detail::coordinatesFinite(in);
+        std::memset(high_count.get(), 0, vn * sizeof(uint32_t));
+        if (high_in_range) countCorners(in, mid, tn, true, high_count.get());
+      });
+  if (!low_in_range || !high_in_range || !coordinates_finite) return validateMesh(in, what);
+  tbb::parallel_invoke(
+      [&] { fillIncidence(in, table, std::move(high_count)); },
+      [&] {
+        surfaceSums(in, area, sum);
         raw.resize(vn);
         weights.resize(vn);
         face_sums.resize(vn);
         if (!in.colors.empty()) face_colors.resize(vn);
         referenced.resize(vn);
       });
-  if (!indices_in_range || !coordinates_finite) return validateMesh(in, what);
-  tbb::parallel_invoke([&] { fillIncidence(in, table); }, [&] { surfaceSums(in, area, sum); });
   out = PreparedMesh();
   out.mesh = &in;
   out.grading = params.grading;

@@ -16,15 +16,23 @@ namespace {
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+}  // namespace
+
+namespace detail {
+
 // every index below vertex_count, by comparisons the compiler vectorises (no early exit; a running
 // unsigned maximum costs twice as many SSE2 operations)
-bool allBelow(const std::vector<uint32_t>& idx, size_t vertex_count) {
+bool indicesBelow(const uint32_t* idx, size_t count, size_t vertex_count) {
   if (vertex_count > UINT32_MAX) return true;
   const uint32_t limit = static_cast<uint32_t>(vertex_count);
   uint32_t bad = 0;
-  for (uint32_t i : idx) bad |= i >= limit;
+  for (size_t k = 0; k < count; ++k) bad |= idx[k] >= limit;
   return !bad;
 }
+
+}  // namespace detail
+
+namespace {
 
 // `known_in_range`: the caller has already found every index below the vertex count
 Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_count, const char* kind,
@@ -33,7 +41,7 @@ Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_c
     return {Status::kInvalidMesh, what + ": " + kind + " index count " + std::to_string(idx.size()) +
                                       " is not a multiple of " + std::to_string(per)};
   // the first bad index is looked for only when there is one
-  if (known_in_range || allBelow(idx, vertex_count)) return {};
+  if (known_in_range || detail::indicesBelow(idx.data(), idx.size(), vertex_count)) return {};
   for (size_t i = 0; i < idx.size(); ++i)
     if (idx[i] >= vertex_count)
       return {Status::kInvalidMesh, what + ": " + kind + " " +
@@ -67,11 +75,6 @@ bool coordinatesFinite(const Mesh& m) {
   int bad = 0;
   for (size_t k = 0; k < 3 * n; ++k) bad |= !(std::fabs(coord[k]) <= FLT_MAX);
   return !bad;
-}
-
-// every triangle and edge index below the vertex count
-bool indicesInRange(const Mesh& m) {
-  return allBelow(m.triangles, m.positions.size()) && allBelow(m.edges, m.positions.size());
 }
 
 // validateMesh with the answers of its two largest scans given: whether every coordinate is finite
