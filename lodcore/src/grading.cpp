@@ -23,7 +23,9 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "cluster_internal.h"
 
@@ -998,7 +1000,8 @@ size_t mergeSplit(const uint64_t* x, size_t nx, const uint64_t* y, size_t ny, si
 // Below this many referenced vertices the sort runs on the calling thread. Sort and sorted copy,
 // best of 2,000 on two threads, serial / two halves: 2 k vertices 13 / 11 us (too little to risk
 // waiting for a busy second thread), 10 k 63 / 41 us, 20 k 104 / 63 us, bunny (35 k) 226 / 131 us;
-// on one thread the halves and the merge cost 255 us on the bunny.
+// on one thread the halves and the merge cost 255 us on the bunny (the merge's 0.65 M instructions),
+// so the two halves are taken only where a second thread may run.
 constexpr size_t kParallelSortMin = 8192;
 
 // `order` (the referenced vertices, heaviest first, ties by index), `sorted` (their positions in
@@ -1019,7 +1022,9 @@ void sortByWeight(const std::vector<float>& raw, const std::vector<uint8_t>& ref
   sorted.resize(count);
   uint32_t* ord = order.data();
   glm::vec3* out = sorted.data();
-  if (count < kParallelSortMin) {
+  const size_t threads = std::min<size_t>(tbb::this_task_arena::max_concurrency(),
+                                          tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  if (count < kParallelSortMin || threads < 2) {
     std::unique_ptr<uint64_t[]> buf_a(new uint64_t[count + 1]), buf_b(new uint64_t[count + 1]);
     sortRangeByWeight(raw.data(), referenced.data(), 0, vn, count, inv, weights.data(), buf_a.get(), buf_b.get(), ord);
     for (size_t i = 0; i < count; ++i) out[i] = pos[ord[i]];

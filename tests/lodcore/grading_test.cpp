@@ -5,6 +5,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/obj_io.h"
@@ -280,9 +281,9 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
 }
 
 // The order is the stable sort of the referenced vertices by descending raw weight (ties by vertex
-// index) and the weights are raw / longest edge, whichever way prepareMesh sorts: on one thread
-// below 16 k referenced vertices, else two halves of the vertex range sorted side by side and
-// merged. Meshes on both sides of that size, with many ties (the flat grid's interior weighs 0),
+// index) and the weights are raw / longest edge, whichever way prepareMesh sorts: on the calling
+// thread below 8 k referenced vertices or with one thread allowed, else two halves of the vertex
+// range sorted side by side and merged. Meshes on both sides of that size, with many ties (the flat grid's interior weighs 0),
 // unreferenced and point-only vertices scattered by a renumbering (so the halves hold unequal
 // counts), and one with every referenced vertex in the upper half.
 TEST(Grading, PreparedOrderIsTheStableSortByRawWeight) {
@@ -306,8 +307,17 @@ TEST(Grading, PreparedOrderIsTheStableSortByRawWeight) {
   for (size_t i = 0; i < meshes.size(); ++i) {
     const Mesh& m = meshes[i];
     SCOPED_TRACE("mesh " + std::to_string(i));
-    PreparedMesh p;
+    PreparedMesh p, serial;
     ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+      ASSERT_TRUE(prepareMesh(m, ClusterParams(), serial).ok());
+    }
+    EXPECT_EQ(serial.order, p.order);
+    ASSERT_EQ(serial.sorted_positions.size(), p.sorted_positions.size());
+    EXPECT_EQ(std::memcmp(serial.sorted_positions.data(), p.sorted_positions.data(),
+                          p.sorted_positions.size() * sizeof(glm::vec3)), 0);
+    EXPECT_EQ(std::memcmp(serial.weights.data(), p.weights.data(), p.weights.size() * sizeof(float)), 0);
     std::vector<float> w, raw;
     float longest = 0.0f;
     gradeVertices(m, Grading::kLowTan, true, w, nullptr, &longest, &raw);
