@@ -16,19 +16,32 @@ namespace {
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+}  // namespace
+
+namespace detail {
+
+// every index below vertex_count, by comparisons the compiler vectorises (no early exit; a running
+// unsigned maximum costs twice as many SSE2 operations)
+bool indicesBelow(const uint32_t* idx, size_t count, size_t vertex_count) {
+  if (vertex_count > UINT32_MAX) return true;
+  const uint32_t limit = static_cast<uint32_t>(vertex_count);
+  uint32_t bad = 0;
+  for (size_t k = 0; k < count; ++k) bad |= idx[k] >= limit;
+  return !bad;
+}
+
+}  // namespace detail
+
+namespace {
+
+// `known_in_range`: the caller has already found every index below the vertex count
 Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_count, const char* kind,
-                   const std::string& what) {
+                   const std::string& what, bool known_in_range = false) {
   if (idx.size() % per != 0)
     return {Status::kInvalidMesh, what + ": " + kind + " index count " + std::to_string(idx.size()) +
                                       " is not a multiple of " + std::to_string(per)};
-  // the common case, every index in range, by comparisons the compiler vectorises (no early exit;
-  // a running unsigned maximum costs twice as many SSE2 operations); the first bad index is looked
-  // for only when there is one
-  if (vertex_count > UINT32_MAX) return {};
-  const uint32_t limit = static_cast<uint32_t>(vertex_count);
-  uint32_t bad = 0;
-  for (uint32_t i : idx) bad |= i >= limit;
-  if (!bad) return {};
+  // the first bad index is looked for only when there is one
+  if (known_in_range || detail::indicesBelow(idx.data(), idx.size(), vertex_count)) return {};
   for (size_t i = 0; i < idx.size(); ++i)
     if (idx[i] >= vertex_count)
       return {Status::kInvalidMesh, what + ": " + kind + " " +
@@ -51,15 +64,28 @@ glm::vec3 newellNormal(const Mesh& m, size_t begin, size_t end) {
 
 }  // namespace
 
-Error validateMesh(const Mesh& m, const std::string& what) {
-  const size_t n = m.positions.size();
-  // all finite, checked without an early exit (vectorised); the first bad vertex only on failure
-  // (a vec3 is three packed floats: the coordinates are read as one array)
+namespace detail {
+
+// every coordinate finite, checked without an early exit (vectorised)
+bool coordinatesFinite(const Mesh& m) {
+  // a vec3 is three packed floats: the coordinates are read as one array
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "packed vec3");
+  const size_t n = m.positions.size();
   const float* coord = n ? &m.positions[0].x : nullptr;
   int bad = 0;
   for (size_t k = 0; k < 3 * n; ++k) bad |= !(std::fabs(coord[k]) <= FLT_MAX);
-  for (size_t i = 0; bad && i < n; ++i)
+  return !bad;
+}
+
+// validateMesh with the answers of its two largest scans given: whether every coordinate is finite
+// and whether every triangle and edge index is below the vertex count. prepareMesh makes those
+// scans in its own first passes, which read the coordinates and indices anyway; given false, the
+// first bad element is looked for here, so the error is validateMesh's.
+Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinates_finite,
+                          bool indices_in_range) {
+  const size_t n = m.positions.size();
+  // the first bad vertex only on failure
+  for (size_t i = 0; !coordinates_finite && i < n; ++i)
     if (!finite3(m.positions[i]))
       return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate"};
   if (!m.normals.empty() && m.normals.size() != n)
@@ -71,8 +97,8 @@ Error validateMesh(const Mesh& m, const std::string& what) {
   if (!m.uvs.empty() && m.uvs.size() != n)
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.uvs.size()) + " texture coordinates for " +
                                       std::to_string(n) + " vertices"};
-  if (Error e = checkIndices(m.triangles, 3, n, "triangle", what)) return e;
-  if (Error e = checkIndices(m.edges, 2, n, "edge", what)) return e;
+  if (Error e = checkIndices(m.triangles, 3, n, "triangle", what, indices_in_range)) return e;
+  if (Error e = checkIndices(m.edges, 2, n, "edge", what, indices_in_range)) return e;
   if (Error e = checkIndices(m.points, 1, n, "point", what)) return e;
   if (!m.edge_thickness.empty()) {
     if (m.edge_thickness.size() != m.edgeCount())
@@ -93,6 +119,12 @@ Error validateMesh(const Mesh& m, const std::string& what) {
     return {Status::kInvalidMesh, what + ": face corners without face offsets"};
   }
   return {};
+}
+
+}  // namespace detail
+
+Error validateMesh(const Mesh& m, const std::string& what) {
+  return detail::validateMeshScanned(m, what, detail::coordinatesFinite(m), false);
 }
 
 Error meshFromView(const MeshView& v, Mesh& out, const std::string& what) {

@@ -5,6 +5,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/obj_io.h"
@@ -277,4 +278,132 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
         EXPECT_GT(base.longest_edge, 0.0f);
       }
   detail::useAvx2Paths(was);
+}
+
+// The order is the stable sort of the referenced vertices by descending raw weight (ties by vertex
+// index) and the weights are raw / longest edge, whichever way prepareMesh sorts: on the calling
+// thread below 8 k referenced vertices or with one thread allowed, else two halves of the vertex
+// range sorted side by side and merged. Meshes on both sides of that size, with many ties (the flat grid's interior weighs 0),
+// unreferenced and point-only vertices scattered by a renumbering (so the halves hold unequal
+// counts), and one with every referenced vertex in the upper half.
+TEST(Grading, PreparedOrderIsTheStableSortByRawWeight) {
+  std::vector<Mesh> meshes = {test::makeBumpySphere(20, 30), test::makeBumpySphere(100, 200), test::makeGrid(150, 2.0f)};
+  if (test::fileExists(test::bunnyPath())) {
+    meshes.emplace_back();
+    ASSERT_TRUE(readObj(test::bunnyPath(), meshes.back()).ok());
+  }
+  {
+    Mesh m = test::makeGrid(150, 2.0f);
+    const size_t vn = m.vertexCount();
+    for (size_t v = 0; v < 6000; ++v) m.positions.push_back({float(v % 7), 3.0f, float(v % 5)});
+    for (size_t v = vn; v < m.vertexCount(); v += 3) m.points.push_back(static_cast<uint32_t>(v));
+    meshes.push_back(shuffledVertices(m, 5u, 0));
+    Mesh high = test::makeBumpySphere(100, 200);  // every referenced vertex above the first half
+    const uint32_t shift = static_cast<uint32_t>(high.vertexCount() + 10);
+    high.positions.insert(high.positions.begin(), shift, glm::vec3(0.0f));
+    for (uint32_t& i : high.triangles) i += shift;
+    meshes.push_back(high);
+  }
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const Mesh& m = meshes[i];
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    PreparedMesh p, serial;
+    ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+      ASSERT_TRUE(prepareMesh(m, ClusterParams(), serial).ok());
+    }
+    EXPECT_EQ(serial.order, p.order);
+    ASSERT_EQ(serial.sorted_positions.size(), p.sorted_positions.size());
+    EXPECT_EQ(std::memcmp(serial.sorted_positions.data(), p.sorted_positions.data(),
+                          p.sorted_positions.size() * sizeof(glm::vec3)), 0);
+    EXPECT_EQ(std::memcmp(serial.weights.data(), p.weights.data(), p.weights.size() * sizeof(float)), 0);
+    std::vector<float> w, raw;
+    float longest = 0.0f;
+    gradeVertices(m, Grading::kLowTan, true, w, nullptr, &longest, &raw);
+    std::vector<uint8_t> referenced(m.vertexCount(), 0);
+    for (uint32_t v : m.triangles) referenced[v] = 1;
+    for (uint32_t v : m.edges) referenced[v] = 1;
+    for (uint32_t v : m.points) referenced[v] = 1;
+    std::vector<uint32_t> expected;
+    for (size_t v = 0; v < m.vertexCount(); ++v)
+      if (referenced[v]) expected.push_back(static_cast<uint32_t>(v));
+    auto bits = [&](uint32_t v) {
+      uint32_t b;
+      std::memcpy(&b, &raw[v], sizeof b);
+      return b;
+    };
+    std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) { return bits(a) > bits(b); });
+    EXPECT_EQ(p.order, expected);
+    ASSERT_EQ(p.sorted_positions.size(), expected.size());
+    for (size_t k = 0; k < expected.size(); ++k)
+      ASSERT_EQ(std::memcmp(&p.sorted_positions[k], &m.positions[expected[k]], sizeof(glm::vec3)), 0) << k;
+    ASSERT_EQ(p.weights.size(), w.size());
+    EXPECT_EQ(std::memcmp(p.weights.data(), w.data(), w.size() * sizeof(float)), 0);
+    EXPECT_EQ(p.longest_edge, longest);
+  }
+}
+
+// prepareMesh checks the coordinates and the triangle and edge indices in its own first passes:
+// a bad mesh gets validateMesh's error (the same first bad element when several are bad), and the
+// PreparedMesh passed in is left as it was
+TEST(Grading, PrepareGivesValidateMeshsErrorAndLeavesTheOutputAlone) {
+  const Mesh good = test::makeBumpySphere(12, 16);
+  const size_t vn = good.vertexCount();
+  const uint32_t bad_index = static_cast<uint32_t>(vn) + 3;
+  std::vector<std::pair<std::string, Mesh>> cases;
+  auto add = [&](const std::string& name, auto&& edit) {
+    Mesh m = good;
+    edit(m);
+    cases.emplace_back(name, m);
+  };
+  add("nan vertex", [&](Mesh& m) { m.positions[7].y = std::nanf(""); });
+  add("infinite vertex and a bad index", [&](Mesh& m) {
+    m.positions[9].z = INFINITY;
+    m.positions[4].x = -INFINITY;
+    m.triangles[0] = bad_index;
+  });
+  add("two bad triangle indices", [&](Mesh& m) {
+    m.triangles[3 * 40 + 2] = bad_index;
+    m.triangles[3 * 11 + 1] = bad_index + 1;
+  });
+  add("the last triangle index", [&](Mesh& m) { m.triangles.back() = static_cast<uint32_t>(vn); });
+  add("index 2^32 - 1", [&](Mesh& m) { m.triangles[5] = UINT32_MAX; });
+  add("a bad edge index", [&](Mesh& m) { m.edges = {0, 1, 2, bad_index, bad_index, 3}; });
+  add("bad edge and triangle indices", [&](Mesh& m) {
+    m.edges = {0, bad_index};
+    m.triangles[100] = bad_index;
+  });
+  add("triangle count not a multiple of 3 and a nan", [&](Mesh& m) {
+    m.triangles.push_back(0);
+    m.positions[3].x = std::nanf("");
+  });
+  add("normals count and a bad index", [&](Mesh& m) {
+    m.normals.assign(vn - 1, glm::vec3(0, 0, 1));
+    m.triangles[0] = bad_index;
+  });
+  add("a bad point index", [&](Mesh& m) { m.points = {1, bad_index}; });
+  add("a bad point and a bad triangle index", [&](Mesh& m) {
+    m.points = {bad_index};
+    m.triangles[8] = bad_index;
+  });
+  add("a negative thickness", [&](Mesh& m) {
+    m.edges = {0, 1, 1, 2};
+    m.edge_thickness = {0.5f, -1.0f};
+  });
+  add("no vertices", [&](Mesh& m) { m.positions.clear(); });
+  PreparedMesh kept;
+  ASSERT_TRUE(prepareMesh(good, ClusterParams(), kept).ok());
+  const std::vector<uint32_t> kept_order = kept.order;
+  for (const auto& [name, m] : cases) {
+    SCOPED_TRACE(name);
+    const Error expected = validateMesh(m, "case");
+    ASSERT_FALSE(expected.ok());
+    PreparedMesh p = kept;
+    const Error e = prepareMesh(m, ClusterParams(), p, "case");
+    EXPECT_EQ(e.status, expected.status);
+    EXPECT_EQ(e.message, expected.message);
+    EXPECT_EQ(p.order, kept_order);
+    EXPECT_EQ(p.mesh, &good);
+  }
 }
