@@ -382,8 +382,10 @@ constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 
 bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
 bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
-// slots the dedupe probe reads at once (two SSE2 loads, 32 bytes)
+// slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
+// for (the bunny's 50 % level: 256 KB)
 constexpr size_t kProbeWindow = 8;
+constexpr size_t kWindowedTableBytes = size_t(1) << 19;
 }  // namespace
 
 // test hook (declared by tests/lodcore/elimination_test.cpp): false lists every candidate edge in the
@@ -429,7 +431,11 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   while (cap * 2 < expected * 3) cap <<= 1;
   // (kProbeWindow slots more: room to align the windowed probe's groups, below)
   std::vector<uint32_t> table(cap + kProbeWindow, kNone);
-  const bool windowed = g_windowed_probes;  // (else the reference probe, useWindowedProbes)
+  // windowed probes (below) where the table stays in cache; else, and where the test hook asks for
+  // the reference (useWindowedProbes), one slot at a time. (At the 1 M sphere's 10 % level, 1 MB of
+  // slots read at random beside 1.6 MB of chained edge lists, the windows ran slower: eliminate
+  // 11.9-12.5 -> 12.5-13.4 ms, 88.6 -> 94.6 M instructions, mispredicts 103 k -> 62 k.)
+  const bool windowed = g_windowed_probes && cap * sizeof(uint32_t) <= kWindowedTableBytes;
   // the slots: with windowed probes from the first 32-byte boundary in the table
   auto slotsOf = [&]() {
     const uintptr_t at = reinterpret_cast<uintptr_t>(table.data());
@@ -623,7 +629,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // first (a branch that is then predicted) and skips the rest of the classification (the scalar
   // classification only: the AVX2 one costs the same for every class)
   bool points_dominate = false;
-  bool branchless_edges = windowed;  // (blocks: see edgeSlot)
+  bool branchless_edges = g_windowed_probes;  // (blocks: see edgeSlot)
   // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
   // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
   // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
@@ -698,7 +704,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     // for the next block: over 3/8 of the lookups made an edge (bunny: 50 % level 51 %, 10 % 25 %,
     // 2 % 9 %; at over 1/8, the 10 % level took the branchless path and eliminated in 0.58-0.62 ms
     // against 0.53-0.57)
-    branchless_edges = windowed && (edge_total - edges_before) * 8 > edge_count * 3;
+    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 8 > edge_count * 3;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
