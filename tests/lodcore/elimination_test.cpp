@@ -179,6 +179,9 @@ namespace scenelod::detail {
 bool useAvx2Paths(bool on);
 // (lodcore/src/elimination.cpp) false: every candidate edge in the chained lists; returns the previous choice
 bool useEdgeBlocks(bool on);
+// (lodcore/src/elimination.cpp) false: the dedupe probe one slot at a time and a branch on each new
+// edge, the reference paths; returns the previous choice
+bool useWindowedProbes(bool on);
 }
 
 namespace {
@@ -347,10 +350,12 @@ TEST(ThickEdge, DynamicNormalIsPerpendicularAndFacesTheCamera) {
 // new edges linked without one) give the bits of the per-cluster blocks: forced on meshes small
 // enough for blocks, with lists longer than three nodes (the hubs of spokes), input edges with
 // thicknesses beside collapsed triangles, uncovered edges (thickness), edges or points not kept.
-TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
-  std::vector<std::pair<std::string, Mesh>> meshes;
-  addBunnyAndSheet(meshes);
-  ASSERT_FALSE(HasFatalFailure());
+namespace {
+
+// a bumpy sphere with input edges across its surface (input thicknesses), 40 hubs of 24 spokes (the
+// hub's block overflows into the chained lists) and a finer bumpy sphere (lists longer than three
+// nodes where every edge is chained)
+void addEdgeMeshes(std::vector<std::pair<std::string, Mesh>>& meshes) {
   Mesh sphere = test::makeBumpySphere(90, 121);
   for (uint32_t v = 0; v + 7 < sphere.positions.size(); v += 7) {  // input edges across the surface
     sphere.edges.insert(sphere.edges.end(), {v, v + 7});
@@ -372,6 +377,15 @@ TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
   }
   meshes.emplace_back("hubs", std::move(hubs));
   meshes.emplace_back("finer bumpy sphere", test::makeBumpySphere(300, 400));
+}
+
+}  // namespace
+
+TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  addBunnyAndSheet(meshes);
+  ASSERT_FALSE(HasFatalFailure());
+  addEdgeMeshes(meshes);
   const bool was = detail::useEdgeBlocks(true);
   size_t levels = 0;
   for (const auto& [name, m] : meshes) {
@@ -394,4 +408,59 @@ TEST(Elimination, ChainedEdgeListsGiveTheBlocksBits) {
   }
   detail::useEdgeBlocks(was);
   EXPECT_GE(levels, 20u);
+}
+
+// The dedupe table's windowed probe and the edge blocks' lookup that lists a new edge without a
+// branch give the reference paths' bits (one slot at a time; find, then add): every output array,
+// with edges or points not kept, at fine widths (few repeats, the blocks' fast path) and coarse ones
+// (most kept triangles repeats: the tag matches), on the meshes of the tests above, a bumpy sphere
+// doubled onto itself (every triangle repeated, same orientation) and 400 clusters with 72,100 input
+// edges (ids past 16 bits: the blocks' branch past them); with the chained lists too.
+TEST(Elimination, WindowedProbesGiveTheReferenceBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  addBunnyAndSheet(meshes);
+  ASSERT_FALSE(HasFatalFailure());
+  addEdgeMeshes(meshes);
+  Mesh doubled = test::makeBumpySphere(120, 160);
+  test::appendMesh(doubled, test::makeBumpySphere(120, 160));
+  meshes.emplace_back("doubled sphere", std::move(doubled));
+  // 400 grid points: the first 65,535 pairs of the first 380 as input edges (ids 0-65534, which fit
+  // the blocks' 16 bits), then every pair of the last 20, whose blocks are empty when their ids
+  // pass 16 bits; each edge twice, in both directions
+  Mesh grid;
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x) grid.positions.push_back({float(x), float(y), 0.0f});
+  auto addPair = [&](uint32_t i, uint32_t j) {
+    grid.edges.insert(grid.edges.end(), {i, j, j, i});
+    grid.edge_thickness.insert(grid.edge_thickness.end(), {0.001f * float(i % 7), 0.001f * float(j % 5)});
+  };
+  for (uint32_t i = 0, pairs = 0; i < 380; ++i)
+    for (uint32_t j = i + 1; j < 380 && pairs < 65535; ++j, ++pairs) addPair(i, j);
+  for (uint32_t i = 380; i < 400; ++i)
+    for (uint32_t j = i + 1; j < 400; ++j) addPair(i, j);
+  meshes.emplace_back("grid of edges", std::move(grid));
+  const bool was_windowed = detail::useWindowedProbes(true), was_blocks = detail::useEdgeBlocks(true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    const float diagonal = positionsDiagonal(m);
+    for (float f : {0.002f, 0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 4; ++keep) {
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        detail::useEdgeBlocks(keep != 3);
+        Mesh windowed, reference;
+        detail::useWindowedProbes(true);
+        ASSERT_TRUE(clusterMesh(m, p, windowed).ok());
+        detail::useWindowedProbes(false);
+        ASSERT_TRUE(clusterMesh(m, p, reference).ok());
+        SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
+        expectSameBits(windowed, reference);
+        levels += reference.triangleCount() + reference.edgeCount() > 0;
+      }
+  }
+  detail::useWindowedProbes(was_windowed);
+  detail::useEdgeBlocks(was_blocks);
+  EXPECT_GE(levels, 120u);
 }
