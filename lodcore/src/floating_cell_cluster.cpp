@@ -1044,6 +1044,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
 }
 #endif
 
+// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 never the runs, 1 always
+std::atomic<int> g_cache_runs{-1};
+
 #if defined(SCENELOD_FLOATING_AVX2)
 // An entry's cells where at most 8 heads were found and each lists one cell (cube cells: a cube of
 // side w/2 lists at most one): found[0 .. count) sorted into listed[0 .. count), each placed at its
@@ -1312,9 +1315,6 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     cluster_of[order[i]] = best;
   }
 }
-
-// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 never the runs, 1 always
-std::atomic<int> g_cache_runs{-1};
 
 // the runs and the centres where the centres take at most kCacheCentresBytesPerVertex (about 3
 // entries reserved per expected cell)
