@@ -1044,7 +1044,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
 }
 #endif
 
-// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 never the runs, 1 always
+// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 no runs, 1 runs with
+// the entries' centres, 2 runs on entries of indices
 std::atomic<int> g_cache_runs{-1};
 
 #if defined(SCENELOD_FLOATING_AVX2)
@@ -1079,9 +1080,11 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE bool sortLoneHeads8(const C
 
 // What cachedRun reads: plain pointers and constants, copied into registers. The cache's pointers
 // are taken at each call (make moves them, and make is never called inside a run).
+template <typename CellRecord>
 struct CachedRunInputs {
+  const CellRecord* cells;
   const CandidateCache::Entry* entries;
-  const CandidateCache::Centres* centres;
+  const CandidateCache::Centres* centres;  // kCentres: the entries' centres
   const uint32_t* cache_bricks;
   const uint16_t* slots;
   const glm::vec3* positions;  // sorted (kSorted) or indexed by the order
@@ -1102,8 +1105,10 @@ struct CachedRunInputs {
 // to its cell (~100 cycles: the range, the brick, the slot, the centres, d^2, the reduction) over
 // the reorder window, not by its ~100 instructions; one vertex ahead, levels 4, 6 and 8 took
 // 0.51, 0.39 and 0.34 ms instead of 0.42-0.47, 0.32-0.34 and 0.28-0.29 (three ahead: no better).
-template <bool kCube, bool kNearest, bool kSorted>
-SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs& in, size_t i, size_t n) {
+template <bool kCube, bool kNearest, bool kSorted, bool kCentres, typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs<CellRecord>& in, size_t i,
+                                                                          size_t n) {
+  const CellRecord* const cells = in.cells;
   const CandidateCache::Centres* const centres = in.centres;
   const CandidateCache::Entry* const entries = in.entries;
   const uint32_t* const cache_bricks = in.cache_bricks;
@@ -1153,10 +1158,16 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
     const Planned after = plan(i + 2);
     // 0 (no entry) and kOverflow: the caller's paths
     if (uint16_t(here.e - 1) >= CandidateCache::kOverflow - 1) break;
-    const CandidateCache::Centres& m = centres[here.e];
-    const uint32_t best = testEntry8<kCube, kNearest>(
-        entries[here.e].cell, _mm256_loadu_ps(m.x), _mm256_loadu_ps(m.y), _mm256_loadu_ps(m.z),
-        _mm256_broadcast_ss(here.pv), _mm256_broadcast_ss(here.pv + 1), _mm256_broadcast_ss(here.pv + 2), rule);
+    __m256 cx, cy, cz;
+    if constexpr (kCentres) {
+      const CandidateCache::Centres& m = centres[here.e];
+      cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
+    } else {
+      loadCentres8(cells, entries[here.e].cell, cx, cy, cz);
+    }
+    const uint32_t best =
+        testEntry8<kCube, kNearest>(entries[here.e].cell, cx, cy, cz, _mm256_broadcast_ss(here.pv),
+                                    _mm256_broadcast_ss(here.pv + 1), _mm256_broadcast_ss(here.pv + 2), rule);
     if (best == kNone) break;
     cluster_of[here.v] = best;
     here = next;
@@ -1167,8 +1178,9 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
 
 // assignDenseAvx2T with a CandidateCache (see there): the vertices whose 3 x 3 x 3 cubes' cells are
 // in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path.
-// kRuns: the cache keeps its centres and the common vertices go through cachedRun (see below)
-template <bool kCube, bool kNearest, typename Head, bool kRuns>
+// kRuns: the common vertices go through cachedRun (see there); kCentres: the cache keeps its
+// entries' centres
+template <bool kCube, bool kNearest, typename Head, bool kRuns, bool kCentres>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
                                                              const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                                              size_t expected, Assignment& out) {
@@ -1188,7 +1200,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
   // 10 % levels
-  CandidateCache cache(dims, expected * 3, kRuns);
+  CandidateCache cache(dims, expected * 3, kCentres);
   const uint32_t* const cache_bricks = cache.bricks();
   const uint16_t* slots = cache.slots();
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
@@ -1226,11 +1238,12 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
   // them), 6 of the ~190 instructions a vertex at the 1 M sphere's 1 % level
   const uint32_t* const order = p.order.data();
   uint32_t* const cluster_of = out.cluster_of.data();
-  CachedRunInputs run_in{nullptr, nullptr, cache_bricks, nullptr, nullptr, order, cluster_of,
+  CachedRunInputs<typename DenseGrid<Head>::Cell> run_in{nullptr, nullptr, nullptr, cache_bricks, nullptr, nullptr, order, cluster_of,
                          inv4, reach4, slack4, lo_cube4, brick_stride4, rule};
   // the vertices from k on that their entries settle; the first that needs more
   auto runFrom = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     run_in.entries = cache.entries();
+    run_in.cells = cells.data();
     run_in.centres = cache.centres();
     run_in.slots = cache.slots();
     bool by_order = false;
@@ -1240,12 +1253,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
       by_order = sorted.sorted == nullptr;
       run_in.positions = by_order ? sorted.positions : sorted.sorted;
     }
-    return by_order ? cachedRun<kCube, kNearest, false>(run_in, k, n) : cachedRun<kCube, kNearest, true>(run_in, k, n);
+    return by_order ? cachedRun<kCube, kNearest, false, kCentres>(run_in, k, n)
+                    : cachedRun<kCube, kNearest, true, kCentres>(run_in, k, n);
   };
-  // the runs where entries are few (with their centres): where they are many, the vertices that
-  // leave a run (no entry yet, a new cell) are so frequent (at the bunny's 2 % level and its chain
-  // level 3, 1 in 6-8) that each one's restart, its position planned again, not ahead, made the
-  // assignment slower (0.66 -> 0.68-0.70 ms and 0.93 -> 1.00-1.03) with 12-20 % fewer instructions
+  // without runs (grids whose bricks' strides pass 15 bits, and a test's choice) as before them
   if (n > 0 && !kRuns) plan(0);
   for (size_t i = 0; i < n; ++i) {
     // after a run, vertex i: its cubes not 3 x 3 x 3, no entry yet or an overflowing one, inside
@@ -1290,7 +1301,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
       if (e != CandidateCache::kOverflow) {
         const CandidateCache::Entry& entry = cache.entry(e);
         __m256 cx, cy, cz;
-        if constexpr (kRuns) {
+        if constexpr (kCentres) {
           const CandidateCache::Centres& m = cache.centres(e);
           cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
         } else {
@@ -1322,8 +1333,13 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
   }
 }
 
-// the runs and the centres where the centres take at most kCacheCentresBytesPerVertex (about 3
-// entries reserved per expected cell)
+// the runs wherever the bricks' strides fit 15 bits, with the entries' centres where these take at
+// most kCacheCentresBytesPerVertex (about 3 entries reserved per expected cell). Runs on entries of
+// indices (the cells' centres gathered and transposed) where the centres do not fit: at the bunny's
+// chain level 3 and 2 % level, where 1 vertex in 6-8 leaves a run, 0.84-0.89 -> 0.79-0.86 ms and
+// 0.64 -> 0.54 (with centres 0.77-0.82 and 0.52, but level 3's took the chain's peak to 3.57 MB);
+// before the runs planned two vertices ahead they made both levels slower (0.66 -> 0.68-0.70 ms and
+// 0.93 -> 1.00-1.03)
 template <bool kCube, bool kNearest, typename Head>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
@@ -1332,11 +1348,15 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // cachedRun's brick places as products of 16-bit halves: the strides of the bricks below 2^15
   const size_t bx = (dims[0] + 3) / 4, by = (dims[1] + 3) / 4, bz = (dims[2] + 3) / 4;
   const bool small_bricks = bx * by < 32768 && bz < 32768;
-  if (small_bricks && (forced == 1 || (forced == -1 && double(expected * 3) * sizeof(CandidateCache::Centres) <=
-                                                           kCacheCentresBytesPerVertex * double(p.order.size()))))
-    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  const bool centres_fit = double(expected * 3) * sizeof(CandidateCache::Centres) <=
+                           kCacheCentresBytesPerVertex * double(p.order.size());
+  const int runs = !small_bricks ? 0 : forced >= 0 ? forced : centres_fit ? 1 : 2;
+  if (runs == 1)
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  else if (runs == 2)
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
   else
-    assignDenseCachedAvx2Impl<kCube, kNearest, Head, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 #endif
 
@@ -1770,8 +1790,8 @@ void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
 }
 // false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
 void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }
-// the candidate cache's runs with the entries' centres (cachedRun): 1 at every cached width, 0 at
-// none, -1 where the centres are few (the default)
+// the candidate cache's runs (cachedRun) at every cached width: 0 none, 1 with the entries' centres,
+// 2 on entries of indices; -1 the default (centres where they are few, else indices)
 void setFloatingCacheRunsForTest(int runs) { g_cache_runs.store(runs, std::memory_order_relaxed); }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {

@@ -27,9 +27,9 @@ struct Case {
 };
 
 // every rule and shape at widths where the cache is taken (at least 12 vertices per expected cell)
-// and one where it is not, with short and 32-bit heads: the cached run (with the entries' centres
-// and cachedRun where they are few, at every cached width and at none), the uncached AVX2 run and
-// the SSE2 run give the same cells in the same order. Sphere cells make lists of more than 8
+// and one where it is not, with short and 32-bit heads: the cached run (its default, and cachedRun
+// with the entries' centres, on entries of indices and not at all, each at every cached width), the
+// uncached AVX2 run and the SSE2 run give the same cells in the same order. Sphere cells make lists of more than 8
 // candidates (entries of several blocks); the coarsest widths fill an entry past its spare lanes.
 void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
   PreparedMesh p;
@@ -45,7 +45,7 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
         params.method = c.method;
         params.cell_shape = c.shape;
         params.cell_width = w;
-        ClusterAssignment plain, uncached, cached, runs_always, runs_never;
+        ClusterAssignment plain, uncached, cached, runs_centres, runs_indices, runs_never;
         detail::setFloatingPathsForTest(false, short_heads, false);
         const bool plain_ok = assignClusters(p, params, plain).ok();
         detail::setFloatingPathsForTest(true, short_heads, false);
@@ -54,19 +54,23 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
         detail::setFloatingCacheForTest(true);
         const bool cached_ok = assignClusters(p, params, cached).ok();
         detail::setFloatingCacheRunsForTest(1);
-        const bool always_ok = assignClusters(p, params, runs_always).ok();
+        const bool centres_ok = assignClusters(p, params, runs_centres).ok();
+        detail::setFloatingCacheRunsForTest(2);
+        const bool indices_ok = assignClusters(p, params, runs_indices).ok();
         detail::setFloatingCacheRunsForTest(0);
         const bool never_ok = assignClusters(p, params, runs_never).ok();
         detail::setFloatingCacheRunsForTest(-1);
         detail::setFloatingPathsForTest(true, true, true);
-        ASSERT_TRUE(plain_ok && uncached_ok && cached_ok && always_ok && never_ok);
+        ASSERT_TRUE(plain_ok && uncached_ok && cached_ok && centres_ok && indices_ok && never_ok);
         EXPECT_GT(plain.heaviest.size(), 1u);
         EXPECT_EQ(uncached.heaviest, plain.heaviest);
         EXPECT_EQ(uncached.cluster_of, plain.cluster_of);
         EXPECT_EQ(cached.heaviest, plain.heaviest);
         EXPECT_EQ(cached.cluster_of, plain.cluster_of);
-        EXPECT_EQ(runs_always.heaviest, plain.heaviest);
-        EXPECT_EQ(runs_always.cluster_of, plain.cluster_of);
+        EXPECT_EQ(runs_centres.heaviest, plain.heaviest);
+        EXPECT_EQ(runs_centres.cluster_of, plain.cluster_of);
+        EXPECT_EQ(runs_indices.heaviest, plain.heaviest);
+        EXPECT_EQ(runs_indices.cluster_of, plain.cluster_of);
         EXPECT_EQ(runs_never.heaviest, plain.heaviest);
         EXPECT_EQ(runs_never.cluster_of, plain.cluster_of);
       }
