@@ -59,6 +59,9 @@ constexpr size_t kPrefetchDistance = 4;
 // 5 % (14: 1.18-1.20 ms, 9 % fewer instructions), a loss at 10 % (9.4: 1.35 -> 1.72 ms, an entry
 // made for every ~4 vertices)
 constexpr double kCacheVerticesPerCell = 12.0;
+// CandidateCache keeps its entries' centres (96 bytes an entry) where those take at most this many
+// bytes per vertex (about 3 entries per expected cell are reserved)
+constexpr double kCacheCentresBytesPerVertex = 4.0;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
 // cube costs one cache line. A grid cube lists at most 8 cube cells (64 sphere cells); those past
@@ -484,20 +487,29 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t bestListedCell8(co
 #endif
 
 #if defined(SCENELOD_FLOATING_AVX2)
-// testCellLanes8 and laneBest8 on 8 cells whose indices ascend along the lanes (0, the sentinel at
-// NaN, in free lanes): the same cell, found with one reduction of d^2 and the first lane holding
-// it, the least id on a tie (for the heaviest rule the first inside lane); kNone if none
-template <bool kCube, bool kNearest, typename CellRecord>
-SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t testEntry8(const CellRecord* cells, const uint16_t* c,
-                                                                         __m256 px, __m256 py, __m256 pz,
-                                                                         const JoinRule& rule) {
+// testCellLanes8 and laneBest8 on 8 cells whose indices c ascend along the lanes (0, the sentinel,
+// in free lanes), given with their centres (cx, cy, cz: NaN in free lanes): the same cell, found with
+// one reduction of d^2 and the first lane holding it, the least id on a tie (for the heaviest rule
+// the first inside lane); kNone if none
+// the centres of the 8 cells c[0 .. 8) into cx, cy, cz (lane k: c[k]; records k and k + 4 share a
+// 128-bit half, so the in-half transpose leaves the lanes in order)
+template <typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void loadCentres8(const CellRecord* cells, const uint16_t* c, __m256& cx,
+                                                                       __m256& cy, __m256& cz) {
   const __m256 a0 = load2Cells(cells, c[0], c[4]), a1 = load2Cells(cells, c[1], c[5]);
   const __m256 a2 = load2Cells(cells, c[2], c[6]), a3 = load2Cells(cells, c[3], c[7]);
   const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpacklo_ps(a2, a3);
   const __m256 t2 = _mm256_unpackhi_ps(a0, a1), t3 = _mm256_unpackhi_ps(a2, a3);
-  const __m256 dx = _mm256_sub_ps(px, _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)));
-  const __m256 dy = _mm256_sub_ps(py, _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)));
-  const __m256 dz = _mm256_sub_ps(pz, _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)));
+  cx = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+  cy = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+  cz = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+}
+
+template <bool kCube, bool kNearest>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t testEntry8(const uint16_t* c, __m256 cx, __m256 cy, __m256 cz,
+                                                                         __m256 px, __m256 py, __m256 pz,
+                                                                         const JoinRule& rule) {
+  const __m256 dx = _mm256_sub_ps(px, cx), dy = _mm256_sub_ps(py, cy), dz = _mm256_sub_ps(pz, cz);
   const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
   __m256 inside;
   if (kCube) {
@@ -846,25 +858,44 @@ struct DenseGrid {
 // 16 bytes, and the cubes' entry numbers in bricks of 4 x 4 x 4 cubes allocated where a cube has
 // an entry (as BrickHeads): about 55 KB at the 2 % level. Entries of 8 centres (128 bytes, tested
 // without the gather from the cells: 6.3 M instructions there instead of 6.8) and a flat array of
-// entry numbers took the bunny's chain peak to 4.2-4.5 MB (budget 3.34).
+// entry numbers took the bunny's chain peak to 4.2-4.5 MB (budget 3.34). The centres are kept
+// beside the entries (Centres, 96 bytes) only where they are few (kCacheCentresBytesPerVertex):
+// kept at every level, the bunny's chain level 3 (1,681 expected cells, 4,265 entries) took its
+// peak from 2.96 to 3.57 MB; from level 4 on (1,144 entries, 124 KB reserved) they cut the
+// assignment by 0.9-1.0 M instructions a level.
 class CandidateCache {
  public:
   static constexpr uint16_t kOverflow = 0xffff;
   struct Entry {
-    uint16_t cell[8];
+    uint16_t cell[8];  // the cells' indices (cluster + 1), ascending, 0 (the sentinel) in free places
   };
-  // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated)
-  CandidateCache(const size_t dims[3], size_t reserve_entries) : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4) {
+  // an entry's cells' centres (SoA), so that a vertex loads three vectors instead of 8 cells by index
+  // and their transpose (31 instructions at the bunny's chain level 4)
+  struct Centres {
+    float x[8], y[8], z[8];  // NaN in free places (the sentinel's centre: contains no vertex)
+  };
+  // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated);
+  // `centres`: keep each entry's Centres too
+  CandidateCache(const size_t dims[3], size_t reserve_entries, bool centres)
+      : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), with_centres_(centres) {
     if (reserve_entries == 0) return;
     top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
     slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
     slots_.assign(64, 0);  // brick 0: no entries
     entries_.reserve(reserve_entries + 1);
     entries_.push_back(Entry{});
+    if (centres) {
+      centres_.reserve(reserve_entries + 1);
+      centres_.push_back(Centres{});
+    }
   }
   // the entry number of cube (x, y, z): 0 none yet, kOverflow for the general path
   uint16_t find(int32_t x, int32_t y, int32_t z) const { return slots_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)]; }
   const Entry& entry(uint16_t e) const { return entries_[e]; }
+  const Entry* entries() const { return entries_.data(); }  // moves when make adds an entry
+  bool hasCentres() const { return with_centres_; }
+  const Centres& centres(uint16_t e) const { return centres_[e]; }
+  const Centres* centres() const { return centres_.data(); }  // null without centres; moves as entries()
   // for find in a caller's SIMD loop: the strides of the bricks' y and z, the bricks (which never
   // move) and the slots (which move when make allocates a brick)
   size_t brickStrideY() const { return bx_; }
@@ -873,7 +904,8 @@ class CandidateCache {
   const uint16_t* slots() const { return slots_.data(); }
   // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending; false (the cube
   // marked kOverflow) where they are more than 8 or the entry numbers are used up
-  bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count) {
+  template <typename CellRecord>
+  bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
     uint16_t& slot = slotFor(x, y, z);
     if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
       slot = kOverflow;
@@ -883,11 +915,19 @@ class CandidateCache {
     Entry e{};
     for (uint32_t k = 0; k < count; ++k) e.cell[k] = uint16_t(list[k]);
     entries_.push_back(e);
+    if (with_centres_) {
+      Centres m;
+      for (uint32_t k = 0; k < 8; ++k) {
+        const CellRecord& c = cells[k < count ? list[k] : 0];  // the sentinel's NaN in free places
+        m.x[k] = c.x, m.y[k] = c.y, m.z[k] = c.z;
+      }
+      centres_.push_back(m);
+    }
     return true;
   }
-  // cell index c (the newest: entries stay ascending), centred in cube (cx, cy, cz), into the built
+  // cell index c (the newest: entries stay ascending), centred at `centre` in cube (cx, cy, cz), into the built
   // entries of the 27 cubes whose 3 x 3 x 3 hold that cube
-  void add(int32_t cx, int32_t cy, int32_t cz, uint32_t c) {
+  void add(int32_t cx, int32_t cy, int32_t cz, uint32_t c, const glm::vec3& centre) {
     // the brick and in-brick parts of the three coordinates on each axis once
     size_t xb[3], xi[3], yb[3], yi[3], zb[3], zi[3];
     for (int k = 0; k < 3; ++k) {
@@ -895,23 +935,37 @@ class CandidateCache {
       yb[k] = size_t((cy - 2 + k) >> 2) * bx_, yi[k] = size_t((cy - 2 + k) & 3) << 2;
       zb[k] = size_t((cz - 2 + k) >> 2) * bx_ * by_, zi[k] = size_t((cz - 2 + k) & 3) << 4;
     }
+    // the slots holding a built entry first, without a branch per slot (which of the 27 do is
+    // random: the test per slot mispredicted about twice per new cell, 8.5 k times at the bunny's
+    // chain level 3, with 1,681 cells), then those entries
+    uint16_t* built[27];
+    uint32_t built_count = 0;
     for (int z = 0; z < 3; ++z)
       for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 3; ++x) {
           // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
-          uint16_t& slot = slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
-          if (uint16_t(slot - 1) >= kOverflow - 1) continue;
-          Entry& e = entries_[slot];
-          // the free places (a full entry has none), without a loop whose exit would mispredict
-          const uint32_t free_places = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(
-                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(e.cell)), _mm_setzero_si128()))) &
-                                       0x5555u;
-          if (free_places == 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
-            slot = kOverflow;
-            continue;
-          }
-          e.cell[__builtin_ctz(free_places) >> 1] = uint16_t(c);
+          uint16_t* slot = &slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
+          built[built_count] = slot;
+          built_count += uint16_t(*slot - 1) < kOverflow - 1;
         }
+    for (uint32_t b = 0; b < built_count; ++b) {
+      uint16_t& slot = *built[b];
+      Entry& e = entries_[slot];
+      // the free places (a full entry has none), without a loop whose exit would mispredict
+      const uint32_t free_places = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(
+                                       _mm_loadu_si128(reinterpret_cast<const __m128i*>(e.cell)), _mm_setzero_si128()))) &
+                                   0x5555u;
+      if (free_places == 0 || c > 0xffff) {  // full, or a cell index past 16 bits (32-bit heads)
+        slot = kOverflow;
+        continue;
+      }
+      const int k = __builtin_ctz(free_places) >> 1;
+      e.cell[k] = uint16_t(c);
+      if (with_centres_) {
+        Centres& m = centres_[slot];
+        m.x[k] = centre.x, m.y[k] = centre.y, m.z[k] = centre.z;
+      }
+    }
   }
 
  private:
@@ -928,9 +982,11 @@ class CandidateCache {
     return slots_[size_t(b) << 6 | inBrick(x, y, z)];
   }
   size_t bx_, by_;
+  bool with_centres_;
   std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one
   std::vector<uint16_t> slots_;    // 64 per brick: the cubes' entry numbers
   std::vector<Entry> entries_;     // entries_[0] unused
+  std::vector<Centres> centres_;   // with_centres_: centres_[e] for entries_[e]
 };
 #endif
 
@@ -1156,13 +1212,146 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
 }
 #endif
 
+// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 no runs, 1 runs with
+// the entries' centres, 2 runs on entries of indices
+std::atomic<int> g_cache_runs{-1};
+
 #if defined(SCENELOD_FLOATING_AVX2)
+// An entry's cells where at most 8 heads were found and each lists one cell (cube cells: a cube of
+// side w/2 lists at most one): found[0 .. count) sorted into listed[0 .. count), each placed at its
+// rank (the number of smaller ones), without a branch per cell; false (nothing sorted) where a list
+// is longer. found must have 8 places; listed, 9. The walk along the lists with an insertion sort
+// mispredicted about 2.3 times per entry made (9.6 k at the bunny's chain level 3, 4,265 entries).
+template <typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE bool sortLoneHeads8(const CellRecord* cells, uint32_t* found,
+                                                                         uint32_t count, uint32_t* listed) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i used = _mm256_cmpgt_epi32(_mm256_set1_epi32(int32_t(count)), lane);
+  // the free lanes at 0 (the sentinel, whose next is 0)
+  const __m256i v = _mm256_and_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(found)), used);
+  alignas(32) uint32_t c[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(c), v);
+  uint32_t chained = 0;
+  for (int k = 0; k < 8; ++k) chained |= cells[c[k]].next;
+  if (chained != 0) return false;
+  // the indices (below 2^31) ranked with the free lanes past them all
+  const __m256i key = _mm256_blendv_epi8(_mm256_set1_epi32(0x7fffffff), v, used);
+  alignas(32) int32_t keys[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(keys), key);
+  for (int k = 0; k < 8; ++k) {
+    const uint32_t rank = uint32_t(
+        _mm_popcnt_u32(uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(keys[k]), key))))));
+    listed[rank] = c[k];  // a free lane writes listed[count], past the cells
+  }
+  return true;
+}
+
+// What cachedRun reads: plain pointers and constants, copied into registers. The cache's pointers
+// are taken at each call (make moves them, and make is never called inside a run).
+template <typename CellRecord>
+struct CachedRunInputs {
+  const CellRecord* cells;
+  const CandidateCache::Entry* entries;
+  const CandidateCache::Centres* centres;  // kCentres: the entries' centres
+  const uint32_t* cache_bricks;
+  const uint16_t* slots;
+  const glm::vec3* positions;  // sorted (kSorted) or indexed by the order
+  const uint32_t* order;
+  uint32_t* cluster_of;
+  __m128 inv4, reach4, slack4;
+  __m128i lo_cube4, brick_stride4;
+  JoinRule rule;
+};
+
+// assignDenseCachedAvx2T's common vertex, in a loop of its own that calls nothing, so that its state
+// stays in registers (inside the whole loop, with the rare paths' calls and the cache's vectors, the
+// compiler kept the counter, the pointers and the position on the stack: ~199 instructions a vertex
+// at the bunny's chain level 4, of which ~40 loads and stores of these): a vertex whose 3 x 3 x 3
+// cubes have an entry and which is inside one of its cells. From vertex i on, it joins such vertices
+// and returns the first one that is not (it or one of the last two: the caller takes that one).
+// Each vertex's entry is found two vertices ahead: the loop is bound by the latency from a position
+// to its cell (~100 cycles: the range, the brick, the slot, the centres, d^2, the reduction) over
+// the reorder window, not by its ~100 instructions; one vertex ahead, levels 4, 6 and 8 took
+// 0.51, 0.39 and 0.34 ms instead of 0.42-0.47, 0.32-0.34 and 0.28-0.29 (three ahead: no better).
+template <bool kCube, bool kNearest, bool kSorted, bool kCentres, typename CellRecord>
+SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs<CellRecord>& in, size_t i,
+                                                                          size_t n) {
+  const CellRecord* const cells = in.cells;
+  const CandidateCache::Centres* const centres = in.centres;
+  const CandidateCache::Entry* const entries = in.entries;
+  const uint32_t* const cache_bricks = in.cache_bricks;
+  const uint16_t* const slots = in.slots;
+  const glm::vec3* const positions = in.positions;
+  const uint32_t* const order = in.order;
+  uint32_t* const cluster_of = in.cluster_of;
+  const __m128 inv4 = in.inv4, reach4 = in.reach4, slack4 = in.slack4;
+  const __m128i lo_cube4 = in.lo_cube4, brick_stride4 = in.brick_stride4;
+  const JoinRule rule = in.rule;
+  // vertex k's position, its vertex index and its entry (0 where it has none or its cubes are not
+  // 3 x 3 x 3)
+  struct Planned {
+    const float* pv;
+    uint32_t v;
+    uint32_t e;
+  };
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    Planned pl;
+    pl.v = order[k];
+    pl.pv = &positions[kSorted ? k : pl.v].x;
+    // x, y from one 8-byte load, z inserted (a 16-byte load could read past the positions)
+    const __m128 pk = _mm_insert_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pl.pv))),
+                                    _mm_load_ss(pl.pv + 2), 0x20);
+    // the caller's operations per lane ((q - reach) - slack and floorToInt's truncation and correction)
+    const __m128 q4 = _mm_mul_ps(pk, inv4);
+    const __m128i lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, reach4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, reach4), slack4)), lo_cube4);
+    const bool span2 =
+        (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(2)))) & 7) == 7;
+    // the brick (lanes' sum) and in-brick place (lanes' or, the same as their sum: disjoint bits) of
+    // cube lo, both summed by two horizontal additions; lane 3 is 0 in both (a stride of 0, a shift of 32)
+    // the products by 16-bit halves (vpmaddwd, 5 cycles of latency on the way to the entry, against
+    // vpmulld's 10): the bricks' coordinates and strides fit 15 bits (assignDenseCachedAvx2T)
+    const __m128i bm = _mm_madd_epi16(_mm_srai_epi32(lo4, 2), brick_stride4);
+    const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), _mm_setr_epi32(0, 2, 4, 32));
+    const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(bm, im), _mm_setzero_si128());
+    // lo is inside the grid even where the span is not 2 (lo_cube is 3 cubes below the box)
+    const uint32_t e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(sums))]) << 6 |
+                             uint32_t(_mm_extract_epi32(sums, 1))];
+    pl.e = span2 ? e : 0;
+    return pl;
+  };
+  if (i + 2 >= n) return i;
+  Planned here = plan(i), next = plan(i + 1);
+  for (; i + 2 < n; ++i) {
+    const Planned after = plan(i + 2);
+    // 0 (no entry) and kOverflow: the caller's paths
+    if (uint16_t(here.e - 1) >= CandidateCache::kOverflow - 1) break;
+    __m256 cx, cy, cz;
+    if constexpr (kCentres) {
+      const CandidateCache::Centres& m = centres[here.e];
+      cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
+    } else {
+      loadCentres8(cells, entries[here.e].cell, cx, cy, cz);
+    }
+    const uint32_t best =
+        testEntry8<kCube, kNearest>(entries[here.e].cell, cx, cy, cz, _mm256_broadcast_ss(here.pv),
+                                    _mm256_broadcast_ss(here.pv + 1), _mm256_broadcast_ss(here.pv + 2), rule);
+    if (best == kNone) break;
+    cluster_of[here.v] = best;
+    here = next;
+    next = after;
+  }
+  return i;
+}
+
 // assignDenseAvx2T with a CandidateCache (see there): the vertices whose 3 x 3 x 3 cubes' cells are
-// in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path
-template <bool kCube, bool kNearest, typename Head>
-SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
-                                                 const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
-                                                 size_t expected, Assignment& out) {
+// in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path.
+// kRuns: the common vertices go through cachedRun (see there); kCentres: the cache keeps its
+// entries' centres
+template <bool kCube, bool kNearest, typename Head, bool kRuns, bool kCentres>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
+                                                             const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                             size_t expected, Assignment& out) {
   static_assert(!DenseGrid<Head>::kBricks, "flat heads only");
   const size_t n = p.order.size();
   DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
@@ -1179,7 +1368,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
   // 10 % levels
-  CandidateCache cache(dims, expected * 3);
+  CandidateCache cache(dims, expected * 3, kCentres);
   const uint32_t* const cache_bricks = cache.bricks();
   const uint16_t* slots = cache.slots();
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
@@ -1189,10 +1378,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // heads (larger meshes) stream the copy
   std::vector<glm::vec3> local;
   const auto sorted = positionsInOrder<Head>(p, local);
-  // the next vertex's range and the place of its cube in the cache (cache.find with the three axes
-  // at once: the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T;
-  // the bricks themselves may be allocated meanwhile). The first head's offset, needed by the few
-  // vertices that gather, is not (ahead, it cost 9 instructions a vertex)
+  // vertex k's range and the place of its cube in the cache (cache.find with the three axes at once:
+  // the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T; the
+  // bricks themselves may be allocated meanwhile), or for the vertices cachedRun leaves. The first
+  // head's offset, needed by the few vertices that gather, is not (ahead, it cost 9 instructions a vertex)
   Located ahead{};
   uint32_t ahead_brick = 0, ahead_in_brick = 0;
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
@@ -1217,13 +1406,38 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // them), 6 of the ~190 instructions a vertex at the 1 M sphere's 1 % level
   const uint32_t* const order = p.order.data();
   uint32_t* const cluster_of = out.cluster_of.data();
-  if (n > 0) plan(0);
+  CachedRunInputs<typename DenseGrid<Head>::Cell> run_in{nullptr, nullptr, nullptr, cache_bricks, nullptr, nullptr, order, cluster_of,
+                         inv4, reach4, slack4, lo_cube4, brick_stride4, rule};
+  // the vertices from k on that their entries settle; the first that needs more
+  auto runFrom = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    run_in.entries = cache.entries();
+    run_in.cells = cells.data();
+    run_in.centres = cache.centres();
+    run_in.slots = cache.slots();
+    bool by_order = false;
+    if constexpr (std::is_same_v<Head, uint32_t>) {
+      run_in.positions = sorted;
+    } else {
+      by_order = sorted.sorted == nullptr;
+      run_in.positions = by_order ? sorted.positions : sorted.sorted;
+    }
+    return by_order ? cachedRun<kCube, kNearest, false, kCentres>(run_in, k, n)
+                    : cachedRun<kCube, kNearest, true, kCentres>(run_in, k, n);
+  };
+  // without runs (grids whose bricks' strides pass 15 bits, and a test's choice) as before them
+  if (n > 0 && !kRuns) plan(0);
   for (size_t i = 0; i < n; ++i) {
+    // after a run, vertex i: its cubes not 3 x 3 x 3, no entry yet or an overflowing one, inside
+    // none of its entry's cells (a new cell), or the last vertex
+    if constexpr (kRuns) {
+      i = runFrom(i);
+      plan(i);
+    }
     const glm::vec3 pv = sorted[i];
     const __m128 q4 = ahead.q4;
     const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
     const uint32_t brick_at = ahead_brick, in_brick = ahead_in_brick;
-    if (i + 1 < n) plan(i + 1);
+    if (!kRuns && i + 1 < n) plan(i + 1);
     const __m128i span = _mm_sub_epi32(hi4, lo4);
     const bool span2 = (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7;
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
@@ -1238,19 +1452,31 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
             gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
         uint32_t listed[27 * 8];
         uint32_t count = 0;
-        for (uint32_t j = 0; j < heads; ++j)
-          for (uint32_t c = found[j]; c != 0; c = cells[c].next) {
-            uint32_t k = count++;
-            for (; k > 0 && listed[k - 1] > c; --k) listed[k] = listed[k - 1];
-            listed[k] = c;
-          }
-        e = cache.make(lo[0], lo[1], lo[2], listed, count) ? cache.find(lo[0], lo[1], lo[2])
-                                                          : CandidateCache::kOverflow;
+        if (heads > 8 || !sortLoneHeads8(cells.data(), found, heads, listed)) {
+          for (uint32_t j = 0; j < heads; ++j)
+            for (uint32_t c = found[j]; c != 0; c = cells[c].next) {
+              uint32_t k = count++;
+              for (; k > 0 && listed[k - 1] > c; --k) listed[k] = listed[k - 1];
+              listed[k] = c;
+            }
+        } else {
+          count = heads;
+        }
+        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data()) ? cache.find(lo[0], lo[1], lo[2])
+                                                                        : CandidateCache::kOverflow;
         slots = cache.slots();
       }
       if (e != CandidateCache::kOverflow) {
-        best = testEntry8<kCube, kNearest>(cells.data(), cache.entry(e).cell, _mm256_set1_ps(pv.x),
-                                           _mm256_set1_ps(pv.y), _mm256_set1_ps(pv.z), rule);
+        const CandidateCache::Entry& entry = cache.entry(e);
+        __m256 cx, cy, cz;
+        if constexpr (kCentres) {
+          const CandidateCache::Centres& m = cache.centres(e);
+          cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
+        } else {
+          loadCentres8(cells.data(), entry.cell, cx, cy, cz);
+        }
+        best = testEntry8<kCube, kNearest>(entry.cell, cx, cy, cz, _mm256_set1_ps(pv.x), _mm256_set1_ps(pv.y),
+                                           _mm256_set1_ps(pv.z), rule);
         tested = true;
       }
     }
@@ -1269,10 +1495,36 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
       grid.list(cx, cy, cz, pv, best);
-      cache.add(cx, cy, cz, best + 1);
+      cache.add(cx, cy, cz, best + 1, pv);
     }
     cluster_of[order[i]] = best;
   }
+}
+
+// the runs wherever the bricks' strides fit 15 bits, with the entries' centres where these take at
+// most kCacheCentresBytesPerVertex (about 3 entries reserved per expected cell). Runs on entries of
+// indices (the cells' centres gathered and transposed) where the centres do not fit: at the bunny's
+// chain level 3 and 2 % level, where 1 vertex in 6-8 leaves a run, 0.84-0.89 -> 0.79-0.86 ms and
+// 0.64 -> 0.54 (with centres 0.77-0.82 and 0.52, but level 3's took the chain's peak to 3.57 MB);
+// before the runs planned two vertices ahead they made both levels slower (0.66 -> 0.68-0.70 ms and
+// 0.93 -> 1.00-1.03)
+template <bool kCube, bool kNearest, typename Head>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                                          const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                          size_t expected, Assignment& out) {
+  const int forced = g_cache_runs.load(std::memory_order_relaxed);
+  // cachedRun's brick places as products of 16-bit halves: the strides of the bricks below 2^15
+  const size_t bx = (dims[0] + 3) / 4, by = (dims[1] + 3) / 4, bz = (dims[2] + 3) / 4;
+  const bool small_bricks = bx * by < 32768 && bz < 32768;
+  const bool centres_fit = double(expected * 3) * sizeof(CandidateCache::Centres) <=
+                           kCacheCentresBytesPerVertex * double(p.order.size());
+  const int runs = !small_bricks ? 0 : forced >= 0 ? forced : centres_fit ? 1 : 2;
+  if (runs == 1)
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  else if (runs == 2)
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  else
+    assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 #endif
 
@@ -1706,6 +1958,9 @@ void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
 }
 // false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
 void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }
+// the candidate cache's runs (cachedRun) at every cached width: 0 none, 1 with the entries' centres,
+// 2 on entries of indices; -1 the default (centres where they are few, else indices)
+void setFloatingCacheRunsForTest(int runs) { g_cache_runs.store(runs, std::memory_order_relaxed); }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))
