@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
@@ -230,9 +231,33 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
   // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
   std::atomic<size_t> next_claim{0};
+  // That order alone keeps levels 1 and 2 apart only while level 1 keeps pace: when its thread is
+  // held up (descheduled on a loaded machine, or a first chain's thread start), the other thread
+  // ran through levels n .. 3 and took level 2 while level 1 was still in synthesis, and the 1 M
+  // sphere's chain peaked at 51.7-52.5 MB instead of 49.6 (budget 49.79; level 1's primitives,
+  // representatives and synthesis scratch, ~17 MB, beside level 2's grid and ids, ~6 MB). So level 2
+  // starts once level 1 is past synthesis. In an unhindered run level 1 is done first (the other
+  // levels together take longer), so nothing waits; with two levels there is nothing else to run
+  // beside level 1, and they overlap as before.
+  std::mutex first_mutex;
+  std::condition_variable first_cv;
+  bool first_synthesized = false;
+  auto firstSynthesized = [&] {
+    {
+      std::lock_guard<std::mutex> lock(first_mutex);
+      first_synthesized = true;
+    }
+    first_cv.notify_all();
+  };
   tbb::parallel_for(size_t(0), n, [&](size_t) {
     const size_t claim = next_claim++;
     const size_t k = claim == 0 ? 0 : n - claim;
+    if (k == 1 && n >= 3) {
+      // (level 1 was claimed first, by a thread running it now: the wait ends; no level calls TBB,
+      // so a waiting thread holds no task another one needs)
+      std::unique_lock<std::mutex> lock(first_mutex);
+      first_cv.wait(lock, [&] { return first_synthesized; });
+    }
     const Clock::time_point start = Clock::now();
     const ClusterParams cp = levelParams(k);
     LodLevel& level = out.levels[k + 1];
@@ -251,6 +276,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     if (k == 0) {
       held = std::move(parts);
       held_seconds = seconds;
+      firstSynthesized();  // also after an error: level 2 must not wait for ever
     }
     if (--synthesis_pending == 0) {
       // every level is past synthesis (and assignment): only the mesh itself is read from here on

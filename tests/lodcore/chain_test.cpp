@@ -92,7 +92,8 @@ TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
   ChainParams cp;
   PreparedMesh prepared;
   ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
-  for (size_t levels : {size_t(1), size_t(2), size_t(6)})
+  // (3 and 6 levels: level 2 waits for level 1's synthesis; 1 and 2: nothing waits)
+  for (size_t levels : {size_t(1), size_t(2), size_t(3), size_t(6)})
     for (int threads : {1, 4}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
       cp.level_count = levels;
