@@ -921,16 +921,17 @@ class CandidateCache {
   size_t brickStrideZ() const { return bx_ * by_; }
   const uint32_t* bricks() const { return top_.data(); }
   const uint16_t* slots() const { return slots_.data(); }
-  // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending; false (the cube
-  // marked kOverflow) where they are more than 8 or the entry numbers are used up
+  // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending: its number, or
+  // kOverflow (the cube marked so) where they are more than 8 or the entry numbers are used up
   template <typename CellRecord>
-  bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
+  uint16_t make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
     uint16_t& slot = slotFor(x, y, z);
     if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
       slot = kOverflow;
-      return false;
+      return kOverflow;
     }
-    slot = uint16_t(entries_.size());
+    const uint16_t number = uint16_t(entries_.size());
+    slot = number;
     Entry e{};
     for (uint32_t k = 0; k < count; ++k) e.cell[k] = uint16_t(list[k]);
     entries_.push_back(e);
@@ -942,7 +943,7 @@ class CandidateCache {
       }
       centres_.push_back(m);
     }
-    return true;
+    return number;
   }
   // cell index c (the newest: entries stay ascending), centred at `centre` in cube (cx, cy, cz), into the built
   // entries of the 27 cubes whose 3 x 3 x 3 hold that cube
@@ -1510,8 +1511,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
         } else {
           count = heads;
         }
-        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data()) ? cache.find(lo[0], lo[1], lo[2])
-                                                                        : CandidateCache::kOverflow;
+        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data());
         slots = cache.slots();
       }
       if (e != CandidateCache::kOverflow) {
