@@ -916,7 +916,6 @@ class CandidateCache {
   // for find in a caller's SIMD loop: the strides of the bricks' y and z (flat: of the cubes' y and
   // z), the bricks (which never move; null where flat) and the slots (which move when make
   // allocates a brick)
-  bool flat() const { return flat_; }
   size_t brickStrideY() const { return bx_; }
   size_t brickStrideZ() const { return bx_ * by_; }
   const uint32_t* bricks() const { return top_.data(); }
