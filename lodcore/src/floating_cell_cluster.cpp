@@ -62,6 +62,15 @@ constexpr double kCacheVerticesPerCell = 12.0;
 // CandidateCache keeps its entries' centres (96 bytes an entry) where those take at most this many
 // bytes per vertex (about 3 entries per expected cell are reserved)
 constexpr double kCacheCentresBytesPerVertex = 4.0;
+// CandidateCache keeps its cubes' entry numbers in one flat array (2 bytes a cube) where that takes
+// at most this many bytes per vertex and kCacheFlatMaxBytes: the bunny's chain levels 4-8 (29.7 KB
+// down to 1 KB, 0.85 B a vertex at level 4) and its 2 % level (43 KB, 1.24 B), whose assignments
+// took 9-12 % less time. Not at the bunny's chain level 3 (139 KB, 4 B a vertex: 0.84-0.90 ->
+// 0.72-0.73 ms, but about 92 KB over the bricks at the chain's memory peak) nor the 1 M sphere's 1 %
+// level (345 KB, far past L1: 12 % fewer instructions, no faster, 8.51-8.62 ->
+// 8.66-8.73 ms)
+constexpr double kCacheFlatBytesPerVertex = 2.0;
+constexpr size_t kCacheFlatMaxBytes = 64 << 10;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
 // cube costs one cache line. A grid cube lists at most 8 cube cells (64 sphere cells); those past
@@ -875,13 +884,19 @@ class CandidateCache {
     float x[8], y[8], z[8];  // NaN in free places (the sentinel's centre: contains no vertex)
   };
   // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated);
-  // `centres`: keep each entry's Centres too
-  CandidateCache(const size_t dims[3], size_t reserve_entries, bool centres)
-      : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), with_centres_(centres) {
+  // `centres`: keep each entry's Centres too; `flat`: the cubes' entry numbers in one flat array
+  // (2 bytes a cube) instead of bricks, which takes the brick's load out of a vertex's way to its entry
+  CandidateCache(const size_t dims[3], size_t reserve_entries, bool centres, bool flat)
+      : bx_(flat ? dims[0] : (dims[0] + 3) / 4), by_(flat ? dims[1] : (dims[1] + 3) / 4), with_centres_(centres),
+        flat_(flat) {
     if (reserve_entries == 0) return;
-    top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
-    slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
-    slots_.assign(64, 0);  // brick 0: no entries
+    if (flat) {
+      slots_.assign(dims[0] * dims[1] * dims[2], 0);
+    } else {
+      top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
+      slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
+      slots_.assign(64, 0);  // brick 0: no entries
+    }
     entries_.reserve(reserve_entries + 1);
     entries_.push_back(Entry{});
     if (centres) {
@@ -890,28 +905,32 @@ class CandidateCache {
     }
   }
   // the entry number of cube (x, y, z): 0 none yet, kOverflow for the general path
-  uint16_t find(int32_t x, int32_t y, int32_t z) const { return slots_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)]; }
+  uint16_t find(int32_t x, int32_t y, int32_t z) const {
+    return flat_ ? slots_[flatPlace(x, y, z)] : slots_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
+  }
   const Entry& entry(uint16_t e) const { return entries_[e]; }
   const Entry* entries() const { return entries_.data(); }  // moves when make adds an entry
   bool hasCentres() const { return with_centres_; }
   const Centres& centres(uint16_t e) const { return centres_[e]; }
   const Centres* centres() const { return centres_.data(); }  // null without centres; moves as entries()
-  // for find in a caller's SIMD loop: the strides of the bricks' y and z, the bricks (which never
-  // move) and the slots (which move when make allocates a brick)
+  // for find in a caller's SIMD loop: the strides of the bricks' y and z (flat: of the cubes' y and
+  // z), the bricks (which never move; null where flat) and the slots (which move when make
+  // allocates a brick)
   size_t brickStrideY() const { return bx_; }
   size_t brickStrideZ() const { return bx_ * by_; }
   const uint32_t* bricks() const { return top_.data(); }
   const uint16_t* slots() const { return slots_.data(); }
-  // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending; false (the cube
-  // marked kOverflow) where they are more than 8 or the entry numbers are used up
+  // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending: its number, or
+  // kOverflow (the cube marked so) where they are more than 8 or the entry numbers are used up
   template <typename CellRecord>
-  bool make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
+  uint16_t make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
     uint16_t& slot = slotFor(x, y, z);
     if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
       slot = kOverflow;
-      return false;
+      return kOverflow;
     }
-    slot = uint16_t(entries_.size());
+    const uint16_t number = uint16_t(entries_.size());
+    slot = number;
     Entry e{};
     for (uint32_t k = 0; k < count; ++k) e.cell[k] = uint16_t(list[k]);
     entries_.push_back(e);
@@ -923,7 +942,7 @@ class CandidateCache {
       }
       centres_.push_back(m);
     }
-    return true;
+    return number;
   }
   // cell index c (the newest: entries stay ascending), centred at `centre` in cube (cx, cy, cz), into the built
   // entries of the 27 cubes whose 3 x 3 x 3 hold that cube
@@ -940,14 +959,25 @@ class CandidateCache {
     // chain level 3, with 1,681 cells), then those entries
     uint16_t* built[27];
     uint32_t built_count = 0;
-    for (int z = 0; z < 3; ++z)
-      for (int y = 0; y < 3; ++y)
-        for (int x = 0; x < 3; ++x) {
-          // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
-          uint16_t* slot = &slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
-          built[built_count] = slot;
-          built_count += uint16_t(*slot - 1) < kOverflow - 1;
-        }
+    if (flat_) {
+      uint16_t* first = &slots_[flatPlace(cx - 2, cy - 2, cz - 2)];
+      for (int z = 0; z < 3; ++z)
+        for (int y = 0; y < 3; ++y)
+          for (int x = 0; x < 3; ++x) {
+            uint16_t* slot = first + (size_t(z) * by_ + size_t(y)) * bx_ + size_t(x);
+            built[built_count] = slot;
+            built_count += uint16_t(*slot - 1) < kOverflow - 1;
+          }
+    } else {
+      for (int z = 0; z < 3; ++z)
+        for (int y = 0; y < 3; ++y)
+          for (int x = 0; x < 3; ++x) {
+            // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
+            uint16_t* slot = &slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
+            built[built_count] = slot;
+            built_count += uint16_t(*slot - 1) < kOverflow - 1;
+          }
+    }
     for (uint32_t b = 0; b < built_count; ++b) {
       uint16_t& slot = *built[b];
       Entry& e = entries_[slot];
@@ -973,7 +1003,9 @@ class CandidateCache {
     return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
   }
   static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
+  size_t flatPlace(int32_t x, int32_t y, int32_t z) const { return (size_t(z) * by_ + size_t(y)) * bx_ + size_t(x); }
   uint16_t& slotFor(int32_t x, int32_t y, int32_t z) {
+    if (flat_) return slots_[flatPlace(x, y, z)];
     uint32_t& b = top_[brick(x, y, z)];
     if (b == 0) {
       b = uint32_t(slots_.size() >> 6);
@@ -981,10 +1013,10 @@ class CandidateCache {
     }
     return slots_[size_t(b) << 6 | inBrick(x, y, z)];
   }
-  size_t bx_, by_;
-  bool with_centres_;
-  std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one
-  std::vector<uint16_t> slots_;    // 64 per brick: the cubes' entry numbers
+  size_t bx_, by_;                 // bricks (flat: cubes) along x and y
+  bool with_centres_, flat_;
+  std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one (empty where flat)
+  std::vector<uint16_t> slots_;    // 64 per brick (flat: one per cube): the cubes' entry numbers
   std::vector<Entry> entries_;     // entries_[0] unused
   std::vector<Centres> centres_;   // with_centres_: centres_[e] for entries_[e]
 };
@@ -1215,6 +1247,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
 // setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 no runs, 1 runs with
 // the entries' centres, 2 runs on entries of indices
 std::atomic<int> g_cache_runs{-1};
+// setFloatingCacheFlatForTest's choice: -1 by kCacheFlatBytesPerVertex, 0 bricked slots, 1 flat
+// slots wherever the runs' 16-bit products allow them
+std::atomic<int> g_cache_flat{-1};
 
 #if defined(SCENELOD_FLOATING_AVX2)
 // An entry's cells where at most 8 heads were found and each lists one cell (cube cells: a cube of
@@ -1273,7 +1308,7 @@ struct CachedRunInputs {
 // to its cell (~100 cycles: the range, the brick, the slot, the centres, d^2, the reduction) over
 // the reorder window, not by its ~100 instructions; one vertex ahead, levels 4, 6 and 8 took
 // 0.51, 0.39 and 0.34 ms instead of 0.42-0.47, 0.32-0.34 and 0.28-0.29 (three ahead: no better).
-template <bool kCube, bool kNearest, bool kSorted, bool kCentres, typename CellRecord>
+template <bool kCube, bool kNearest, bool kSorted, bool kCentres, bool kFlat, typename CellRecord>
 SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs<CellRecord>& in, size_t i,
                                                                           size_t n) {
   const CellRecord* const cells = in.cells;
@@ -1311,12 +1346,19 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
     // cube lo, both summed by two horizontal additions; lane 3 is 0 in both (a stride of 0, a shift of 32)
     // the products by 16-bit halves (vpmaddwd, 5 cycles of latency on the way to the entry, against
     // vpmulld's 10): the bricks' coordinates and strides fit 15 bits (assignDenseCachedAvx2T)
-    const __m128i bm = _mm_madd_epi16(_mm_srai_epi32(lo4, 2), brick_stride4);
-    const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), _mm_setr_epi32(0, 2, 4, 32));
-    const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(bm, im), _mm_setzero_si128());
     // lo is inside the grid even where the span is not 2 (lo_cube is 3 cubes below the box)
-    const uint32_t e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(sums))]) << 6 |
-                             uint32_t(_mm_extract_epi32(sums, 1))];
+    uint32_t e;
+    if constexpr (kFlat) {
+      // the cube's place itself (its coordinates and strides fit 15 bits too), no brick loaded
+      const __m128i pm = _mm_madd_epi16(lo4, brick_stride4);
+      const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(pm, pm), pm);
+      e = slots[uint32_t(_mm_cvtsi128_si32(sums))];
+    } else {
+      const __m128i bm = _mm_madd_epi16(_mm_srai_epi32(lo4, 2), brick_stride4);
+      const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), _mm_setr_epi32(0, 2, 4, 32));
+      const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(bm, im), _mm_setzero_si128());
+      e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(sums))]) << 6 | uint32_t(_mm_extract_epi32(sums, 1))];
+    }
     pl.e = span2 ? e : 0;
     return pl;
   };
@@ -1348,7 +1390,7 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
 // in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path.
 // kRuns: the common vertices go through cachedRun (see there); kCentres: the cache keeps its
 // entries' centres
-template <bool kCube, bool kNearest, typename Head, bool kRuns, bool kCentres>
+template <bool kCube, bool kNearest, typename Head, bool kRuns, bool kCentres, bool kFlat>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
                                                              const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                                              size_t expected, Assignment& out) {
@@ -1368,7 +1410,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
   // 10 % levels
-  CandidateCache cache(dims, expected * 3, kCentres);
+  CandidateCache cache(dims, expected * 3, kCentres, kFlat);
   const uint32_t* const cache_bricks = cache.bricks();
   const uint16_t* slots = cache.slots();
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
@@ -1392,6 +1434,12 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, reach4), slack4)), lo_cube4);
     ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, reach4), slack4)), lo_cube4);
     const __m128i lo4 = ahead.lo4;
+    if constexpr (kFlat) {  // the cube's place in ahead_brick
+      const __m128i pm = _mm_mullo_epi32(lo4, brick_stride4);
+      const __m128i ps = _mm_add_epi32(pm, _mm_shuffle_epi32(pm, _MM_SHUFFLE(1, 0, 3, 2)));
+      ahead_brick = uint32_t(_mm_cvtsi128_si32(_mm_add_epi32(ps, _mm_shuffle_epi32(ps, _MM_SHUFFLE(2, 3, 0, 1)))));
+      return;
+    }
     const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
     const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
     __m128i bs = _mm_add_epi32(bm, _mm_shuffle_epi32(bm, _MM_SHUFFLE(1, 0, 3, 2)));
@@ -1421,8 +1469,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
       by_order = sorted.sorted == nullptr;
       run_in.positions = by_order ? sorted.positions : sorted.sorted;
     }
-    return by_order ? cachedRun<kCube, kNearest, false, kCentres>(run_in, k, n)
-                    : cachedRun<kCube, kNearest, true, kCentres>(run_in, k, n);
+    return by_order ? cachedRun<kCube, kNearest, false, kCentres, kFlat>(run_in, k, n)
+                    : cachedRun<kCube, kNearest, true, kCentres, kFlat>(run_in, k, n);
   };
   // without runs (grids whose bricks' strides pass 15 bits, and a test's choice) as before them
   if (n > 0 && !kRuns) plan(0);
@@ -1446,7 +1494,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     uint32_t best = kNone;
     bool tested = false;
     if (span2) {
-      uint16_t e = slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
+      uint16_t e = kFlat ? slots[brick_at] : slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
       if (e == 0) {  // the cube's first vertex: its cells from the heads and lists, by index
         const uint32_t heads =
             gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
@@ -1462,8 +1510,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
         } else {
           count = heads;
         }
-        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data()) ? cache.find(lo[0], lo[1], lo[2])
-                                                                        : CandidateCache::kOverflow;
+        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data());
         slots = cache.slots();
       }
       if (e != CandidateCache::kOverflow) {
@@ -1519,12 +1566,28 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   const bool centres_fit = double(expected * 3) * sizeof(CandidateCache::Centres) <=
                            kCacheCentresBytesPerVertex * double(p.order.size());
   const int runs = !small_bricks ? 0 : forced >= 0 ? forced : centres_fit ? 1 : 2;
-  if (runs == 1)
-    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  else if (runs == 2)
-    assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  else
-    assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  // flat slots: the cubes' places as products of 16-bit halves too
+  const int forced_flat = g_cache_flat.load(std::memory_order_relaxed);
+  const size_t cubes = dims[0] * dims[1] * dims[2];
+  const bool flat = dims[0] * dims[1] < 32768 && dims[2] < 32768 &&
+                    (forced_flat >= 0 ? forced_flat == 1
+                                      : cubes * sizeof(uint16_t) <= kCacheFlatMaxBytes &&
+                                            double(cubes) * sizeof(uint16_t) <= kCacheFlatBytesPerVertex * double(p.order.size()));
+  if (flat) {
+    if (runs == 1)
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    else if (runs == 2)
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    else
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  } else {
+    if (runs == 1)
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    else if (runs == 2)
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    else
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  }
 }
 #endif
 
@@ -1961,6 +2024,9 @@ void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::mem
 // the candidate cache's runs (cachedRun) at every cached width: 0 none, 1 with the entries' centres,
 // 2 on entries of indices; -1 the default (centres where they are few, else indices)
 void setFloatingCacheRunsForTest(int runs) { g_cache_runs.store(runs, std::memory_order_relaxed); }
+// the candidate cache's slots: 0 bricked, 1 flat (wherever the runs' 16-bit products allow them), -1
+// the default (flat where they are few)
+void setFloatingCacheFlatForTest(int flat) { g_cache_flat.store(flat, std::memory_order_relaxed); }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))

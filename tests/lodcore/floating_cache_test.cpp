@@ -17,6 +17,7 @@ namespace scenelod::detail {
 void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
 void setFloatingCacheForTest(bool cache);
 void setFloatingCacheRunsForTest(int runs);
+void setFloatingCacheFlatForTest(int flat);
 }  // namespace scenelod::detail
 
 namespace {
@@ -28,8 +29,9 @@ struct Case {
 
 // every rule and shape at widths where the cache is taken (at least 12 vertices per expected cell)
 // and one where it is not, with short and 32-bit heads: the cached run (its default, and cachedRun
-// with the entries' centres, on entries of indices and not at all, each at every cached width), the
-// uncached AVX2 run and the SSE2 run give the same cells in the same order. Sphere cells make lists of more than 8
+// with the entries' centres, on entries of indices and not at all, each at every cached width and
+// each on the cache's bricked and flat slots), the uncached AVX2 run and the SSE2 run give the same
+// cells in the same order. Sphere cells make lists of more than 8
 // candidates (entries of several blocks); the coarsest widths fill an entry past its spare lanes.
 void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
   PreparedMesh p;
@@ -45,7 +47,7 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
         params.method = c.method;
         params.cell_shape = c.shape;
         params.cell_width = w;
-        ClusterAssignment plain, uncached, cached, runs_centres, runs_indices, runs_never;
+        ClusterAssignment plain, uncached, cached;
         detail::setFloatingPathsForTest(false, short_heads, false);
         const bool plain_ok = assignClusters(p, params, plain).ok();
         detail::setFloatingPathsForTest(true, short_heads, false);
@@ -53,26 +55,32 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
         const bool uncached_ok = assignClusters(p, params, uncached).ok();
         detail::setFloatingCacheForTest(true);
         const bool cached_ok = assignClusters(p, params, cached).ok();
-        detail::setFloatingCacheRunsForTest(1);
-        const bool centres_ok = assignClusters(p, params, runs_centres).ok();
-        detail::setFloatingCacheRunsForTest(2);
-        const bool indices_ok = assignClusters(p, params, runs_indices).ok();
-        detail::setFloatingCacheRunsForTest(0);
-        const bool never_ok = assignClusters(p, params, runs_never).ok();
+        // runs with centres, on indices, none; bricked then flat slots
+        ClusterAssignment forced[2][3];
+        bool forced_ok = true;
+        for (int flat = 0; flat < 2; ++flat) {
+          detail::setFloatingCacheFlatForTest(flat);
+          for (int runs = 0; runs < 3; ++runs) {
+            detail::setFloatingCacheRunsForTest(runs == 2 ? 0 : runs + 1);
+            forced_ok = assignClusters(p, params, forced[flat][runs]).ok() && forced_ok;
+          }
+        }
+        detail::setFloatingCacheFlatForTest(-1);
         detail::setFloatingCacheRunsForTest(-1);
         detail::setFloatingPathsForTest(true, true, true);
-        ASSERT_TRUE(plain_ok && uncached_ok && cached_ok && centres_ok && indices_ok && never_ok);
+        ASSERT_TRUE(plain_ok && uncached_ok && cached_ok && forced_ok);
         EXPECT_GT(plain.heaviest.size(), 1u);
         EXPECT_EQ(uncached.heaviest, plain.heaviest);
         EXPECT_EQ(uncached.cluster_of, plain.cluster_of);
         EXPECT_EQ(cached.heaviest, plain.heaviest);
         EXPECT_EQ(cached.cluster_of, plain.cluster_of);
-        EXPECT_EQ(runs_centres.heaviest, plain.heaviest);
-        EXPECT_EQ(runs_centres.cluster_of, plain.cluster_of);
-        EXPECT_EQ(runs_indices.heaviest, plain.heaviest);
-        EXPECT_EQ(runs_indices.cluster_of, plain.cluster_of);
-        EXPECT_EQ(runs_never.heaviest, plain.heaviest);
-        EXPECT_EQ(runs_never.cluster_of, plain.cluster_of);
+        for (int flat = 0; flat < 2; ++flat)
+          for (int runs = 0; runs < 3; ++runs) {
+            SCOPED_TRACE(std::string(flat ? "flat" : "bricked") + " slots, runs " +
+                         (runs == 0 ? "with centres" : runs == 1 ? "on indices" : "none"));
+            EXPECT_EQ(forced[flat][runs].heaviest, plain.heaviest);
+            EXPECT_EQ(forced[flat][runs].cluster_of, plain.cluster_of);
+          }
       }
     }
   }
@@ -146,9 +154,9 @@ TEST(FloatingCell, CandidateCacheChoosesTheSameCellsOnTheBunny) {
   SCENELOD_REQUIRE_BUNNY();
   Mesh bunny;
   ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
-  // the bunny's 10 % (not cached), 5 %, 3 %, 2 % levels, and coarser: its chain's levels 4 to 8
-  // (w1 = 0.0267405026 times 8 to 128)
-  expectSameCells(bunny, {0.0721607581f, 0.104215436f, 0.135870472f, 0.172672614f, 0.3f, 0.6f, 0.213924021f,
+  // the bunny's 10 % (not cached), 5 %, 3 %, 2 % levels, and coarser: its chain's levels 3 to 8
+  // (w1 = 0.0267405026 times 4 to 128)
+  expectSameCells(bunny, {0.0721607581f, 0.104215436f, 0.135870472f, 0.172672614f, 0.3f, 0.6f, 0.10696201f, 0.213924021f,
                           0.427848041f, 0.855696082f, 1.71139216f, 3.42278433f});
 }
 
