@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
@@ -499,9 +500,7 @@ bool g_output_reference = false;
 // test hook (declared by the test, as useAvx2Paths is): the reference output pass for every later
 // call; returns the previous choice
 bool useOutputReference(bool on) {
-  const bool was = g_output_reference;
-  g_output_reference = on;
-  return was;
+  return std::exchange(g_output_reference, on);
 }
 
 void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle_deg, Mesh& out) {

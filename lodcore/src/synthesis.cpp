@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -89,9 +90,7 @@ bool g_eigen_lanes = true;
 // private test hook (declared by tests/lodcore/synthesis_test.cpp): the lanes on or off for every
 // later call; returns the previous choice; not thread-safe
 bool useEigenvalueLanes(bool on) {
-  const bool was = g_eigen_lanes;
-  g_eigen_lanes = on;
-  return was;
+  return std::exchange(g_eigen_lanes, on);
 }
 
 namespace {
@@ -105,9 +104,7 @@ bool g_grouped = true;
 // private test hook (declared by tests/lodcore/synthesis_test.cpp): the grouped pass allowed or not
 // for every later call; returns the previous choice; not thread-safe
 bool useGroupedSynthesis(bool on) {
-  const bool was = g_grouped;
-  g_grouped = on;
-  return was;
+  return std::exchange(g_grouped, on);
 }
 
 namespace {
