@@ -95,11 +95,7 @@ class EdgeLists {
       }
       return;
     }
-    size_t done = 0;
-    if (avx2) done = long_ids_ ? markCoveredInBlocksAvx2<true>(tri, n, covered, en)
-                               : markCoveredInBlocksAvx2<false>(tri, n, covered, en);
-    if (long_ids_) markCoveredInBlocks<true>(tri + 3 * done, n - done, covered, en);
-    else markCoveredInBlocks<false>(tri + 3 * done, n - done, covered, en);
+    markCoveredWithBlocks(tri, n, covered, en, avx2);
   }
   // whether every edge is chained (no blocks): findOrAdd's case
   bool chained() const { return blocks_.empty(); }
@@ -198,6 +194,16 @@ class EdgeLists {
     const uint32_t flip = (((lo ^ hi) & 1u) - 1u) & (lo ^ hi);  // lo ^ hi when the sum is even
     lo ^= flip;
     hi ^= flip;
+  }
+  // markCovered with blocks (out of line: inlined, the chained loop above took 0.2 M instructions
+  // more on the 1 M sphere's 10 % level, 8.59 -> 8.80 M)
+  __attribute__((noinline)) void markCoveredWithBlocks(const uint32_t* tri, size_t n, uint8_t* __restrict covered,
+                                                       uint32_t en, bool avx2) const {
+    size_t done = 0;
+    if (avx2) done = long_ids_ ? markCoveredInBlocksAvx2<true>(tri, n, covered, en)
+                               : markCoveredInBlocksAvx2<false>(tri, n, covered, en);
+    if (long_ids_) markCoveredInBlocks<true>(tri + 3 * done, n - done, covered, en);
+    else markCoveredInBlocks<false>(tri + 3 * done, n - done, covered, en);
   }
   // markCovered with blocks; kLongIds: long_ids_ (a test per lookup otherwise, though it is nearly
   // always false)
