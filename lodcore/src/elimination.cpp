@@ -242,8 +242,9 @@ class EdgeLists {
   // markCoveredInBlocks for the first multiple of 8 of the n triangles, whose count it returns.
   // Eight triangles' corners go into columns (as in classifyAvx2), then each of the three edges'
   // eight lookups: the owner swapped in lanes, and for four lookups at a time the blocks' hi and id
-  // halves gathered as 64-bit words, the other id compared in each 16-bit entry, the id found picked
-  // with the compare's mask and shifts (the ids in a block are distinct: at most one entry matches).
+  // halves gathered as 64-bit words (index 2 x owner, signed 32 bits: blocks are used below 2^15
+  // clusters), the other id compared in each 16-bit entry, the id found picked with the compare's
+  // mask and shifts (a block's other ids are distinct: at most one entry matches).
   // A lookup that must go past its block (not found in a full block, or any not found with kLongIds)
   // is done as in find, one test per four lookups. The stores are scalar; each writes a 1, so their
   // order is free. (The scalar pass: about 40 instructions a lookup, 4.18 M of the bunny 50 % level's
