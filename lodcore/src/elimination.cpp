@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <type_traits>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -549,17 +550,13 @@ constexpr size_t kWindowedTableBytes = size_t(1) << 19;
 // test hook (declared by tests/lodcore/elimination_test.cpp): false lists every candidate edge in the
 // chained lists, whatever the cluster count, for every later call; returns the previous choice
 bool useEdgeBlocks(bool on) {
-  const bool was = g_edge_blocks;
-  g_edge_blocks = on;
-  return was;
+  return std::exchange(g_edge_blocks, on);
 }
 
 // test hook (declared by tests/lodcore/elimination_test.cpp): false probes the dedupe table one slot
 // at a time, the reference for the windowed probe, for every later call; returns the previous choice
 bool useWindowedProbes(bool on) {
-  const bool was = g_windowed_probes;
-  g_windowed_probes = on;
-  return was;
+  return std::exchange(g_windowed_probes, on);
 }
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
