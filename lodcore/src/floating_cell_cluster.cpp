@@ -1613,21 +1613,18 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
                     (forced_flat >= 0 ? forced_flat == 1
                                       : cubes * sizeof(uint16_t) <= kCacheFlatMaxBytes &&
                                             double(cubes) * sizeof(uint16_t) <= kCacheFlatBytesPerVertex * double(p.order.size()));
-  if (flat) {
+  // the variant of (runs, centres, flat slots), each a loop compiled apart
+  auto run = [&](auto flat_slots) {
+    constexpr bool kFlat = decltype(flat_slots)::value;
     if (runs == 1)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
     else if (runs == 2)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
     else
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  } else {
-    if (runs == 1)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-    else if (runs == 2)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-    else
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  }
+      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  };
+  if (flat) run(std::true_type{});
+  else run(std::false_type{});
 }
 #endif
 
