@@ -251,6 +251,20 @@ constexpr double kBlockBytes = 20.0;
 inline size_t expectedBlocks(size_t expected_cells) { return expected_cells * 11 / 20 + 16; }
 
 #if defined(__SSE2__)
+// the successors of the cells list[0 .. count) along their grid cubes' lists, the ended ones (0)
+// dropped without a branch, into `next`; their count (shared by the SSE2 and AVX2 searches)
+template <typename CellRecord>
+SCENELOD_ALWAYS_INLINE uint32_t listSuccessors(const CellRecord* cells, const uint32_t* list, uint32_t count,
+                                               uint32_t* next) {
+  uint32_t next_count = 0;
+  for (uint32_t j = 0; j < count; ++j) {
+    const uint32_t c = cells[list[j]].next;
+    next[next_count] = c;
+    next_count += c != 0;
+  }
+  return next_count;
+}
+
 // Tests the cells list[0 .. count) four at a time, one per lane, without a branch per cell: each
 // lane computes d^2 and the containment with testCell's operations and keeps its least (d^2, id)
 // in (bd2, bid) under the same order, so that laneBest then gives the cell testCell would choose,
@@ -482,14 +496,8 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t bestListedCell8(co
     const __m256i chained = testCellLanes8<kCube, kNearest>(cells, list, list_count, px, py, pz, rule, bd2, bid);
     if (_mm256_testz_si256(chained, chained)) break;
     uint32_t* next_list = list == found ? successors : found;
-    uint32_t next_count = 0;
-    for (uint32_t j = 0; j < list_count; ++j) {
-      const uint32_t c = cells[list[j]].next;
-      next_list[next_count] = c;
-      next_count += c != 0;
-    }
+    list_count = listSuccessors(cells, list, list_count, next_list);
     list = next_list;
-    list_count = next_count;
   }
   return laneBest8<kNearest>(bd2, bid);
 }
@@ -1113,14 +1121,8 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
             testCellLanes<kCube, kNearest>(cells.data(), list, list_count, px, py, pz, rule, bd2, bid);
         if (_mm_movemask_epi8(_mm_cmpeq_epi32(chained, _mm_setzero_si128())) == 0xffff) break;
         uint32_t* next_list = list == found ? successors : found;
-        uint32_t next_count = 0;
-        for (uint32_t j = 0; j < list_count; ++j) {
-          const uint32_t c = cells[list[j]].next;
-          next_list[next_count] = c;
-          next_count += c != 0;
-        }
+        list_count = listSuccessors(cells.data(), list, list_count, next_list);
         list = next_list;
-        list_count = next_count;
       }
       best = laneBest<kNearest>(bd2, bid);
     }

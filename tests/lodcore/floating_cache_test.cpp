@@ -26,6 +26,9 @@ struct Case {
   LodMethod method;
   CellShape shape;
 };
+// both joining rules with both cell shapes
+constexpr Case kRules[] = {{LodMethod::kFloatingHeaviest, CellShape::kCube}, {LodMethod::kFloatingNearest, CellShape::kCube},
+                           {LodMethod::kFloatingHeaviest, CellShape::kSphere}, {LodMethod::kFloatingNearest, CellShape::kSphere}};
 
 // every rule and shape at widths where the cache is taken (at least 12 vertices per expected cell)
 // and one where it is not, with short and 32-bit heads: the cached run (its default, and cachedRun
@@ -37,9 +40,7 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
   PreparedMesh p;
   ClusterParams params;
   ASSERT_TRUE(prepareMesh(m, params, p).ok());
-  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
-                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
-                 Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+  for (Case c : kRules) {
     for (float w : widths) {
       for (bool short_heads : {true, false}) {
         SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w) +
@@ -93,9 +94,7 @@ void expectSameCellsInBricks(const Mesh& m, std::initializer_list<float> widths)
   PreparedMesh p;
   ClusterParams params;
   ASSERT_TRUE(prepareMesh(m, params, p).ok());
-  for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
-                 Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
-                 Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+  for (Case c : kRules) {
     for (float w : widths) {
       SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(w));
       params.method = c.method;
