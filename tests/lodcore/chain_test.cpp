@@ -92,7 +92,9 @@ TEST(Chain, EveryLevelIsTheSingleLevelClustering) {
   ChainParams cp;
   PreparedMesh prepared;
   ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
-  // (3 and 6 levels: level 2 waits for level 1's synthesis; 1 and 2: nothing waits)
+  // (3 and 6 levels: level 2 waits for level 1's synthesis, and on one thread, the copy dropped, it
+  // is claimed right after level 1, ahead of levels 6 .. 3, the displaced level taking the last
+  // claim: a level built twice or never would fail below; 1 and 2: nothing waits)
   for (size_t levels : {size_t(1), size_t(2), size_t(3), size_t(6)})
     for (int threads : {1, 4}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
