@@ -289,8 +289,8 @@ using test::sameBits;
 
 }  // namespace
 
-// The AVX2 variants (where the CPU has them) give the baseline's bits: every array of the output,
-// for each synthesis, fine levels (the grouped synthesis) and coarse ones (the single pass), with
+// The AVX2 variants (where the CPU has them) give the baseline's bits: every array of the output and
+// the level's maximum displacement, for each synthesis, fine levels (the grouped synthesis) and coarse ones (the single pass), with
 // colours, crease splits and a sphere cell; on a CPU without AVX2 both runs take the baseline.
 TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
   Mesh bumpy = test::makeBumpySphere(90, 120);
@@ -310,12 +310,15 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
           p.cell_width = w;
           p.crease_angle_deg = 40.0f;
           Mesh wide, base;
+          float wide_error = -1.0f, base_error = -2.0f;  // the level's maximum vertex displacement
           detail::useAvx2Paths(true);
-          ASSERT_TRUE(clusterMesh(*m, p, wide).ok());
+          ASSERT_TRUE(clusterMesh(*m, p, wide, &wide_error).ok());
           detail::useAvx2Paths(false);
-          ASSERT_TRUE(clusterMesh(*m, p, base).ok());
+          ASSERT_TRUE(clusterMesh(*m, p, base, &base_error).ok());
           SCOPED_TRACE(std::string(synthesisName(s)) + " " + cellShapeName(shape) + " w=" + std::to_string(w));
           ASSERT_GT(base.triangleCount(), 0u);
+          EXPECT_GT(base_error, 0.0f);
+          EXPECT_TRUE(sameBits(std::vector<float>{wide_error}, std::vector<float>{base_error}));
           EXPECT_TRUE(sameBits(wide.positions, base.positions));
           EXPECT_TRUE(sameBits(wide.normals, base.normals));
           EXPECT_TRUE(sameBits(wide.colors, base.colors));
