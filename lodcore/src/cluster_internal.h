@@ -246,13 +246,16 @@ struct LevelParts {
   Eliminated eliminated;
   Representatives representatives;
 };
+// With `synthesized` given, synthesis comes before elimination and `synthesized(synthesized_context)`
+// is called between them (the prepared mesh's arrays are not read after it, only its mesh).
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
-                        ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr);
+                        ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr,
+                        void (*synthesized)(void*) = nullptr, void* synthesized_context = nullptr);
 void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out);  // frees parts
 // The same first step from an assignment already made at params.cell_width (by `assign`, e.g. a
 // width search's last probe, which a chain keeps as its first level's); consumes `a`.
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
-                        ClusterStats* stats);
+                        ClusterStats* stats, void (*synthesized)(void*) = nullptr, void* context = nullptr);
 // The assignment step alone: checks the width and the method, then assigns every vertex.
 Error assign(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a);
 

@@ -89,7 +89,8 @@ Error assign(const PreparedMesh& p, const ClusterParams& params, Assignment& a) 
 }
 
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
-                        ClusterStats* stats, void (*assigned)(void*), void* context) {
+                        ClusterStats* stats, void (*assigned)(void*), void* context, void (*synthesized)(void*),
+                        void* synthesized_context) {
   Assignment a;
   const Error assign_error = assign(prepared, params, a);
   if (assigned) assigned(context);
@@ -98,22 +99,31 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
     if (stats) *stats = ClusterStats();
     return assign_error;
   }
-  return clusterLevelParts(prepared, params, a, parts, stats);
+  return clusterLevelParts(prepared, params, a, parts, stats, synthesized, synthesized_context);
 }
 
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
-                        ClusterStats* stats) {
+                        ClusterStats* stats, void (*synthesized)(void*), void* context) {
   parts = LevelParts();
   if (stats) *stats = ClusterStats();
   const Mesh& m = *prepared.mesh;
   // elimination before synthesis (neither reads the other's result), so that the representatives
   // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
-  // eliminated primitives (about 6 bytes per cluster at fine levels) are held through synthesis
+  // eliminated primitives (about 6 bytes per cluster at fine levels) are held through synthesis.
+  // Synthesis first where the caller waits for it (a chain frees the prepared arrays once every
+  // level is past synthesis; elimination reads only the mesh)
   Eliminated& el = parts.eliminated;
-  eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
   Representatives& r = parts.representatives;
-  synthesize(prepared, a, params.synthesis, r);
-  std::vector<uint32_t>().swap(a.heaviest);
+  if (synthesized) {
+    synthesize(prepared, a, params.synthesis, r);
+    std::vector<uint32_t>().swap(a.heaviest);
+    synthesized(context);
+    eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
+  } else {
+    eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
+    synthesize(prepared, a, params.synthesis, r);
+    std::vector<uint32_t>().swap(a.heaviest);
+  }
   if (stats) {
     stats->cluster_count = a.cluster_count;
     stats->collapsed_triangles = el.collapsed_triangles;
