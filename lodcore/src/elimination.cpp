@@ -534,6 +534,58 @@ void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, 
 }
 #endif
 
+// Drops the entries of a block's edge list (x[j], y[j]) that are the same cluster pair as the
+// entry before them, in place, and leaves each kept pair as (lower id, higher id); returns the count
+// kept. A dropped entry equals the last kept one, so comparing with that is comparing with the
+// entry before. The lookup of a repeated pair finds the edge its predecessor found or made and
+// changes nothing (the branchless paths write a spare entry), so only the lookups made differ.
+// (The 1 M sphere's 10 % level in its generator's ring order: 268.9 k of its 522.5 k collapsed
+// triangles repeat the pair before, about 90 instructions a lookup on the chained lists; the
+// bunny's 50 % level 4.2 k of 34.0 k, chain level 2 6.8 k of 35.8 k.)
+size_t dropRepeatedEdgesScalar(uint32_t* x, uint32_t* y, size_t j, size_t n, size_t kept) {
+  uint32_t last_lo = kept ? x[kept - 1] : kNone, last_hi = kept ? y[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t lo = branchlessMin(x[j], y[j]), hi = x[j] ^ y[j] ^ lo;
+    x[kept] = lo;  // (kept <= j: an entry already read)
+    y[kept] = hi;
+    kept += uint32_t(lo != last_lo) | uint32_t(hi != last_hi);
+    last_lo = lo;
+    last_hi = hi;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedEdgesScalar eight entries at a time (the tail scalar): each lane compared with the
+// lane before (lane 0 with the last of the previous eight), the kept lanes compacted through
+// kLaneCompaction. In place: a store at `kept` <= j reaches at most the eight entries just read.
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev_lo = _mm256_set1_epi32(-1), prev_hi = prev_lo;  // (kNone: no pair's lower id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + j));
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(y + j));
+    const __m256i lo = _mm256_min_epu32(a, b), hi = _mm256_max_epu32(a, b);
+    const __m256i lo1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(lo, before),
+                                           _mm256_permutevar8x32_epi32(prev_lo, before), 0x01);
+    const __m256i hi1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(hi, before),
+                                           _mm256_permutevar8x32_epi32(prev_hi, before), 0x01);
+    const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(lo, lo1), _mm256_cmpeq_epi32(hi, hi1));
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(same))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(x + kept, lo, perm);
+    storeCompacted(y + kept, hi, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev_lo = lo;
+    prev_hi = hi;
+  }
+  return dropRepeatedEdgesScalar(x, y, j, n, kept);
+}
+#else
+size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) { return dropRepeatedEdgesScalar(x, y, 0, n, 0); }
+#endif
+
 // the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
 // 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
 // their ids fit the blocks' 16 bits
@@ -541,6 +593,7 @@ constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 
 bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
 bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
+bool g_drop_repeated_edges = true;  // false: every collapsed triangle's pair looked up (useRepeatedEdgeDrop, a test hook)
 // slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
 // for (the bunny's 50 % level: 256 KB)
 constexpr size_t kProbeWindow = 8;
@@ -557,6 +610,13 @@ bool useEdgeBlocks(bool on) {
 // at a time, the reference for the windowed probe, for every later call; returns the previous choice
 bool useWindowedProbes(bool on) {
   return std::exchange(g_windowed_probes, on);
+}
+
+// test hook (declared by tests/lodcore/elimination_test.cpp): false looks up every collapsed
+// triangle's cluster pair, the reference for dropping the repeats (dropRepeatedEdges*), for every
+// later call; returns the previous choice
+bool useRepeatedEdgeDrop(bool on) {
+  return std::exchange(g_drop_repeated_edges, on);
 }
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
@@ -815,7 +875,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     const size_t t1 = std::min(tn, t0 + kBlock);
     const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
     classifyBlock(t0, t1, prefetch_block);
-    const size_t kept_count = lists.kept_count, edge_count = lists.edge_count, point_count = lists.point_count;
+    const size_t kept_count = lists.kept_count, point_count = lists.point_count;
     out.collapsed_triangles += (t1 - t0) - kept_count;
     // for the next block: fine meshes at coarse widths. At 3/4 rather than 7/8: 1 M sphere 1 %, 77 %
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
@@ -834,6 +894,16 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
     if (!keep_edges) continue;
     const size_t edges_before = edge_total;
+    if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
+      collapsed_dropped = true;
+      std::vector<CollapsedTriangle>().swap(collapsed_list);
+    }
+    // the collapsed triangles whose pair repeats the one before are not looked up where nothing
+    // lists them one by one (the list of collapsed triangles)
+    size_t edge_count = lists.edge_count;
+    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
+      edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
+                        : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
     if (!track_collapsed) {
       if (branchless_edges)
         for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], true);
@@ -842,10 +912,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     } else {
       const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
       block_first_edge.push_back(static_cast<uint32_t>(edge_total));
-      if (!collapsed_dropped && collapsed_list.size() + edge_count > kCollapsedList) {
-        collapsed_dropped = true;
-        std::vector<CollapsedTriangle>().swap(collapsed_list);
-      }
       auto slots = [&](bool branchless) __attribute__((always_inline)) {
         for (size_t j = 0; j < edge_count; ++j) {
           const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j], branchless);
@@ -858,7 +924,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     }
     // for the next block: over 3/8 of the lookups made an edge (bunny: 50 % level 51 %, 10 % 25 %,
     // 2 % 9 %; at over 1/8, the 10 % level took the branchless path and eliminated in 0.58-0.62 ms
-    // against 0.53-0.57)
+    // against 0.53-0.57); of the lookups made, the repeats dropped
     branchless_edges = g_windowed_probes && (edge_total - edges_before) * 8 > edge_count * 3;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
