@@ -586,6 +586,43 @@ SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedEdgesAvx2(uint32_t* x, uint3
 size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) { return dropRepeatedEdgesScalar(x, y, 0, n, 0); }
 #endif
 
+// Drops the entries of a block's point list that repeat the entry before them, in place; returns
+// the count kept (addPoint of a repeat finds its cluster listed and does nothing). (The 1 M
+// sphere's 1 % level: 798 k of its 1.04 M triangles collapse to a point, about 10 instructions
+// each in addPoint.)
+size_t dropRepeatedPointsScalar(uint32_t* c, size_t j, size_t n, size_t kept) {
+  uint32_t last = kept ? c[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t x = c[j];
+    c[kept] = x;
+    kept += x != last;
+    last = x;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedPointsScalar eight entries at a time, as dropRepeatedEdgesAvx2
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev = _mm256_set1_epi32(-1);  // (kNone: no cluster id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c + j));
+    const __m256i x1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(x, before),
+                                          _mm256_permutevar8x32_epi32(prev, before), 0x01);
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, x1)))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(c + kept, x, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev = x;
+  }
+  return dropRepeatedPointsScalar(c, j, n, kept);
+}
+#else
+size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) { return dropRepeatedPointsScalar(c, 0, n, 0); }
+#endif
+
 // the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
 // 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
 // their ids fit the blocks' 16 bits
@@ -593,7 +630,8 @@ constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 
 bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
 bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
-bool g_drop_repeated_edges = true;  // false: every collapsed triangle's pair looked up (useRepeatedEdgeDrop, a test hook)
+// false: every collapsed triangle's pair and point looked up (useRepeatedEdgeDrop, a test hook)
+bool g_drop_repeated_edges = true;
 // slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
 // for (the bunny's 50 % level: 256 KB)
 constexpr size_t kProbeWindow = 8;
@@ -613,8 +651,8 @@ bool useWindowedProbes(bool on) {
 }
 
 // test hook (declared by tests/lodcore/elimination_test.cpp): false looks up every collapsed
-// triangle's cluster pair, the reference for dropping the repeats (dropRepeatedEdges*), for every
-// later call; returns the previous choice
+// triangle's cluster pair and point, the reference for dropping the repeats (dropRepeatedEdges*,
+// dropRepeatedPoints*), for every later call; returns the previous choice
 bool useRepeatedEdgeDrop(bool on) {
   return std::exchange(g_drop_repeated_edges, on);
 }
@@ -875,12 +913,12 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     const size_t t1 = std::min(tn, t0 + kBlock);
     const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
     classifyBlock(t0, t1, prefetch_block);
-    const size_t kept_count = lists.kept_count, point_count = lists.point_count;
+    const size_t kept_count = lists.kept_count;
     out.collapsed_triangles += (t1 - t0) - kept_count;
     // for the next block: fine meshes at coarse widths. At 3/4 rather than 7/8: 1 M sphere 1 %, 77 %
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
     // 120 k; at 2/3 the bunny 2 % level (69 % points) mispredicted 3 x as often, 0.38 -> 0.46 ms
-    points_dominate = point_count * 4 > (t1 - t0) * 3;
+    points_dominate = lists.point_count * 4 > (t1 - t0) * 3;
     for (size_t j = 0; j < kept_count; ++j) {
       // rotation (keeping orientation) that puts the smallest id first, by index rather than by
       // selects (which the compiler turned into branches)
@@ -890,8 +928,13 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2
       addTriangle(lo, c[r + 1], c[r + 2]);
     }
-    if (keep_points)
+    if (keep_points) {
+      size_t point_count = lists.point_count;
+      if (g_drop_repeated_edges)
+        point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
+                           : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
       for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
+    }
     if (!keep_edges) continue;
     const size_t edges_before = edge_total;
     if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {

@@ -491,8 +491,8 @@ TEST(Elimination, WindowedProbesGiveTheReferenceBits) {
   EXPECT_GE(levels, 120u);
 }
 
-// Dropping the collapsed triangles whose cluster pair repeats the one before (in lanes and scalar)
-// gives the bits of looking every pair up: every output array, with edges or points not kept, at
+// Dropping the collapsed triangles whose cluster pair or point repeats the one before (in lanes
+// and scalar) gives the bits of looking every one up: every output array, with edges or points not kept, at
 // fine and coarse widths, on the meshes above (the generator's ring order, where about half the
 // pairs repeat; the hubs, whose pairs alternate in direction), the scrambled sphere (few repeats,
 // the prefetching classification), with the blocks and with every edge chained, with the AVX2
