@@ -1009,10 +1009,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       if (branchless_edges) slots(true);
       else slots(false);
     }
-    // for the next block: over 3/8 of the lookups made an edge (bunny: 50 % level 51 %, 10 % 25 %,
-    // 2 % 9 %; at over 1/8, the 10 % level took the branchless path and eliminated in 0.58-0.62 ms
-    // against 0.53-0.57); of the lookups made, the repeats dropped
-    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 8 > edge_count * 3;
+    // for the next block: over 1/4 of the lookups made (the repeats dropped) made an edge. Before
+    // the repeats were dropped: 3/8 (bunny: 50 % level 51 %, 10 % 25 %, 2 % 9 %; at over 1/8, the
+    // 10 % level took the branchless path and eliminated in 0.58-0.62 ms against 0.53-0.57). With
+    // them dropped the found edges are fewer: 50 % 58 %, chain level 2 39 %, 10 % 32 %, level 3
+    // 20 %, 2 % 12 %; at 3/8 level 2's blocks alternated between the paths, and the branch on a new
+    // edge mispredicted 5.7 k times of its 15.2 k (at 1/4: 11.6 k -> 6.6 k mispredicts, 5.89 ->
+    // 6.28 M instructions, eliminate 0.536-0.569 -> 0.496-0.545 ms; 10 % 0.440-0.463 ->
+    // 0.434-0.448; level 3 and 2 % unchanged)
+    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 4 > edge_count;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
