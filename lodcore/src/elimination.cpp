@@ -409,15 +409,30 @@ constexpr size_t kPrefetchTriangles = 16;  // how far ahead the cluster ids are 
 // stores eight lanes of each at once (a store starts at most at kBlock - 8, since a list holds at
 // most the triangles before the group; the 8 entries past kBlock are a margin)
 struct BlockLists {
-  uint32_t kept[3][kBlock + 8];  // the corners' clusters of kept triangles (rotated when added)
+  // the corners' clusters of kept triangles, rotated (keeping the orientation) so that the smallest
+  // id comes first where `rotated`, else rotated when added
+  uint32_t kept[3][kBlock + 8];
   uint32_t edge[3][kBlock + 8];  // collapsed to an edge: first corner's cluster, the other, the triangle
   uint32_t point[kBlock + 8];    // collapsed to a point: its cluster
   size_t kept_count, edge_count, point_count;
+  bool rotated;
 };
 
-// Classifies triangles [t, t1) onto the lists' ends. Compiled for each pair of constants (a test of
-// a flag in memory per triangle otherwise).
-template <bool kPrefetch, bool kPointsFirst>
+// rotation (keeping orientation) that puts the smallest id first, by index rather than by selects
+// (which the compiler turned into branches); for a kept triangle (three distinct ids)
+SCENELOD_ALWAYS_INLINE void rotateSmallestFirst(uint32_t& c0, uint32_t& c1, uint32_t& c2) {
+  const uint32_t c[5] = {c0, c1, c2, c0, c1};
+  const uint32_t lo = branchlessMin(branchlessMin(c0, c1), c2);
+  const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2
+  c0 = lo;
+  c1 = c[r + 1];
+  c2 = c[r + 2];
+}
+
+// Classifies triangles [t, t1) onto the lists' ends. Compiled for each set of constants (a test of
+// a flag in memory per triangle otherwise); kRotate: kept triangles rotated (rotateSmallestFirst),
+// for the tail of the AVX2 classification.
+template <bool kPrefetch, bool kPointsFirst, bool kRotate = false>
 SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
   size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
   for (const uint32_t* v = tri + 3 * t; t < t1; ++t, v += 3) {
@@ -433,9 +448,17 @@ SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* 
     }
     const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
     const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-    l.kept[0][nk] = c0;
-    l.kept[1][nk] = c1;
-    l.kept[2][nk] = c2;
+    if (kRotate && kept) {
+      uint32_t r0 = c0, r1 = c1, r2 = c2;
+      rotateSmallestFirst(r0, r1, r2);
+      l.kept[0][nk] = r0;
+      l.kept[1][nk] = r1;
+      l.kept[2][nk] = r2;
+    } else {
+      l.kept[0][nk] = c0;
+      l.kept[1][nk] = c1;
+      l.kept[2][nk] = c2;
+    }
     nk += kept;
     l.edge[0][ne] = c0;
     l.edge[1][ne] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
@@ -474,8 +497,10 @@ SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m25
 
 // The classification eight triangles at a time (the tail of a block scalar): the three corners'
 // vertex ids split into columns, their clusters gathered, the classes compared per lane and each
-// list's lanes compacted through a permutation table; the same lists as classifyScalar.
-template <bool kPrefetch>
+// list's lanes compacted through a permutation table; the same lists as classifyScalar, with kRotate
+// the kept triangles rotated in lanes (rotateSmallestFirst, about 25 instructions a kept triangle
+// where it is added, against 8 per eight triangles here).
+template <bool kPrefetch, bool kRotate>
 SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1,
                                                    BlockLists& l) {
   size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
@@ -511,9 +536,18 @@ SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const ui
     const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[kept])));
     const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[edge])));
     const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[point])));
-    storeCompacted(l.kept[0] + nk, c0, pk);
-    storeCompacted(l.kept[1] + nk, c1, pk);
-    storeCompacted(l.kept[2] + nk, c2, pk);
+    if (kRotate) {
+      // as rotateSmallestFirst: exactly one corner of a kept triangle holds the smallest id
+      const __m256i lo = _mm256_min_epu32(_mm256_min_epu32(c0, c1), c2);
+      const __m256i at1 = _mm256_cmpeq_epi32(c1, lo), at2 = _mm256_cmpeq_epi32(c2, lo);
+      storeCompacted(l.kept[0] + nk, lo, pk);
+      storeCompacted(l.kept[1] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c1, c2, at1), c0, at2), pk);
+      storeCompacted(l.kept[2] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c2, c0, at1), c1, at2), pk);
+    } else {
+      storeCompacted(l.kept[0] + nk, c0, pk);
+      storeCompacted(l.kept[1] + nk, c1, pk);
+      storeCompacted(l.kept[2] + nk, c2, pk);
+    }
     nk += size_t(__builtin_popcount(kept));
     storeCompacted(l.edge[0] + ne, c0, pe);
     storeCompacted(l.edge[1] + ne, _mm256_blendv_epi8(c1, c2, e01), pe);  // the corner not in c0's cluster
@@ -525,13 +559,102 @@ SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const ui
   l.kept_count = nk;
   l.edge_count = ne;
   l.point_count = np;
-  classifyScalar<false, false>(tri, co, t, t1, l);
+  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
 }
 #else
-template <bool kPrefetch>
+template <bool kPrefetch, bool kRotate>
 void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
-  classifyScalar<false, false>(tri, co, t, t1, l);
+  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
 }
+#endif
+
+// Drops the entries of a block's edge list (x[j], y[j]) that are the same cluster pair as the
+// entry before them, in place, and leaves each kept pair as (lower id, higher id); returns the count
+// kept. A dropped entry equals the last kept one, so comparing with that is comparing with the
+// entry before. The lookup of a repeated pair finds the edge its predecessor found or made and
+// changes nothing (the branchless paths write a spare entry), so only the lookups made differ.
+// (The 1 M sphere's 10 % level in its generator's ring order: 268.9 k of its 522.5 k collapsed
+// triangles repeat the pair before, about 90 instructions a lookup on the chained lists; the
+// bunny's 50 % level 4.2 k of 34.0 k, chain level 2 6.8 k of 35.8 k.)
+size_t dropRepeatedEdgesScalar(uint32_t* x, uint32_t* y, size_t j, size_t n, size_t kept) {
+  uint32_t last_lo = kept ? x[kept - 1] : kNone, last_hi = kept ? y[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t lo = branchlessMin(x[j], y[j]), hi = x[j] ^ y[j] ^ lo;
+    x[kept] = lo;  // (kept <= j: an entry already read)
+    y[kept] = hi;
+    kept += uint32_t(lo != last_lo) | uint32_t(hi != last_hi);
+    last_lo = lo;
+    last_hi = hi;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedEdgesScalar eight entries at a time (the tail scalar): each lane compared with the
+// lane before (lane 0 with the last of the previous eight), the kept lanes compacted through
+// kLaneCompaction. In place: a store at `kept` <= j reaches at most the eight entries just read.
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev_lo = _mm256_set1_epi32(-1), prev_hi = prev_lo;  // (kNone: no pair's lower id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + j));
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(y + j));
+    const __m256i lo = _mm256_min_epu32(a, b), hi = _mm256_max_epu32(a, b);
+    const __m256i lo1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(lo, before),
+                                           _mm256_permutevar8x32_epi32(prev_lo, before), 0x01);
+    const __m256i hi1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(hi, before),
+                                           _mm256_permutevar8x32_epi32(prev_hi, before), 0x01);
+    const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(lo, lo1), _mm256_cmpeq_epi32(hi, hi1));
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(same))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(x + kept, lo, perm);
+    storeCompacted(y + kept, hi, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev_lo = lo;
+    prev_hi = hi;
+  }
+  return dropRepeatedEdgesScalar(x, y, j, n, kept);
+}
+#else
+size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) { return dropRepeatedEdgesScalar(x, y, 0, n, 0); }
+#endif
+
+// Drops the entries of a block's point list that repeat the entry before them, in place; returns
+// the count kept (addPoint of a repeat finds its cluster listed and does nothing). (The 1 M
+// sphere's 1 % level: 798 k of its 1.04 M triangles collapse to a point, about 10 instructions
+// each in addPoint.)
+size_t dropRepeatedPointsScalar(uint32_t* c, size_t j, size_t n, size_t kept) {
+  uint32_t last = kept ? c[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t x = c[j];
+    c[kept] = x;
+    kept += x != last;
+    last = x;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedPointsScalar eight entries at a time, as dropRepeatedEdgesAvx2
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev = _mm256_set1_epi32(-1);  // (kNone: no cluster id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c + j));
+    const __m256i x1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(x, before),
+                                          _mm256_permutevar8x32_epi32(prev, before), 0x01);
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, x1)))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(c + kept, x, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev = x;
+  }
+  return dropRepeatedPointsScalar(c, j, n, kept);
+}
+#else
+size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) { return dropRepeatedPointsScalar(c, 0, n, 0); }
 #endif
 
 // the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
@@ -541,6 +664,8 @@ constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
 
 bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
 bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
+// false: every collapsed triangle's pair and point looked up (useRepeatedEdgeDrop, a test hook)
+bool g_drop_repeated_edges = true;
 // slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
 // for (the bunny's 50 % level: 256 KB)
 constexpr size_t kProbeWindow = 8;
@@ -557,6 +682,13 @@ bool useEdgeBlocks(bool on) {
 // at a time, the reference for the windowed probe, for every later call; returns the previous choice
 bool useWindowedProbes(bool on) {
   return std::exchange(g_windowed_probes, on);
+}
+
+// test hook (declared by tests/lodcore/elimination_test.cpp): false looks up every collapsed
+// triangle's cluster pair and point, the reference for dropping the repeats (dropRepeatedEdges*,
+// dropRepeatedPoints*), for every later call; returns the previous choice
+bool useRepeatedEdgeDrop(bool on) {
+  return std::exchange(g_drop_repeated_edges, on);
 }
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
@@ -784,6 +916,10 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // first (a branch that is then predicted) and skips the rest of the classification (the scalar
   // classification only: the AVX2 one costs the same for every class)
   bool points_dominate = false;
+  // where over 1/16 of the last block's triangles were kept, the next block's are rotated in lanes
+  // (the AVX2 classification only; at the 1 M sphere's 1 % level, 1 % kept, the lanes took 1.0 M
+  // instructions more than they saved, 22.22 -> 23.19 M)
+  bool rotate_in_lanes = true;
   bool branchless_edges = g_windowed_probes;  // (blocks: see edgeSlot)
   // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
   // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
@@ -800,9 +936,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // the classification of one block [t0, t1)
   auto classifyBlock = [&](size_t t0, size_t t1, bool prefetch_block) {
     lists.kept_count = lists.edge_count = lists.point_count = 0;
+    lists.rotated = avx2 && rotate_in_lanes;
     if (avx2) {
-      if (prefetch_block) classifyAvx2<true>(tri, co, t0, t1, lists);
-      else classifyAvx2<false>(tri, co, t0, t1, lists);
+      if (prefetch_block) {
+        if (rotate_in_lanes) classifyAvx2<true, true>(tri, co, t0, t1, lists);
+        else classifyAvx2<true, false>(tri, co, t0, t1, lists);
+      } else {
+        if (rotate_in_lanes) classifyAvx2<false, true>(tri, co, t0, t1, lists);
+        else classifyAvx2<false, false>(tri, co, t0, t1, lists);
+      }
     } else if (prefetch_block) {
       if (points_dominate) classifyScalar<true, true>(tri, co, t0, t1, lists);
       else classifyScalar<true, false>(tri, co, t0, t1, lists);
@@ -815,25 +957,40 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     const size_t t1 = std::min(tn, t0 + kBlock);
     const bool prefetch_block = prefetch && t1 + kPrefetchTriangles <= tn;  // (not the last block)
     classifyBlock(t0, t1, prefetch_block);
-    const size_t kept_count = lists.kept_count, edge_count = lists.edge_count, point_count = lists.point_count;
+    const size_t kept_count = lists.kept_count;
     out.collapsed_triangles += (t1 - t0) - kept_count;
     // for the next block: fine meshes at coarse widths. At 3/4 rather than 7/8: 1 M sphere 1 %, 77 %
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
     // 120 k; at 2/3 the bunny 2 % level (69 % points) mispredicted 3 x as often, 0.38 -> 0.46 ms
-    points_dominate = point_count * 4 > (t1 - t0) * 3;
-    for (size_t j = 0; j < kept_count; ++j) {
-      // rotation (keeping orientation) that puts the smallest id first, by index rather than by
-      // selects (which the compiler turned into branches)
-      const uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
-      const uint32_t c[5] = {c0, c1, c2, c0, c1};
-      const uint32_t lo = branchlessMin(branchlessMin(c0, c1), c2);
-      const uint32_t r = uint32_t(c1 == lo) + 2u * uint32_t(c2 == lo);  // 0, 1 or 2
-      addTriangle(lo, c[r + 1], c[r + 2]);
-    }
-    if (keep_points)
+    points_dominate = lists.point_count * 4 > (t1 - t0) * 3;
+    rotate_in_lanes = kept_count * 16 > t1 - t0;
+    if (lists.rotated)
+      for (size_t j = 0; j < kept_count; ++j) addTriangle(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
+    else
+      for (size_t j = 0; j < kept_count; ++j) {
+        uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
+        rotateSmallestFirst(c0, c1, c2);
+        addTriangle(c0, c1, c2);
+      }
+    if (keep_points) {
+      size_t point_count = lists.point_count;
+      if (g_drop_repeated_edges)
+        point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
+                           : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
       for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
+    }
     if (!keep_edges) continue;
     const size_t edges_before = edge_total;
+    if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
+      collapsed_dropped = true;
+      std::vector<CollapsedTriangle>().swap(collapsed_list);
+    }
+    // the collapsed triangles whose pair repeats the one before are not looked up where nothing
+    // lists them one by one (the list of collapsed triangles)
+    size_t edge_count = lists.edge_count;
+    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
+      edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
+                        : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
     if (!track_collapsed) {
       if (branchless_edges)
         for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], true);
@@ -842,10 +999,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     } else {
       const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
       block_first_edge.push_back(static_cast<uint32_t>(edge_total));
-      if (!collapsed_dropped && collapsed_list.size() + edge_count > kCollapsedList) {
-        collapsed_dropped = true;
-        std::vector<CollapsedTriangle>().swap(collapsed_list);
-      }
       auto slots = [&](bool branchless) __attribute__((always_inline)) {
         for (size_t j = 0; j < edge_count; ++j) {
           const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j], branchless);
@@ -856,10 +1009,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       if (branchless_edges) slots(true);
       else slots(false);
     }
-    // for the next block: over 3/8 of the lookups made an edge (bunny: 50 % level 51 %, 10 % 25 %,
-    // 2 % 9 %; at over 1/8, the 10 % level took the branchless path and eliminated in 0.58-0.62 ms
-    // against 0.53-0.57)
-    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 8 > edge_count * 3;
+    // for the next block: over 1/4 of the lookups made (the repeats dropped) made an edge. Before
+    // the repeats were dropped: 3/8 (bunny: 50 % level 51 %, 10 % 25 %, 2 % 9 %; at over 1/8, the
+    // 10 % level took the branchless path and eliminated in 0.58-0.62 ms against 0.53-0.57). With
+    // them dropped the found edges are fewer: 50 % 58 %, chain level 2 39 %, 10 % 32 %, level 3
+    // 20 %, 2 % 12 %; at 3/8 level 2's blocks alternated between the paths, and the branch on a new
+    // edge mispredicted 5.7 k times of its 15.2 k (at 1/4: 11.6 k -> 6.6 k mispredicts, 5.89 ->
+    // 6.28 M instructions, eliminate 0.536-0.569 -> 0.496-0.545 ms; 10 % 0.440-0.463 ->
+    // 0.434-0.448; level 3 and 2 % unchanged)
+    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 4 > edge_count;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];

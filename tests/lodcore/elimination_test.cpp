@@ -182,6 +182,9 @@ bool useEdgeBlocks(bool on);
 // (lodcore/src/elimination.cpp) false: the dedupe probe one slot at a time and a branch on each new
 // edge, the reference paths; returns the previous choice
 bool useWindowedProbes(bool on);
+// (lodcore/src/elimination.cpp) false: every collapsed triangle's cluster pair looked up, the
+// reference for dropping the pairs that repeat the one before; returns the previous choice
+bool useRepeatedEdgeDrop(bool on);
 }
 
 namespace {
@@ -486,4 +489,62 @@ TEST(Elimination, WindowedProbesGiveTheReferenceBits) {
   detail::useWindowedProbes(was_windowed);
   detail::useEdgeBlocks(was_blocks);
   EXPECT_GE(levels, 120u);
+}
+
+// Dropping the collapsed triangles whose cluster pair or point repeats the one before (in lanes
+// and scalar) gives the bits of looking every one up: every output array, with edges or points not kept, at
+// fine and coarse widths, on the meshes above (the generator's ring order, where about half the
+// pairs repeat; the hubs, whose pairs alternate in direction), the scrambled sphere (few repeats,
+// the prefetching classification), with the blocks and with every edge chained, with the AVX2
+// paths and without.
+TEST(Elimination, DroppedRepeatedEdgesGiveTheReferenceBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  addBunnyAndSheet(meshes);
+  ASSERT_FALSE(HasFatalFailure());
+  addEdgeMeshes(meshes);
+  // 48 thin cylinders, half of them along x and half along y, crossing (over 4,096 collapsed
+  // triangles, so that their list is dropped, and most edges uncovered: output edges)
+  Mesh hair;
+  for (int k = 0; k < 48; ++k) {
+    Mesh c = test::makeCylinder(0.0f, 6.0f, 0.02f, 40, 12, glm::vec3(0.0f, 0.37f * float(k % 12), 0.23f * float(k / 24)));
+    if (k % 2)
+      for (glm::vec3& q : c.positions) q = glm::vec3(q.y, q.x, q.z + 0.01f);
+    test::appendMesh(hair, c);
+  }
+  meshes.emplace_back("hair", std::move(hair));
+  meshes.emplace_back("scrambled sphere", scrambled(test::makeBumpySphere(400, 700)));
+  const bool was_drop = detail::useRepeatedEdgeDrop(true), was_blocks = detail::useEdgeBlocks(true);
+  const bool was_avx2 = detail::useAvx2Paths(true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    const float diagonal = positionsDiagonal(m);
+    const bool large = m.positions.size() > (size_t(1) << 18);
+    for (float f : {0.002f, 0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 4; ++keep) {
+        if (large && (keep != 0 || f < 0.004f)) continue;  // (the test's time)
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        detail::useEdgeBlocks(keep != 3);
+        Mesh reference;
+        detail::useRepeatedEdgeDrop(false);
+        ASSERT_TRUE(clusterMesh(m, p, reference).ok());
+        detail::useRepeatedEdgeDrop(true);
+        for (bool avx2 : {true, false}) {
+          detail::useAvx2Paths(avx2);
+          Mesh dropped;
+          ASSERT_TRUE(clusterMesh(m, p, dropped).ok());
+          SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep) +
+                       (avx2 ? " avx2" : " scalar"));
+          expectSameBits(dropped, reference);
+        }
+        detail::useAvx2Paths(true);
+        levels += reference.edgeCount() > 0;
+      }
+  }
+  detail::useRepeatedEdgeDrop(was_drop);
+  detail::useEdgeBlocks(was_blocks);
+  detail::useAvx2Paths(was_avx2);
+  EXPECT_GE(levels, 40u);
 }
