@@ -619,13 +619,18 @@ class BrickHeads {
   uint32_t get(int32_t x, int32_t y, int32_t z) const {
     return heads_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
   }
-  void set(int32_t x, int32_t y, int32_t z, uint32_t v) {
+  void set(int32_t x, int32_t y, int32_t z, uint32_t v) { exchange(x, y, z, v); }
+  // set, returning the head it replaces (get and set with one brick lookup)
+  uint32_t exchange(int32_t x, int32_t y, int32_t z, uint32_t v) {
     uint32_t& b = top_[brick(x, y, z)];
     if (b == 0) {
       b = uint32_t(heads_.size() >> 6);
       heads_.resize(heads_.size() + 64, 0);
     }
-    heads_[size_t(b) << 6 | inBrick(x, y, z)] = uint16_t(v);
+    uint16_t& h = heads_[size_t(b) << 6 | inBrick(x, y, z)];
+    const uint32_t old = h;
+    h = uint16_t(v);
+    return old;
   }
   // the non-empty heads of the cubes lo .. hi into found (without a branch per head); their count
   uint32_t gather(const int32_t lo[3], const int32_t hi[3], uint32_t* found) const {
@@ -802,15 +807,22 @@ class BrickHeads {
     in_brick = _mm256_or_si256(_mm256_or_si256(_mm256_permutevar8x32_epi32(in, px), _mm256_permutevar8x32_epi32(in, py)),
                                _mm256_permutevar8x32_epi32(in, pz));
   }
-  // heads8All: the heads of the cubes locate8 gave into found[0 .. 8), empty ones (0) in place, for
-  // bestOfEightLists: the stores' addresses do not wait on the loaded heads, as a running count of
-  // the non-empty ones makes them
+  // heads8All: the heads of the cubes locate8 gave into found[0 .. 8) (32-byte aligned), empty ones
+  // (0) in place, for bestOfEightLists: the stores' addresses do not wait on the loaded heads, as a
+  // running count of the non-empty ones makes them. Two gathers: the bricks' numbers, then the
+  // 4-byte words holding the heads, each head shifted out of its word (so nothing past the heads is
+  // read). The 8 scalar steps (the vectors stored, 8 brick numbers, 8 heads) took 71 instructions a
+  // vertex at the bunny's 50 % level, 19 % of its assignment: 12.72 -> 11.04 M instructions,
+  // 1.36-1.42 -> 1.26-1.30 ms. The gathers' latency is hidden: the heads are read a vertex ahead.
   SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void heads8All(__m256i bricks, __m256i in_brick,
                                                                       uint32_t* found) const {
-    alignas(32) uint32_t bk[8], ik[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(bk), bricks);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(ik), in_brick);
-    for (int k = 0; k < 8; ++k) found[k] = heads_[size_t(top_[bk[k]]) << 6 | ik[k]];
+    const __m256i first = _mm256_i32gather_epi32(reinterpret_cast<const int*>(top_.data()), bricks, 4);
+    const __m256i at = _mm256_or_si256(_mm256_slli_epi32(first, 6), in_brick);
+    const __m256i words = _mm256_i32gather_epi32(reinterpret_cast<const int*>(heads_.data()),
+                                                 _mm256_andnot_si256(_mm256_set1_epi32(1), at), 2);
+    const __m256i shift = _mm256_slli_epi32(_mm256_and_si256(at, _mm256_set1_epi32(1)), 4);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(found),
+                       _mm256_and_si256(_mm256_srlv_epi32(words, shift), _mm256_set1_epi32(0xffff)));
   }
   // locate8's strides of the bricks along x, y, z for the cubes lo and lo + 1
   SCENELOD_FLOATING_AVX2_TARGET __m256i brickStrides() const {
@@ -864,8 +876,7 @@ struct DenseGrid {
   // a new cell (cluster `id`) at pv, listed first in grid cube (cx, cy, cz) (inlined into each variant)
   SCENELOD_ALWAYS_INLINE void list(int32_t cx, int32_t cy, int32_t cz, const glm::vec3& pv, uint32_t id) {
     if constexpr (kBricks) {
-      cells.push_back({pv.x, pv.y, pv.z, bricks.get(cx, cy, cz)});
-      bricks.set(cx, cy, cz, id + 1);
+      cells.push_back({pv.x, pv.y, pv.z, bricks.exchange(cx, cy, cz, id + 1)});
     } else {
       const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
       cells.push_back({pv.x, pv.y, pv.z, head[k]});
@@ -1146,8 +1157,8 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 #if defined(SCENELOD_FLOATING_AVX2)
 // assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
-// are tested 8 at a time. kBricks27: bricked cubes of side w/2 (3 x 3 x 3 searched, bricks.plan27),
-// else of side w (2 x 2 x 2, bricks.locate8); a compile-time choice, as the run-time one cost the
+// are tested 8 at a time. kBricks27: bricked cubes of side w/2 (3 x 3 x 3 searched, bricks.plan27;
+// those of side w take assignBrickedAvx2T); a compile-time choice, as the run-time one cost the
 // bunny's 50 % level 0.2 M instructions
 template <bool kCube, bool kNearest, typename Head, bool kBricks27>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
@@ -1182,43 +1193,34 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
     l.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(l.q4, reach4), slack4)), lo_cube4);
     return l;
   };
-  // the next vertex's range and where its heads are (bricks.plan27 or bricks.locate8, or the offset
-  // of its first cube in the flat array), a vertex ahead
+  static_assert(kBricks27 == kBricks, "bricked cubes of side w take assignBrickedAvx2T");
+  // the next vertex's range and where its heads are (bricks.plan27, or the offset of its first cube
+  // in the flat array), a vertex ahead
   const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
   Located ahead{};
-  __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
   BrickHeads::Plan27 plans[2];  // the current vertex's and the next one's
   size_t ahead_offset = 0;
-  // 2 x 2 x 2 bricked cubes: the next vertex's 8 heads are read a vertex ahead too (bestOfEightLists
-  // works in place, so 8 + 8 entries each), where its span is 1 along each axis. They are loaded
-  // before the current vertex's unpredictable branches (its rounds, whether it makes a cell: half the
-  // vertices at the bunny's 50 % level), so a mispredict does not put them back in front of the next
-  // vertex's cell loads. A cell made in between changes one cube's head (a brick it allocates is
-  // otherwise empty, as the shared empty brick read before), so they are read again only where that
-  // cube is one of the 8.
-  alignas(32) uint32_t ahead_heads[2][16];
-  bool ahead_eight = false;
+  glm::vec3 ahead_pv{0.0f};  // read once (through the order, for short heads)
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
-    ahead = locate(sorted[k]);
+    ahead_pv = sorted[k];
+    ahead = locate(ahead_pv);
     if (kBricks27) {
       bricks.plan27(ahead.lo4, brick_strides, plans[k & 1]);
-    } else if (kBricks) {
-      bricks.locate8(ahead.lo4, brick_strides, ahead_bricks, ahead_in_brick);
-      const __m128i one = _mm_cmpeq_epi32(_mm_sub_epi32(ahead.hi4, ahead.lo4), _mm_set1_epi32(1));
-      ahead_eight = (_mm_movemask_ps(_mm_castsi128_ps(one)) & 7) == 7;
-      if (ahead_eight) bricks.heads8All(ahead_bricks, ahead_in_brick, ahead_heads[k & 1]);
     } else {
       // lo >= 0: lo_cube is 3 cubes below the box
       ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
                      size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
     }
   };
+  // the order and cluster_of as plain pointers (through the vectors, each vertex reloaded their data
+  // pointers: heaviest's push_back may, for the compiler, change them)
+  const uint32_t* const order = p.order.data();
+  uint32_t* const cluster_of = out.cluster_of.data();
   if (n > 0) plan(0);
   for (size_t i = 0; i < n; ++i) {
-    const glm::vec3 pv = sorted[i];
+    const glm::vec3 pv = ahead_pv;
     const Located here = ahead;
     const size_t offset = ahead_offset;
-    const bool eight_lists = !kBricks27 && kBricks && ahead_eight;  // ahead_heads[i & 1] holds the 8 heads
     if (i + 1 < n) plan(i + 1);
     const __m128 q4 = here.q4;
     const __m128i lo4 = here.lo4, hi4 = here.hi4;
@@ -1226,10 +1228,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
-    if (eight_lists) {
-      // bestOfEightLists reads ahead_heads
-    } else if (kBricks) {
-      if (kBricks27 && (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
+    if (kBricks) {
+      if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
         found_count = bricks.heads27(plans[i & 1], brick_strides, found);
       } else {
         const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
@@ -1255,34 +1255,106 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
       const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
       found_count = gatherHeadsAnySpan(head.data(), sy, sz, lo, hi, found, found_count);
     }
-    uint32_t best = eight_lists ? bestOfEightLists<kCube, kNearest>(cells.data(), ahead_heads[i & 1], pv, rule)
-                                : bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
+    uint32_t best = bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
     if (best == kNone) {
       best = out.cluster_count++;
-      out.heaviest.push_back(p.order[i]);
+      out.heaviest.push_back(order[i]);
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
       grid.list(cx, cy, cz, pv, best);
-      if (!kBricks27 && kBricks && ahead_eight && i + 1 < n) {
+    }
+    cluster_of[order[i]] = best;
+  }
+}
+
+// assignDenseAvx2Impl's bricked grid of side w (2 x 2 x 2 cubes searched, bestOfEightLists), in a
+// loop of its own whose state between vertices is the next vertex's position, its lo cube, where its
+// 8 heads are and the heads themselves; inside assignDenseAvx2Impl (the other grids' state, the
+// range kept as Located) GCC kept much of it on the stack, reloaded and stored each vertex. The
+// cube a new cell goes in comes from the position again (the same product and floor).
+// The next vertex's 8 heads are read a vertex ahead (bestOfEightLists works in place, so 8 + 8
+// entries each), where its span is 1 along each axis. They are loaded before the current vertex's
+// unpredictable branches (its rounds, whether it makes a cell: half the vertices at the bunny's
+// 50 % level), so a mispredict does not put them back in front of the next vertex's cell loads. A
+// cell made in between changes one cube's head (a brick it allocates is otherwise empty, as the
+// shared empty brick read before), so they are read again only where that cube is one of the 8.
+template <bool kCube, bool kNearest>
+SCENELOD_FLOATING_AVX2_TARGET void assignBrickedAvx2T(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3],
+                                                      const size_t dims[3], JoinRule rule, size_t expected,
+                                                      Assignment& out) {
+  DenseGrid<Bricked> grid(dims, expected, false);
+  auto& cells = grid.cells;
+  auto& bricks = grid.bricks;
+  const __m128 inv4 = _mm_set1_ps(1.0f / cube_width), half4 = _mm_set1_ps(0.5f), slack4 = _mm_set1_ps(kSearchSlack);
+  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
+  const size_t n = p.order.size();
+  const PositionsByWeight sorted(p);  // short heads: at most 65,535 vertices (positionsInOrder)
+  const uint32_t* const order = p.order.data();
+  uint32_t* const cluster_of = out.cluster_of.data();
+  const __m256i brick_strides = bricks.brickStrides();
+  // the next vertex's
+  glm::vec3 ahead_pv{0.0f};
+  __m128i ahead_lo4 = _mm_setzero_si128();
+  __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
+  alignas(32) uint32_t ahead_heads[2][16];
+  bool ahead_eight = false;
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    ahead_pv = sorted[k];
+    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(ahead_pv.x, ahead_pv.y, ahead_pv.z, 0.0f), inv4);
+    ahead_lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
+    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+    bricks.locate8(ahead_lo4, brick_strides, ahead_bricks, ahead_in_brick);
+    const __m128i one = _mm_cmpeq_epi32(_mm_sub_epi32(hi4, ahead_lo4), _mm_set1_epi32(1));
+    ahead_eight = (_mm_movemask_ps(_mm_castsi128_ps(one)) & 7) == 7;
+    if (ahead_eight) bricks.heads8All(ahead_bricks, ahead_in_brick, ahead_heads[k & 1]);
+  };
+  if (n > 0) plan(0);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 pv = ahead_pv;
+    const __m128i lo4 = ahead_lo4;
+    const bool eight = ahead_eight;
+    if (i + 1 < n) plan(i + 1);
+    uint32_t best;
+    if (eight) {
+      best = bestOfEightLists<kCube, kNearest>(cells.data(), ahead_heads[i & 1], pv, rule);
+    } else {  // a vertex within the slack of a cube face (3 cubes along an axis)
+      const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+      const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
+      const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
+      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
+      uint32_t found[64 + 8];  // 8 spare: testCellLanes8 writes 8 entries
+      const uint32_t found_count = bricks.gather(lo, hi, found);
+      best = bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
+    }
+    if (best == kNone) {
+      best = out.cluster_count++;
+      out.heaviest.push_back(order[i]);
+      const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      grid.list(_mm_cvtsi128_si32(c4), _mm_extract_epi32(c4, 1), _mm_extract_epi32(c4, 2), pv, best);
+      if (ahead_eight && i + 1 < n) {
         // the new cell's cube among the next vertex's 8 (c - lo in {0, 1} along each axis)?
-        const __m128i d = _mm_sub_epi32(c4, ahead.lo4);
+        const __m128i d = _mm_sub_epi32(c4, ahead_lo4);
         const __m128i in = _mm_cmpeq_epi32(_mm_andnot_si128(_mm_set1_epi32(1), d), _mm_setzero_si128());
         if ((_mm_movemask_ps(_mm_castsi128_ps(in)) & 7) == 7)
           bricks.heads8All(ahead_bricks, ahead_in_brick, ahead_heads[(i + 1) & 1]);
       }
     }
-    out.cluster_of[p.order[i]] = best;
+    cluster_of[order[i]] = best;
   }
 }
 template <bool kCube, bool kNearest, typename Head>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                            size_t expected, Assignment& out) {
-  if (DenseGrid<Head>::kBricks && reach == 1.0f)
-    assignDenseAvx2Impl<kCube, kNearest, Head, DenseGrid<Head>::kBricks>(p, cube_width, reach, lo_cube, dims, rule,
-                                                                         expected, out);
-  else
+  if constexpr (DenseGrid<Head>::kBricks) {
+    if (reach == 0.5f)
+      assignBrickedAvx2T<kCube, kNearest>(p, cube_width, lo_cube, dims, rule, expected, out);
+    else
+      assignDenseAvx2Impl<kCube, kNearest, Head, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  } else {
     assignDenseAvx2Impl<kCube, kNearest, Head, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  }
 }
 #endif
 
