@@ -328,7 +328,8 @@ SCENELOD_AVX2_TARGET inline float minPairDot8(const __m128 (&x)[2], const __m128
 }
 
 struct LaneRow {
-  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused)
+  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused); not
+                       // written by gradeTwoRowsAvx2 when it encodes them itself
   float longest;       // longest incident edge
   float cos_dirs;      // minPairDot of the directions (1 when fewer than two)
   float cos_normals;   // minPairDot of the face normals, when asked
@@ -609,6 +610,39 @@ SCENELOD_AVX2_TARGET inline __m256 rowOf(const __m256 (&x)[2], int i) {
   return i ? _mm256_permute2f128_ps(x[0], x[1], 0x31) : _mm256_permute2f128_ps(x[0], x[1], 0x20);
 }
 
+// VertexFaceSums::encode of both rows' sums (the quadric and normal sums in q0, q1 and lane 0 of q2,
+// the area in lane 1 of q2; row 0 in the low half) into sums[0] and sums[1]: the same arithmetic in
+// lanes. minps / maxps are the encode's `c < one ? c : one` and `c > -one ? c : -one` exactly
+// (NaN gives +1); q[8] takes toSnorm16's order, max then min (NaN gives -1). The rounded values lie
+// in [-32767, 32767], so packssdw's saturation never acts. A row whose area is not above zero gets
+// all zeros, as the encode's early return leaves it. The encode called per row took 94
+// instructions a vertex (its lane stores and scalar tail), 6 % of the bunny's one-thread prepare.
+SCENELOD_AVX2_TARGET inline void encodeTwo(__m256 q0, __m256 q1, __m256 q2, VertexFaceSums* sums) {
+  const __m256 one = _mm256_set1_ps(1.0f), minus_one = _mm256_set1_ps(-1.0f);
+  const __m256 scale = _mm256_set1_ps(32767.0f), offset = _mm256_set1_ps(32768.5f);
+  const __m256i bias = _mm256_set1_epi32(32768);
+  const __m256 area = _mm256_shuffle_ps(q2, q2, _MM_SHUFFLE(1, 1, 1, 1));
+  const __m256 inv = _mm256_div_ps(one, area);
+  const __m256 c0 = _mm256_max_ps(_mm256_min_ps(_mm256_mul_ps(q0, inv), one), minus_one);
+  const __m256 c1 = _mm256_max_ps(_mm256_min_ps(_mm256_mul_ps(q1, inv), one), minus_one);
+  const __m256 c2 = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(q2, inv), minus_one), one);
+  const __m256i i0 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c0, scale), offset)), bias);
+  const __m256i i1 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c1, scale), offset)), bias);
+  const __m256i i2 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c2, scale), offset)), bias);
+  const __m256 face = _mm256_cmp_ps(area, _mm256_setzero_ps(), _CMP_GT_OQ);  // false for NaN, as !(area > 0)
+  const __m256i keep = _mm256_castps_si256(face);
+  const __m256i q07 = _mm256_and_si256(keep, _mm256_packs_epi32(i0, i1));  // per half q[0..7]
+  const __m256i q8 = _mm256_and_si256(keep, i2);
+  const __m256 kept_area = _mm256_and_ps(face, area);
+  for (int i = 0; i < 2; ++i) {
+    VertexFaceSums& o = sums[i];
+    o = VertexFaceSums();
+    o.area = _mm_cvtss_f32(i ? _mm256_extractf128_ps(kept_area, 1) : _mm256_castps256_ps128(kept_area));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(o.q), i ? _mm256_extracti128_si256(q07, 1) : _mm256_castsi256_si128(q07));
+    o.q[8] = static_cast<int16_t>(_mm_cvtsi128_si32(i ? _mm256_extracti128_si256(q8, 1) : _mm256_castsi256_si128(q8)));
+  }
+}
+
 // Two rows of 5 to 8 triangle corners (two blocks each) in one pass of 8-lane AVX2 operations:
 // lanes 0..3 hold row 0's block, lanes 4..7 row 1's. Every operation the body above does on four
 // lanes is here in-lane (the 256-bit unpacks, shuffles and compares work on each 128-bit half
@@ -619,11 +653,12 @@ SCENELOD_AVX2_TARGET inline __m256 rowOf(const __m256 (&x)[2], int i) {
 // dependent imuls, 18 ns, put in front of each row's position loads added 9-15 ns to the row).
 // Two independent rows in the same instructions run side by side: bunny prepare on one thread
 // 4.6 -> 3.3 ms. Rows are paired as they come (v, v + 1), so no reordering and no extra memory.
-// False (nothing computed) when either row holds an input edge.
+// False (nothing computed) when either row holds an input edge. With `sums` (else null), the rows'
+// face sums are encoded into sums[0] and sums[1] here, and out[i].sums is not written.
 SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::vec3* pos, const uint32_t v[2],
                                                                     const Incidence* const row[2], const size_t r[2],
                                                                     bool want_normals, LaneScratch s[2],
-                                                                    LaneRow out[2]) {
+                                                                    LaneRow out[2], VertexFaceSums* sums) {
   constexpr size_t nb = 2, nc = 4;
   const __m256i none = _mm256_set1_epi32(-1);
   const __m256i self = _mm256_setr_epi32(int(v[0]), int(v[0]), int(v[0]), int(v[0]), int(v[1]), int(v[1]), int(v[1]),
@@ -743,10 +778,8 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   }
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(1, 0, 3, 2)));
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
+  if (sums) encodeTwo(q0, q1, q2, sums);
   for (int i = 0; i < 2; ++i) {
-    _mm_storeu_ps(out[i].sums, halfOf(q0, i));
-    _mm_storeu_ps(out[i].sums + 4, halfOf(q1, i));
-    _mm_storeu_ps(out[i].sums + 8, halfOf(q2, i));
     out[i].longest = _mm_cvtss_f32(halfOf(longest, i));
     out[i].any_dir = any_dir[i] != 0;
     out[i].cos_dirs = (dir_blocks[i] >> 2) == 0 && (dir_stored & 2u)
@@ -808,8 +841,8 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 #if defined(__SSE2__)
     LaneScratch lanes, two_lanes[2];
     LaneRow lr, two_lr[2];
-    auto laneDone = [&](size_t v, const LaneRow& l) {
-      if (out.sums) out.sums[v].encode(l.sums[9], l.sums);
+    auto laneDone = [&](size_t v, const LaneRow& l, bool encoded) {
+      if (out.sums && !encoded) out.sums[v].encode(l.sums[9], l.sums);
       range_longest = std::max(range_longest, l.longest);
       finish(v, l.longest, l.any_dir, l.cos_dirs, l.boundary, [&] { return l.cos_normals; });
     };
@@ -834,19 +867,19 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         const uint32_t vv[2] = {static_cast<uint32_t>(v), static_cast<uint32_t>(v + 1)};
         const Incidence* const rr[2] = {incidence + b, incidence + e};
         const size_t rs[2] = {row, offsets[v + 2] - e};
-        if (gradeTwoRowsAvx2(pos, vv, rr, rs, want_normals, two_lanes, two_lr)) {
-          laneDone(v, two_lr[0]);
+        if (gradeTwoRowsAvx2(pos, vv, rr, rs, want_normals, two_lanes, two_lr, out.sums ? out.sums + v : nullptr)) {
+          laneDone(v, two_lr[0], true);
           ++v;
           if (out.in_rows) out.in_rows[v] = 1;
           lo = glm::min(lo, pos[v]);
           hi = glm::max(hi, pos[v]);
-          laneDone(v, two_lr[1]);
+          laneDone(v, two_lr[1], true);
           continue;
         }
       }
       if (!colors && row <= kLaneRow &&
           lanes_fn(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
-        laneDone(v, lr);
+        laneDone(v, lr, false);
         continue;
       }
 #endif
