@@ -654,6 +654,39 @@ SCENELOD_AVX2_TARGET inline __m256 rowOf(const __m256 (&x)[2], int i) {
   return i ? _mm256_permute2f128_ps(x[0], x[1], 0x31) : _mm256_permute2f128_ps(x[0], x[1], 0x20);
 }
 
+// minPairDot8v of each row's blocks 0 and 1 (row i in half i of x[0] and x[1]; every lane a vector or
+// NaN), both rows at once in that layout: within a block lane l against lanes (l + 1) % 4 and
+// (l + 2) % 4, across the blocks all four rotations, which meets every pair of a row's 8 lanes and
+// no lane with itself. The same dot products (each symmetric in its two vectors) and, the minimum
+// not depending on the order (up to the sign of a zero), the same result as minPairDot8v per row,
+// with in-half shuffles (1 cycle) in place of its vpermps (3) and the halves' regrouping
+// (vperm2f128), and one reduction for both rows.
+SCENELOD_AVX2_TARGET inline __m256 minDot8(__m256 best, __m256 px, __m256 py, __m256 pz, __m256 qx, __m256 qy,
+                                           __m256 qz) {
+  const __m256 d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, qx), _mm256_mul_ps(py, qy)), _mm256_mul_ps(pz, qz));
+  return _mm256_min_ps(d, best);  // a NaN dot keeps best, as in minDot
+}
+#define SCENELOD_ROT8_PS(x, k) _mm256_permute_ps(x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+SCENELOD_AVX2_TARGET inline void minPairDotTwo(const __m256 (&x)[2], const __m256 (&y)[2], const __m256 (&z)[2],
+                                               float out[2]) {
+  const __m256 one = _mm256_set1_ps(1.0f);
+  __m256 b0 = one, b1 = one, b2 = one, b3 = one;  // four running minima, none waiting on another
+  for (int k = 0; k < 2; ++k) {
+    b0 = minDot8(b0, x[k], y[k], z[k], SCENELOD_ROT8_PS(x[k], 1), SCENELOD_ROT8_PS(y[k], 1), SCENELOD_ROT8_PS(z[k], 1));
+    b1 = minDot8(b1, x[k], y[k], z[k], SCENELOD_ROT8_PS(x[k], 2), SCENELOD_ROT8_PS(y[k], 2), SCENELOD_ROT8_PS(z[k], 2));
+  }
+  b2 = minDot8(b2, x[0], y[0], z[0], x[1], y[1], z[1]);
+  b3 = minDot8(b3, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 1), SCENELOD_ROT8_PS(y[1], 1), SCENELOD_ROT8_PS(z[1], 1));
+  b2 = minDot8(b2, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 2), SCENELOD_ROT8_PS(y[1], 2), SCENELOD_ROT8_PS(z[1], 2));
+  b3 = minDot8(b3, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 3), SCENELOD_ROT8_PS(y[1], 3), SCENELOD_ROT8_PS(z[1], 3));
+  __m256 best = _mm256_min_ps(_mm256_min_ps(b0, b1), _mm256_min_ps(b2, b3));  // none is NaN
+  best = _mm256_min_ps(best, SCENELOD_ROT8_PS(best, 2));
+  best = _mm256_min_ps(best, SCENELOD_ROT8_PS(best, 1));
+  out[0] = _mm256_cvtss_f32(best);
+  out[1] = _mm_cvtss_f32(_mm256_extractf128_ps(best, 1));
+}
+#undef SCENELOD_ROT8_PS
+
 // VertexFaceSums::encode of both rows' sums (the quadric and normal sums in q0, q1 and lane 0 of q2,
 // the area in lane 1 of q2; row 0 in the low half) into sums[0] and sums[1]: the same arithmetic in
 // lanes. minps / maxps are the encode's `c < one ? c : one` and `c > -one ? c : -one` exactly
@@ -811,12 +844,15 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
       longest = _mm256_max_ps(longest, _mm256_and_ps(use, len));
       const __m256 ex = orNan8(use, _mm256_div_ps(dx, len)), ey = orNan8(use, _mm256_div_ps(dy, len));
       const __m256 ez = orNan8(use, _mm256_div_ps(dz, len));
-      for (int i = 0; i < 2; ++i) {  // for the 4-lane pair search when a row has directions beyond block 1
-        _mm_store_ps(s[i].dir[0] + 4 * c, halfOf(ex, i));
-        _mm_store_ps(s[i].dir[1] + 4 * c, halfOf(ey, i));
-        _mm_store_ps(s[i].dir[2] + 4 * c, halfOf(ez, i));
+      if (c < 2) {
+        ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
+      } else {
+        for (int i = 0; i < 2; ++i) {  // for the 4-lane pair search (a row with directions beyond block 1)
+          _mm_store_ps(s[i].dir[0] + 4 * c, halfOf(ex, i));
+          _mm_store_ps(s[i].dir[1] + 4 * c, halfOf(ey, i));
+          _mm_store_ps(s[i].dir[2] + 4 * c, halfOf(ez, i));
+        }
       }
-      if (c < 2) ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
       const int used = _mm256_movemask_ps(use);
       for (int i = 0; i < 2; ++i) {
         const int u = (used >> (4 * i)) & 0xf;
@@ -829,13 +865,30 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(1, 0, 3, 2)));
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
   if (sums) encodeTwo(q0, q1, q2, sums);
+  // the directions in blocks 0 and 1 only, both stored (block 0 always is: its lane 0 is a first
+  // occurrence), for both rows (a closed fan's): one pair search in registers for the two
+  const bool in_regs[2] = {(dir_blocks[0] >> 2) == 0 && (dir_stored & 2u), (dir_blocks[1] >> 2) == 0 && (dir_stored & 2u)};
+  float cos_dirs[2], cos_normals[2] = {1.0f, 1.0f};
+  if (in_regs[0] && in_regs[1]) {
+    minPairDotTwo(ra[0], ra[1], ra[2], cos_dirs);
+  } else {
+    for (int i = 0; i < 2; ++i) {
+      if (in_regs[i]) {
+        cos_dirs[i] = minPairDot8v(rowOf(ra[0], i), rowOf(ra[1], i), rowOf(ra[2], i));
+        continue;
+      }
+      for (size_t c = 0; c < 2; ++c)
+        if (dir_stored & (1u << c))
+          for (int d = 0; d < 3; ++d) _mm_store_ps(s[i].dir[d] + 4 * c, halfOf(ra[d][c], i));
+      cos_dirs[i] = minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks[i]);
+    }
+  }
+  if (want_normals) minPairDotTwo(rn[0], rn[1], rn[2], cos_normals);
   for (int i = 0; i < 2; ++i) {
     out[i].longest = _mm_cvtss_f32(halfOf(longest, i));
     out[i].any_dir = any_dir[i] != 0;
-    out[i].cos_dirs = (dir_blocks[i] >> 2) == 0 && (dir_stored & 2u)
-                          ? minPairDot8v(rowOf(ra[0], i), rowOf(ra[1], i), rowOf(ra[2], i))
-                          : minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks[i]);
-    out[i].cos_normals = want_normals ? minPairDot8v(rowOf(rn[0], i), rowOf(rn[1], i), rowOf(rn[2], i)) : 1.0f;
+    out[i].cos_dirs = cos_dirs[i];
+    out[i].cos_normals = cos_normals[i];
   }
   return true;
 }
