@@ -760,10 +760,13 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   if (_mm256_movemask_epi8(edge)) return false;
 
   uint32_t row_bits[2], first[2];
+  __m256 first_lanes[nc];  // per candidate block, its first occurrences of distinct neighbours
   for (int i = 0; i < 2; ++i) row_bits[i] = (1u << r[i]) - 1;
   if (closedFans(cand, valid)) {
     // every neighbour once an a and once a b: the a are the distinct neighbours, all shared
     for (int i = 0; i < 2; ++i) first[i] = row_bits[i], out[i].boundary = false;
+    for (size_t k = 0; k < nb; ++k)
+      first_lanes[k] = _mm256_castsi256_ps(valid[k]), first_lanes[nb + k] = _mm256_setzero_ps();
   } else {
     __m256i other[nc], earlier[nc];
     for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm256_setzero_si256();
@@ -784,6 +787,12 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
       first[i] = valid_bits[i] & ~repeat;
       out[i].boundary = (first[i] & ~shared) != 0;
     }
+    const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 1, 2, 4, 8);
+    for (size_t c = 0; c < nc; ++c) {
+      const int f0 = int((first[0] >> (4 * c)) & 0xfu), f1 = int((first[1] >> (4 * c)) & 0xfu);
+      const __m256i fb = _mm256_setr_epi32(f0, f0, f0, f0, f1, f1, f1, f1);
+      first_lanes[c] = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(fb, bit), bit));
+    }
   }
 
   const __m256 vx = _mm256_setr_ps(pos[v[0]].x, pos[v[0]].x, pos[v[0]].x, pos[v[0]].x, pos[v[1]].x, pos[v[1]].x,
@@ -796,8 +805,7 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   const float* base = &pos[0].x;
   __m256 q0 = zero, q1 = zero, q2 = zero, longest = zero;
   __m256 ra[3][2] = {{zero, zero}, {zero, zero}, {zero, zero}}, rn[3][2];
-  uint32_t dir_blocks[2] = {0, 0}, dir_stored = 0;
-  int any_dir[2] = {0, 0};
+  uint32_t used_bits = 0, dir_stored = 0;  // bits 8 c + 4 i + l: lane l of row i, candidate block c, has a direction
   for (size_t k = 0; k < nb; ++k) {
     const __m256i a3 = _mm256_add_epi32(ia[k], _mm256_add_epi32(ia[k], ia[k]));
     const __m256i b3 = _mm256_add_epi32(ib[k], _mm256_add_epi32(ib[k], ib[k]));
@@ -832,15 +840,11 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
     if (want_normals) rn[0][k] = orNan8(face, nx), rn[1][k] = orNan8(face, ny), rn[2][k] = orNan8(face, nz);
     for (int side = 0; side < 2; ++side) {
       const size_t c = side ? nb + k : k;
-      const uint32_t f0 = (first[0] >> (4 * c)) & 0xfu, f1 = (first[1] >> (4 * c)) & 0xfu;
-      if (!(f0 | f1)) continue;
+      if (!(((first[0] | first[1]) >> (4 * c)) & 0xfu)) continue;
       const __m256 dx = side ? wx : ux, dy = side ? wy : uy, dz = side ? wz : uz;
       const __m256 len = _mm256_sqrt_ps(
           _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz)));
-      const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 1, 2, 4, 8);
-      const __m256i fb = _mm256_setr_epi32(int(f0), int(f0), int(f0), int(f0), int(f1), int(f1), int(f1), int(f1));
-      const __m256 lanes = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(fb, bit), bit));
-      const __m256 use = _mm256_and_ps(lanes, _mm256_cmp_ps(len, zero, _CMP_GT_OQ));
+      const __m256 use = _mm256_and_ps(first_lanes[c], _mm256_cmp_ps(len, zero, _CMP_GT_OQ));
       longest = _mm256_max_ps(longest, _mm256_and_ps(use, len));
       const __m256 ex = orNan8(use, _mm256_div_ps(dx, len)), ey = orNan8(use, _mm256_div_ps(dy, len));
       const __m256 ez = orNan8(use, _mm256_div_ps(dz, len));
@@ -853,12 +857,7 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
           _mm_store_ps(s[i].dir[2] + 4 * c, halfOf(ez, i));
         }
       }
-      const int used = _mm256_movemask_ps(use);
-      for (int i = 0; i < 2; ++i) {
-        const int u = (used >> (4 * i)) & 0xf;
-        any_dir[i] |= u;
-        dir_blocks[i] |= static_cast<uint32_t>(u != 0) << c;
-      }
+      used_bits |= static_cast<uint32_t>(_mm256_movemask_ps(use)) << (8 * c);
       dir_stored |= 1u << c;
     }
   }
@@ -867,7 +866,8 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   if (sums) encodeTwo(q0, q1, q2, sums);
   // the directions in blocks 0 and 1 only, both stored (block 0 always is: its lane 0 is a first
   // occurrence), for both rows (a closed fan's): one pair search in registers for the two
-  const bool in_regs[2] = {(dir_blocks[0] >> 2) == 0 && (dir_stored & 2u), (dir_blocks[1] >> 2) == 0 && (dir_stored & 2u)};
+  const bool in_regs[2] = {(used_bits & 0x0f0f0000u) == 0 && (dir_stored & 2u),
+                           (used_bits & 0xf0f00000u) == 0 && (dir_stored & 2u)};
   float cos_dirs[2], cos_normals[2] = {1.0f, 1.0f};
   if (in_regs[0] && in_regs[1]) {
     minPairDotTwo(ra[0], ra[1], ra[2], cos_dirs);
@@ -880,13 +880,15 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
       for (size_t c = 0; c < 2; ++c)
         if (dir_stored & (1u << c))
           for (int d = 0; d < 3; ++d) _mm_store_ps(s[i].dir[d] + 4 * c, halfOf(ra[d][c], i));
-      cos_dirs[i] = minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks[i]);
+      uint32_t dir_blocks = 0;  // the candidate blocks holding some direction of row i
+      for (size_t c = 0; c < nc; ++c) dir_blocks |= static_cast<uint32_t>(((used_bits >> (8 * c + 4 * i)) & 0xfu) != 0) << c;
+      cos_dirs[i] = minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks);
     }
   }
   if (want_normals) minPairDotTwo(rn[0], rn[1], rn[2], cos_normals);
   for (int i = 0; i < 2; ++i) {
     out[i].longest = _mm_cvtss_f32(halfOf(longest, i));
-    out[i].any_dir = any_dir[i] != 0;
+    out[i].any_dir = (used_bits & (0x0f0f0f0fu << (4 * i))) != 0;
     out[i].cos_dirs = cos_dirs[i];
     out[i].cos_normals = cos_normals[i];
   }
