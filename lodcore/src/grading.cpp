@@ -942,14 +942,55 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
-    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
 #if defined(__SSE2__)
+    // the box of the rows' vertices in lanes 0..2: minps(p, lo) and maxps(p, hi) are glm::min(lo, p)
+    // and glm::max(hi, p) exactly (p < lo ? p : lo; hi < p ? p : hi)
+    __m128 lo = _mm_set1_ps(std::numeric_limits<float>::max()), hi = _mm_set1_ps(-std::numeric_limits<float>::max());
+    auto addToBox = [&](const glm::vec3& p) {
+      const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&p.x)));
+      const __m128 q = _mm_movelh_ps(xy, _mm_load_ss(&p.z));  // x y z 0, no read past the point
+      lo = _mm_min_ps(q, lo);
+      hi = _mm_max_ps(q, hi);
+    };
     LaneScratch lanes, two_lanes[2];
     LaneRow lr, two_lr[2];
     auto laneDone = [&](size_t v, const LaneRow& l, bool encoded) {
       if (out.sums && !encoded) out.sums[v].encode(l.sums[9], l.sums);
       range_longest = std::max(range_longest, l.longest);
       finish(v, l.longest, l.any_dir, l.cos_dirs, l.boundary, [&] { return l.cos_normals; });
+    };
+    // finish for a pair's rows v, v + 1 under kLowTan, in two lanes: the same operations (std::clamp
+    // as maxps then minps, std::max(x, y) as maxps(y, x): equal for these non-NaN values); with the
+    // box in lanes, the bunny's pass outside gradeTwoRowsAvx2 took 263 -> 208 instructions a pair.
+    // Rossignac's acos stays scalar.
+    auto pairDone = [&](size_t v, const LaneRow (&l)[2]) {
+      if (grading != Grading::kLowTan) {
+        laneDone(v, l[0], true);
+        laneDone(v + 1, l[1], true);
+        return;
+      }
+      const __m128 one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f), half = _mm_set1_ps(0.5f);
+      auto clampUnit = [&](__m128 c) { return _mm_min_ps(_mm_max_ps(c, minus_one), one); };
+      auto laneMask = [](bool x0, bool x1) { return _mm_castsi128_ps(_mm_setr_epi32(-int(x0), -int(x1), 0, 0)); };
+      const __m128 cos_dirs = _mm_setr_ps(l[0].cos_dirs, l[1].cos_dirs, 0.0f, 0.0f);
+      __m128 a = _mm_sqrt_ps(_mm_max_ps(_mm_mul_ps(_mm_add_ps(one, clampUnit(cos_dirs)), half), _mm_setzero_ps()));
+      if (boost_features) {
+        const __m128 boundary = laneMask(l[0].boundary, l[1].boundary);
+        a = _mm_or_ps(_mm_and_ps(boundary, _mm_max_ps(a, half)), _mm_andnot_ps(boundary, a));
+        const __m128 cos_normals = _mm_setr_ps(l[0].cos_normals, l[1].cos_normals, 0.0f, 0.0f);
+        a = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(one, clampUnit(cos_normals)), half), a);
+      }
+      a = _mm_and_ps(laneMask(l[0].any_dir, l[1].any_dir), a);  // no direction: 0
+      const __m128 raw = _mm_mul_ps(_mm_setr_ps(l[0].longest, l[1].longest, 0.0f, 0.0f), a);
+      _mm_storel_pi(reinterpret_cast<__m64*>(out.raw + v), raw);
+      if (out.angular) _mm_storel_pi(reinterpret_cast<__m64*>(out.angular + v), a);
+      range_longest = std::max(std::max(range_longest, l[0].longest), l[1].longest);
+    };
+#else
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    auto addToBox = [&](const glm::vec3& p) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
     };
 #endif
     for (size_t v = range.begin(); v != range.end(); ++v) {
@@ -964,8 +1005,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
       }
       const size_t row = e - b;
       const glm::vec3 pv = pos[v];
-      lo = glm::min(lo, pv);
-      hi = glm::max(hi, pv);
+      addToBox(pv);
 #if defined(__SSE2__)
       // two rows of two blocks each (most of a closed mesh's), v and v + 1, in one 8-lane pass
       if (avx2 && !colors && row - 5 < 4 && v + 1 != range.end() && offsets[v + 2] - e - 5 < 4) {
@@ -973,12 +1013,10 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         const Incidence* const rr[2] = {incidence + b, incidence + e};
         const size_t rs[2] = {row, offsets[v + 2] - e};
         if (gradeTwoRowsAvx2(pos, vv, rr, rs, want_normals, two_lanes, two_lr, out.sums ? out.sums + v : nullptr)) {
-          laneDone(v, two_lr[0], true);
+          pairDone(v, two_lr);
           ++v;
           if (out.in_rows) out.in_rows[v] = 1;
-          lo = glm::min(lo, pos[v]);
-          hi = glm::max(hi, pos[v]);
-          laneDone(v, two_lr[1], true);
+          addToBox(pos[v]);
           continue;
         }
       }
@@ -1063,8 +1101,16 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
     longest_edge = std::max(longest_edge, range_longest);
+#if defined(__SSE2__)
+    float l4[4], h4[4];
+    _mm_storeu_ps(l4, lo);
+    _mm_storeu_ps(h4, hi);
+    box_lo = glm::min(box_lo, glm::vec3(l4[0], l4[1], l4[2]));
+    box_hi = glm::max(box_hi, glm::vec3(h4[0], h4[1], h4[2]));
+#else
     box_lo = glm::min(box_lo, lo);
     box_hi = glm::max(box_hi, hi);
+#endif
   });
   *out.longest_edge = longest_edge;
   if (out.bounds) out.bounds->min = box_lo, out.bounds->max = box_hi;
