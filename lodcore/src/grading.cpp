@@ -747,7 +747,7 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3);
   const __m256i rows = _mm256_setr_epi32(int(r[0]), int(r[0]), int(r[0]), int(r[0]), int(r[1]), int(r[1]), int(r[1]),
                                          int(r[1]));
-  __m256i cand[nc], ia[nb], ib[nb], valid[nb];
+  __m256i cand[nc], valid[nb];
   __m256i edge = _mm256_setzero_si256();
   // the loops over blocks, sides and rows here and in the helpers are unrolled by pragma: GCC left
   // some rolled, and their arrays (cand, ra, rn, the pair minima) in stack memory (bunny: 859 -> 777
@@ -761,9 +761,6 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
     edge = _mm256_or_si256(edge, _mm256_and_si256(valid[k], _mm256_cmpeq_epi32(b, none)));
     cand[k] = _mm256_or_si256(a, _mm256_andnot_si256(valid[k], none));
     cand[nb + k] = _mm256_or_si256(b, _mm256_andnot_si256(valid[k], none));
-    const __m256i pad = _mm256_andnot_si256(valid[k], self);
-    ia[k] = _mm256_or_si256(_mm256_and_si256(valid[k], a), pad);
-    ib[k] = _mm256_or_si256(_mm256_and_si256(valid[k], b), pad);
   }
   if (_mm256_movemask_epi8(edge)) return false;
 
@@ -816,8 +813,14 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   uint32_t used_bits = 0, dir_stored = 0;  // bits 8 c + 4 i + l: lane l of row i, candidate block c, has a direction
   #pragma GCC unroll 2
   for (size_t k = 0; k < nb; ++k) {
-    const __m256i a3 = _mm256_add_epi32(ia[k], _mm256_add_epi32(ia[k], ia[k]));
-    const __m256i b3 = _mm256_add_epi32(ib[k], _mm256_add_epi32(ib[k], ib[k]));
+    // the corners whose positions are read, from the candidates (a valid lane's a and b): the vertex
+    // itself in padding lanes (zero edges, zero area); made here rather than kept from the loads,
+    // which left four more vectors live across the neighbour search
+    const __m256i pad = _mm256_andnot_si256(valid[k], self);
+    const __m256i ia = _mm256_or_si256(_mm256_and_si256(valid[k], cand[k]), pad);
+    const __m256i ib = _mm256_or_si256(_mm256_and_si256(valid[k], cand[nb + k]), pad);
+    const __m256i a3 = _mm256_add_epi32(ia, _mm256_add_epi32(ia, ia));
+    const __m256i b3 = _mm256_add_epi32(ib, _mm256_add_epi32(ib, ib));
     const __m256 ax = _mm256_i32gather_ps(base, a3, 4), ay = _mm256_i32gather_ps(base + 1, a3, 4);
     const __m256 az = _mm256_i32gather_ps(base + 2, a3, 4);
     const __m256 bx = _mm256_i32gather_ps(base, b3, 4), by = _mm256_i32gather_ps(base + 1, b3, 4);
