@@ -736,11 +736,16 @@ SCENELOD_AVX2_TARGET inline void encodeTwo(__m256 q0, __m256 q1, __m256 q2, Vert
 // 4.6 -> 3.3 ms. Rows are paired as they come (v, v + 1), so no reordering and no extra memory.
 // False (nothing computed) when either row holds an input edge. With `sums` (else null), the rows'
 // face sums are encoded into sums[0] and sums[1] here, and out[i].sums is not written.
-SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::vec3* pos, const uint32_t v[2],
-                                                                    const Incidence* const row[2], const size_t r[2],
+SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::vec3* pos, uint32_t v0,
+                                                                    const Incidence* row0, size_t r0, size_t r1,
                                                                     bool want_normals, LaneScratch s[2],
                                                                     LaneRow out[2], VertexFaceSums* sums) {
   constexpr size_t nb = 2, nc = 4;
+  // rows v0 and v0 + 1, one after the other in the table (passed as scalars: the caller's arrays
+  // cost 34 instructions a pair)
+  const uint32_t v[2] = {v0, v0 + 1};
+  const Incidence* const row[2] = {row0, row0 + r0};
+  const size_t r[2] = {r0, r1};
   const __m256i none = _mm256_set1_epi32(-1);
   const __m256i self = _mm256_setr_epi32(int(v[0]), int(v[0]), int(v[0]), int(v[0]), int(v[1]), int(v[1]), int(v[1]),
                                          int(v[1]));
@@ -1022,10 +1027,8 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 #if defined(__SSE2__)
       // two rows of two blocks each (most of a closed mesh's), v and v + 1, in one 8-lane pass
       if (avx2 && !colors && row - 5 < 4 && v + 1 != range.end() && offsets[v + 2] - e - 5 < 4) {
-        const uint32_t vv[2] = {static_cast<uint32_t>(v), static_cast<uint32_t>(v + 1)};
-        const Incidence* const rr[2] = {incidence + b, incidence + e};
-        const size_t rs[2] = {row, offsets[v + 2] - e};
-        if (gradeTwoRowsAvx2(pos, vv, rr, rs, want_normals, two_lanes, two_lr, out.sums ? out.sums + v : nullptr)) {
+        if (gradeTwoRowsAvx2(pos, static_cast<uint32_t>(v), incidence + b, row, offsets[v + 2] - e, want_normals,
+                             two_lanes, two_lr, out.sums ? out.sums + v : nullptr)) {
           pairDone(v, two_lr);
           ++v;
           if (out.in_rows) out.in_rows[v] = 1;
