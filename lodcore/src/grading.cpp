@@ -328,7 +328,8 @@ SCENELOD_AVX2_TARGET inline float minPairDot8(const __m128 (&x)[2], const __m128
 }
 
 struct LaneRow {
-  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused)
+  float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused); not
+                       // written by gradeTwoRowsAvx2 when it encodes them itself
   float longest;       // longest incident edge
   float cos_dirs;      // minPairDot of the directions (1 when fewer than two)
   float cos_normals;   // minPairDot of the face normals, when asked
@@ -587,6 +588,53 @@ SCENELOD_AVX2_TARGET inline void compareTwo(const __m256i* cand, __m256i* other,
   }
   other[p] = op;
 }
+// Whether both rows are closed manifold fans, decided from the a-by-b comparisons alone: the
+// matrix M (a_j == b_l) over a row's incidences is a permutation exactly when every a equals one b
+// and every b one a (each row and column sum is 1). Then the a are distinct (two equal a would
+// both equal the b that matches one), so are the b, and both are the same set: every neighbour is
+// held by two triangles, the a are the first occurrences and the b the repeats, which is what
+// compareTwo's all-pairs search finds (first = the a lanes, no boundary). 16 compares against its
+// 26 and none of its per-row bit bookkeeping. Padding lanes hold kNone in a and b, which no valid
+// lane does (a valid b of kNone is an input edge, which returned false before), so they add to no
+// valid lane's sum. Bunny: the pair pass 1,167 -> 1,037 instructions a pair of rows.
+SCENELOD_AVX2_TARGET inline bool closedFans(const __m256i cand[4], const __m256i valid[2]) {
+  __m256i rows[2], cols[2][4];  // rows[p]: -matches of a-block p's lanes; cols[q][k]: rotation k's, of b-block q
+  #pragma GCC unroll 2
+  for (int q = 0; q < 2; ++q) {
+    const __m256i b = cand[2 + q];
+    const __m256i b1 = SCENELOD_ROT8_EPI32(b, 1), b2 = SCENELOD_ROT8_EPI32(b, 2), b3 = SCENELOD_ROT8_EPI32(b, 3);
+    #pragma GCC unroll 2
+    for (int p = 0; p < 2; ++p) {
+      const __m256i a = cand[p];
+      // lane l of f_k: a lane l against b lane (l + k) % 4
+      const __m256i f0 = _mm256_cmpeq_epi32(a, b), f1 = _mm256_cmpeq_epi32(a, b1);
+      const __m256i f2 = _mm256_cmpeq_epi32(a, b2), f3 = _mm256_cmpeq_epi32(a, b3);
+      const __m256i sum = _mm256_add_epi32(_mm256_add_epi32(f0, f1), _mm256_add_epi32(f2, f3));
+      rows[p] = q ? _mm256_add_epi32(rows[p], sum) : sum;
+      if (p) {
+        cols[q][0] = _mm256_add_epi32(cols[q][0], f0), cols[q][1] = _mm256_add_epi32(cols[q][1], f1);
+        cols[q][2] = _mm256_add_epi32(cols[q][2], f2), cols[q][3] = _mm256_add_epi32(cols[q][3], f3);
+      } else {
+        cols[q][0] = f0, cols[q][1] = f1, cols[q][2] = f2, cols[q][3] = f3;
+      }
+    }
+  }
+  const __m256i minus_one = _mm256_set1_epi32(-1);
+  __m256i bad = _mm256_setzero_si256();  // valid lanes whose sum is not one match
+  #pragma GCC unroll 2
+  for (int p = 0; p < 2; ++p) {
+    // b lane m met a lane (m - k) % 4 in rotation k: rotated back by 4 - k
+    const __m256i col = _mm256_add_epi32(_mm256_add_epi32(cols[p][0], SCENELOD_ROT8_EPI32(cols[p][1], 3)),
+                                         _mm256_add_epi32(SCENELOD_ROT8_EPI32(cols[p][2], 2),
+                                                          SCENELOD_ROT8_EPI32(cols[p][3], 1)));
+    const __m256i wrong = _mm256_xor_si256(_mm256_and_si256(_mm256_cmpeq_epi32(rows[p], minus_one),
+                                                            _mm256_cmpeq_epi32(col, minus_one)),
+                                           minus_one);
+    bad = _mm256_or_si256(bad, _mm256_and_si256(valid[p], wrong));  // block p's a and b lanes are valid alike
+  }
+  return _mm256_testz_si256(bad, bad);
+}
+
 // 4 bits of row i's half of mask m, shifted to candidate block c
 SCENELOD_AVX2_TARGET inline uint32_t halfBits(__m256i m, int i, size_t c) {
   return ((static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(m))) >> (4 * i)) & 0xfu) << (4 * c);
@@ -609,6 +657,73 @@ SCENELOD_AVX2_TARGET inline __m256 rowOf(const __m256 (&x)[2], int i) {
   return i ? _mm256_permute2f128_ps(x[0], x[1], 0x31) : _mm256_permute2f128_ps(x[0], x[1], 0x20);
 }
 
+// minPairDot8v of each row's blocks 0 and 1 (row i in half i of x[0] and x[1]; every lane a vector or
+// NaN), both rows at once in that layout: within a block lane l against lanes (l + 1) % 4 and
+// (l + 2) % 4, across the blocks all four rotations, which meets every pair of a row's 8 lanes and
+// no lane with itself. The same dot products (each symmetric in its two vectors) and, the minimum
+// not depending on the order (up to the sign of a zero), the same result as minPairDot8v per row,
+// with in-half shuffles (1 cycle) in place of its vpermps (3) and the halves' regrouping
+// (vperm2f128), and one reduction for both rows.
+SCENELOD_AVX2_TARGET inline __m256 minDot8(__m256 best, __m256 px, __m256 py, __m256 pz, __m256 qx, __m256 qy,
+                                           __m256 qz) {
+  const __m256 d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, qx), _mm256_mul_ps(py, qy)), _mm256_mul_ps(pz, qz));
+  return _mm256_min_ps(d, best);  // a NaN dot keeps best, as in minDot
+}
+#define SCENELOD_ROT8_PS(x, k) _mm256_permute_ps(x, _MM_SHUFFLE((k + 3) % 4, (k + 2) % 4, (k + 1) % 4, k))
+SCENELOD_AVX2_TARGET inline void minPairDotTwo(const __m256 (&x)[2], const __m256 (&y)[2], const __m256 (&z)[2],
+                                               float out[2]) {
+  const __m256 one = _mm256_set1_ps(1.0f);
+  __m256 b0 = one, b1 = one, b2 = one, b3 = one;  // four running minima, none waiting on another
+  #pragma GCC unroll 2
+  for (int k = 0; k < 2; ++k) {
+    b0 = minDot8(b0, x[k], y[k], z[k], SCENELOD_ROT8_PS(x[k], 1), SCENELOD_ROT8_PS(y[k], 1), SCENELOD_ROT8_PS(z[k], 1));
+    b1 = minDot8(b1, x[k], y[k], z[k], SCENELOD_ROT8_PS(x[k], 2), SCENELOD_ROT8_PS(y[k], 2), SCENELOD_ROT8_PS(z[k], 2));
+  }
+  b2 = minDot8(b2, x[0], y[0], z[0], x[1], y[1], z[1]);
+  b3 = minDot8(b3, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 1), SCENELOD_ROT8_PS(y[1], 1), SCENELOD_ROT8_PS(z[1], 1));
+  b2 = minDot8(b2, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 2), SCENELOD_ROT8_PS(y[1], 2), SCENELOD_ROT8_PS(z[1], 2));
+  b3 = minDot8(b3, x[0], y[0], z[0], SCENELOD_ROT8_PS(x[1], 3), SCENELOD_ROT8_PS(y[1], 3), SCENELOD_ROT8_PS(z[1], 3));
+  __m256 best = _mm256_min_ps(_mm256_min_ps(b0, b1), _mm256_min_ps(b2, b3));  // none is NaN
+  best = _mm256_min_ps(best, SCENELOD_ROT8_PS(best, 2));
+  best = _mm256_min_ps(best, SCENELOD_ROT8_PS(best, 1));
+  out[0] = _mm256_cvtss_f32(best);
+  out[1] = _mm_cvtss_f32(_mm256_extractf128_ps(best, 1));
+}
+#undef SCENELOD_ROT8_PS
+
+// VertexFaceSums::encode of both rows' sums (the quadric and normal sums in q0, q1 and lane 0 of q2,
+// the area in lane 1 of q2; row 0 in the low half) into sums[0] and sums[1]: the same arithmetic in
+// lanes. minps / maxps are the encode's `c < one ? c : one` and `c > -one ? c : -one` exactly
+// (NaN gives +1); q[8] takes toSnorm16's order, max then min (NaN gives -1). The rounded values lie
+// in [-32767, 32767], so packssdw's saturation never acts. A row whose area is not above zero gets
+// all zeros, as the encode's early return leaves it. The encode called per row took 94
+// instructions a vertex (its lane stores and scalar tail), 6 % of the bunny's one-thread prepare.
+SCENELOD_AVX2_TARGET inline void encodeTwo(__m256 q0, __m256 q1, __m256 q2, VertexFaceSums* sums) {
+  const __m256 one = _mm256_set1_ps(1.0f), minus_one = _mm256_set1_ps(-1.0f);
+  const __m256 scale = _mm256_set1_ps(32767.0f), offset = _mm256_set1_ps(32768.5f);
+  const __m256i bias = _mm256_set1_epi32(32768);
+  const __m256 area = _mm256_shuffle_ps(q2, q2, _MM_SHUFFLE(1, 1, 1, 1));
+  const __m256 inv = _mm256_div_ps(one, area);
+  const __m256 c0 = _mm256_max_ps(_mm256_min_ps(_mm256_mul_ps(q0, inv), one), minus_one);
+  const __m256 c1 = _mm256_max_ps(_mm256_min_ps(_mm256_mul_ps(q1, inv), one), minus_one);
+  const __m256 c2 = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(q2, inv), minus_one), one);
+  const __m256i i0 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c0, scale), offset)), bias);
+  const __m256i i1 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c1, scale), offset)), bias);
+  const __m256i i2 = _mm256_sub_epi32(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(c2, scale), offset)), bias);
+  const __m256 face = _mm256_cmp_ps(area, _mm256_setzero_ps(), _CMP_GT_OQ);  // false for NaN, as !(area > 0)
+  const __m256i keep = _mm256_castps_si256(face);
+  const __m256i q07 = _mm256_and_si256(keep, _mm256_packs_epi32(i0, i1));  // per half q[0..7]
+  const __m256i q8 = _mm256_and_si256(keep, i2);
+  const __m256 kept_area = _mm256_and_ps(face, area);
+  for (int i = 0; i < 2; ++i) {
+    VertexFaceSums& o = sums[i];
+    o = VertexFaceSums();
+    o.area = _mm_cvtss_f32(i ? _mm256_extractf128_ps(kept_area, 1) : _mm256_castps256_ps128(kept_area));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(o.q), i ? _mm256_extracti128_si256(q07, 1) : _mm256_castsi256_si128(q07));
+    o.q[8] = static_cast<int16_t>(_mm_cvtsi128_si32(i ? _mm256_extracti128_si256(q8, 1) : _mm256_castsi256_si128(q8)));
+  }
+}
+
 // Two rows of 5 to 8 triangle corners (two blocks each) in one pass of 8-lane AVX2 operations:
 // lanes 0..3 hold row 0's block, lanes 4..7 row 1's. Every operation the body above does on four
 // lanes is here in-lane (the 256-bit unpacks, shuffles and compares work on each 128-bit half
@@ -619,53 +734,77 @@ SCENELOD_AVX2_TARGET inline __m256 rowOf(const __m256 (&x)[2], int i) {
 // dependent imuls, 18 ns, put in front of each row's position loads added 9-15 ns to the row).
 // Two independent rows in the same instructions run side by side: bunny prepare on one thread
 // 4.6 -> 3.3 ms. Rows are paired as they come (v, v + 1), so no reordering and no extra memory.
-// False (nothing computed) when either row holds an input edge.
-SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::vec3* pos, const uint32_t v[2],
-                                                                    const Incidence* const row[2], const size_t r[2],
-                                                                    bool want_normals, LaneScratch s[2],
-                                                                    LaneRow out[2]) {
+// Since then two paired rows are about three instructions per cycle (bunny: 1,138 instructions a
+// pair in ~100 ns, one thread), so instructions count again: 764 a pair after the closed-fan test,
+// the joint pair searches, the encode in lanes and the unrolled loops below.
+// False (nothing computed) when either row holds an input edge. With `sums` (else null), the rows'
+// face sums are encoded into sums[0] and sums[1] here, and out[i].sums is not written.
+SCENELOD_AVX2_TARGET inline __attribute__((always_inline)) bool gradeTwoRowsBody(
+    const glm::vec3* pos, uint32_t v0, const Incidence* row0, size_t r0, size_t r1, bool want_normals,
+    LaneScratch s[2], LaneRow out[2], VertexFaceSums* sums) {
   constexpr size_t nb = 2, nc = 4;
+  // rows v0 and v0 + 1, one after the other in the table (passed as scalars: the caller's arrays
+  // cost 34 instructions a pair)
+  const uint32_t v[2] = {v0, v0 + 1};
+  const Incidence* const row[2] = {row0, row0 + r0};
+  const size_t r[2] = {r0, r1};
   const __m256i none = _mm256_set1_epi32(-1);
   const __m256i self = _mm256_setr_epi32(int(v[0]), int(v[0]), int(v[0]), int(v[0]), int(v[1]), int(v[1]), int(v[1]),
                                          int(v[1]));
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3);
   const __m256i rows = _mm256_setr_epi32(int(r[0]), int(r[0]), int(r[0]), int(r[0]), int(r[1]), int(r[1]), int(r[1]),
                                          int(r[1]));
-  __m256i cand[nc], ia[nb], ib[nb];
+  __m256i cand[nc], valid[nb];
   __m256i edge = _mm256_setzero_si256();
+  // the loops over blocks, sides and rows here and in the helpers are unrolled by pragma: GCC left
+  // some rolled, and their arrays (cand, ra, rn, the pair minima) in stack memory (bunny: 859 -> 777
+  // instructions a pair; 130 of the 859 were vector moves to and from the stack)
+  #pragma GCC unroll 2
   for (size_t k = 0; k < nb; ++k) {
     const __m256 lo = loadTwo(row, 4 * k), hi = loadTwo(row, 4 * k + 2);
-    const __m256i valid = _mm256_cmpgt_epi32(rows, _mm256_add_epi32(lane, _mm256_set1_epi32(int(4 * k))));
+    valid[k] = _mm256_cmpgt_epi32(rows, _mm256_add_epi32(lane, _mm256_set1_epi32(int(4 * k))));
     const __m256i a = _mm256_castps_si256(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0)));
     const __m256i b = _mm256_castps_si256(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
-    edge = _mm256_or_si256(edge, _mm256_and_si256(valid, _mm256_cmpeq_epi32(b, none)));
-    cand[k] = _mm256_or_si256(a, _mm256_andnot_si256(valid, none));
-    cand[nb + k] = _mm256_or_si256(b, _mm256_andnot_si256(valid, none));
-    const __m256i pad = _mm256_andnot_si256(valid, self);
-    ia[k] = _mm256_or_si256(_mm256_and_si256(valid, a), pad);
-    ib[k] = _mm256_or_si256(_mm256_and_si256(valid, b), pad);
+    edge = _mm256_or_si256(edge, _mm256_and_si256(valid[k], _mm256_cmpeq_epi32(b, none)));
+    cand[k] = _mm256_or_si256(a, _mm256_andnot_si256(valid[k], none));
+    cand[nb + k] = _mm256_or_si256(b, _mm256_andnot_si256(valid[k], none));
   }
   if (_mm256_movemask_epi8(edge)) return false;
 
-  __m256i other[nc], earlier[nc];
-  for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm256_setzero_si256();
-  for (size_t p = 0; p < nb; ++p) compareTwo(cand, other, earlier, p, nc);
-  uint32_t row_bits[2], valid_bits[2], first[2];
-  bool need_b = false;
-  for (int i = 0; i < 2; ++i) {
-    row_bits[i] = (1u << r[i]) - 1;
-    valid_bits[i] = row_bits[i] | (row_bits[i] << (4 * nb));
-    uint32_t b_matched = 0;
-    for (size_t c = nb; c < nc; ++c) b_matched |= halfBits(earlier[c], i, c - nb);
-    need_b |= (b_matched & row_bits[i]) != row_bits[i];
-  }
-  if (need_b)  // the b blocks compared for both rows: for a closed fan's row that finds nothing new
-    for (size_t p = nb; p < nc; ++p) compareTwo(cand, other, earlier, p, nc);
-  for (int i = 0; i < 2; ++i) {
-    uint32_t repeat = 0, shared = 0;
-    for (size_t c = 0; c < nc; ++c) repeat |= halfBits(earlier[c], i, c), shared |= halfBits(other[c], i, c);
-    first[i] = valid_bits[i] & ~repeat;
-    out[i].boundary = (first[i] & ~shared) != 0;
+  uint32_t row_bits[2], first[2];
+  __m256 first_lanes[nc];  // per candidate block, its first occurrences of distinct neighbours
+  for (int i = 0; i < 2; ++i) row_bits[i] = (1u << r[i]) - 1;
+  if (closedFans(cand, valid)) {
+    // every neighbour once an a and once a b: the a are the distinct neighbours, all shared
+    for (int i = 0; i < 2; ++i) first[i] = row_bits[i], out[i].boundary = false;
+    for (size_t k = 0; k < nb; ++k)
+      first_lanes[k] = _mm256_castsi256_ps(valid[k]), first_lanes[nb + k] = _mm256_setzero_ps();
+  } else {
+    __m256i other[nc], earlier[nc];
+    for (size_t c = 0; c < nc; ++c) other[c] = earlier[c] = _mm256_setzero_si256();
+    for (size_t p = 0; p < nb; ++p) compareTwo(cand, other, earlier, p, nc);
+    uint32_t valid_bits[2];
+    bool need_b = false;
+    for (int i = 0; i < 2; ++i) {
+      valid_bits[i] = row_bits[i] | (row_bits[i] << (4 * nb));
+      uint32_t b_matched = 0;
+      for (size_t c = nb; c < nc; ++c) b_matched |= halfBits(earlier[c], i, c - nb);
+      need_b |= (b_matched & row_bits[i]) != row_bits[i];
+    }
+    if (need_b)  // the b blocks compared for both rows: for a closed fan's row that finds nothing new
+      for (size_t p = nb; p < nc; ++p) compareTwo(cand, other, earlier, p, nc);
+    for (int i = 0; i < 2; ++i) {
+      uint32_t repeat = 0, shared = 0;
+      for (size_t c = 0; c < nc; ++c) repeat |= halfBits(earlier[c], i, c), shared |= halfBits(other[c], i, c);
+      first[i] = valid_bits[i] & ~repeat;
+      out[i].boundary = (first[i] & ~shared) != 0;
+    }
+    const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 1, 2, 4, 8);
+    for (size_t c = 0; c < nc; ++c) {
+      const int f0 = int((first[0] >> (4 * c)) & 0xfu), f1 = int((first[1] >> (4 * c)) & 0xfu);
+      const __m256i fb = _mm256_setr_epi32(f0, f0, f0, f0, f1, f1, f1, f1);
+      first_lanes[c] = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(fb, bit), bit));
+    }
   }
 
   const __m256 vx = _mm256_setr_ps(pos[v[0]].x, pos[v[0]].x, pos[v[0]].x, pos[v[0]].x, pos[v[1]].x, pos[v[1]].x,
@@ -678,11 +817,17 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
   const float* base = &pos[0].x;
   __m256 q0 = zero, q1 = zero, q2 = zero, longest = zero;
   __m256 ra[3][2] = {{zero, zero}, {zero, zero}, {zero, zero}}, rn[3][2];
-  uint32_t dir_blocks[2] = {0, 0}, dir_stored = 0;
-  int any_dir[2] = {0, 0};
+  uint32_t used_bits = 0, dir_stored = 0;  // bits 8 c + 4 i + l: lane l of row i, candidate block c, has a direction
+  #pragma GCC unroll 2
   for (size_t k = 0; k < nb; ++k) {
-    const __m256i a3 = _mm256_add_epi32(ia[k], _mm256_add_epi32(ia[k], ia[k]));
-    const __m256i b3 = _mm256_add_epi32(ib[k], _mm256_add_epi32(ib[k], ib[k]));
+    // the corners whose positions are read, from the candidates (a valid lane's a and b): the vertex
+    // itself in padding lanes (zero edges, zero area); made here rather than kept from the loads,
+    // which left four more vectors live across the neighbour search
+    const __m256i pad = _mm256_andnot_si256(valid[k], self);
+    const __m256i ia = _mm256_or_si256(_mm256_and_si256(valid[k], cand[k]), pad);
+    const __m256i ib = _mm256_or_si256(_mm256_and_si256(valid[k], cand[nb + k]), pad);
+    const __m256i a3 = _mm256_add_epi32(ia, _mm256_add_epi32(ia, ia));
+    const __m256i b3 = _mm256_add_epi32(ib, _mm256_add_epi32(ib, ib));
     const __m256 ax = _mm256_i32gather_ps(base, a3, 4), ay = _mm256_i32gather_ps(base + 1, a3, 4);
     const __m256 az = _mm256_i32gather_ps(base + 2, a3, 4);
     const __m256 bx = _mm256_i32gather_ps(base, b3, 4), by = _mm256_i32gather_ps(base + 1, b3, 4);
@@ -712,51 +857,110 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
     q0 = _mm256_add_ps(q0, t2), q1 = _mm256_add_ps(q1, t6), q2 = _mm256_add_ps(q2, t10);
     q0 = _mm256_add_ps(q0, t3), q1 = _mm256_add_ps(q1, t7), q2 = _mm256_add_ps(q2, t11);
     if (want_normals) rn[0][k] = orNan8(face, nx), rn[1][k] = orNan8(face, ny), rn[2][k] = orNan8(face, nz);
+    #pragma GCC unroll 2
     for (int side = 0; side < 2; ++side) {
       const size_t c = side ? nb + k : k;
-      const uint32_t f0 = (first[0] >> (4 * c)) & 0xfu, f1 = (first[1] >> (4 * c)) & 0xfu;
-      if (!(f0 | f1)) continue;
+      if (!(((first[0] | first[1]) >> (4 * c)) & 0xfu)) continue;
       const __m256 dx = side ? wx : ux, dy = side ? wy : uy, dz = side ? wz : uz;
       const __m256 len = _mm256_sqrt_ps(
           _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz)));
-      const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 1, 2, 4, 8);
-      const __m256i fb = _mm256_setr_epi32(int(f0), int(f0), int(f0), int(f0), int(f1), int(f1), int(f1), int(f1));
-      const __m256 lanes = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(fb, bit), bit));
-      const __m256 use = _mm256_and_ps(lanes, _mm256_cmp_ps(len, zero, _CMP_GT_OQ));
+      const __m256 use = _mm256_and_ps(first_lanes[c], _mm256_cmp_ps(len, zero, _CMP_GT_OQ));
       longest = _mm256_max_ps(longest, _mm256_and_ps(use, len));
       const __m256 ex = orNan8(use, _mm256_div_ps(dx, len)), ey = orNan8(use, _mm256_div_ps(dy, len));
       const __m256 ez = orNan8(use, _mm256_div_ps(dz, len));
-      for (int i = 0; i < 2; ++i) {  // for the 4-lane pair search when a row has directions beyond block 1
-        _mm_store_ps(s[i].dir[0] + 4 * c, halfOf(ex, i));
-        _mm_store_ps(s[i].dir[1] + 4 * c, halfOf(ey, i));
-        _mm_store_ps(s[i].dir[2] + 4 * c, halfOf(ez, i));
+      if (c < 2) {
+        ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
+      } else {
+        for (int i = 0; i < 2; ++i) {  // for the 4-lane pair search (a row with directions beyond block 1)
+          _mm_store_ps(s[i].dir[0] + 4 * c, halfOf(ex, i));
+          _mm_store_ps(s[i].dir[1] + 4 * c, halfOf(ey, i));
+          _mm_store_ps(s[i].dir[2] + 4 * c, halfOf(ez, i));
+        }
       }
-      if (c < 2) ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
-      const int used = _mm256_movemask_ps(use);
-      for (int i = 0; i < 2; ++i) {
-        const int u = (used >> (4 * i)) & 0xf;
-        any_dir[i] |= u;
-        dir_blocks[i] |= static_cast<uint32_t>(u != 0) << c;
-      }
+      used_bits |= static_cast<uint32_t>(_mm256_movemask_ps(use)) << (8 * c);
       dir_stored |= 1u << c;
     }
   }
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(1, 0, 3, 2)));
   longest = _mm256_max_ps(longest, _mm256_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
+  if (sums) encodeTwo(q0, q1, q2, sums);
+  // the directions in blocks 0 and 1 only, both stored (block 0 always is: its lane 0 is a first
+  // occurrence), for both rows (a closed fan's): one pair search in registers for the two
+  const bool in_regs[2] = {(used_bits & 0x0f0f0000u) == 0 && (dir_stored & 2u),
+                           (used_bits & 0xf0f00000u) == 0 && (dir_stored & 2u)};
+  float cos_dirs[2], cos_normals[2] = {1.0f, 1.0f};
+  if (in_regs[0] && in_regs[1]) {
+    minPairDotTwo(ra[0], ra[1], ra[2], cos_dirs);
+  } else {
+    for (int i = 0; i < 2; ++i) {
+      if (in_regs[i]) {
+        cos_dirs[i] = minPairDot8v(rowOf(ra[0], i), rowOf(ra[1], i), rowOf(ra[2], i));
+        continue;
+      }
+      for (size_t c = 0; c < 2; ++c)
+        if (dir_stored & (1u << c))
+          for (int d = 0; d < 3; ++d) _mm_store_ps(s[i].dir[d] + 4 * c, halfOf(ra[d][c], i));
+      uint32_t dir_blocks = 0;  // the candidate blocks holding some direction of row i
+      for (size_t c = 0; c < nc; ++c) dir_blocks |= static_cast<uint32_t>(((used_bits >> (8 * c + 4 * i)) & 0xfu) != 0) << c;
+      cos_dirs[i] = minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks);
+    }
+  }
+  if (want_normals) minPairDotTwo(rn[0], rn[1], rn[2], cos_normals);
   for (int i = 0; i < 2; ++i) {
-    _mm_storeu_ps(out[i].sums, halfOf(q0, i));
-    _mm_storeu_ps(out[i].sums + 4, halfOf(q1, i));
-    _mm_storeu_ps(out[i].sums + 8, halfOf(q2, i));
     out[i].longest = _mm_cvtss_f32(halfOf(longest, i));
-    out[i].any_dir = any_dir[i] != 0;
-    out[i].cos_dirs = (dir_blocks[i] >> 2) == 0 && (dir_stored & 2u)
-                          ? minPairDot8v(rowOf(ra[0], i), rowOf(ra[1], i), rowOf(ra[2], i))
-                          : minPairDotBlocks(s[i].dir[0], s[i].dir[1], s[i].dir[2], dir_blocks[i]);
-    out[i].cos_normals = want_normals ? minPairDot8v(rowOf(rn[0], i), rowOf(rn[1], i), rowOf(rn[2], i)) : 1.0f;
+    out[i].any_dir = (used_bits & (0x0f0f0f0fu << (4 * i))) != 0;
+    out[i].cos_dirs = cos_dirs[i];
+    out[i].cos_normals = cos_normals[i];
   }
   return true;
 }
+
+SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::vec3* pos, uint32_t v0,
+                                                                    const Incidence* row0, size_t r0, size_t r1,
+                                                                    bool want_normals, LaneScratch s[2],
+                                                                    LaneRow out[2], VertexFaceSums* sums) {
+  return gradeTwoRowsBody(pos, v0, row0, r0, r1, want_normals, s, out, sums);
+}
+
+// The same pass built for AVX-512VL where the CPU has it: the same 256-bit operations, now with 32
+// vector registers (the AVX2 build spills: 129 of its 764 instructions a pair touch the stack, 235
+// static stack references against 96 here). fp-contract=off because the AVX-512F target would
+// otherwise fuse the intrinsics' multiplies and adds into FMAs (73 of them), which round once
+// and change the bits (Avx2PathsGiveTheBaselineBits fails without it). Bunny prepare, one thread,
+// alternated with the AVX2 build, best / mean of 500: 2.463 / 2.664 -> 2.344 / 2.519, 2.370 / 2.657
+// -> 2.336 / 2.520, 2.480 / 2.675 -> 2.341 / 2.526 ms. Valgrind 3.19 hides AVX-512, so callgrind
+// counts the AVX2 build.
+__attribute__((target("avx2,avx512f,avx512vl"), optimize("fp-contract=off"), flatten)) bool gradeTwoRowsAvx512(
+    const glm::vec3* pos, uint32_t v0, const Incidence* row0, size_t r0, size_t r1, bool want_normals,
+    LaneScratch s[2], LaneRow out[2], VertexFaceSums* sums) {
+  return gradeTwoRowsBody(pos, v0, row0, r0, r1, want_normals, s, out, sums);
+}
+
+bool cpuHasAvx512vl() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+}
+bool g_avx512_pairs = cpuHasAvx512vl();
 #endif
+
+}  // namespace
+
+namespace detail {
+// test hook (declared by the test, as useAvx2Paths is): the pair pass's AVX-512VL build where the
+// CPU has it (and the AVX2 paths are on), else its AVX2 build, for every later call; returns the
+// previous choice
+bool useAvx512Pairs(bool on) {
+#if defined(__SSE2__)
+  const bool was = g_avx512_pairs;
+  g_avx512_pairs = on && cpuHasAvx512vl();
+  return was;
+#else
+  return false;
+#endif
+}
+}  // namespace detail
+
+namespace {
 
 // Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
 // of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
@@ -797,6 +1001,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 #if defined(__SSE2__)
   const bool avx2 = detail::avx2Paths() && vn < (size_t(1) << 31) / 3;
   const auto lanes_fn = avx2 ? gradeRowLanesAvx2 : gradeRowLanes;
+  const auto pair_fn = g_avx512_pairs ? gradeTwoRowsAvx512 : gradeTwoRowsAvx2;
 #endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
@@ -804,14 +1009,55 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
     float range_longest = 0.0f;
-    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
 #if defined(__SSE2__)
+    // the box of the rows' vertices in lanes 0..2: minps(p, lo) and maxps(p, hi) are glm::min(lo, p)
+    // and glm::max(hi, p) exactly (p < lo ? p : lo; hi < p ? p : hi)
+    __m128 lo = _mm_set1_ps(std::numeric_limits<float>::max()), hi = _mm_set1_ps(-std::numeric_limits<float>::max());
+    auto addToBox = [&](const glm::vec3& p) {
+      const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&p.x)));
+      const __m128 q = _mm_movelh_ps(xy, _mm_load_ss(&p.z));  // x y z 0, no read past the point
+      lo = _mm_min_ps(q, lo);
+      hi = _mm_max_ps(q, hi);
+    };
     LaneScratch lanes, two_lanes[2];
     LaneRow lr, two_lr[2];
-    auto laneDone = [&](size_t v, const LaneRow& l) {
-      if (out.sums) out.sums[v].encode(l.sums[9], l.sums);
+    auto laneDone = [&](size_t v, const LaneRow& l, bool encoded) {
+      if (out.sums && !encoded) out.sums[v].encode(l.sums[9], l.sums);
       range_longest = std::max(range_longest, l.longest);
       finish(v, l.longest, l.any_dir, l.cos_dirs, l.boundary, [&] { return l.cos_normals; });
+    };
+    // finish for a pair's rows v, v + 1 under kLowTan, in two lanes: the same operations (std::clamp
+    // as maxps then minps, std::max(x, y) as maxps(y, x): equal for these non-NaN values); with the
+    // box in lanes, the bunny's pass outside gradeTwoRowsAvx2 took 263 -> 208 instructions a pair.
+    // Rossignac's acos stays scalar.
+    auto pairDone = [&](size_t v, const LaneRow (&l)[2]) {
+      if (grading != Grading::kLowTan) {
+        laneDone(v, l[0], true);
+        laneDone(v + 1, l[1], true);
+        return;
+      }
+      const __m128 one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f), half = _mm_set1_ps(0.5f);
+      auto clampUnit = [&](__m128 c) { return _mm_min_ps(_mm_max_ps(c, minus_one), one); };
+      auto laneMask = [](bool x0, bool x1) { return _mm_castsi128_ps(_mm_setr_epi32(-int(x0), -int(x1), 0, 0)); };
+      const __m128 cos_dirs = _mm_setr_ps(l[0].cos_dirs, l[1].cos_dirs, 0.0f, 0.0f);
+      __m128 a = _mm_sqrt_ps(_mm_max_ps(_mm_mul_ps(_mm_add_ps(one, clampUnit(cos_dirs)), half), _mm_setzero_ps()));
+      if (boost_features) {
+        const __m128 boundary = laneMask(l[0].boundary, l[1].boundary);
+        a = _mm_or_ps(_mm_and_ps(boundary, _mm_max_ps(a, half)), _mm_andnot_ps(boundary, a));
+        const __m128 cos_normals = _mm_setr_ps(l[0].cos_normals, l[1].cos_normals, 0.0f, 0.0f);
+        a = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(one, clampUnit(cos_normals)), half), a);
+      }
+      a = _mm_and_ps(laneMask(l[0].any_dir, l[1].any_dir), a);  // no direction: 0
+      const __m128 raw = _mm_mul_ps(_mm_setr_ps(l[0].longest, l[1].longest, 0.0f, 0.0f), a);
+      _mm_storel_pi(reinterpret_cast<__m64*>(out.raw + v), raw);
+      if (out.angular) _mm_storel_pi(reinterpret_cast<__m64*>(out.angular + v), a);
+      range_longest = std::max(std::max(range_longest, l[0].longest), l[1].longest);
+    };
+#else
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    auto addToBox = [&](const glm::vec3& p) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
     };
 #endif
     for (size_t v = range.begin(); v != range.end(); ++v) {
@@ -826,27 +1072,22 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
       }
       const size_t row = e - b;
       const glm::vec3 pv = pos[v];
-      lo = glm::min(lo, pv);
-      hi = glm::max(hi, pv);
+      addToBox(pv);
 #if defined(__SSE2__)
       // two rows of two blocks each (most of a closed mesh's), v and v + 1, in one 8-lane pass
       if (avx2 && !colors && row - 5 < 4 && v + 1 != range.end() && offsets[v + 2] - e - 5 < 4) {
-        const uint32_t vv[2] = {static_cast<uint32_t>(v), static_cast<uint32_t>(v + 1)};
-        const Incidence* const rr[2] = {incidence + b, incidence + e};
-        const size_t rs[2] = {row, offsets[v + 2] - e};
-        if (gradeTwoRowsAvx2(pos, vv, rr, rs, want_normals, two_lanes, two_lr)) {
-          laneDone(v, two_lr[0]);
+        if (pair_fn(pos, static_cast<uint32_t>(v), incidence + b, row, offsets[v + 2] - e, want_normals, two_lanes,
+                    two_lr, out.sums ? out.sums + v : nullptr)) {
+          pairDone(v, two_lr);
           ++v;
           if (out.in_rows) out.in_rows[v] = 1;
-          lo = glm::min(lo, pos[v]);
-          hi = glm::max(hi, pos[v]);
-          laneDone(v, two_lr[1]);
+          addToBox(pos[v]);
           continue;
         }
       }
       if (!colors && row <= kLaneRow &&
           lanes_fn(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
-        laneDone(v, lr);
+        laneDone(v, lr, false);
         continue;
       }
 #endif
@@ -925,8 +1166,16 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
     longest_edge = std::max(longest_edge, range_longest);
+#if defined(__SSE2__)
+    float l4[4], h4[4];
+    _mm_storeu_ps(l4, lo);
+    _mm_storeu_ps(h4, hi);
+    box_lo = glm::min(box_lo, glm::vec3(l4[0], l4[1], l4[2]));
+    box_hi = glm::max(box_hi, glm::vec3(h4[0], h4[1], h4[2]));
+#else
     box_lo = glm::min(box_lo, lo);
     box_hi = glm::max(box_hi, hi);
+#endif
   });
   *out.longest_edge = longest_edge;
   if (out.bounds) out.bounds->min = box_lo, out.bounds->max = box_hi;

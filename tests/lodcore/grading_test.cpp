@@ -1,5 +1,6 @@
 // Grading (Low & Tan 1997 §3.1; Rossignac & Borrel 1993) on constructed vertices.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -208,6 +209,7 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
 // for every later call; returns the previous choice
 namespace scenelod::detail {
 bool useAvx2Paths(bool on);
+bool useAvx512Pairs(bool on);  // lodcore/src/grading.cpp: the pair pass's AVX-512VL build where the CPU has it
 }
 
 namespace {
@@ -232,6 +234,41 @@ Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
   return m;
 }
 
+// prepareMesh with the AVX2 paths (the pair pass built for AVX2, and for AVX-512VL where the CPU
+// has it) and with the baseline give the same weights, face sums, order, sorted positions and
+// longest edge, under both gradings, with and without the boost
+void expectAvx2GivesTheBaselineBits(const Mesh& mesh, const std::string& label) {
+  const bool was512 = detail::useAvx512Pairs(true);
+  for (Grading g : {Grading::kLowTan, Grading::kRossignac})
+    for (bool boost : {true, false})
+      for (bool avx512 : {false, true}) {
+        ClusterParams params;
+        params.grading = g;
+        params.boost_features = boost;
+        PreparedMesh wide, base;
+        detail::useAvx2Paths(true);
+        detail::useAvx512Pairs(avx512);
+        ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
+        detail::useAvx2Paths(false);
+        ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
+        SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : "") + (avx512 ? " avx512" : ""));
+        ASSERT_EQ(wide.weights.size(), base.weights.size());
+        ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
+        EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
+        for (size_t v = 0; v < base.face_sums.size(); ++v) {
+          ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
+          for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
+        }
+        EXPECT_EQ(wide.order, base.order);
+        ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
+        EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
+                              base.sorted_positions.size() * sizeof(glm::vec3)), 0);
+        EXPECT_EQ(wide.longest_edge, base.longest_edge);
+        EXPECT_GT(base.longest_edge, 0.0f);
+      }
+  detail::useAvx512Pairs(was512);
+}
+
 }  // namespace
 
 // The grading pass built for AVX2 (where the CPU has it: four lanes per row, or two rows of 5 to 8
@@ -251,32 +288,95 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
     meshes.push_back(shuffledVertices(meshes[i], 11u + static_cast<uint32_t>(i), 7));
   }
   const bool was = detail::useAvx2Paths(true);
-  for (size_t i = 0; i < meshes.size(); ++i)
-    for (Grading g : {Grading::kLowTan, Grading::kRossignac})
-      for (bool boost : {true, false}) {
-        ClusterParams params;
-        params.grading = g;
-        params.boost_features = boost;
-        PreparedMesh wide, base;
-        detail::useAvx2Paths(true);
-        ASSERT_TRUE(prepareMesh(meshes[i], params, wide).ok());
-        detail::useAvx2Paths(false);
-        ASSERT_TRUE(prepareMesh(meshes[i], params, base).ok());
-        SCOPED_TRACE("mesh " + std::to_string(i) + " " + gradingName(g) + (boost ? " boost" : ""));
-        ASSERT_EQ(wide.weights.size(), base.weights.size());
-        ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
-        EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
-        for (size_t v = 0; v < base.face_sums.size(); ++v) {
-          ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
-          for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
+  for (size_t i = 0; i < meshes.size(); ++i) expectAvx2GivesTheBaselineBits(meshes[i], "mesh " + std::to_string(i));
+  detail::useAvx2Paths(was);
+}
+
+// The same on triangle soups whose fans are anything but closed: each triangle joins a vertex to
+// two others at most 4 (or 6) indices on (some the same one: degenerate faces), so that rows of 5 to 8
+// corners hold neighbours repeated 1 to 4 times, and fans where every a matches exactly one b but
+// some b none (the pair pass's closed-fan test needs both its row and its column sums). Nearly
+// flat (z within 1e-3) with the triangles wound one way, so the crease term stays low and the
+// boundary flag decides the boosted weights.
+TEST(Grading, Avx2PathsGiveTheBaselineBitsOnNonManifoldFans) {
+  const bool was = detail::useAvx2Paths(true);
+  for (uint32_t seed = 1; seed <= 6; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_int_distribution<uint32_t> step(1, seed <= 3 ? 4 : 6);
+    Mesh m;
+    const uint32_t vn = 3000;
+    for (uint32_t v = 0; v < vn; ++v) m.positions.push_back({unit(rng), unit(rng), 1e-3f * unit(rng)});
+    for (uint32_t t = 0; t < 2 * vn; ++t) {
+      const uint32_t i0 = static_cast<uint32_t>(rng() % (vn - 8));
+      uint32_t i1 = i0 + step(rng), i2 = i0 + step(rng);
+      const glm::vec3 d1 = m.positions[i1] - m.positions[i0], d2 = m.positions[i2] - m.positions[i0];
+      if (d1.x * d2.y - d1.y * d2.x < 0.0f) std::swap(i1, i2);
+      m.triangles.insert(m.triangles.end(), {i0, i1, i2});
+    }
+    expectAvx2GivesTheBaselineBits(m, "soup " + std::to_string(seed));
+  }
+  // fans made to measure, two centres side by side (vertices 18 g and 18 g + 1, so that they meet
+  // in a pair; their 16 neighbours hold fewer than 5 corners each), each centre one of:
+  // - a closed fan of 6;
+  // - corner pairs (a, b) (u, w) (u, p) (p, q) (q, u) and a closed fan of 4: every a equals one b,
+  //   but u is two a and one b, and w no a (the closed-fan test needs the column sums);
+  // - (w, u) (p, u) (q, p) (u, q) and a closed fan of 4: every b equals one a, but w is no b (it
+  //   needs the row sums);
+  // - a closed fan of 5 with one triangle twice;
+  // - the second kind with (s, t) (t, s) in place of the fan of 4, out of plane, w far out.
+  // The planar ones lie in z = 0 around their centre, wound counter-clockwise (all normals +z, no
+  // crease), so that the boundary flag decides their boosted weights. The triangles in random order.
+  for (uint32_t seed = 1; seed <= 4; ++seed) {
+    std::mt19937 rng(100 + seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    Mesh m;
+    std::vector<std::array<uint32_t, 3>> tris;
+    for (uint32_t g = 0; g < 400; ++g) {
+      m.positions.resize(18 * g + 18);
+      for (uint32_t c = 18 * g; c < 18 * g + 2; ++c) {
+        const glm::vec3 centre(10.0f * unit(rng), 10.0f * unit(rng), 0.0f);
+        m.positions[c] = centre;
+        const uint32_t n0 = 18 * g + 2 + 8 * (c - 18 * g);
+        // neighbour n0 + j at `degrees` around the centre, at a random distance in [0.5, 1.5]
+        auto place = [&](uint32_t j, float degrees) {
+          const float r = 1.0f + 0.5f * unit(rng), a = degrees * 3.14159265f / 180.0f;
+          m.positions[n0 + j] = centre + glm::vec3(r * std::cos(a), r * std::sin(a), 0.0f);
+        };
+        auto pairs = [&](std::initializer_list<std::array<uint32_t, 2>> list) {
+          for (const auto& ab : list) tris.push_back({c, n0 + ab[0], n0 + ab[1]});
+        };
+        const uint32_t kind = rng() % 5;
+        if (kind == 0 || kind == 3) {
+          const uint32_t n = kind == 0 ? 6 : 5;
+          for (uint32_t j = 0; j < n; ++j) place(j, 360.0f * float(j) / float(n) + 10.0f * unit(rng));
+          for (uint32_t j = 0; j < n; ++j) pairs({{j, (j + 1) % n}});
+          if (kind == 3) tris.push_back(tris.back());
+          continue;
         }
-        EXPECT_EQ(wide.order, base.order);
-        ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
-        EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
-                              base.sorted_positions.size() * sizeof(glm::vec3)), 0);
-        EXPECT_EQ(wide.longest_edge, base.longest_edge);
-        EXPECT_GT(base.longest_edge, 0.0f);
+        const uint32_t u = 0, w = 1, p = 2, q = 3, s = 4, t = 5, x = 6, y = 7;
+        place(u, 0.0f);
+        if (kind == 1 || kind == 4) {
+          place(w, 30.0f), place(p, 120.0f), place(q, 240.0f);
+          pairs({{u, w}, {u, p}, {p, q}, {q, u}});
+        } else {
+          place(w, 330.0f), place(q, 120.0f), place(p, 240.0f);
+          pairs({{w, u}, {p, u}, {q, p}, {u, q}});
+        }
+        if (kind == 4) {
+          for (uint32_t j : {s, t}) m.positions[n0 + j] = centre + glm::vec3(unit(rng), unit(rng), unit(rng));
+          m.positions[n0 + w] = centre + 3.0f * (m.positions[n0 + w] - centre);
+          pairs({{s, t}, {t, s}});
+        } else {
+          place(s, 45.0f), place(t, 135.0f), place(x, 225.0f), place(y, 315.0f);
+          pairs({{s, t}, {t, x}, {x, y}, {y, s}});
+        }
       }
+    }
+    std::shuffle(tris.begin(), tris.end(), rng);
+    for (const auto& t : tris) m.triangles.insert(m.triangles.end(), t.begin(), t.end());
+    expectAvx2GivesTheBaselineBits(m, "fans " + std::to_string(seed));
+  }
   detail::useAvx2Paths(was);
 }
 
