@@ -4,6 +4,7 @@
 // cluster's area-weighted normal of the original faces (edges are shaded with dynamic normals).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <utility>
 
@@ -234,6 +235,46 @@ SCENELOD_AVX2_TARGET inline __m256 meanPair(const glm::vec4* m, uint32_t i, uint
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&m[i].x)), _mm_loadu_ps(&m[j].x), 1);
 }
 
+// each 8-bit mask as eight bytes 0 or 1 (byte q is bit q), 2 KB built at compile time
+struct MaskBytes {
+  uint64_t bytes[256];
+  constexpr MaskBytes() : bytes() {
+    for (uint32_t mask = 0; mask < 256; ++mask)
+      for (uint32_t q = 0; q < 8; ++q) bytes[mask] |= uint64_t((mask >> q) & 1u) << (8 * q);
+  }
+};
+inline constexpr MaskBytes kMaskBytes;
+
+// The normalisation pass of buildOutputMeshBody eight clusters at a time (clusters c and c + 4 of
+// each group in one row's halves): per lane glm::length's products and sums in its order, the
+// root, the division, the corner count's conversion and the first smooth verdict, as the scalar
+// loop; the verdicts as eight bytes from a table. At the bunny's 50 % level 0.040 -> 0.013 ms (the
+// scalar loop waited on a root and a division per cluster). Returns the clusters done (a multiple of 8).
+SCENELOD_AVX2_TARGET size_t normaliseSums8(size_t nc, bool fast, glm::vec4* mean, uint32_t* count, uint8_t* smooth) {
+  const __m256 min_l = _mm256_set1_ps(1e-18f);
+  const __m256i fast_mask = _mm256_set1_epi32(fast ? -1 : 0);
+  size_t c = 0;
+  for (; c + 8 <= nc; c += 8) {
+    glm::vec4* m = mean + c;
+    __m256 x = meanPair(m, 0, 4), y = meanPair(m, 1, 5), z = meanPair(m, 2, 6), w = meanPair(m, 3, 7);
+    transposeHalves(x, y, z, w);
+    const __m256 l = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z)));
+    const __m256i k = _mm256_cvttps_epi32(w);  // exact: a count below 2^24
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + c), k);
+    const __m256i with_faces = _mm256_andnot_si256(_mm256_cmpeq_epi32(k, _mm256_setzero_si256()), fast_mask);
+    const __m256 ok = _mm256_and_ps(_mm256_castsi256_ps(with_faces), _mm256_cmp_ps(l, min_l, _CMP_GE_OQ));
+    const uint64_t bytes = kMaskBytes.bytes[_mm256_movemask_ps(ok)];
+    std::memcpy(smooth + c, &bytes, 8);
+    __m256 nx = _mm256_div_ps(x, l), ny = _mm256_div_ps(y, l), nz = _mm256_div_ps(z, l), nw = _mm256_setzero_ps();
+    transposeHalves(nx, ny, nz, nw);
+    _mm_storeu_ps(&m[0].x, _mm256_castps256_ps128(nx)), _mm_storeu_ps(&m[4].x, _mm256_extractf128_ps(nx, 1));
+    _mm_storeu_ps(&m[1].x, _mm256_castps256_ps128(ny)), _mm_storeu_ps(&m[5].x, _mm256_extractf128_ps(ny, 1));
+    _mm_storeu_ps(&m[2].x, _mm256_castps256_ps128(nz)), _mm_storeu_ps(&m[6].x, _mm256_extractf128_ps(nz, 1));
+    _mm_storeu_ps(&m[3].x, _mm256_castps256_ps128(nw)), _mm_storeu_ps(&m[7].x, _mm256_extractf128_ps(nw, 1));
+  }
+  return c;
+}
+
 // The corner test of buildOutputMeshBody eight faces at a time: faces t .. t + 7 in the lanes, the
 // sums of corner k of faces q and q + 4 loaded into one row's halves (a load and an insert from
 // memory, no shuffle), one transpose in halves for eight corners; the four-face loop's products,
@@ -370,7 +411,11 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   for (uint32_t c : e.points) needs_vertex[c] = 1;
   // 1 while a cluster with faces may be smooth: its sum long enough, then every face passing
   std::vector<uint8_t> smooth(nc, 0);
-  for (size_t c = 0; c < nc; ++c) {
+  size_t c0 = 0;
+#if defined(__SSE2__)
+  if constexpr (avx2) c0 = normaliseSums8(nc, fast, mean.get(), count, smooth.data());
+#endif
+  for (size_t c = c0; c < nc; ++c) {
     const glm::vec3 s(mean[c]);
     const float l = glm::length(s);
     count[c] = static_cast<uint32_t>(mean[c].w);
