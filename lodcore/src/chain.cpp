@@ -9,6 +9,7 @@
 #include <condition_variable>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -38,13 +39,67 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
 
 namespace {
 
+// The search's first width. The area formula, count = 2 * tiling * area / w^2, assumes that every
+// triangle is smaller than its share of a cell; on meshes of very unequal triangles (CAD parts,
+// scans with flat regions) the large ones survive whole and the formula's width was too wide: the
+// count at it was 0.30-0.67 x the target on 2CylinderEngine's parts, BrainStem and DamagedHelmet at
+// half the triangles. So the count is modelled per triangle, sum_t min(1, 2 * tiling * A_t / w^2),
+// over the areas in quarter-octave bins (a float's exponent and two mantissa bits), and solved for
+// w by bisection. Where the two widths differ by less than the search's own tolerance in width
+// (half its relative tolerance in count, the count going as w^-2), the area formula is kept: on
+// near-uniform meshes (the bunny, spheres) the first probe is then the same as before.
+double firstWidth(const PreparedMesh& p, double tiling, size_t target, double tolerance) {
+  const double uniform = std::sqrt(2.0 * tiling * p.surface_area / double(target));
+  const Mesh& m = *p.mesh;
+  constexpr size_t kBins = 1024;  // positive floats: 8 exponent bits and 2 mantissa bits
+  std::vector<double> sum(kBins, 0.0);
+  std::vector<uint32_t> count(kBins, 0);
+  const glm::vec3* pos = m.positions.data();
+  const uint32_t* tri = m.triangles.data();
+  double largest = 0.0;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], c = pos[tri[3 * t + 2]];
+    const float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+    if (!(area > 0.0f) || !std::isfinite(area)) continue;
+    uint32_t bits;
+    std::memcpy(&bits, &area, sizeof bits);
+    const size_t bin = bits >> 21;
+    ++count[bin];
+    sum[bin] += double(area);
+    largest = std::max(largest, double(area));
+  }
+  const double c = 2.0 * tiling;
+  if (!(uniform > 0.0) || largest * c <= uniform * uniform) return uniform;  // no triangle capped
+  auto model = [&](double w2) {
+    double n = 0.0;
+    for (size_t b = 0; b < kBins; ++b)
+      if (count[b]) n += std::min(double(count[b]), c * sum[b] / w2);
+    return n;
+  };
+  // model(w2) decreases in w2, from the count of non-degenerate triangles (w2 -> 0) to 0; capping
+  // only lowers it, so at the area formula's width it is at most the target and the root is
+  // narrower: bracket it by quartering w2, then bisect on log w2
+  size_t faces = 0;
+  for (uint32_t k : count) faces += k;
+  if (faces <= target) return uniform;
+  double hi = uniform * uniform, lo = hi;
+  while (model(lo) <= double(target) && lo > 1e-300) lo *= 0.25;
+  for (int i = 0; i < 64 && hi / lo > 1.0 + 1e-4; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    if (model(mid) > double(target)) lo = mid; else hi = mid;
+  }
+  const double capped = std::sqrt(std::sqrt(lo * hi));
+  return std::abs(capped / uniform - 1.0) <= 0.5 * tolerance ? uniform : capped;
+}
+
 // The search of findCellWidthForTarget. With `keep`, the assignment of the probe that ends the
 // search within the tolerance is moved there (a chain's first level at that width is then spared
 // its assignment, a third of the level); `keep` stays empty when the width chosen is not the last
 // probed (the search ended outside the tolerance).
 Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
-                      double tolerance, detail::Assignment* keep) {
+                      double tolerance, detail::Assignment* keep, size_t* probes = nullptr) {
   cell_width = 0.0f;
+  if (probes) *probes = 0;
   if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
   if (!p.mesh || p.mesh->triangleCount() == 0 || p.order.empty())
     return {Status::kInvalidArgument, "cannot search a cell width for a mesh without triangles"};
@@ -63,6 +118,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   auto count = [&](double w, size_t& n) -> Error {
     cp.cell_width = static_cast<float>(w);
     n = 0;
+    if (probes) ++*probes;
     a = detail::Assignment();
     if (Error e = detail::assign(p, cp, a)) return e;
     detail::Eliminated el;
@@ -77,7 +133,12 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   // cells, centred on vertices, tile a surface less tightly than the grid: their count at the area
   // guess was 1.39-1.65 x the target (bumpy sphere, bunny), so their first guess is sqrt(1.4) wider.
   const double tiling = params.method == LodMethod::kUniform ? 1.0 : 1.4;
-  double w = p.surface_area > 0.0 ? std::sqrt(2.0 * tiling * p.surface_area / double(target)) : std::sqrt(lo * hi);
+  double w = p.surface_area > 0.0 ? firstWidth(p, tiling, target, tolerance) : std::sqrt(lo * hi);
+  // the previous probe: from the third probe on, the exponent of count ~ w^-alpha is the one
+  // between the last two probes (a secant on log count against log width), not 2: at half the
+  // triangles of unequal meshes the count falls more slowly than w^-2 (the large triangles stay)
+  double previous_w = 0.0;
+  size_t previous_n = 0;
   for (int it = 0; it < 48; ++it) {
     if (!(w > lo && w < hi)) w = std::sqrt(lo * hi);
     if (Error e = count(w, n)) return e;
@@ -89,7 +150,14 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     }
     if (n > target) lo = w; else hi = w;
     if (hi / lo < 1.0 + 1e-6) break;
-    w = n > 0 ? w * std::sqrt(double(n) / double(target)) : std::sqrt(lo * hi);
+    double alpha = 2.0;
+    if (previous_n > 0 && n > 0 && previous_n != n && previous_w != w) {
+      alpha = std::log(double(previous_n) / double(n)) / std::log(w / previous_w);
+      // a count that rose with the width (cells float) or an implausible slope: back to the model
+      alpha = alpha > 0.25 ? std::min(alpha, 4.0) : 2.0;
+    }
+    previous_w = w, previous_n = n;
+    w = n > 0 ? w * std::pow(double(n) / double(target), 1.0 / alpha) : std::sqrt(lo * hi);
   }
   // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
   // scan widths around the best one and keep the closest
@@ -168,7 +236,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     params.progress(0.05, "choosing w1");
     const size_t tn = original.triangleCount();
     if (tn >= 2) {
-      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first)) {
+      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes)) {
         out.levels.clear();
         return e;
       }

@@ -237,6 +237,41 @@ TEST(Chain, TargetSearchFindsTheTriangleCount) {
   }
 }
 
+// The w_1 search's first width comes from the triangles' areas, each capped at one surviving
+// triangle, and later probes from the slope between the last two: on a mesh of very unequal
+// triangles (a fine sphere beside a coarse one of 100 times the area) the plain area formula's
+// width merges the fine sphere into a few cells (under a tenth of the target), while the
+// search ends within its 5 % in a few probes. The probes are counted in ChainStats.
+TEST(Chain, SearchOnUnequalTrianglesStartsNearTheTarget) {
+  Mesh m = test::makeSphere(glm::vec3(0.0f), 1.0f, 50, 70);
+  const Mesh coarse = test::makeSphere(glm::vec3(30.0f, 0.0f, 0.0f), 10.0f, 5, 8);
+  const uint32_t base = uint32_t(m.positions.size());
+  m.positions.insert(m.positions.end(), coarse.positions.begin(), coarse.positions.end());
+  for (uint32_t v : coarse.triangles) m.triangles.push_back(base + v);
+  const size_t target = m.triangleCount() / 2;
+  ChainParams cp;
+  cp.level_count = 2;
+  PreparedMesh prepared;
+  ASSERT_TRUE(prepareMesh(m, cp.cluster, prepared).ok());
+  // the area formula the search used to start from (floating cells: tiling 1.4)
+  ClusterParams plain = cp.cluster;
+  plain.cell_width = float(std::sqrt(2.0 * 1.4 * prepared.surface_area / double(target)));
+  size_t plain_count = 0;
+  ASSERT_TRUE(countClusteredTriangles(prepared, plain, plain_count).ok());
+  EXPECT_LT(double(plain_count), 0.1 * double(target));
+  LodChain chain;
+  ChainStats stats;
+  ASSERT_TRUE(buildChain(m, cp, chain, &stats).ok());
+  EXPECT_GE(stats.first_width_probes, 1u);
+  EXPECT_LE(stats.first_width_probes, 4u);
+  const double diff = std::fabs(double(chain.levels[1].mesh.triangleCount()) - double(target));
+  EXPECT_LE(diff, 0.05 * double(target)) << chain.levels[1].mesh.triangleCount() << " of " << target;
+  // a given w_1 is not searched
+  cp.first_cell_width = chain.levels[1].cell_width;
+  ASSERT_TRUE(buildChain(m, cp, chain, &stats).ok());
+  EXPECT_EQ(stats.first_width_probes, 0u);
+}
+
 TEST(Chain, BadInputAndEmptyMesh) {
   const Mesh m = test::makeSphere({0, 0, 0}, 1.0f, 6, 8);
   LodChain chain;

@@ -42,11 +42,13 @@ Error buildChain(Mesh&& original, const ChainParams& params, LodChain& out, stru
 struct ChainStats {
   double prepare_seconds = 0.0;       // validation, grading and the sort by weight
   double first_width_seconds = 0.0;   // the search for w_1 (0 when given)
+  size_t first_width_probes = 0;      // clusterings the search counted (0 when w_1 is given)
   std::vector<double> level_seconds;  // per simplified level (levels run in parallel: these overlap)
   double total_seconds = 0.0;         // wall time of the whole call
 };
 
-// Finds by a safeguarded secant search (count ~ w^-2, falling back to bisection on log width) a cell width whose clustering gives a triangle count within
+// Finds by a safeguarded secant search (a first width from the triangles' areas, then count ~ w^-alpha
+// with alpha from the last two probes, falling back to bisection on log width) a cell width whose clustering gives a triangle count within
 // `tolerance` (relative) of `target_triangles`, or the closest found. Errors: target 0, empty mesh
 // (no triangles), invalid mesh, a method that is not a clustering method. Cost: O(V log V) once,
 // then typically 3-10 O(V + T) counting passes (up to 48, plus 33 when the count jumps).
