@@ -43,45 +43,48 @@ namespace {
 // triangle is smaller than its share of a cell; on meshes of very unequal triangles (CAD parts,
 // scans with flat regions) the large ones survive whole and the formula's width was too wide: the
 // count at it was 0.30-0.67 x the target on 2CylinderEngine's parts, BrainStem and DamagedHelmet at
-// half the triangles. So the count is modelled per triangle, sum_t min(1, 2 * tiling * A_t / w^2),
-// over the areas in quarter-octave bins (a float's exponent and two mantissa bits), and solved for
-// w by bisection. Where the two widths differ by less than the search's own tolerance in width
-// (half its relative tolerance in count, the count going as w^-2), the area formula is kept: on
-// near-uniform meshes (the bunny, spheres) the first probe is then the same as before.
+// half the triangles. So the count is modelled per vertex, sum_v min(T / V, 2 * tiling * a_v / w^2)
+// with a_v a third of the vertex's incident area (the prepared face sums hold it: one streaming pass
+// over V floats) and T / V the mesh's triangles per vertex, i.e. a vertex keeps at most its share of
+// triangles; the areas are binned in quarter octaves (a float's exponent and two mantissa bits) and
+// the model solved for w by bisection. Where no vertex is capped at the area formula's width, or the
+// two widths differ by less than half the search's tolerance (the count going as w^-2), the area
+// formula is kept: near-uniform meshes (the bunny, spheres) then start where they always did.
 double firstWidth(const PreparedMesh& p, double tiling, size_t target, double tolerance) {
   const double uniform = std::sqrt(2.0 * tiling * p.surface_area / double(target));
-  const Mesh& m = *p.mesh;
+  const size_t vn = p.face_sums.size();
+  if (!(uniform > 0.0) || vn == 0 || p.order.empty()) return uniform;  // a hand-made PreparedMesh
   constexpr size_t kBins = 1024;  // positive floats: 8 exponent bits and 2 mantissa bits
   std::vector<double> sum(kBins, 0.0);
   std::vector<uint32_t> count(kBins, 0);
-  const glm::vec3* pos = m.positions.data();
-  const uint32_t* tri = m.triangles.data();
-  double largest = 0.0;
-  for (size_t t = 0; t < m.triangleCount(); ++t) {
-    const glm::vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], c = pos[tri[3 * t + 2]];
-    const float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+  float largest = 0.0f;
+  for (size_t v = 0; v < vn; ++v) {
+    const float area = p.face_sums[v].area * (1.0f / 3.0f);
     if (!(area > 0.0f) || !std::isfinite(area)) continue;
     uint32_t bits;
     std::memcpy(&bits, &area, sizeof bits);
     const size_t bin = bits >> 21;
     ++count[bin];
     sum[bin] += double(area);
-    largest = std::max(largest, double(area));
+    largest = std::max(largest, area);
   }
   const double c = 2.0 * tiling;
-  if (!(uniform > 0.0) || largest * c <= uniform * uniform) return uniform;  // no triangle capped
+  const double share = double(p.mesh->triangleCount()) / double(p.order.size());  // triangles per vertex
+  if (double(largest) * c <= share * uniform * uniform) return uniform;  // no vertex capped
+  // the occupied bins only (a few dozen), as (most triangles, c * area)
+  std::vector<std::pair<double, double>> bins;
+  double most = 0.0;
+  for (size_t b = 0; b < kBins; ++b)
+    if (count[b]) bins.push_back({share * double(count[b]), c * sum[b]}), most += share * double(count[b]);
   auto model = [&](double w2) {
     double n = 0.0;
-    for (size_t b = 0; b < kBins; ++b)
-      if (count[b]) n += std::min(double(count[b]), c * sum[b] / w2);
+    for (const auto& [k, ca] : bins) n += std::min(k, ca / w2);
     return n;
   };
-  // model(w2) decreases in w2, from the count of non-degenerate triangles (w2 -> 0) to 0; capping
-  // only lowers it, so at the area formula's width it is at most the target and the root is
-  // narrower: bracket it by quartering w2, then bisect on log w2
-  size_t faces = 0;
-  for (uint32_t k : count) faces += k;
-  if (faces <= target) return uniform;
+  // model(w2) decreases in w2, from about the triangle count (w2 -> 0) to 0; capping only lowers
+  // it, so at the area formula's width it is at most the target and the root is narrower: bracket
+  // it by quartering w2, then bisect on log w2
+  if (most <= double(target)) return uniform;
   double hi = uniform * uniform, lo = hi;
   while (model(lo) <= double(target) && lo > 1e-300) lo *= 0.25;
   for (int i = 0; i < 64 && hi / lo > 1.0 + 1e-4; ++i) {
