@@ -215,8 +215,9 @@ int runLods(const std::vector<std::string>& argv) {
                 cellShapeName(cp.cluster.cell_shape));
   }
   printLevelTable(chain, &stats);
-  std::printf("time: grading and sort %.1f ms, w1 search %.1f ms, whole chain %.1f ms (levels in parallel)\n",
-              stats.prepare_seconds * 1e3, stats.first_width_seconds * 1e3, stats.total_seconds * 1e3);
+  std::printf("time: grading and sort %.1f ms, w1 search %.1f ms (%zu probe%s), whole chain %.1f ms (levels in parallel)\n",
+              stats.prepare_seconds * 1e3, stats.first_width_seconds * 1e3, stats.first_width_probes,
+              stats.first_width_probes == 1 ? "" : "s", stats.total_seconds * 1e3);
   return 0;
 }
 
