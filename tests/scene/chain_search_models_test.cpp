@@ -3,7 +3,8 @@
 // width was too wide (the count there 0.30-0.67 x the target), and a fixed exponent count ~ w^-2
 // overshot afterwards: the four models below took 129 probes over their 20 meshes of 1,000 triangles
 // or more. The first width from the capped per-vertex areas and the secant on the last two probes
-// take 88 (docs/bench/clustering.md, "w_1 search"); the bound leaves room for small changes in
+// took 88, and with the first round's pair of probes (small meshes: two at once) 93 probes in 73
+// rounds (docs/bench/clustering.md, "w_1 search"); the bound leaves room for small changes in
 // grading and still fails the old search.
 #include <string>
 #include <vector>
@@ -44,5 +45,5 @@ TEST(ChainSearchModels, FirstWidthSearchTakesFewProbesOnRealModels) {
     }
   }
   EXPECT_EQ(meshes, 20u);
-  EXPECT_LE(probes, 100u) << "over " << meshes << " meshes";
+  EXPECT_LE(probes, 105u) << "over " << meshes << " meshes";
 }
