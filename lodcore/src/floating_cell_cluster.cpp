@@ -1447,8 +1447,9 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
     Planned pl;
     pl.v = order[k];
     pl.pv = &positions[kSorted ? k : pl.v].x;
-    // x, y from one 8-byte load, z inserted (a 16-byte load could read past the positions)
-    const __m128 pk = _mm_insert_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pl.pv))),
+    // x, y from one 8-byte load (movq, unaligned-safe: _mm_load_sd would dereference a double* at a
+    // float's alignment), z inserted (a 16-byte load could read past the positions)
+    const __m128 pk = _mm_insert_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(pl.pv))),
                                     _mm_load_ss(pl.pv + 2), 0x20);
     // the caller's operations per lane ((q - reach) - slack and floorToInt's truncation and correction)
     const __m128 q4 = _mm_mul_ps(pk, inv4);

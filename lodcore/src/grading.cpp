@@ -1014,7 +1014,9 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
     // and glm::max(hi, p) exactly (p < lo ? p : lo; hi < p ? p : hi)
     __m128 lo = _mm_set1_ps(std::numeric_limits<float>::max()), hi = _mm_set1_ps(-std::numeric_limits<float>::max());
     auto addToBox = [&](const glm::vec3& p) {
-      const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&p.x)));
+      // (movq through _mm_loadl_epi64, whose pointer type is unaligned: _mm_load_sd would dereference
+      // a double* at a float's alignment, undefined behaviour UBSan reports)
+      const __m128 xy = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&p.x)));
       const __m128 q = _mm_movelh_ps(xy, _mm_load_ss(&p.z));  // x y z 0, no read past the point
       lo = _mm_min_ps(q, lo);
       hi = _mm_max_ps(q, hi);
