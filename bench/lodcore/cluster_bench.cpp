@@ -122,6 +122,8 @@ void reportTriangles(benchmark::State& state, const Mesh& in, size_t out_triangl
 // (docs/bench/targets.md quotes it where the medians scatter). For rate counters such as
 // items_per_second the min row holds the smallest rate: read its time columns.
 double minimumOf(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); }
+// every benchmark of this file registered with the min statistic
+#define SCENELOD_BENCHMARK(fn) BENCHMARK(fn)->ComputeStatistics("min", minimumOf)
 
 void BM_FloatingLevel_Bunny(benchmark::State& state) {
   const double fraction = double(state.range(0)) / 100.0;
@@ -134,7 +136,7 @@ void BM_FloatingLevel_Bunny(benchmark::State& state) {
   reportTriangles(state, bunny(), out.triangleCount());
   state.counters["cell_width"] = pr.params.cell_width;
 }
-BENCHMARK(BM_FloatingLevel_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_FloatingLevel_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_UniformLevel_Bunny(benchmark::State& state) {
   ClusterParams params;
@@ -147,7 +149,7 @@ void BM_UniformLevel_Bunny(benchmark::State& state) {
   }
   reportTriangles(state, bunny(), out.triangleCount());
 }
-BENCHMARK(BM_UniformLevel_Bunny)->Arg(10)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_UniformLevel_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
 
 // the once-per-mesh part: validation, grading, sort by weight
 void BM_Prepare_Bunny(benchmark::State& state) {
@@ -158,7 +160,7 @@ void BM_Prepare_Bunny(benchmark::State& state) {
   }
   reportTriangles(state, bunny(), 0);
 }
-BENCHMARK(BM_Prepare_Bunny)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Prepare_Bunny)->Unit(benchmark::kMillisecond);
 
 // meshopt_simplifySloppy to the triangle count our level at the same Arg produced
 void BM_Sloppy_Bunny(benchmark::State& state) {
@@ -173,7 +175,7 @@ void BM_Sloppy_Bunny(benchmark::State& state) {
   }
   reportTriangles(state, m, n / 3);
 }
-BENCHMARK(BM_Sloppy_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Sloppy_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_MeshoptSimplify_Bunny(benchmark::State& state) {
   const Mesh& m = bunny();
@@ -187,7 +189,7 @@ void BM_MeshoptSimplify_Bunny(benchmark::State& state) {
   }
   reportTriangles(state, m, n / 3);
 }
-BENCHMARK(BM_MeshoptSimplify_Bunny)->Arg(10)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_MeshoptSimplify_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
 
 // whole 8-level chain (grading, sort, w1 search when Arg 0, levels in parallel on all threads)
 void BM_Chain8_Bunny(benchmark::State& state) {
@@ -202,7 +204,7 @@ void BM_Chain8_Bunny(benchmark::State& state) {
   reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
   state.SetLabel(state.range(0) == 1 ? "w1 given" : "w1 searched");
 }
-BENCHMARK(BM_Chain8_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Chain8_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Chain8_Bunny_OneThread(benchmark::State& state) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
@@ -217,7 +219,7 @@ void BM_Chain8_Bunny_OneThread(benchmark::State& state) {
   reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
   state.SetLabel("w1 given, 1 thread");
 }
-BENCHMARK(BM_Chain8_Bunny_OneThread)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Chain8_Bunny_OneThread)->Unit(benchmark::kMillisecond);
 
 void BM_Sloppy10pct_Bunny(benchmark::State& state) {
   const Mesh& m = bunny();
@@ -231,7 +233,7 @@ void BM_Sloppy10pct_Bunny(benchmark::State& state) {
   }
   reportTriangles(state, m, n / 3);
 }
-BENCHMARK(BM_Sloppy10pct_Bunny)->Unit(benchmark::kMillisecond)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Sloppy10pct_Bunny)->Unit(benchmark::kMillisecond);
 
 // one level on a generated mesh of about 1 M triangles, one thread
 void BM_FloatingLevel_1M(benchmark::State& state) {
@@ -244,7 +246,7 @@ void BM_FloatingLevel_1M(benchmark::State& state) {
   }
   reportTriangles(state, bigMesh(), out.triangleCount());
 }
-BENCHMARK(BM_FloatingLevel_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_FloatingLevel_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
 
 void BM_Sloppy_1M(benchmark::State& state) {
   const Mesh& m = bigMesh();
@@ -258,7 +260,7 @@ void BM_Sloppy_1M(benchmark::State& state) {
   }
   reportTriangles(state, m, n / 3);
 }
-BENCHMARK(BM_Sloppy_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_Sloppy_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
 
 // peak extra memory (operator new) while building an 8-level chain, per input vertex and triangle;
 // "retained" is what the finished chain holds, "transient" the rest of the peak. With `hand_over`
@@ -289,8 +291,8 @@ void chainMemory(benchmark::State& state, const Mesh& m, bool hand_over) {
   state.SetLabel(hand_over ? "mesh handed over" : "mesh copied");
 }
 void BM_ChainMemory_Bunny(benchmark::State& state) { chainMemory(state, bunny(), state.range(0) == 1); }
-BENCHMARK(BM_ChainMemory_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_ChainMemory_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ChainMemory_1M(benchmark::State& state) { chainMemory(state, bigMesh(), state.range(0) == 1); }
-BENCHMARK(BM_ChainMemory_1M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1)->ComputeStatistics("min", minimumOf);
+SCENELOD_BENCHMARK(BM_ChainMemory_1M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace

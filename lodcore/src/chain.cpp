@@ -136,9 +136,17 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   };
   auto within = [&](size_t diff) { return double(diff) <= tolerance * double(target); };
   auto distance = [&](size_t n) { return n > target ? n - target : target - n; };
+  // the exponent alpha of count ~ w^-alpha between two probes (a secant on log count against log
+  // width); 2, the model's, where a count is 0, the counts are equal, or the count rose with the
+  // width (cells float), and clamped to [0.25, 4] against implausible slopes
+  auto slope = [](double w0, size_t n0, double w1, size_t n1) {
+    if (n0 == 0 || n1 == 0 || n0 == n1 || w0 == w1) return 2.0;
+    const double alpha = std::log(double(n0) / double(n1)) / std::log(w1 / w0);
+    return alpha > 0.25 ? std::min(alpha, 4.0) : 2.0;
+  };
   size_t n = 0;
-  // safeguarded secant on the model count ~ w^-2 (a surface's clusters): a first guess from the
-  // area, then w * sqrt(count / target), falling back to bisection of the bracket [lo, hi]. Floating
+  // safeguarded secant on log count against log width: a first width from the areas (firstWidth),
+  // then w * (count / target)^(1 / alpha), falling back to bisection of the bracket [lo, hi]. Floating
   // cells, centred on vertices, tile a surface less tightly than the grid: their count at the area
   // guess was 1.39-1.65 x the target (bumpy sphere, bunny), so their first guess is sqrt(1.4) wider.
   const double tiling = params.method == LodMethod::kUniform ? 1.0 : 1.4;
@@ -154,8 +162,9 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   // puts one of them within the tolerance (the bunny: 1.01 x the target at the narrower, where w
   // alone gave 0.934 and needed a second probe), and otherwise the pair's slope gives the next
   // width. Both are always probed and compared in a fixed order, so the result does not depend on
-  // the number of threads. Over the bunny, a bumpy sphere and the shared models' 20 meshes the
-  // chain's searches took 78 rounds of probes instead of 93 (docs/bench/clustering.md, "w_1 search").
+  // the number of threads. Over the bunny, a bumpy sphere and the shared models' 21 meshes of 1,000
+  // triangles or more the chain's searches took 78 rounds of probes instead of 93
+  // (docs/bench/clustering.md, "w_1 search").
   const double spread = std::min(0.7 * tolerance, 0.1);
   if (spread > 0.0 && p.order.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes &&
       w * (1.0 - spread) > lo && w * (1.0 + spread) < hi) {
@@ -182,19 +191,15 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     }
     // the next width from the closer probe, with the slope between the two
     const double wc = a_closer ? wa : wb;
-    const size_t nc = a_closer ? na : nb, nf = a_closer ? nb : na;
-    double alpha = 2.0;
-    if (nc > 0 && nf > 0 && nc != nf) {
-      alpha = std::log(double(na) / double(nb)) / std::log(wb / wa);
-      alpha = alpha > 0.25 ? std::min(alpha, 4.0) : 2.0;
-    }
+    const size_t nc = a_closer ? na : nb;
+    const double alpha = slope(wa, na, wb, nb);
     previous_w = wc, previous_n = nc;
     w = nc > 0 ? wc * std::pow(double(nc) / double(target), 1.0 / alpha) : std::sqrt(lo * hi);
   }
   for (int it = 0; it < 48; ++it) {
     if (!(w > lo && w < hi)) w = std::sqrt(lo * hi);
     if (Error e = count(w, n)) return e;
-    const size_t diff = n > target ? n - target : target - n;
+    const size_t diff = distance(n);
     if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
     if (within(diff)) {
       if (keep_last) *keep = std::move(a);
@@ -202,12 +207,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     }
     if (n > target) lo = w; else hi = w;
     if (hi / lo < 1.0 + 1e-6) break;
-    double alpha = 2.0;
-    if (previous_n > 0 && n > 0 && previous_n != n && previous_w != w) {
-      alpha = std::log(double(previous_n) / double(n)) / std::log(w / previous_w);
-      // a count that rose with the width (cells float) or an implausible slope: back to the model
-      alpha = alpha > 0.25 ? std::min(alpha, 4.0) : 2.0;
-    }
+    const double alpha = slope(previous_w, previous_n, w, n);  // 2 after the first probe (none before)
     previous_w = w, previous_n = n;
     w = n > 0 ? w * std::pow(double(n) / double(target), 1.0 / alpha) : std::sqrt(lo * hi);
   }
@@ -218,7 +218,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     for (int k = -16; k <= 16 && !within(best_diff); ++k) {
       const double w = centre * std::pow(1.25, double(k) / 16.0);
       if (Error e = count(w, n)) return e;
-      const size_t diff = n > target ? n - target : target - n;
+      const size_t diff = distance(n);
       if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
       if (keep_last && within(diff)) *keep = std::move(a);
     }
