@@ -18,6 +18,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include "cluster_internal.h"
@@ -37,6 +38,19 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
   s.radius = std::sqrt(r2) * (1.0f + 1e-6f);
   return s;
 }
+
+namespace detail {
+namespace {
+// how a chain builds its coarse levels during the w_1 search's first probe: 0 not at all, 1 on
+// another thread while the probe runs (the default), 2 all of them before the probe, on the
+// calling thread (a test's way to make every one of them and so exercise their dropping)
+std::atomic<int> g_speculation{1};
+}  // namespace
+
+// private test hook (declared by tests/lodcore/chain_test.cpp): the speculation's mode for every
+// later chain; returns the previous mode
+int setChainSpeculationForTest(int mode) { return g_speculation.exchange(mode); }
+}  // namespace detail
 
 namespace {
 
@@ -96,12 +110,22 @@ double firstWidth(const PreparedMesh& p, double tiling, size_t target, double to
   return std::abs(capped / uniform - 1.0) <= 0.5 * tolerance ? uniform : capped;
 }
 
+// A chain's hooks into its w_1 search (buildClusterChain): on small meshes the search's first round
+// is then one probe at the narrower of the pair's widths, `before` called with that width just
+// before it and `after` with whether it ended the search just after it (also when it failed), so
+// that the chain can build its coarse levels at that width meanwhile.
+struct FirstProbeHooks {
+  std::function<void(float)> before;
+  std::function<void(bool)> after;
+};
+
 // The search of findCellWidthForTarget. With `keep`, the assignment of the probe that ends the
 // search within the tolerance is moved there (a chain's first level at that width is then spared
 // its assignment, a third of the level); `keep` stays empty when the width chosen is not the last
 // probed (the search ended outside the tolerance).
 Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t target, float& cell_width,
-                      double tolerance, detail::Assignment* keep, size_t* probes = nullptr) {
+                      double tolerance, detail::Assignment* keep, size_t* probes = nullptr,
+                      const FirstProbeHooks* hooks = nullptr) {
   cell_width = 0.0f;
   if (probes) *probes = 0;
   if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
@@ -156,18 +180,39 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   // triangles of unequal meshes the count falls more slowly than w^-2 (the large triangles stay)
   double previous_w = 0.0;
   size_t previous_n = 0;
-  // Small meshes (those whose chain drops the sorted copy of positions: the two probes' scratch is
-  // then small beside the chain's peak) probe two widths at once first, w (1 -/+ 0.7 tolerance),
-  // on two threads where there are two: a first width within about 7 % of the right one in count
-  // puts one of them within the tolerance (the bunny: 1.01 x the target at the narrower, where w
-  // alone gave 0.934 and needed a second probe), and otherwise the pair's slope gives the next
-  // width. Both are always probed and compared in a fixed order, so the result does not depend on
-  // the number of threads. Over the bunny, a bumpy sphere and the shared models' 21 meshes of 1,000
-  // triangles or more the chain's searches took 78 rounds of probes instead of 93
-  // (docs/bench/clustering.md, "w_1 search").
+  // Small meshes (those whose chain drops the sorted copy of positions: the probes' scratch is then
+  // small beside the chain's peak) first probe the narrower width w (1 - 0.7 tolerance) alone: the
+  // first width's count is under the target on 22 of the 23 meshes below (from 0.61 to 1.25 x it,
+  // 0.79 in the median, at w), so the narrower is the likelier to end the search; a chain builds its
+  // coarse levels at that width on its other thread meanwhile (`hooks`), kept if it becomes w_1.
+  // When it misses, two widths w' (1 -/+ 0.7 tolerance) around the next width are probed at once, on
+  // two threads where there are two, their slope giving the width after; both are always probed and
+  // compared in a fixed order, so the result does not depend on the number of threads. Over the
+  // bunny, a bumpy sphere and the shared models' 21 meshes of 1,000 triangles or more the chains'
+  // searches took 83 rounds of probes (78 with the pair first, 93 without a pair), and 3 of them
+  // end at the first probe (docs/bench/clustering.md, "w_1 search" and "first probe alone").
   const double spread = std::min(0.7 * tolerance, 0.1);
-  if (spread > 0.0 && p.order.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes &&
-      w * (1.0 - spread) > lo && w * (1.0 + spread) < hi) {
+  const bool small = p.order.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes;
+  if (spread > 0.0 && small && w * (1.0 - spread) > lo && w < hi) {
+    const double wa = w * (1.0 - spread);
+    if (hooks) hooks->before(static_cast<float>(wa));
+    size_t na = 0;
+    const Error ea = count(wa, na);
+    const size_t da = distance(na);
+    if (hooks) hooks->after(!ea && within(da));
+    if (ea) return ea;
+    best_diff = da;
+    best = static_cast<float>(wa);
+    if (within(da)) {
+      if (keep_last) *keep = std::move(a);
+      cell_width = best;
+      return {};
+    }
+    if (na > target) lo = wa; else hi = wa;
+    previous_w = wa, previous_n = na;
+    w = na > 0 ? wa * std::sqrt(double(na) / double(target)) : std::sqrt(lo * hi);
+  }
+  if (spread > 0.0 && small && w * (1.0 - spread) > lo && w * (1.0 + spread) < hi) {
     const double wa = w * (1.0 - spread), wb = w * (1.0 + spread);
     detail::Assignment b;
     size_t na = 0, nb = 0;
@@ -178,9 +223,12 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     if (eb) return eb;
     const size_t da = distance(na), db = distance(nb);
     const bool a_closer = da <= db;  // ties: the narrower
-    best_diff = a_closer ? da : db;
-    best = static_cast<float>(a_closer ? wa : wb);
-    if (within(best_diff)) {
+    // (after a chain's first probe, which may have been closer)
+    if ((a_closer ? da : db) < best_diff) {
+      best_diff = a_closer ? da : db;
+      best = static_cast<float>(a_closer ? wa : wb);
+    }
+    if (within(best_diff)) {  // (a first probe within the tolerance ended the search above)
       if (keep_last) *keep = std::move(a_closer ? a : b);
       cell_width = best;
       return {};
@@ -280,28 +328,6 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     return {};
   }
 
-  float w1 = params.first_cell_width;
-  // the search's last probe, at w1: level 1's assignment (empty when w1 is given or was not probed last)
-  detail::Assignment first;
-  t0 = Clock::now();
-  if (w1 == 0.0f) {
-    params.progress(0.05, "choosing w1");
-    const size_t tn = original.triangleCount();
-    if (tn >= 2) {
-      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes)) {
-        out.levels.clear();
-        return e;
-      }
-    } else {
-      w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
-    }
-  }
-  stats.first_width_seconds = since(t0);
-  if (Error e = detail::checkCellWidth(p, w1)) {
-    out.levels.clear();
-    return e;
-  }
-
   const size_t n = params.level_count;
   out.levels.resize(n + 1);
   std::vector<Error> errors(n);
@@ -316,6 +342,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   // held output pass to the task group, where the thread that runs out of levels takes it.
   detail::LevelParts held;
   double held_seconds = 0.0;
+  float held_w1 = 0.0f;
   std::atomic<size_t> synthesis_pending{n};
   std::atomic<bool> first_ready{false};  // level 1's parts are held (set after `held` is written)
   // the sort (order and sorted positions, 16 bytes per vertex) is read by assignments only: freed
@@ -332,19 +359,20 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     }
   };
   tbb::task_group finish_group;
-  auto finishLevel = [&](size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds) {
+  // (levels built while the search's first probe runs report no progress: they may be dropped)
+  auto finishLevel = [&](size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds, bool report) {
     const Clock::time_point start = Clock::now();
     LodLevel& level = out.levels[k + 1];
     detail::finishLevel(parts, cp, level.mesh);
     level.bounds = computeBoundingSphere(level.mesh);
     stats.level_seconds[k] = seconds + since(start);
     const size_t d = ++done;
-    if (params.progress.fn) {
+    if (report && params.progress.fn) {
       std::lock_guard<std::mutex> lock(progress_mutex);
       params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
     }
   };
-  auto levelParams = [&](size_t k) {
+  auto levelParams = [&](size_t k, float w1) {
     ClusterParams cp = params.cluster;
     cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
     return cp;
@@ -352,7 +380,8 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
   // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
   // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
-  std::atomic<size_t> next_claim{0};
+  bool first_claimed = false;  // level 1 (k = 0)
+  size_t next_claim = 0;       // claim c is level n - c (k = n - 1 - c), c < n - 1
   std::atomic<bool> bounds_taken{false};
   // That order alone keeps levels 1 and 2 apart only while level 1 keeps pace: when its thread is
   // held up (descheduled on a loaded machine, or a first chain's thread start), the other thread
@@ -384,10 +413,15 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   const bool second_early = p.sorted_positions.empty() && n >= 3;
   bool second_taken = false;
   size_t displaced = 1;
+  constexpr size_t kNoLevel = SIZE_MAX;
   auto claimLevel = [&]() -> size_t {
     std::unique_lock<std::mutex> lock(first_mutex);
-    const size_t claim = next_claim++;
-    const size_t natural = claim == 0 ? 0 : n - claim;  // 0, n - 1, n - 2, ..., 1
+    if (!first_claimed) {
+      first_claimed = true;
+      return 0;
+    }
+    if (next_claim + 1 >= n) return kNoLevel;
+    const size_t natural = n - 1 - next_claim++;  // n - 1, n - 2, ..., 1
     size_t k = natural;
     if (natural == 1 && second_taken) k = displaced;
     else if (second_early && natural >= 2 && first_synthesized && !second_taken) k = 1, displaced = natural;
@@ -399,19 +433,24 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     }
     return k;
   };
+  auto allClaimed = [&] {
+    std::lock_guard<std::mutex> lock(first_mutex);
+    return first_claimed && next_claim + 1 >= n;
+  };
   std::function<void()> passSynthesis = [&] {
     if (--synthesis_pending == 0) {
       // every level is past synthesis (and assignment): only the mesh itself is read from here on
       std::vector<float>().swap(p.weights);
       std::vector<VertexFaceSums>().swap(p.face_sums);
       std::vector<glm::vec4>().swap(p.face_colors);
-      if (first_ready.load()) finish_group.run([&] { finishLevel(0, held, levelParams(0), held_seconds); });
+      if (first_ready.load()) finish_group.run([&] { finishLevel(0, held, levelParams(0, held_w1), held_seconds, true); });
     }
   };
-  tbb::parallel_for(size_t(0), n, [&](size_t) {
-    const size_t k = claimLevel();
+  // the search's last probe, at w1: level 1's assignment (empty when w1 is given or was not probed last)
+  detail::Assignment first;
+  auto runLevel = [&](size_t k, float w1, bool report) {
     const Clock::time_point start = Clock::now();
-    const ClusterParams cp = levelParams(k);
+    const ClusterParams cp = levelParams(k, w1);
     LodLevel& level = out.levels[k + 1];
     detail::LevelParts parts;
     ClusterStats cs;
@@ -435,17 +474,99 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     if (k == 0) {
       held = std::move(parts);
       held_seconds = seconds;
+      held_w1 = w1;
       first_ready.store(!errors[0]);
       firstSynthesized();  // also after an error: level 2 must not wait for ever
     }
     // (a level's only error is its assignment's, before synthesis: then the callback was not made)
     if (!synthesis_first || errors[k]) passSynthesis();
-    if (k != 0 && !errors[k]) finishLevel(k, parts, cp, seconds);
+    if (k != 0 && !errors[k]) finishLevel(k, parts, cp, seconds, report);
+  };
+
+  // Levels n, n - 1, ..., 3 built at the width of the search's first probe while it runs (small
+  // meshes, two threads or more): they are the chain's own if that width becomes w_1, and are
+  // dropped otherwise. They take the claims above, so the level loop below starts after them. Only
+  // levels that no other level waits for (not 1 or 2), and no progress is reported for them.
+  tbb::task_group speculation;
+  std::atomic<bool> speculating{false};
+  float speculative_w1 = 0.0f;
+  struct WaitFor {
+    tbb::task_group& g;
+    ~WaitFor() {  // (on the way out of an exception only: every other path has waited)
+      try {
+        g.wait();
+      } catch (...) {
+      }
+    }
+  } wait_speculation{speculation};
+  FirstProbeHooks hooks;
+  const int speculation_mode = detail::g_speculation.load();
+  hooks.before = [&](float wa) {
+    if (!second_early || speculation_mode == 0) return;
+    if (speculation_mode == 1 && tbb::this_task_arena::max_concurrency() < 2) return;
+    speculative_w1 = wa;
+    speculating.store(true);
+    auto speculate = [&] {
+      while (speculating.load()) {
+        size_t k = kNoLevel;
+        {
+          std::lock_guard<std::mutex> lock(first_mutex);
+          if (speculating.load() && next_claim + 3 <= n) k = n - 1 - next_claim++;  // k >= 2
+        }
+        if (k == kNoLevel) break;
+        runLevel(k, speculative_w1, false);
+      }
+    };
+    if (speculation_mode == 2) speculate();
+    else speculation.run(speculate);
+  };
+  hooks.after = [&](bool hit) {
+    if (!speculating.exchange(false) || hit) return;
+    speculation.wait();  // the level under way, then drop what was built
+    std::lock_guard<std::mutex> lock(first_mutex);
+    for (size_t c = 0; c < next_claim; ++c) {
+      const size_t k = n - 1 - c;
+      out.levels[k + 1] = LodLevel();
+      stats.level_seconds[k] = 0.0;
+      errors[k] = Error();
+    }
+    synthesis_pending += next_claim;
+    release.pending += next_claim;
+    done -= next_claim;
+    next_claim = 0;
+  };
+
+  float w1 = params.first_cell_width;
+  t0 = Clock::now();
+  if (w1 == 0.0f) {
+    params.progress(0.05, "choosing w1");
+    const size_t tn = original.triangleCount();
+    if (tn >= 2) {
+      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes, &hooks)) {
+        out.levels.clear();
+        return e;
+      }
+    } else {
+      w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
+    }
+  }
+  stats.first_width_seconds = since(t0);
+  if (Error e = detail::checkCellWidth(p, w1)) {
+    speculation.wait();
+    out.levels.clear();
+    return e;
+  }
+
+  tbb::parallel_for(size_t(0), n, [&](size_t) {
+    const size_t k = claimLevel();
+    if (k == kNoLevel) return;  // (taken while the search ran)
+    runLevel(k, w1, true);
     // level 0's bounds by the first thread to find no level left to claim: it would otherwise wait
     // for the last levels' synthesis (the held output pass) or for the other thread's last level
     // (the bunny chain: 0.16 ms that came after both, at the end)
-    if (next_claim.load() >= n && !bounds_taken.exchange(true)) base_bounds = computeBoundingSphere(original);
+    if (allClaimed() && !bounds_taken.exchange(true)) base_bounds = computeBoundingSphere(original);
   });
+  speculation.wait();
   if (!base_bounds) base_bounds = computeBoundingSphere(original);
   finish_group.wait();
   for (const Error& e : errors)

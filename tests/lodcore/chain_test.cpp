@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -11,6 +12,13 @@
 #include "scenelod/lodcore/chain.h"
 
 using namespace scenelod;
+
+namespace scenelod::detail {
+// private test hook (lodcore/src/chain.cpp): how a chain builds its coarse levels during the w_1
+// search's first probe (0 not at all, 1 on another thread meanwhile, 2 all before the probe);
+// returns the previous mode
+int setChainSpeculationForTest(int mode);
+}  // namespace scenelod::detail
 
 namespace {
 
@@ -170,6 +178,67 @@ TEST(Chain, SearchedFirstLevelIsTheSearchedWidthClusteredAfresh) {
         const double diff = std::fabs(double(single.triangleCount()) - double(m.triangleCount() / 2));
         EXPECT_LE(diff, 0.05 * double(m.triangleCount() / 2)) << lodMethodName(method);
       }
+}
+
+// A chain's w_1 search on a small mesh first probes one width while levels n .. 3 are built at
+// that width; they are kept when the probe ends the search (it becomes w_1) and dropped and built
+// again at the real w_1 otherwise. Mode 2 builds all of them before the probe, so both the keeping
+// and the dropping are exercised whatever the thread count and timing: every chain must equal the
+// one built without any (mode 0), report its progress in order up to 1, and time every level.
+TEST(Chain, LevelsBuiltDuringTheFirstProbeAreKeptOrDropped) {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+    bool first_probe_ends_search;
+  };
+  const Case cases[] = {{"bumpy sphere 48 x 48", test::makeBumpySphere(48, 48), true},
+                        {"sphere and CAD part", testMesh(), false}};
+  struct Seen {
+    double last = -1.0;
+    bool monotone = true;
+  };
+  for (const Case& c : cases) {
+    ChainParams cp;
+    cp.level_count = 6;
+    LodChain reference;
+    ChainStats reference_stats;
+    const int previous = detail::setChainSpeculationForTest(0);
+    ASSERT_TRUE(buildChain(c.mesh, cp, reference, &reference_stats).ok());
+    // which of the two paths this mesh takes (if the search's rule changes, pick another mesh)
+    if (c.first_probe_ends_search) EXPECT_EQ(reference_stats.first_width_probes, 1u) << c.name;
+    else EXPECT_GT(reference_stats.first_width_probes, 1u) << c.name;
+    for (int mode : {1, 2})
+      for (int threads : {1, 2, 4}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        detail::setChainSpeculationForTest(mode);
+        Seen seen;
+        cp.progress.fn = [](void* u, double f, const char*) {
+          Seen* s = static_cast<Seen*>(u);
+          if (f < s->last) s->monotone = false;
+          s->last = f;
+        };
+        cp.progress.user = &seen;
+        LodChain chain;
+        ChainStats stats;
+        ASSERT_TRUE(buildChain(c.mesh, cp, chain, &stats).ok());
+        cp.progress = ProgressCallback();
+        const std::string where = std::string(c.name) + ", mode " + std::to_string(mode) + ", " +
+                                  std::to_string(threads) + " threads";
+        EXPECT_EQ(stats.first_width_probes, reference_stats.first_width_probes) << where;
+        EXPECT_TRUE(seen.monotone) << where;
+        EXPECT_DOUBLE_EQ(seen.last, 1.0) << where;
+        ASSERT_EQ(chain.levelCount(), reference.levelCount()) << where;
+        for (size_t k = 0; k < chain.levelCount(); ++k) {
+          EXPECT_TRUE(sameMesh(chain.levels[k].mesh, reference.levels[k].mesh)) << where << ", level " << k;
+          EXPECT_EQ(chain.levels[k].cell_width, reference.levels[k].cell_width) << where << ", level " << k;
+          EXPECT_EQ(chain.levels[k].max_error, reference.levels[k].max_error) << where << ", level " << k;
+          EXPECT_EQ(chain.levels[k].bounds.radius, reference.levels[k].bounds.radius) << where << ", level " << k;
+        }
+        ASSERT_EQ(stats.level_seconds.size(), 6u);
+        for (double seconds : stats.level_seconds) EXPECT_GT(seconds, 0.0) << where;
+      }
+    detail::setChainSpeculationForTest(previous);
+  }
 }
 
 TEST(Chain, ProgressIsReportedUpToOne) {
