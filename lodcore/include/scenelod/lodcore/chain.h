@@ -29,7 +29,10 @@ struct ChainParams {
 // the previous one are kept, so level indices always match cell widths.
 // Errors: invalid mesh (as validateMesh), first_cell_width negative or not finite, growth not finite
 // or <= 1, a method that is not a generator. An empty mesh, or level_count 0, gives a chain with only
-// level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB.
+// level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB. With
+// w_1 searched on a small mesh (see findCellWidthForTarget) and two threads or more, levels n .. 3
+// are built at the search's first width while it is probed, and kept when that width becomes w_1
+// (otherwise dropped and built again: the chain is the same either way).
 Error buildChain(const Mesh& original, const ChainParams& params, LodChain& out, struct ChainStats* stats = nullptr);
 
 // The same chain from a mesh the caller hands over: level 0 takes `original` by move instead of
@@ -49,9 +52,11 @@ struct ChainStats {
 
 // Finds by a safeguarded secant search (a first width from the vertices' incident areas, then
 // count ~ w^-alpha with alpha from the last two probes, falling back to bisection on log width; on
-// meshes under 43,690 referenced vertices the first round probes two widths at once, on two TBB
-// threads where there are two, with the same result on any number) a cell width whose clustering gives a triangle count within
-// `tolerance` (relative) of `target_triangles`, or the closest found. Errors: target 0, empty mesh
+// meshes under 43,690 referenced vertices the first probe is 0.7 x tolerance narrower than the
+// area model's width and, when it misses, the next round probes two widths at once, on two TBB
+// threads where there are two, with the same result on any number) a cell width whose clustering
+// gives a triangle count within `tolerance` (relative) of `target_triangles`, or the closest found.
+// A chain's automatic w_1 is this search's width for half the triangles at a tolerance of 0.05. Errors: target 0, empty mesh
 // (no triangles), invalid mesh, a method that is not a clustering method. Cost: O(V log V) once,
 // then typically 3-10 O(V + T) counting passes (up to 48, plus 33 when the count jumps).
 Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, size_t target_triangles,
