@@ -191,26 +191,36 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   // bunny, a bumpy sphere and the shared models' 21 meshes of 1,000 triangles or more the chains'
   // searches took 83 rounds of probes (78 with the pair first, 93 without a pair), and 3 of them
   // end at the first probe (docs/bench/clustering.md, "w_1 search" and "first probe alone").
+  // one probe at w: the closest width so far; within the tolerance, `ended` and the assignment kept;
+  // otherwise the bracket, and w becomes the next width (the secant with the previous probe)
+  auto step = [&](double& w, bool& ended) -> Error {
+    if (Error e = count(w, n)) return e;
+    const size_t diff = distance(n);
+    if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
+    if (within(diff)) {
+      if (keep_last) *keep = std::move(a);
+      ended = true;
+      return {};
+    }
+    if (n > target) lo = w; else hi = w;
+    const double alpha = slope(previous_w, previous_n, w, n);  // 2 after the first probe (none before)
+    previous_w = w, previous_n = n;
+    w = n > 0 ? w * std::pow(double(n) / double(target), 1.0 / alpha) : std::sqrt(lo * hi);
+    return {};
+  };
   const double spread = std::min(0.7 * tolerance, 0.1);
   const bool small = p.order.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes;
   if (spread > 0.0 && small && w * (1.0 - spread) > lo && w < hi) {
-    const double wa = w * (1.0 - spread);
-    if (hooks) hooks->before(static_cast<float>(wa));
-    size_t na = 0;
-    const Error ea = count(wa, na);
-    const size_t da = distance(na);
-    if (hooks) hooks->after(!ea && within(da));
-    if (ea) return ea;
-    best_diff = da;
-    best = static_cast<float>(wa);
-    if (within(da)) {
-      if (keep_last) *keep = std::move(a);
+    w *= 1.0 - spread;
+    if (hooks) hooks->before(static_cast<float>(w));
+    bool ended = false;
+    const Error e = step(w, ended);
+    if (hooks) hooks->after(!e && ended);
+    if (e) return e;
+    if (ended) {
       cell_width = best;
       return {};
     }
-    if (na > target) lo = wa; else hi = wa;
-    previous_w = wa, previous_n = na;
-    w = na > 0 ? wa * std::sqrt(double(na) / double(target)) : std::sqrt(lo * hi);
   }
   if (spread > 0.0 && small && w * (1.0 - spread) > lo && w * (1.0 + spread) < hi) {
     const double wa = w * (1.0 - spread), wb = w * (1.0 + spread);
@@ -246,18 +256,9 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   }
   for (int it = 0; it < 48; ++it) {
     if (!(w > lo && w < hi)) w = std::sqrt(lo * hi);
-    if (Error e = count(w, n)) return e;
-    const size_t diff = distance(n);
-    if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
-    if (within(diff)) {
-      if (keep_last) *keep = std::move(a);
-      break;
-    }
-    if (n > target) lo = w; else hi = w;
-    if (hi / lo < 1.0 + 1e-6) break;
-    const double alpha = slope(previous_w, previous_n, w, n);  // 2 after the first probe (none before)
-    previous_w = w, previous_n = n;
-    w = n > 0 ? w * std::pow(double(n) / double(target), 1.0 / alpha) : std::sqrt(lo * hi);
+    bool ended = false;
+    if (Error e = step(w, ended)) return e;
+    if (ended || hi / lo < 1.0 + 1e-6) break;
   }
   // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
   // scan widths around the best one and keep the closest
@@ -329,6 +330,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   }
 
   const size_t n = params.level_count;
+  float w1 = params.first_cell_width;  // searched below when 0 (level 1 is only ever built at it)
   out.levels.resize(n + 1);
   std::vector<Error> errors(n);
   stats.level_seconds.assign(n, 0.0);
@@ -342,7 +344,6 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   // held output pass to the task group, where the thread that runs out of levels takes it.
   detail::LevelParts held;
   double held_seconds = 0.0;
-  float held_w1 = 0.0f;
   std::atomic<size_t> synthesis_pending{n};
   std::atomic<bool> first_ready{false};  // level 1's parts are held (set after `held` is written)
   // the sort (order and sorted positions, 16 bytes per vertex) is read by assignments only: freed
@@ -372,9 +373,9 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
       params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
     }
   };
-  auto levelParams = [&](size_t k, float w1) {
+  auto levelParams = [&](size_t k, float first_width) {
     ClusterParams cp = params.cluster;
-    cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+    cp.cell_width = static_cast<float>(double(first_width) * std::pow(double(params.growth), double(k)));
     return cp;
   };
   // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
@@ -443,14 +444,14 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
       std::vector<float>().swap(p.weights);
       std::vector<VertexFaceSums>().swap(p.face_sums);
       std::vector<glm::vec4>().swap(p.face_colors);
-      if (first_ready.load()) finish_group.run([&] { finishLevel(0, held, levelParams(0, held_w1), held_seconds, true); });
+      if (first_ready.load()) finish_group.run([&] { finishLevel(0, held, levelParams(0, w1), held_seconds, true); });
     }
   };
   // the search's last probe, at w1: level 1's assignment (empty when w1 is given or was not probed last)
   detail::Assignment first;
-  auto runLevel = [&](size_t k, float w1, bool report) {
+  auto runLevel = [&](size_t k, float first_width, bool report) {
     const Clock::time_point start = Clock::now();
-    const ClusterParams cp = levelParams(k, w1);
+    const ClusterParams cp = levelParams(k, first_width);
     LodLevel& level = out.levels[k + 1];
     detail::LevelParts parts;
     ClusterStats cs;
@@ -474,7 +475,6 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     if (k == 0) {
       held = std::move(parts);
       held_seconds = seconds;
-      held_w1 = w1;
       first_ready.store(!errors[0]);
       firstSynthesized();  // also after an error: level 2 must not wait for ever
     }
@@ -536,7 +536,6 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     next_claim = 0;
   };
 
-  float w1 = params.first_cell_width;
   t0 = Clock::now();
   if (w1 == 0.0f) {
     params.progress(0.05, "choosing w1");
