@@ -52,8 +52,17 @@ namespace {
 // slack on the searched range so that a centre exactly on a cell's face is never missed by rounding
 constexpr float kSearchSlack = 1e-4f;
 // vertices ahead of the current one whose grid slots are prefetched (the search is bound by the
-// latency of its random slot reads, vertices being visited in weight order)
+// latency of its random slot reads, vertices being visited in weight order). With the home slot of
+// the vertex's own cube prefetched too, the 1 M sphere's 50 % level (17 MB of slots) assigned in
+// 105 ms instead of 124 (minima of 32, AMD Zen 3); 8 ahead, or the slot after each home as well,
+// did no better
 constexpr size_t kPrefetchDistance = 4;
+// assignBlocksAvx2T (the flat grid of side w of large meshes) prefetches a vertex's 4 rows of heads
+// and its cluster id's slot this many vertices ahead: on AMD Zen 3 (512 KiB of L2), the 1 M
+// sphere's 10 % level, whose heads (2.9 MB) and cluster ids (2 MB) are far past L2, assigned in
+// 24-25 ms instead of 28-31 (8, 12, 16 and 32 ahead within 1 ms of each other; prefetching the 8
+// first blocks as well, which needs the heads read, cost more than it hid: 29-31 ms)
+constexpr size_t kBlocksAhead = 16;
 // CandidateCache is used where the referenced vertices are at least this many per expected cell:
 // on the bunny, assignment 1.10 -> 0.85 ms at 2 % (53 per cell), 1.14 -> 0.97 at 3 % (23), even at
 // 5 % (14: 1.18-1.20 ms, 9 % fewer instructions), a loss at 10 % (9.4: 1.35 -> 1.72 ms, an entry
@@ -106,6 +115,8 @@ class CellGrid {
   void prefetch(uint64_t h) const {
     if (mayHold(h)) __builtin_prefetch(&slots_[home(h)]);
   }
+  // the slot a new cube of hash h would be added at first (its home), held or not
+  void prefetchHome(uint64_t h) const { __builtin_prefetch(&slots_[home(h)]); }
 
   // the slot of cube (x, y, z) or null; call only when mayHold(h)
   const CubeSlot* findHeld(int32_t x, int32_t y, int32_t z, uint64_t h) const {
@@ -1879,25 +1890,40 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
   const size_t n = p.order.size();
   std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
   const glm::vec3* sorted = sortedPositions(p, local);
-  // the next vertex's range and the offset of its first head, a vertex ahead (as in assignDenseAvx2T)
-  Located ahead{};
-  size_t ahead_offset = 0;
-  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
-    const glm::vec3 pk = sorted[k];
-    ahead.q4 = _mm_mul_ps(_mm_setr_ps(pk.x, pk.y, pk.z, 0.0f), inv4);
-    ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, half4), slack4)), lo_cube4);
-    ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, half4), slack4)), lo_cube4);
-    // lo >= 0: lo_cube is 3 cubes below the box
-    ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
-                   size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
+  // each vertex's range and the offset of its first head, planned kBlocksAhead vertices ahead, when
+  // its 4 rows of heads and its cluster id's slot are prefetched (see kBlocksAhead)
+  struct Planned {
+    Located at;
+    size_t offset;
   };
-  if (n > 0) plan(0);
+  Planned ring[kBlocksAhead];
+  const uint32_t* heads = grid.head.data();
+  const uint32_t* order = p.order.data();
+  uint32_t* cluster_of = out.cluster_of.data();
+  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
+    Planned& a = ring[k % kBlocksAhead];
+    const glm::vec3 pk = sorted[k];
+    a.at.q4 = _mm_mul_ps(_mm_setr_ps(pk.x, pk.y, pk.z, 0.0f), inv4);
+    a.at.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(a.at.q4, half4), slack4)), lo_cube4);
+    a.at.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(a.at.q4, half4), slack4)), lo_cube4);
+    // lo >= 0: lo_cube is 3 cubes below the box
+    a.offset = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 2))) * sz +
+               size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(a.at.lo4)));
+    const uint32_t* h = heads + a.offset;
+    _mm_prefetch(reinterpret_cast<const char*>(h), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(h + sy), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(h + sz), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(h + sz + sy), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(cluster_of + order[k]), _MM_HINT_T0);
+  };
+  for (size_t k = 0; k < std::min(n, kBlocksAhead); ++k) plan(k);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
-    const __m128 q4 = ahead.q4;
-    const __m128i lo4 = ahead.lo4, hi4 = ahead.hi4;
-    const size_t first = ahead_offset;
-    if (i + 1 < n) plan(i + 1);
+    const Planned& planned = ring[i % kBlocksAhead];
+    const __m128 q4 = planned.at.q4;
+    const __m128i lo4 = planned.at.lo4, hi4 = planned.at.hi4;
+    const size_t first = planned.offset;
+    if (i + kBlocksAhead < n) plan(i + kBlocksAhead);
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
     uint32_t found[8 * 5 + 8];  // 8 blocks at counts up to 5, then 8 sentinels of padding
     uint32_t* list = found;
@@ -1906,7 +1932,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
     const bool narrow =
         (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
     if (narrow) {
-      const uint32_t* base = grid.head.data() + first;
+      const uint32_t* base = heads + first;
       for (int k = 0; k < 8; ++k) {
         const uint32_t h = base[offset[k]];
         _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
@@ -1935,7 +1961,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
                    size_t(_mm_cvtsi128_si32(c4)),
                best + 1);
     }
-    out.cluster_of[p.order[i]] = best;
+    cluster_of[order[i]] = best;
   }
 }
 #endif
@@ -2073,6 +2099,11 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     }
     s.h = cubeHash(s.lo[0], s.lo[1], s.lo[2]);
     for (int k = 0; k < 8; ++k) grid.prefetch(s.h + step[k]);
+    // the cube holding the vertex, one of the 8 (floor(q) is lo or lo + 1 on each axis): where the
+    // vertex becomes a centre, its cell is added there, most often to a cube holding none yet, whose
+    // slot the filter kept from being prefetched above
+    const int kc = (floorToInt(q.x) - s.lo[0]) + 2 * (floorToInt(q.y) - s.lo[1]) + 4 * (floorToInt(q.z) - s.lo[2]);
+    grid.prefetchHome(s.h + step[kc]);
   };
   for (size_t i = 0; i < std::min(n, kPrefetchDistance); ++i) plan(i, ring[i]);
 
