@@ -2,8 +2,14 @@
 // of every level (positions, normals, colours, uvs, triangles, edges, thicknesses, points) and of its
 // cell width, maximum error and bounding sphere. Two builds whose lines are equal produce the same
 // bits; a speed change that must not move the output is checked by diffing the two outputs.
+// With "geometry", the hash is of the primitives as sets instead: each triangle as its three corners
+// (position, normal, colour) from its least corner on, in its own winding, the triangles sorted, and
+// likewise edges (with thickness) and points, so that a change meant to renumber the output's
+// vertices, and nothing else, is checked too.
 // Built and run by scripts/chain-hash (against a build's libscenelod_core.a). Not a benchmark.
-// Usage: chain_hash [big]   ("big" adds the 1 M-triangle bumpy sphere's chains)
+// Usage: chain_hash [big] [geometry]   ("big" adds the 1 M-triangle bumpy sphere's chains)
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -42,6 +48,41 @@ Mesh coloured(Mesh m) {
   return m;
 }
 
+// one output corner: position, normal and colour (zero where the level has none), as raw words
+using Corner = std::array<uint32_t, 9>;
+Corner corner(const Mesh& m, uint32_t v) {
+  Corner c{};
+  std::memcpy(&c[0], &m.positions[v], sizeof(glm::vec3));
+  if (!m.normals.empty()) std::memcpy(&c[3], &m.normals[v], sizeof(glm::vec3));
+  if (!m.colors.empty()) std::memcpy(&c[6], &m.colors[v], sizeof(glm::vec3));
+  return c;
+}
+
+// the level's primitives as sorted sets of corner tuples (see the header)
+void hashGeometry(const Mesh& m, Fnv& f) {
+  std::vector<std::array<Corner, 3>> tris;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    std::array<Corner, 3> c = {corner(m, m.triangles[3 * t]), corner(m, m.triangles[3 * t + 1]),
+                               corner(m, m.triangles[3 * t + 2])};
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());  // the winding is kept
+    tris.push_back(c);
+  }
+  std::sort(tris.begin(), tris.end());
+  std::vector<std::pair<std::array<Corner, 2>, float>> edges;
+  for (size_t e = 0; e < m.edgeCount(); ++e) {
+    std::array<Corner, 2> c = {corner(m, m.edges[2 * e]), corner(m, m.edges[2 * e + 1])};
+    if (c[1] < c[0]) std::swap(c[0], c[1]);
+    edges.push_back({c, m.edgeThickness(e)});
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<Corner> points;
+  for (uint32_t v : m.points) points.push_back(corner(m, v));
+  std::sort(points.begin(), points.end());
+  f.vec(tris), f.vec(edges), f.vec(points);
+}
+
+bool g_geometry = false;
+
 int run(const char* name, const Mesh& m, const ChainParams& cp) {
   LodChain chain;
   if (Error e = buildChain(m, cp, chain)) {
@@ -50,8 +91,12 @@ int run(const char* name, const Mesh& m, const ChainParams& cp) {
   }
   Fnv f;
   for (const LodLevel& l : chain.levels) {
-    f.vec(l.mesh.positions), f.vec(l.mesh.normals), f.vec(l.mesh.colors), f.vec(l.mesh.uvs);
-    f.vec(l.mesh.triangles), f.vec(l.mesh.edges), f.vec(l.mesh.edge_thickness), f.vec(l.mesh.points);
+    if (g_geometry) {
+      hashGeometry(l.mesh, f);
+    } else {
+      f.vec(l.mesh.positions), f.vec(l.mesh.normals), f.vec(l.mesh.colors), f.vec(l.mesh.uvs);
+      f.vec(l.mesh.triangles), f.vec(l.mesh.edges), f.vec(l.mesh.edge_thickness), f.vec(l.mesh.points);
+    }
     f.pod(l.cell_width), f.pod(l.max_error), f.pod(l.bounds.center), f.pod(l.bounds.radius);
   }
   std::printf("%-40s levels %zu last %zu tris  %016llx\n", name, chain.levels.size(),
@@ -62,7 +107,15 @@ int run(const char* name, const Mesh& m, const ChainParams& cp) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool big = argc > 1 && std::strcmp(argv[1], "big") == 0;
+  bool big = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "big") == 0) big = true;
+    else if (std::strcmp(argv[i], "geometry") == 0) g_geometry = true;
+    else {
+      std::fprintf(stderr, "chain_hash: unknown argument '%s' (usage: chain_hash [big] [geometry])\n", argv[i]);
+      return 2;
+    }
+  }
   struct Named { std::string name; Mesh mesh; };
   std::vector<Named> meshes;
   Mesh b;

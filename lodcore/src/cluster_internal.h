@@ -83,7 +83,10 @@ class GridHash {
   size_t size_ = 0;
 };
 
-// Which cluster each vertex joined, and the cell each cluster is bound to (for clamping).
+// Which cluster each vertex joined, and the cell each cluster is bound to (for clamping). The
+// clusterings number clusters in creation order (heaviest first), as `assign` and assignClusters
+// return them; a level (clusterLevelParts) renumbers them in the order of their first vertex by
+// index before elimination and synthesis (renumberByFirstVertex in cluster_mesh.cpp).
 struct Assignment {
   std::vector<uint32_t> cluster_of;  // per vertex; kNone for vertices no primitive references
   std::vector<uint32_t> heaviest;    // per cluster: its heaviest vertex (the floating cell's centre)

@@ -69,6 +69,38 @@ float maxSquaredDisplacement(const glm::vec3* pos, const uint32_t* cluster_of, s
   return maxSquaredDisplacementScalar(pos, cluster_of, n, rep);
 }
 
+// Renumbers the clusters in the order of their first vertex by index. The assignment numbers them
+// in creation order, heaviest first, which is spatially random: elimination's edge lists,
+// synthesis' sums and the output's vertices, all indexed by cluster, were then read at random while
+// the mesh's own order (the input triangles, the vertices) is spatially coherent. On the 1 M
+// sphere's 50 % level (258 k clusters), 3.3-3.5 ms of renumbering took elimination from 47-51 ms
+// to 32-35, synthesis from 31 to 22 and the output pass from 21-24 to 11 (AMD Zen 3). Which
+// vertex is each cluster's heaviest is unchanged; only the ids move. Without a branch per vertex:
+// a third to a half of the vertices open a cluster at fine levels, in no predictable pattern.
+void renumberByFirstVertex(Assignment& a) {
+  const uint32_t nc = a.cluster_count;
+  if (nc == 0) return;
+  std::vector<uint32_t> remap(nc, kNone);
+  std::vector<uint32_t> heaviest(nc);
+  uint32_t* cluster_of = a.cluster_of.data();
+  const uint32_t* old_heaviest = a.heaviest.data();
+  uint32_t* to = remap.data();
+  uint32_t* h = heaviest.data();
+  uint32_t next = 0;
+  for (size_t v = 0, n = a.cluster_of.size(); v < n; ++v) {
+    const uint32_t c = cluster_of[v];
+    if (c == kNone) continue;  // unreferenced: rare, and together
+    const uint32_t r = to[c];
+    const uint32_t fresh = uint32_t(r == kNone);
+    const uint32_t id = fresh ? next : r;
+    to[c] = id;
+    h[id] = old_heaviest[c];  // (the same value again when not fresh)
+    next += fresh;
+    cluster_of[v] = id;
+  }
+  a.heaviest.swap(heaviest);
+}
+
 }  // namespace
 
 Error assign(const PreparedMesh& p, const ClusterParams& params, Assignment& a) {
@@ -107,6 +139,7 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
   parts = LevelParts();
   if (stats) *stats = ClusterStats();
   const Mesh& m = *prepared.mesh;
+  renumberByFirstVertex(a);
   // elimination before synthesis (neither reads the other's result), so that the representatives
   // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
   // eliminated primitives (about 6 bytes per cluster at fine levels) are held through synthesis.

@@ -117,6 +117,8 @@ struct ClusterAssignment {
 };
 
 // Runs only the clustering step of clusterPrepared. Same errors. Cost: O(V) time and memory.
+// Clusters are numbered in creation order, so heaviest centre first (clusterPrepared renumbers them
+// by first vertex index before building the level, which orders its output vertices that way).
 Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, ClusterAssignment& out);
 
 // Numbers measured while clustering one level.
