@@ -3,11 +3,12 @@
 // cell width, maximum error and bounding sphere. Two builds whose lines are equal produce the same
 // bits; a speed change that must not move the output is checked by diffing the two outputs.
 // With "geometry", the hash is of the primitives as sets instead: each triangle as its three corners
-// (position, normal, colour) from its least corner on, in its own winding, the triangles sorted, and
-// likewise edges (with thickness) and points, so that a change meant to renumber the output's
-// vertices, and nothing else, is checked too.
+// (position, normal, colour) in its own winding, the least of its three rotations, the triangles
+// sorted, and likewise edges (with thickness) and points, so that a change meant to renumber the
+// output's vertices, and nothing else, is checked too; "positions" does the same with the corners'
+// positions alone (for a change that may also move normals by rounding).
 // Built and run by scripts/chain-hash (against a build's libscenelod_core.a). Not a benchmark.
-// Usage: chain_hash [big] [geometry]   ("big" adds the 1 M-triangle bumpy sphere's chains)
+// Usage: chain_hash [big] [geometry|positions]   ("big" adds the 1 M-triangle bumpy sphere's chains)
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -48,11 +49,14 @@ Mesh coloured(Mesh m) {
   return m;
 }
 
+bool g_geometry = false, g_positions_only = false;
+
 // one output corner: position, normal and colour (zero where the level has none), as raw words
 using Corner = std::array<uint32_t, 9>;
 Corner corner(const Mesh& m, uint32_t v) {
   Corner c{};
   std::memcpy(&c[0], &m.positions[v], sizeof(glm::vec3));
+  if (g_positions_only) return c;
   if (!m.normals.empty()) std::memcpy(&c[3], &m.normals[v], sizeof(glm::vec3));
   if (!m.colors.empty()) std::memcpy(&c[6], &m.colors[v], sizeof(glm::vec3));
   return c;
@@ -64,8 +68,14 @@ void hashGeometry(const Mesh& m, Fnv& f) {
   for (size_t t = 0; t < m.triangleCount(); ++t) {
     std::array<Corner, 3> c = {corner(m, m.triangles[3 * t]), corner(m, m.triangles[3 * t + 1]),
                                corner(m, m.triangles[3 * t + 2])};
-    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());  // the winding is kept
-    tris.push_back(c);
+    // the least of the three rotations (the winding is kept; two equal corners make the least corner
+    // alone ambiguous)
+    std::array<Corner, 3> best = c;
+    for (int r = 1; r < 3; ++r) {
+      std::rotate(c.begin(), c.begin() + 1, c.end());
+      best = std::min(best, c);
+    }
+    tris.push_back(best);
   }
   std::sort(tris.begin(), tris.end());
   std::vector<std::pair<std::array<Corner, 2>, float>> edges;
@@ -80,8 +90,6 @@ void hashGeometry(const Mesh& m, Fnv& f) {
   std::sort(points.begin(), points.end());
   f.vec(tris), f.vec(edges), f.vec(points);
 }
-
-bool g_geometry = false;
 
 int run(const char* name, const Mesh& m, const ChainParams& cp) {
   LodChain chain;
@@ -111,8 +119,9 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "big") == 0) big = true;
     else if (std::strcmp(argv[i], "geometry") == 0) g_geometry = true;
+    else if (std::strcmp(argv[i], "positions") == 0) g_geometry = g_positions_only = true;
     else {
-      std::fprintf(stderr, "chain_hash: unknown argument '%s' (usage: chain_hash [big] [geometry])\n", argv[i]);
+      std::fprintf(stderr, "chain_hash: unknown argument '%s' (usage: chain_hash [big] [geometry|positions])\n", argv[i]);
       return 2;
     }
   }

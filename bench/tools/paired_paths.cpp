@@ -5,7 +5,8 @@
 // library's private test hooks, each of which gives the same bits on and off (tests compare them), so
 // this only asks which is faster where. Built and run by scripts/paired-paths against a build's
 // libscenelod_core.a. Not a unit test: it times.
-// Usage: paired_paths bunny|sphere1M FRACTION PAIRS   (FRACTION of the triangles kept, e.g. 0.5)
+// Usage: paired_paths bunny|sphere1M FRACTION PAIRS [NAME]   (FRACTION of the triangles kept, e.g.
+// 0.5; NAME: only the paths whose name contains it)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -27,6 +28,7 @@ bool useWindowedProbes(bool on);
 bool useRepeatedEdgeDrop(bool on);
 bool useEigenvalueLanes(bool on);
 bool useGroupedSynthesis(bool on);
+int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
 }  // namespace scenelod::detail
 
 using namespace scenelod;
@@ -35,7 +37,7 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 int usage(const char* why) {
-  std::fprintf(stderr, "paired_paths: %s\nusage: paired_paths bunny|sphere1M FRACTION PAIRS\n", why);
+  std::fprintf(stderr, "paired_paths: %s\nusage: paired_paths bunny|sphere1M FRACTION PAIRS [NAME]\n", why);
   return 2;
 }
 
@@ -48,7 +50,7 @@ struct Path {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) return usage("three arguments expected");
+  if (argc != 4 && argc != 5) return usage("three or four arguments expected");
   Mesh m;
   if (std::strcmp(argv[1], "bunny") == 0) {
     if (Error e = readObj(SCENELOD_BUNNY_PATH, m)) return usage(e.message.c_str());
@@ -106,10 +108,13 @@ int main(int argc, char** argv) {
       {"repeated edge drop: elimination", detail::useRepeatedEdgeDrop, elimination},
       {"eigenvalue lanes: synthesis", detail::useEigenvalueLanes, synthesis},
       {"grouped synthesis: synthesis", detail::useGroupedSynthesis, synthesis},
+      // last: the hook(true) after each pair leaves it on always, not by size as by default
+      {"renumbering: whole level", [](bool on) { return detail::setRenumberingForTest(on ? 1 : 0) != 0; }, level},
   };
   std::printf("%s, %zu of %zu triangles' width (%.9g), %d pairs; ratio = time off / time on\n", argv[1], target,
               m.triangleCount(), params.cell_width, pairs);
   for (const Path& path : paths) {
+    if (argc == 5 && !std::strstr(path.name, argv[4])) continue;
     std::vector<double> ratio, on_ms, off_ms;
     for (int i = 0; i < pairs; ++i) {
       double t[2] = {0.0, 0.0};  // on, off

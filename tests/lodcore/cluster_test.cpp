@@ -1,6 +1,7 @@
 // clusterMesh as a whole: output validity for every method and option, the consistency experiment of
 // Low & Tan 1997 §3.2.2, synthesis bounds, bad input.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -348,4 +349,106 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
   detail::useAvx2Paths(was);
   EXPECT_EQ(levels, 48u);
   EXPECT_GT(split, 0u);  // the CAD part's sharp edges split vertices in some levels
+}
+
+namespace scenelod::detail {
+int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
+}
+
+namespace {
+
+// a level's triangles as sorted position triples, each the least of its three rotations (its
+// winding kept), with the corners' normals alongside, in the same order
+struct CornerSet {
+  std::vector<std::array<float, 18>> tris;  // 3 x (position, normal)
+};
+CornerSet cornerSet(const Mesh& m) {
+  CornerSet s;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    std::array<std::array<float, 6>, 3> c;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.triangles[3 * t + k];
+      c[k] = {m.positions[v].x, m.positions[v].y, m.positions[v].z, m.normals[v].x, m.normals[v].y, m.normals[v].z};
+    }
+    auto positions = [](const std::array<std::array<float, 6>, 3>& r) {
+      return std::make_tuple(r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]);
+    };
+    std::array<std::array<float, 6>, 3> best = c;
+    for (int r = 1; r < 3; ++r) {
+      std::rotate(c.begin(), c.begin() + 1, c.end());
+      if (positions(c) < positions(best)) best = c;
+    }
+    std::array<float, 18> flat;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 6; ++j) flat[6 * k + j] = best[k][j];
+    s.tris.push_back(flat);
+  }
+  std::sort(s.tris.begin(), s.tris.end(), [](const std::array<float, 18>& a, const std::array<float, 18>& b) {
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        if (a[6 * k + j] != b[6 * k + j]) return a[6 * k + j] < b[6 * k + j];
+    return false;
+  });
+  return s;
+}
+
+}  // namespace
+
+// A level renumbers its clusters by first vertex index where they are many (cluster_mesh.cpp): the
+// same primitives at the same positions, the same error and cluster count; only the vertices' order
+// moves, and with it the corner a triangle starts at, so normals may differ in their last bits.
+TEST(ClusterMesh, RenumberingClustersKeepsTheLevel) {
+  const Mesh m = test::makeBumpySphere(300, 400);  // 120 k vertices
+  PreparedMesh p;
+  ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
+  size_t renumbered_by_default = 0, kept_by_default = 0;
+  for (LodMethod method : {LodMethod::kFloatingHeaviest, LodMethod::kFloatingNearest, LodMethod::kUniform})
+    for (float w : {0.006f, 0.04f}) {
+      ClusterParams params;
+      params.method = method;
+      params.cell_width = w;
+      Mesh on, off, by_default;
+      ClusterStats on_stats, off_stats;
+      SCOPED_TRACE(std::string(lodMethodName(method)) + " w=" + std::to_string(w));
+      detail::setRenumberingForTest(1);
+      ASSERT_TRUE(clusterPrepared(p, params, on, &on_stats).ok());
+      detail::setRenumberingForTest(0);
+      ASSERT_TRUE(clusterPrepared(p, params, off, &off_stats).ok());
+      detail::setRenumberingForTest(-1);
+      ASSERT_TRUE(clusterPrepared(p, params, by_default).ok());
+      ASSERT_GT(off.triangleCount(), 1000u);
+      EXPECT_EQ(on_stats.cluster_count, off_stats.cluster_count);
+      EXPECT_TRUE(sameBits(std::vector<float>{on_stats.max_error}, std::vector<float>{off_stats.max_error}));
+      EXPECT_EQ(on.vertexCount(), off.vertexCount());
+      EXPECT_EQ(on.edgeCount(), off.edgeCount());
+      EXPECT_EQ(on.pointCount(), off.pointCount());
+      // the same positions, as a multiset, and the same triangles
+      std::vector<glm::vec3> pa = on.positions, pb = off.positions;
+      auto lex = [](const glm::vec3& a, const glm::vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+      std::sort(pa.begin(), pa.end(), lex);
+      std::sort(pb.begin(), pb.end(), lex);
+      EXPECT_TRUE(sameBits(pa, pb));
+      const CornerSet a = cornerSet(on), b = cornerSet(off);
+      ASSERT_EQ(a.tris.size(), b.tris.size());
+      float normal_diff = 0.0f;
+      size_t position_mismatches = 0;
+      for (size_t t = 0; t < a.tris.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+          for (int j = 0; j < 3; ++j) position_mismatches += a.tris[t][6 * k + j] != b.tris[t][6 * k + j];
+          for (int j = 3; j < 6; ++j) normal_diff = std::max(normal_diff, std::fabs(a.tris[t][6 * k + j] - b.tris[t][6 * k + j]));
+        }
+      EXPECT_EQ(position_mismatches, 0u);
+      EXPECT_LT(normal_diff, 1e-4f);
+      // the default renumbers where the clusters are many (32,768 or more) and leaves the others
+      const bool many = off_stats.cluster_count >= 32768;
+      const Mesh& expected = many ? on : off;
+      EXPECT_TRUE(sameBits(by_default.positions, expected.positions));
+      EXPECT_TRUE(sameBits(by_default.triangles, expected.triangles));
+      (many ? renumbered_by_default : kept_by_default) += 1;
+      // renumbered, the output's vertices differ in order from the creation order's
+      if (many) EXPECT_FALSE(sameBits(on.positions, off.positions));
+    }
+  detail::setRenumberingForTest(-1);
+  EXPECT_GT(renumbered_by_default, 0u);  // both sides of the threshold were exercised
+  EXPECT_GT(kept_by_default, 0u);
 }
