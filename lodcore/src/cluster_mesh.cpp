@@ -76,6 +76,10 @@ float maxSquaredDisplacement(const glm::vec3* pos, const uint32_t* cluster_of, s
 // at 50 % (258 k clusters), 1.085 at 25 %, 1.038 at 10 % (51 k), 0.971 at 3 % (15 k), 0.962 at 1 %;
 // the bunny 1.011 at 50 % (17.6 k), 0.97 at 5 %, 0.925 at 2 %
 constexpr uint32_t kRenumberMinClusters = 32768;
+// -1: renumber where the clusters are at least kRenumberMinClusters; 0 never, 1 always (the test
+// hook setRenumberingForTest, for paired timings and tests)
+std::atomic<int> g_renumber{-1};
+
 // Renumbers the clusters in the order of their first vertex by index. The assignment numbers them
 // in creation order, heaviest first, which is spatially random: elimination's edge lists,
 // synthesis' sums and the output's vertices, all indexed by cluster, were then read at random while
@@ -84,10 +88,6 @@ constexpr uint32_t kRenumberMinClusters = 32768;
 // to 32-35, synthesis from 31 to 22 and the output pass from 21-24 to 11 (AMD Zen 3). Which
 // vertex is each cluster's heaviest is unchanged; only the ids move. Without a branch per vertex:
 // a third to a half of the vertices open a cluster at fine levels, in no predictable pattern.
-// -1: renumber where the clusters are at least kRenumberMinClusters; 0 never, 1 always (the test
-// hook setRenumberingForTest, for paired timings and tests)
-std::atomic<int> g_renumber{-1};
-
 void renumberByFirstVertex(Assignment& a) {
   const uint32_t nc = a.cluster_count;
   const int mode = g_renumber.load(std::memory_order_relaxed);
