@@ -261,5 +261,9 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
                         ClusterStats* stats, void (*synthesized)(void*) = nullptr, void* context = nullptr);
 // The assignment step alone: checks the width and the method, then assigns every vertex.
 Error assign(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a);
+// The first step's renumbering of a level's clusters by first vertex (levels of 32,768 clusters or
+// more; the others are left as they are), which clusterLevelParts does to the assignment it is
+// given; public to the tools that time the steps apart (bench/tools/level_phases.cpp).
+void renumberByFirstVertex(Assignment& a);
 
 }  // namespace scenelod::detail

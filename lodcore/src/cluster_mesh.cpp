@@ -80,6 +80,8 @@ constexpr uint32_t kRenumberMinClusters = 32768;
 // hook setRenumberingForTest, for paired timings and tests)
 std::atomic<int> g_renumber{-1};
 
+}  // namespace
+
 // Renumbers the clusters in the order of their first vertex by index. The assignment numbers them
 // in creation order, heaviest first, which is spatially random: elimination's edge lists,
 // synthesis' sums and the output's vertices, all indexed by cluster, were then read at random while
@@ -112,8 +114,6 @@ void renumberByFirstVertex(Assignment& a) {
   }
   a.heaviest.swap(heaviest);
 }
-
-}  // namespace
 
 // the test hook: mode -1 renumbers by size (the default), 0 never, 1 always; returns the previous mode
 int setRenumberingForTest(int mode) { return g_renumber.exchange(mode < 0 ? -1 : mode > 0 ? 1 : 0); }
