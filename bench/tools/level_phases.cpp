@@ -1,9 +1,10 @@
 // Where one clustering level spends its time: the phases of clusterPrepared timed apart (the
 // assignment, the renumbering of large levels, elimination, synthesis, the output pass), one thread,
 // minima over repetitions, for each level of a mesh's 8-level chain (its own widths, w_1 searched as
-// buildChain does) or at the widths that keep given fractions of the triangles. The phases run in
-// the level's order on the level's data, so their sum is the level's time less its statistics
-// (the maximum displacement) and its allocations. Built and run by scripts/level-phases against a
+// buildChain does, and as there without the sorted copy of a small mesh's positions) or at the
+// widths that keep given fractions of the triangles (as clusterPrepared, with the copy). The phases
+// run in the level's order on the level's data, so their sum is the level's time less its
+// statistics (the maximum displacement) and its allocations. Built and run by scripts/level-phases against a
 // build's libscenelod_core.a. Not a unit test: it times.
 // Usage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] REPETITIONS
 #include <algorithm>
@@ -105,6 +106,11 @@ int main(int argc, char** argv) {
     if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
     prepare_ms = std::min(prepare_ms, msSince(t0));
   }
+  // a chain's levels of a small mesh read its positions through the order, the sorted copy dropped
+  // (as buildChain does); single levels (clusterPrepared) keep it
+  const bool chain_levels = std::strcmp(argv[2], "chain") == 0;
+  if (chain_levels && p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
+    std::vector<glm::vec3>().swap(p.sorted_positions);
   for (Row& r : rows) {
     ClusterParams cp = params;
     cp.cell_width = r.width;
