@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -45,9 +46,8 @@ struct Row {
   uint32_t clusters = 0;
   size_t triangles = 0;
   // minima, ms: assign, renumber, elimination, synthesis, output
-  double phase[5] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                     std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                     std::numeric_limits<double>::infinity()};
+  double phase[5];
+  Row() { std::fill(std::begin(phase), std::end(phase), std::numeric_limits<double>::infinity()); }
 };
 
 }  // namespace
@@ -69,9 +69,17 @@ int main(int argc, char** argv) {
   // one thread, as a level of a chain runs (the levels, not the phases, go in parallel), and the
   // prepare on one thread too
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const bool chain_levels = std::strcmp(argv[2], "chain") == 0;
   ClusterParams params;
+  PreparedMesh p;
+  double prepare_ms = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < repetitions; ++i) {
+    const Clock::time_point t0 = Clock::now();
+    if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
+    prepare_ms = std::min(prepare_ms, msSince(t0));
+  }
   std::vector<Row> rows;
-  if (std::strcmp(argv[2], "chain") == 0) {
+  if (chain_levels) {
     // the chain's own widths (buildChain searches w_1 for half the triangles)
     ChainParams cp;
     cp.cluster = params;
@@ -83,11 +91,13 @@ int main(int argc, char** argv) {
       r.width = chain.levels[k].cell_width;
       rows.push_back(r);
     }
+    // a chain's levels of a small mesh read its positions through the order, the sorted copy
+    // dropped (as buildChain does); single levels (clusterPrepared) keep it
+    if (p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
+      std::vector<glm::vec3>().swap(p.sorted_positions);
   } else {
     std::stringstream list(argv[2]);
     std::string item;
-    PreparedMesh p;
-    if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
     while (std::getline(list, item, ',')) {
       const double fraction = std::atof(item.c_str());
       if (!(fraction > 0.0 && fraction < 1.0)) return usage("each FRACTION must be in (0, 1)");
@@ -98,19 +108,6 @@ int main(int argc, char** argv) {
       rows.push_back(r);
     }
   }
-
-  PreparedMesh p;
-  double prepare_ms = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < repetitions; ++i) {
-    const Clock::time_point t0 = Clock::now();
-    if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
-    prepare_ms = std::min(prepare_ms, msSince(t0));
-  }
-  // a chain's levels of a small mesh read its positions through the order, the sorted copy dropped
-  // (as buildChain does); single levels (clusterPrepared) keep it
-  const bool chain_levels = std::strcmp(argv[2], "chain") == 0;
-  if (chain_levels && p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
-    std::vector<glm::vec3>().swap(p.sorted_positions);
   for (Row& r : rows) {
     ClusterParams cp = params;
     cp.cell_width = r.width;
