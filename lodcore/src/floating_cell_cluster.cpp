@@ -259,6 +259,9 @@ constexpr double kDenseBytesPerVertex = 8.0;
 // occupied cubes of side w were 0.549 and 0.45 per expected cell on the 1 M sphere's 10 % level and
 // the bunny's 50 % level; more only regrows the vectors)
 constexpr double kBlockBytes = 20.0;
+// the bricked grid of side w (CellBlocks) gives up for the hash past this many bytes of bricks per
+// referenced vertex
+constexpr double kBrickBytesPerVertex = 16.0;
 inline size_t expectedBlocks(size_t expected_cells) { return expected_cells * 11 / 20 + 16; }
 
 #if defined(__SSE2__)
@@ -350,6 +353,12 @@ constexpr bool kAvx2Built = false;
 #endif
 // cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
 std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true}, g_cache_allowed{true};
+// the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 with a
+// limit of k bricks (setFloatingBlockBricksForTest)
+std::atomic<int> g_block_bricks{-1};
+// the grid the last assignFloating call searched (lastFloatingGridForTest)
+enum : int { kGridFlat = 0, kGridBricked = 1, kGridHash = 2, kGridHashAfterBricks = 3 };
+std::atomic<int> g_last_grid{-1};
 [[maybe_unused]] bool useAvx2() {  // unused where no AVX2 path is built
   static const bool has = cpuHasAvx2();
   return kAvx2Built && has && g_avx2_allowed.load(std::memory_order_relaxed);
@@ -1714,7 +1723,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
 }
 #endif
 
-// The flat grid of cubes of side w (where cubes of side w/2 would not fit): such a cube lists up to
+// The grid of cubes of side w (where cubes of side w/2 would not fit): such a cube lists up to
 // 8 cube cells and 64 sphere cells, so that chained lists took several rounds of dependent loads
 // and a mispredicted exit per vertex (the 1 M sphere's 10 % level: 2.5 rounds, 0.7 mispredicts and
 // 630 instructions per vertex). Here a cube's cells are kept in blocks of 4 ids; a vertex copies
@@ -1724,21 +1733,99 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
 // of the bunny's 50 % level); such cubes, and vertices within the slack of a cube face (3 cubes
 // along an axis), take a general gather. 20 bytes per block (kBlockBytes), one block per occupied
 // cube: 1.4 to 2 cells per occupied cube on the bunny and the sphere.
-// assignBlocksT's grid: the heads, the blocks of 4 cell indices and their links
+// The heads are a flat array over the box where it fits the dense budget, else (kBricked) bricks
+// of 4 x 4 x 4 cubes (256 bytes: 4 z-slices of one cache line each) allocated where a cell is
+// listed, under a table of the box's bricks (4 bytes a brick, 1/256 of the flat heads): a fine
+// level's surface then takes the bricks its cells touch, not its box. Bricked, a vertex's 2 x 2 x 2
+// cubes cost 8 more loads (their bricks' indices, mostly one cache line) and its heads mostly 2
+// lines. Where a mesh's cells spread over more bricks than max_bricks (scattered parts), add fails
+// and the caller takes the hash instead.
+template <bool kBricked>
 struct CellBlocks {
   struct Block {
     uint32_t id[4];  // cell indices, filled in order, 0 where free
   };
+  struct alignas(64) Brick {
+    uint32_t h[64];  // (z & 3) << 4 | (y & 3) << 2 | (x & 3)
+  };
   std::vector<Block> blocks;  // blocks[0] stays empty
   std::vector<uint32_t> more;  // per block: the cube's next block once it is full, 0 for none
-  std::vector<uint32_t> head;
-  size_t sy, sz;
+  std::vector<uint32_t> head;  // flat: per cube of the box
+  std::vector<uint32_t> top;   // bricked: per brick of the box, its index in `bricks`, 0 for none
+  std::vector<Brick> bricks;   // bricked: bricks[0] stays empty
+  size_t sy, sz;               // the strides of `head` (flat) or of `top` (bricked, in bricks)
+  size_t max_bricks;
 
-  CellBlocks(const size_t dims[3], size_t expected)
-      : blocks(1, Block{}), more(1, 0), sy(dims[0]), sz(dims[0] * dims[1]) {
+  CellBlocks(const size_t dims[3], size_t expected, size_t brick_limit = 0)
+      : blocks(1, Block{}), more(1, 0), max_bricks(brick_limit) {
     blocks.reserve(expectedBlocks(expected));
     more.reserve(expectedBlocks(expected));
-    head.assign(sz * dims[2], 0);
+    if (kBricked) {
+      const size_t b[3] = {(dims[0] + 3) / 4, (dims[1] + 3) / 4, (dims[2] + 3) / 4};
+      sy = b[0], sz = b[0] * b[1];
+      top.assign(sz * b[2], 0);
+      bricks.reserve(std::min(brick_limit, expectedBricks(expected)));
+      bricks.emplace_back();  // value-initialised: all heads empty
+    } else {
+      sy = dims[0], sz = dims[0] * dims[1];
+      head.assign(sz * dims[2], 0);
+    }
+  }
+  // cells reserved: an eighth over the expected count, which fell short by 3-4 % on the 1 M sphere's
+  // chain levels of 118-137 k cells (their 16-byte records then doubled beside the old ones, up to
+  // 5.7 MB at once, while the other thread held level 1's output: the chain's peak passed its budget)
+  static size_t reservedCells(size_t expected_cells, size_t vertices) {
+    return std::min(vertices, expected_cells + expected_cells / 8) + 1;
+  }
+  // bricks reserved: one per 16 expected cells (the 1 M sphere's 50 % level used one per 17.5)
+  static size_t expectedBricks(size_t expected_cells) { return expected_cells / 16 + 16; }
+  static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
+  size_t brickOf(int32_t x, int32_t y, int32_t z) const {
+    return size_t(z >> 2) * sz + size_t(y >> 2) * sy + size_t(x >> 2);
+  }
+  uint32_t headAt(int32_t x, int32_t y, int32_t z) const {
+    if constexpr (kBricked) return bricks[top[brickOf(x, y, z)]].h[inBrick(x, y, z)];
+    else return head[size_t(z) * sz + size_t(y) * sy + size_t(x)];
+  }
+  // the heads of the 2 x 2 x 2 cubes from lo into h (flat: `first` is lo's index in head)
+  SCENELOD_ALWAYS_INLINE void heads8(const int32_t lo[3], size_t first, uint32_t h[8]) const {
+    if constexpr (kBricked) {
+      const size_t bx[2] = {size_t(lo[0] >> 2), size_t((lo[0] + 1) >> 2)};
+      const size_t ix[2] = {size_t(lo[0] & 3), size_t((lo[0] + 1) & 3)};
+      for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 2; ++y) {
+          const int32_t cy = lo[1] + y, cz = lo[2] + z;
+          const uint32_t* row = top.data() + size_t(cz >> 2) * sz + size_t(cy >> 2) * sy;
+          const size_t in = size_t((cz & 3) << 4 | (cy & 3) << 2);
+          h[4 * z + 2 * y] = bricks[row[bx[0]]].h[in | ix[0]];
+          h[4 * z + 2 * y + 1] = bricks[row[bx[1]]].h[in | ix[1]];
+        }
+    } else {
+      const uint32_t* base = head.data() + first;
+      for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 2; ++y) {
+          h[4 * z + 2 * y] = base[size_t(z) * sz + size_t(y) * sy];
+          h[4 * z + 2 * y + 1] = base[size_t(z) * sz + size_t(y) * sy + 1];
+        }
+    }
+  }
+  // copies the first blocks of the 8 heads into found (4 entries each, whole), appending each
+  // head's count; returns the count, and in `chained` bit 3 where some cube has more blocks
+  SCENELOD_ALWAYS_INLINE uint32_t copyBlocks8(const uint32_t h[8], uint32_t* found, uint32_t& chained) const {
+    uint32_t count = 0;
+    chained = 0;
+    for (int k = 0; k < 8; ++k) {
+      const uint32_t* ids = blocks[h[k] >> 3].id;
+#if defined(__SSE2__)
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count), _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids)));
+#else
+      for (int j = 0; j < 4; ++j) found[count + j] = ids[j];
+#endif
+      const uint32_t c = h[k] & 7u;  // 5 when more blocks follow: the list is then made again
+      count += c;
+      chained |= c + 3u;
+    }
+    return count;
   }
   // every cell listed in the cubes lo .. hi (grid indices), into scratch, followed by `pad` spare
   // entries; returns the count
@@ -1747,16 +1834,29 @@ struct CellBlocks {
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
       for (int32_t y = lo[1]; y <= hi[1]; ++y)
         for (int32_t x = lo[0]; x <= hi[0]; ++x)
-          for (uint32_t b = head[size_t(z) * sz + size_t(y) * sy + size_t(x)] >> 3; b != 0; b = more[b])
+          for (uint32_t b = headAt(x, y, z) >> 3; b != 0; b = more[b])
             for (uint32_t k = 0; k < 4; ++k)
               if (blocks[b].id[k] != 0) scratch.push_back(blocks[b].id[k]);
     const uint32_t count = static_cast<uint32_t>(scratch.size());
     scratch.resize(scratch.size() + pad);
     return count;
   }
-  // lists cell index `id` in the cube of head index k
-  void add(size_t k, uint32_t id) {
-    uint32_t& h = head[k];
+  // lists cell index `id` in cube (x, y, z); false (nothing listed) where that needed a brick past
+  // max_bricks
+  bool add(int32_t x, int32_t y, int32_t z, uint32_t id) {
+    uint32_t* hp;
+    if constexpr (kBricked) {
+      uint32_t& b = top[brickOf(x, y, z)];
+      if (b == 0) {
+        if (bricks.size() >= max_bricks) return false;
+        b = uint32_t(bricks.size());
+        bricks.emplace_back();
+      }
+      hp = &bricks[b].h[inBrick(x, y, z)];
+    } else {
+      hp = &head[size_t(z) * sz + size_t(y) * sy + size_t(x)];
+    }
+    uint32_t& h = *hp;
     if (h == 0) {
       h = uint32_t(blocks.size()) << 3 | 1u;
       blocks.push_back(Block{});
@@ -1780,22 +1880,23 @@ struct CellBlocks {
       }
       blocks[b].id[k4] = id;
     }
+    return true;
   }
 };
 
-template <bool kCube, bool kNearest>
-void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half a cube*/, const int32_t lo_cube[3],
-                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
+// false where the bricked grid ran out of bricks (out is then partly filled)
+template <bool kCube, bool kNearest, bool kBricked>
+bool assignBlocksT(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
+                   JoinRule rule, size_t expected, size_t brick_limit, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t zero;  // no chain: testCellLanes' OR of these is unused
   };
   std::vector<Cell> cells;  // cells[k + 1] is cluster k's cell; cells[0] the sentinel at NaN
-  cells.reserve(expected + 1);
+  cells.reserve(CellBlocks<kBricked>::reservedCells(expected, p.order.size()));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  CellBlocks grid(dims, expected);
-  const size_t sy = grid.sy, sz = grid.sz;
+  CellBlocks<kBricked> grid(dims, expected, brick_limit);
   std::vector<uint32_t> scratch;  // the general gather's list
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
@@ -1816,22 +1917,9 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     uint32_t chained = 0;
     const bool narrow = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
     if (narrow) {
-      const uint32_t* base = grid.head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
-      for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 2; ++y)
-          for (int x = 0; x < 2; ++x) {
-            const uint32_t h = base[size_t(z) * sz + size_t(y) * sy + size_t(x)];
-            const uint32_t* ids = grid.blocks[h >> 3].id;
-#if defined(__SSE2__)
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
-                             _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids)));
-#else
-            for (int k = 0; k < 4; ++k) found[count + k] = ids[k];
-#endif
-            const uint32_t c = h & 7u;  // 5 when more blocks follow: the list is then made again below
-            count += c;
-            chained |= c + 3u;
-          }
+      uint32_t h[8];
+      grid.heads8(lo, size_t(lo[2]) * grid.sz + size_t(lo[1]) * grid.sy + size_t(lo[0]), h);
+      count = grid.copyBlocks8(h, found, chained);
     }
     if (!narrow || (chained & 8u)) {
       count = grid.gatherAll(lo, hi, scratch, 3);
@@ -1854,50 +1942,51 @@ void assignBlocksT(const PreparedMesh& p, float cube_width, float /*reach: half 
     }
 #endif
     if (best == kNone) {
-      best = out.cluster_count++;
+      best = out.cluster_count;
+      if (!grid.add(floorToInt(q.x) - lo_cube[0], floorToInt(q.y) - lo_cube[1], floorToInt(q.z) - lo_cube[2],
+                    best + 1))
+        return false;
+      ++out.cluster_count;
       out.heaviest.push_back(p.order[i]);
       cells.push_back({pv.x, pv.y, pv.z, 0});
-      grid.add(size_t(floorToInt(q.z) - lo_cube[2]) * sz + size_t(floorToInt(q.y) - lo_cube[1]) * sy +
-                   size_t(floorToInt(q.x) - lo_cube[0]),
-               best + 1);
     }
     out.cluster_of[p.order[i]] = best;
   }
+  return true;
 }
 
 #if defined(SCENELOD_FLOATING_AVX2)
 // assignBlocksT on AVX2: the searched range on the three axes at once, the same copies of the
 // first blocks, the cells tested 8 at a time (testCellLanes8, laneBest8)
-template <bool kCube, bool kNearest>
-SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, float /*reach*/,
-                                            const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
-                                            size_t expected, Assignment& out) {
+template <bool kCube, bool kNearest, bool kBricked>
+SCENELOD_FLOATING_AVX2_TARGET bool assignBlocksAvx2T(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3],
+                                                     const size_t dims[3], JoinRule rule, size_t expected,
+                                                     size_t brick_limit, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t zero;
   };
   std::vector<Cell> cells;
-  cells.reserve(expected + 1);
+  cells.reserve(CellBlocks<kBricked>::reservedCells(expected, p.order.size()));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  CellBlocks grid(dims, expected);
+  CellBlocks<kBricked> grid(dims, expected, brick_limit);
   const size_t sy = grid.sy, sz = grid.sz;
   std::vector<uint32_t> scratch;
   const float inv = 1.0f / cube_width;
   const __m128 inv4 = _mm_set1_ps(inv), half4 = _mm_set1_ps(0.5f), slack4 = _mm_set1_ps(kSearchSlack);
   const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
-  const size_t offset[8] = {0, 1, sy, sy + 1, sz, sz + 1, sz + sy, sz + sy + 1};
   const size_t n = p.order.size();
   std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
   const glm::vec3* sorted = sortedPositions(p, local);
-  // each vertex's range and the offset of its first head, planned kBlocksAhead vertices ahead, when
-  // its 4 rows of heads and its cluster id's slot are prefetched (see kBlocksAhead)
+  // each vertex's range and (flat) the offset of its first head, planned kBlocksAhead vertices
+  // ahead, when its heads' cache lines and its cluster id's slot are prefetched (see kBlocksAhead;
+  // bricked, the lines of the bricks the table names then, re-read when the vertex is reached)
   struct Planned {
     Located at;
     size_t offset;
   };
   Planned ring[kBlocksAhead];
-  const uint32_t* heads = grid.head.data();
   const uint32_t* order = p.order.data();
   uint32_t* cluster_of = out.cluster_of.data();
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
@@ -1907,13 +1996,30 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
     a.at.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(a.at.q4, half4), slack4)), lo_cube4);
     a.at.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(a.at.q4, half4), slack4)), lo_cube4);
     // lo >= 0: lo_cube is 3 cubes below the box
-    a.offset = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 2))) * sz +
-               size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(a.at.lo4)));
-    const uint32_t* h = heads + a.offset;
-    _mm_prefetch(reinterpret_cast<const char*>(h), _MM_HINT_T0);
-    _mm_prefetch(reinterpret_cast<const char*>(h + sy), _MM_HINT_T0);
-    _mm_prefetch(reinterpret_cast<const char*>(h + sz), _MM_HINT_T0);
-    _mm_prefetch(reinterpret_cast<const char*>(h + sz + sy), _MM_HINT_T0);
+    const size_t x = size_t(uint32_t(_mm_cvtsi128_si32(a.at.lo4))), y = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 1))),
+                 z = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 2)));
+    if constexpr (kBricked) {
+      // the z-slices of lo's cubes and of lo + (1, 1, 1)'s (the other cubes' lines but where a
+      // row crosses a brick along x or y)
+      const uint32_t* top = grid.top.data();
+      const size_t in0 = (z & 3) << 4 | (y & 3) << 2, in1 = ((z + 1) & 3) << 4 | ((y + 1) & 3) << 2;
+      const size_t b0 = top[(z >> 2) * sz + (y >> 2) * sy + (x >> 2)];
+      const size_t b1 = top[((z + 1) >> 2) * sz + ((y + 1) >> 2) * sy + ((x + 1) >> 2)];
+      const size_t b2 = top[((z + 1) >> 2) * sz + (y >> 2) * sy + (x >> 2)];
+      const size_t b3 = top[(z >> 2) * sz + ((y + 1) >> 2) * sy + ((x + 1) >> 2)];
+      const auto* bricks = grid.bricks.data();
+      _mm_prefetch(reinterpret_cast<const char*>(bricks[b0].h + in0), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(bricks[b1].h + in1), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(bricks[b2].h + (((z + 1) & 3) << 4 | (y & 3) << 2)), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(bricks[b3].h + ((z & 3) << 4 | ((y + 1) & 3) << 2)), _MM_HINT_T0);
+    } else {
+      a.offset = z * sz + y * sy + x;
+      const uint32_t* h = grid.head.data() + a.offset;
+      _mm_prefetch(reinterpret_cast<const char*>(h), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(h + sy), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(h + sz), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(h + sz + sy), _MM_HINT_T0);
+    }
     _mm_prefetch(reinterpret_cast<const char*>(cluster_of + order[k]), _MM_HINT_T0);
   };
   for (size_t k = 0; k < std::min(n, kBlocksAhead); ++k) plan(k);
@@ -1932,15 +2038,9 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
     const bool narrow =
         (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_sub_epi32(hi4, lo4), _mm_set1_epi32(1)))) & 7) == 7;
     if (narrow) {
-      const uint32_t* base = heads + first;
-      for (int k = 0; k < 8; ++k) {
-        const uint32_t h = base[offset[k]];
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(found + count),
-                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(grid.blocks[h >> 3].id)));
-        const uint32_t c = h & 7u;
-        count += c;
-        chained |= c + 3u;
-      }
+      uint32_t h[8];
+      grid.heads8(lo, first, h);
+      count = grid.copyBlocks8(h, found, chained);
     }
     if (!narrow || (chained & 8u)) {
       const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
@@ -1953,18 +2053,41 @@ SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, floa
                                     _mm256_set1_ps(pv.z), rule, bd2, bid);
     uint32_t best = laneBest8<kNearest>(bd2, bid);
     if (best == kNone) {
-      best = out.cluster_count++;
+      best = out.cluster_count;
+      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
+      if (!grid.add(_mm_cvtsi128_si32(c4), _mm_extract_epi32(c4, 1), _mm_extract_epi32(c4, 2), best + 1)) return false;
+      ++out.cluster_count;
       out.heaviest.push_back(p.order[i]);
       cells.push_back({pv.x, pv.y, pv.z, 0});
-      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
-      grid.add(size_t(_mm_extract_epi32(c4, 2)) * sz + size_t(_mm_extract_epi32(c4, 1)) * sy +
-                   size_t(_mm_cvtsi128_si32(c4)),
-               best + 1);
     }
     cluster_of[order[i]] = best;
   }
+  return true;
 }
 #endif
+
+// the grid of side w in blocks (assignBlocksT), flat or bricked; false where the bricks ran out
+bool assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
+                  JoinRule rule, size_t expected, bool bricked, size_t brick_limit, Assignment& out) {
+  using Fn = bool (*)(const PreparedMesh&, float, const int32_t*, const size_t*, JoinRule, size_t, size_t,
+                      Assignment&);
+#if defined(SCENELOD_FLOATING_AVX2)
+  if (useAvx2()) {
+    static constexpr Fn kAvx2BlockFns[2][2][2] = {
+        {{assignBlocksAvx2T<false, false, false>, assignBlocksAvx2T<false, true, false>},
+         {assignBlocksAvx2T<true, false, false>, assignBlocksAvx2T<true, true, false>}},
+        {{assignBlocksAvx2T<false, false, true>, assignBlocksAvx2T<false, true, true>},
+         {assignBlocksAvx2T<true, false, true>, assignBlocksAvx2T<true, true, true>}}};
+    return kAvx2BlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_limit, out);
+  }
+#endif
+  static constexpr Fn kBlockFns[2][2][2] = {
+      {{assignBlocksT<false, false, false>, assignBlocksT<false, true, false>},
+       {assignBlocksT<true, false, false>, assignBlocksT<true, true, false>}},
+      {{assignBlocksT<false, false, true>, assignBlocksT<false, true, true>},
+       {assignBlocksT<true, false, true>, assignBlocksT<true, true, true>}}};
+  return kBlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_limit, out);
+}
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                  const size_t dims[3], JoinRule rule, size_t expected, bool blocks, int heads,
@@ -1974,17 +2097,7 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
   // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
   if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
-#if defined(SCENELOD_FLOATING_AVX2)
-    if (useAvx2()) {
-      static constexpr Fn kAvx2BlockFns[2][2] = {{assignBlocksAvx2T<false, false>, assignBlocksAvx2T<false, true>},
-                                                 {assignBlocksAvx2T<true, false>, assignBlocksAvx2T<true, true>}};
-      kAvx2BlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
-      return;
-    }
-#endif
-    static constexpr Fn kBlockFns[2][2] = {{assignBlocksT<false, false>, assignBlocksT<false, true>},
-                                           {assignBlocksT<true, false>, assignBlocksT<true, true>}};
-    kBlockFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    assignBlocks(p, cube_width, lo_cube, dims, rule, expected, false, 0, out);  // flat: never fails
     return;
   }
   // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
@@ -2039,6 +2152,8 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   // grid cubes of side w/2 where their heads fit: a vertex then tests the cells of 3 x 3 x 3 cubes
   // of side w/2 instead of 2 x 2 x 2 of side w, 2.4 times less volume, which matters at coarse levels
   // where a cube of side w lists several cells; then cubes of side w; then the hash
+  const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
+                                       kDenseBytesPerVertex * double(p.order.size()));
   for (const int sub : {2, 1}) {
     const float cube_width = cell_width / float(sub);
     const float cube_inv = 1.0f / cube_width;
@@ -2051,8 +2166,6 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       dims[a] = size_t(floorToInt(p.bounds.max[a] * cube_inv) + 4 - lo_cube[a]);
       volume *= double(dims[a]);
     }
-    const double dense_budget = std::max(kDenseBaseBytes + kDenseBytesPerCell * double(expected),
-                                         kDenseBytesPerVertex * double(p.order.size()));
     // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
     // these fit (the bunny: its 50 % level's flat heads 1.72 -> 0.86 MB; see the bricks below)
     const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
@@ -2070,9 +2183,40 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
                            volume * head_bytes > kFlatHeadBytesPerVertex * double(p.order.size());
       const int heads = bricked ? 2 : short_heads ? 1 : 0;
       assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, heads, out);
+      g_last_grid.store(kGridFlat, std::memory_order_relaxed);
       return;
     }
   }
+  // else cubes of side w in blocks under bricked heads where the table of the box's bricks fits the
+  // budget (1/256 of a flat array of heads); they give up for the hash when the cells spread over
+  // more bricks than kBrickBytesPerVertex allows (scattered parts). The 1 M sphere's 50 % and 25 %
+  // levels (the hash's 17 and 8.5 MB of slots) assigned in 40.9 and 29.9 ms instead of 80.1 and 74.2
+  // (Intel Xeon, minima of 5; docs/bench/clustering.md)
+  const int block_bricks = g_block_bricks.load(std::memory_order_relaxed);
+  bool bricks_ran_out = false;
+  if (block_bricks != 0 && p.order.size() < (size_t(1) << 28)) {
+    int32_t lo_cube[3];
+    size_t dims[3];
+    double top_bytes = sizeof(uint32_t);
+    for (int a = 0; a < 3; ++a) {
+      lo_cube[a] = floorToInt(p.bounds.min[a] * inv) - 3;
+      dims[a] = size_t(floorToInt(p.bounds.max[a] * inv) + 4 - lo_cube[a]);
+      top_bytes *= double((dims[a] + 3) / 4);
+    }
+    if (top_bytes <= dense_budget) {
+      const size_t brick_limit =
+          block_bricks > 0 ? size_t(block_bricks)
+                           : std::max<size_t>(64, size_t(kBrickBytesPerVertex * double(p.order.size()) / 256.0));
+      if (assignBlocks(p, cell_width, lo_cube, dims, rule, expected, true, brick_limit, out)) {
+        g_last_grid.store(kGridBricked, std::memory_order_relaxed);
+        return;
+      }
+      out.reset(p.mesh->vertexCount(), cell_width, false, shape);  // scattered: the hash below
+      out.heaviest.reserve(expected);
+      bricks_ran_out = true;
+    }
+  }
+  g_last_grid.store(bricks_ran_out ? kGridHashAfterBricks : kGridHash, std::memory_order_relaxed);
   // occupied grid cubes per expected cell, measured on the 1 M sphere's chain: 0.46 (the width
   // search's first probe), 0.48, 0.53, 0.48 (levels 1-3). Sized for 0.5, level 2 passed the 3/4 load
   // and doubled, old and new slots at once (3.9 + 7.9 MB): part of that chain's peak
@@ -2162,6 +2306,12 @@ void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
   g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
   g_bricks_allowed.store(bricks, std::memory_order_relaxed);
 }
+// the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 giving up
+// for the hash past k bricks; returns the mode it replaces
+int setFloatingBlockBricksForTest(int mode) { return g_block_bricks.exchange(mode < 0 ? -1 : mode); }
+// the grid the last assignFloating call searched: 0 a flat one, 1 the bricked grid of side w, 2 the
+// hash, 3 the hash after the bricked grid ran out of bricks
+int lastFloatingGridForTest() { return g_last_grid.load(std::memory_order_relaxed); }
 // false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
 void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }
 // the candidate cache's runs (cachedRun) at every cached width: 0 none, 1 with the entries' centres,

@@ -18,6 +18,11 @@ namespace scenelod::detail {
 // floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
 // short_heads false keeps the flat grids' list heads at 32 bits, bricks false keeps them flat
 void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
+// the bricked grid of side w in blocks: -1 the default, 0 never (the hash), k > 0 giving up for the
+// hash past k bricks; and the grid the last assignment searched (0 flat, 1 bricked, 2 the hash, 3
+// the hash after the bricks ran out)
+int setFloatingBlockBricksForTest(int mode);
+int lastFloatingGridForTest();
 }  // namespace scenelod::detail
 
 namespace {
@@ -176,6 +181,94 @@ TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
           EXPECT_EQ(other.cluster_of, plain.cluster_of);
         }
       }
+    }
+  }
+}
+
+// The bricked grid of side w (cells in blocks under heads in bricks of 4 x 4 x 4 cubes, for boxes
+// too large for flat heads) chooses the hash's cells, on the AVX2 and SSE2 paths, for both rules and
+// shapes: on a sphere with a triangle at 20 (at w = 0.1 and 0.25 the box's flat heads would pass
+// the dense budget and its bricks' table does not), on a lattice of point pairs holding about 10.5
+// sphere cells per grid cube (chained blocks, the general gather), and where it runs out of bricks:
+// with a limit of 2, and by default on 2,197 small triangles 8 cubes apart (a brick each, past the
+// limit of one per 16 vertices), which then take the hash.
+TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
+  Mesh sphere_far = test::makeBumpySphere(60, 80);
+  Mesh far_triangle;
+  far_triangle.positions = {{20, 20, 20}, {20.5f, 20, 20}, {20, 20.5f, 20}};
+  far_triangle.triangles = {0, 1, 2};
+  test::appendMesh(sphere_far, far_triangle);
+  Mesh lattice;
+  const float a = 0.29f;
+  for (int x = 0; x < 5; ++x)
+    for (int y = 0; y < 5; ++y)
+      for (int z = 0; z < 5; ++z)
+        for (glm::vec3 d : {glm::vec3(0.0f), glm::vec3(a / 2, a / 2, 0), glm::vec3(a / 2, 0, a / 2), glm::vec3(0, a / 2, a / 2)})
+          for (float e : {0.0f, 0.001f}) {
+            lattice.points.push_back(uint32_t(lattice.positions.size()));
+            lattice.positions.push_back(glm::vec3(float(x), float(y), float(z)) * a + d + glm::vec3(e));
+          }
+  Mesh far60 = far_triangle;
+  for (glm::vec3& v : far60.positions) v += glm::vec3(40.0f);
+  test::appendMesh(lattice, far60);
+  Mesh scattered;  // w = 0.1: triangles 0.8 apart, each in a brick of its own
+  for (int x = 0; x < 13; ++x)
+    for (int y = 0; y < 13; ++y)
+      for (int z = 0; z < 13; ++z) {
+        const glm::vec3 o = glm::vec3(float(x), float(y), float(z)) * 0.8f;
+        const uint32_t b = uint32_t(scattered.positions.size());
+        scattered.positions.insert(scattered.positions.end(), {o, o + glm::vec3(0.03f, 0, 0), o + glm::vec3(0, 0.03f, 0.01f)});
+        scattered.triangles.insert(scattered.triangles.end(), {b, b + 1, b + 2});
+      }
+  struct Run {
+    const Mesh* mesh;
+    float w;
+    int grid;  // the grid the default settings take
+  };
+  for (Run run : {Run{&sphere_far, 0.1f, 1}, Run{&sphere_far, 0.25f, 1}, Run{&lattice, 0.4f, 1}, Run{&scattered, 0.1f, 3}}) {
+    PreparedMesh p;
+    ClusterParams params;
+    ASSERT_TRUE(prepareMesh(*run.mesh, params, p).ok());
+    for (Case c : {Case{LodMethod::kFloatingHeaviest, CellShape::kCube}, Case{LodMethod::kFloatingNearest, CellShape::kCube},
+                   Case{LodMethod::kFloatingHeaviest, CellShape::kSphere},
+                   Case{LodMethod::kFloatingNearest, CellShape::kSphere}}) {
+      SCOPED_TRACE(std::string(lodMethodName(c.method)) + " " + cellShapeName(c.shape) + " w=" + std::to_string(run.w) +
+                   " vertices " + std::to_string(run.mesh->vertexCount()));
+      params.method = c.method;
+      params.cell_shape = c.shape;
+      params.cell_width = run.w;
+      ClusterAssignment hash;
+      detail::setFloatingBlockBricksForTest(0);
+      const bool hash_ok = assignClusters(p, params, hash).ok();
+      const int hash_grid = detail::lastFloatingGridForTest();
+      detail::setFloatingBlockBricksForTest(-1);
+      ASSERT_TRUE(hash_ok);
+      EXPECT_EQ(hash_grid, 2);
+      EXPECT_GT(hash.heaviest.size(), 1u);
+      if (run.mesh == &lattice && c.shape == CellShape::kSphere) {
+        std::map<std::tuple<int, int, int>, int> per_cube;  // more cells in a cube than one block holds
+        int most = 0;
+        for (uint32_t v : hash.heaviest) {
+          const glm::vec3 q = glm::floor(run.mesh->positions[v] / run.w);
+          most = std::max(most, ++per_cube[{int(q.x), int(q.y), int(q.z)}]);
+        }
+        EXPECT_GT(most, 4);
+      }
+      for (bool avx2 : {true, false})
+        for (int mode : {-1, 2}) {
+          SCOPED_TRACE(std::string(avx2 ? "avx2" : "sse2") + (mode < 0 ? " default" : " 2 bricks"));
+          ClusterAssignment other;
+          detail::setFloatingPathsForTest(avx2, true, true);
+          detail::setFloatingBlockBricksForTest(mode);
+          const bool ok = assignClusters(p, params, other).ok();
+          const int grid = detail::lastFloatingGridForTest();
+          detail::setFloatingBlockBricksForTest(-1);
+          detail::setFloatingPathsForTest(true, true, true);
+          ASSERT_TRUE(ok);
+          EXPECT_EQ(grid, mode < 0 ? run.grid : 3);
+          EXPECT_EQ(other.heaviest, hash.heaviest);
+          EXPECT_EQ(other.cluster_of, hash.cluster_of);
+        }
     }
   }
 }
