@@ -15,7 +15,9 @@
 // (3 x 3 x 3 of them searched: 2.4 times less volume than 2 x 2 x 2 cubes of side w, so fewer cells
 // to test; each lists at most one cube cell), else of cubes of side w whose cells are kept in
 // blocks of 4 where these fit too (one copy per cube instead of a walk along a list), else listed;
-// otherwise a hash whose slots hold each grid cube's first three cells inline (one cache line per
+// otherwise, where a table of the box's bricks of 4 x 4 x 4 cubes fits, the blocks under heads in
+// bricks allocated where cells are (CellBlocks); otherwise, or where the cells spread over too many
+// bricks, a hash whose slots hold each grid cube's first three cells inline (one cache line per
 // cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
 // the joining rule breaks ties by id. A listed flat grid's heads take 16 bits where every cell index
 // fits (at most 65,535 referenced vertices), kept in bricks of 4 x 4 x 4 cubes, allocated where cells
@@ -1999,6 +2001,7 @@ SCENELOD_FLOATING_AVX2_TARGET bool assignBlocksAvx2T(const PreparedMesh& p, floa
     const size_t x = size_t(uint32_t(_mm_cvtsi128_si32(a.at.lo4))), y = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 1))),
                  z = size_t(uint32_t(_mm_extract_epi32(a.at.lo4, 2)));
     if constexpr (kBricked) {
+      a.offset = 0;  // (unused: the bricks are looked up again when the vertex is reached)
       // the z-slices of lo's cubes and of lo + (1, 1, 1)'s (the other cubes' lines but where a
       // row crosses a brick along x or y)
       const uint32_t* top = grid.top.data();
