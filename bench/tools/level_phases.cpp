@@ -6,7 +6,9 @@
 // run in the level's order on the level's data, so their sum is the level's time less its
 // statistics (the maximum displacement) and its allocations. Built and run by scripts/level-phases against a
 // build's libscenelod_core.a. Not a unit test: it times.
-// Usage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] REPETITIONS
+// With `hash` last, the levels that would search the bricked grid of side w search the hash
+// instead (the grid before the bricked one, for comparisons); the grid column names the one searched.
+// Usage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] REPETITIONS [hash]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -28,12 +30,19 @@
 using namespace scenelod;
 using Clock = std::chrono::steady_clock;
 
+namespace scenelod::detail {
+// floating_cell_cluster.cpp's switches (see tests/lodcore/floating_cell_test.cpp), weak so that the
+// tool still links against the libraries of builds older than them (scripts/level-phases OTHER_BUILD)
+__attribute__((weak)) int setFloatingBlockBricksForTest(int mode);
+__attribute__((weak)) int lastFloatingGridForTest();
+}  // namespace scenelod::detail
+
 namespace {
 
 int usage(const char* why) {
   std::fprintf(stderr,
                "level_phases: %s\nusage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] "
-               "REPETITIONS\n",
+               "REPETITIONS [hash]\n",
                why);
   return 2;
 }
@@ -45,6 +54,7 @@ struct Row {
   float width = 0.0f;
   uint32_t clusters = 0;
   size_t triangles = 0;
+  int grid = -1;  // lastFloatingGridForTest: 0 flat, 1 bricked, 2 hash, 3 hash after bricks
   // minima, ms: assign, renumber, elimination, synthesis, output
   double phase[5];
   Row() { std::fill(std::begin(phase), std::end(phase), std::numeric_limits<double>::infinity()); }
@@ -53,7 +63,12 @@ struct Row {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) return usage("three arguments expected");
+  if (argc != 4 && argc != 5) return usage("three or four arguments expected");
+  if (argc == 5) {
+    if (std::strcmp(argv[4], "hash") != 0) return usage("the fourth argument, if any, must be `hash`");
+    if (!detail::setFloatingBlockBricksForTest) return usage("this build's library has no bricked grid to switch off");
+    detail::setFloatingBlockBricksForTest(0);
+  }
   const int repetitions = std::atoi(argv[3]);
   if (repetitions < 1) return usage("REPETITIONS must be at least 1");
   Mesh m;
@@ -135,23 +150,27 @@ int main(int argc, char** argv) {
       for (int k = 0; k < 5; ++k) r.phase[k] = std::min(r.phase[k], t[k]);
       r.clusters = a.cluster_count;
       r.triangles = out.triangleCount();
+      if (detail::lastFloatingGridForTest) r.grid = detail::lastFloatingGridForTest();
     }
   }
 
   std::printf("%s: %zu vertices, %zu triangles; prepare %.3f ms; all on one thread, minima of %d (ms)\n\n", argv[1],
               m.vertexCount(), m.triangleCount(), prepare_ms, repetitions);
-  std::printf("| level | cell width | clusters | triangles | assign | renumber | elimination | synthesis | output | sum |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| level | cell width | clusters | triangles | grid | assign | renumber | elimination | synthesis | output | sum |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  static const char* const kGridNames[] = {"flat", "bricked", "hash", "hash (bricks ran out)"};
   double total[6] = {0, 0, 0, 0, 0, 0};
   for (const Row& r : rows) {
     double sum = 0.0;
     for (int k = 0; k < 5; ++k) sum += r.phase[k], total[k] += r.phase[k];
     total[5] += sum;
-    std::printf("| %s | %.6g | %u | %zu | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", r.label.c_str(), r.width,
-                r.clusters, r.triangles, r.phase[0], r.phase[1], r.phase[2], r.phase[3], r.phase[4], sum);
+    std::printf("| %s | %.6g | %u | %zu | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", r.label.c_str(), r.width,
+                r.clusters, r.triangles, r.grid >= 0 && r.grid <= 3 ? kGridNames[r.grid] : "-", r.phase[0],
+                r.phase[1], r.phase[2], r.phase[3], r.phase[4], sum);
   }
   if (rows.size() > 1)
-    std::printf("| all | | | | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", total[0], total[1], total[2], total[3],
+    std::printf("| all | | | | | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", total[0], total[1], total[2], total[3],
                 total[4], total[5]);
   return 0;
 }
