@@ -88,6 +88,33 @@ const Mesh& bigMesh() {
   return m;
 }
 
+// the "meshes of 10 M triangles must not exhaust memory": one closed surface of 10,003,864
+// triangles, and 10,000,000 triangles in 8,000 separate spheres of 1,250 triangles on a 20 x 20 x 20
+// lattice of spacing 10 (a box 190 wide around parts of diameter 1: the cells of the fine levels
+// spread over many bricks of a box mostly empty: the fine levels take the hash, whose memory the
+// bricks and their table would pass)
+const Mesh& hugeSphere() {
+  static Mesh m = test::makeBumpySphere(2237, 2237);
+  return m;
+}
+const Mesh& hugeScattered() {
+  static Mesh m = [] {
+    const Mesh part = test::makeSphere({0, 0, 0}, 0.5f, 26, 25);
+    Mesh all;
+    all.positions.reserve(part.positions.size() * 8000);
+    all.triangles.reserve(part.triangles.size() * 8000);
+    for (int z = 0; z < 20; ++z)
+      for (int y = 0; y < 20; ++y)
+        for (int x = 0; x < 20; ++x) {
+          Mesh moved = part;
+          for (glm::vec3& v : moved.positions) v += glm::vec3(10.0f * float(x), 10.0f * float(y), 10.0f * float(z));
+          test::appendMesh(all, moved);
+        }
+    return all;
+  }();
+  return m;
+}
+
 struct Prepared {
   PreparedMesh p;
   ClusterParams params;
@@ -295,5 +322,13 @@ void BM_ChainMemory_Bunny(benchmark::State& state) { chainMemory(state, bunny(),
 SCENELOD_BENCHMARK(BM_ChainMemory_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ChainMemory_1M(benchmark::State& state) { chainMemory(state, bigMesh(), state.range(0) == 1); }
 SCENELOD_BENCHMARK(BM_ChainMemory_1M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
+// 10 M triangles, the mesh copied: Arg 0 one sphere, Arg 1 the scattered parts (a few seconds each)
+void BM_ChainMemory_10M(benchmark::State& state) {
+  const Mesh& m = state.range(0) == 0 ? hugeSphere() : hugeScattered();
+  chainMemory(state, m, false);
+  state.counters["triangles"] = double(m.triangleCount());
+  state.SetLabel(state.range(0) == 0 ? "one sphere" : "8,000 scattered spheres");
+}
+SCENELOD_BENCHMARK(BM_ChainMemory_10M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace

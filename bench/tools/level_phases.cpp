@@ -54,7 +54,7 @@ struct Row {
   float width = 0.0f;
   uint32_t clusters = 0;
   size_t triangles = 0;
-  int grid = -1;  // lastFloatingGridForTest: 0 flat, 1 bricked, 2 hash, 3 hash after bricks
+  int grid = -1;  // lastFloatingGridForTest: 0 flat, 1 bricked, 2 hash, 3 hash (too many bricks)
   // minima, ms: assign, renumber, elimination, synthesis, output
   double phase[5];
   Row() { std::fill(std::begin(phase), std::end(phase), std::numeric_limits<double>::infinity()); }
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
   std::printf(
       "| level | cell width | clusters | triangles | grid | assign | renumber | elimination | synthesis | output | sum |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
-  static const char* const kGridNames[] = {"flat", "bricked", "hash", "hash (bricks ran out)"};
+  static const char* const kGridNames[] = {"flat", "bricked", "hash", "hash (too many bricks)"};
   double total[6] = {0, 0, 0, 0, 0, 0};
   for (const Row& r : rows) {
     double sum = 0.0;

@@ -15,10 +15,11 @@
 // (3 x 3 x 3 of them searched: 2.4 times less volume than 2 x 2 x 2 cubes of side w, so fewer cells
 // to test; each lists at most one cube cell), else of cubes of side w whose cells are kept in
 // blocks of 4 where these fit too (one copy per cube instead of a walk along a list), else listed;
-// otherwise, where a table of the box's bricks of 4 x 4 x 4 cubes fits, the blocks under heads in
-// bricks allocated where cells are (CellBlocks); otherwise, or where the cells spread over too many
-// bricks, a hash whose slots hold each grid cube's first three cells inline (one cache line per
-// cube), the slots of the next vertices in weight order being prefetched. All give the same cells:
+// otherwise, where a table of the box's bricks of 4 x 4 x 4 cubes and the bricks holding vertices
+// (counted first) take at most 21 bytes per expected cell, the blocks under heads in those bricks
+// (CellBlocks); otherwise (scattered parts, boxes mostly empty) a hash whose slots hold each grid
+// cube's first three cells inline (one cache line per cube), the slots of the next vertices in
+// weight order being prefetched. All give the same cells:
 // the joining rule breaks ties by id. A listed flat grid's heads take 16 bits where every cell index
 // fits (at most 65,535 referenced vertices), kept in bricks of 4 x 4 x 4 cubes, allocated where cells
 // are, when a flat array of them would take more than 16 bytes per vertex; the flat grids have AVX2
@@ -27,6 +28,7 @@
 // mesh), the AVX2 grid of side w/2 keeps per grid cube the cells its vertices test (CandidateCache).
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -261,9 +263,13 @@ constexpr double kDenseBytesPerVertex = 8.0;
 // occupied cubes of side w were 0.549 and 0.45 per expected cell on the 1 M sphere's 10 % level and
 // the bunny's 50 % level; more only regrows the vectors)
 constexpr double kBlockBytes = 20.0;
-// the bricked grid of side w (CellBlocks) gives up for the hash past this many bytes of bricks per
-// referenced vertex
-constexpr double kBrickBytesPerVertex = 16.0;
+// the bricked grid of side w (CellBlocks) is taken where its table and bricks (256 bytes each) would
+// take at most this many bytes per expected cell: about what the hash's slots (64 bytes for
+// 0.55 x 4/3 per expected cell) take beyond the blocks and the cells' records, so that the bricked
+// grid holds no more than the hash would (the 1 M sphere's 50 % level: one brick per 17.5 cells
+// and a table of 1.2 MB, 19 bytes in all)
+constexpr double kBrickBytesPerCell = 21.0;
+constexpr size_t kBrickBytes = 256;  // one CellBlocks<true>::Brick
 inline size_t expectedBlocks(size_t expected_cells) { return expected_cells * 11 / 20 + 16; }
 
 #if defined(__SSE2__)
@@ -356,10 +362,10 @@ constexpr bool kAvx2Built = false;
 // cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
 std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true}, g_cache_allowed{true};
 // the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 with a
-// limit of k bricks (setFloatingBlockBricksForTest)
+// limit of k bricks in place of kBrickBytesPerCell's (setFloatingBlockBricksForTest)
 std::atomic<int> g_block_bricks{-1};
 // the grid the last assignFloating call searched (lastFloatingGridForTest)
-enum : int { kGridFlat = 0, kGridBricked = 1, kGridHash = 2, kGridHashAfterBricks = 3 };
+enum : int { kGridFlat = 0, kGridBricked = 1, kGridHash = 2, kGridHashForBricks = 3 };
 std::atomic<int> g_last_grid{-1};
 [[maybe_unused]] bool useAvx2() {  // unused where no AVX2 path is built
   static const bool has = cpuHasAvx2();
@@ -1740,8 +1746,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
 // listed, under a table of the box's bricks (4 bytes a brick, 1/256 of the flat heads): a fine
 // level's surface then takes the bricks its cells touch, not its box. Bricked, a vertex's 2 x 2 x 2
 // cubes cost 8 more loads (their bricks' indices, mostly one cache line) and its heads mostly 2
-// lines. Where a mesh's cells spread over more bricks than max_bricks (scattered parts), add fails
-// and the caller takes the hash instead.
+// lines. The bricks are reserved for the count the caller found (countVertexBricks), which takes
+// the hash instead where they would be too many (scattered parts).
 template <bool kBricked>
 struct CellBlocks {
   struct Block {
@@ -1750,23 +1756,23 @@ struct CellBlocks {
   struct alignas(64) Brick {
     uint32_t h[64];  // (z & 3) << 4 | (y & 3) << 2 | (x & 3)
   };
+  static_assert(sizeof(Brick) == kBrickBytes, "a brick is 4 x 4 x 4 heads of 32 bits");
   std::vector<Block> blocks;  // blocks[0] stays empty
   std::vector<uint32_t> more;  // per block: the cube's next block once it is full, 0 for none
   std::vector<uint32_t> head;  // flat: per cube of the box
   std::vector<uint32_t> top;   // bricked: per brick of the box, its index in `bricks`, 0 for none
   std::vector<Brick> bricks;   // bricked: bricks[0] stays empty
   size_t sy, sz;               // the strides of `head` (flat) or of `top` (bricked, in bricks)
-  size_t max_bricks;
 
-  CellBlocks(const size_t dims[3], size_t expected, size_t brick_limit = 0)
-      : blocks(1, Block{}), more(1, 0), max_bricks(brick_limit) {
+  // bricked: `brick_count` the bricks the level can fill (countVertexBricks), reserved whole
+  CellBlocks(const size_t dims[3], size_t expected, size_t brick_count = 0) : blocks(1, Block{}), more(1, 0) {
     blocks.reserve(expectedBlocks(expected));
     more.reserve(expectedBlocks(expected));
     if (kBricked) {
       const size_t b[3] = {(dims[0] + 3) / 4, (dims[1] + 3) / 4, (dims[2] + 3) / 4};
       sy = b[0], sz = b[0] * b[1];
       top.assign(sz * b[2], 0);
-      bricks.reserve(std::min(brick_limit, expectedBricks(expected)));
+      bricks.reserve(brick_count + 1);
       bricks.emplace_back();  // value-initialised: all heads empty
     } else {
       sy = dims[0], sz = dims[0] * dims[1];
@@ -1779,8 +1785,6 @@ struct CellBlocks {
   static size_t reservedCells(size_t expected_cells, size_t vertices) {
     return std::min(vertices, expected_cells + expected_cells / 8) + 1;
   }
-  // bricks reserved: one per 16 expected cells (the 1 M sphere's 50 % level used one per 17.5)
-  static size_t expectedBricks(size_t expected_cells) { return expected_cells / 16 + 16; }
   static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
   size_t brickOf(int32_t x, int32_t y, int32_t z) const {
     return size_t(z >> 2) * sz + size_t(y >> 2) * sy + size_t(x >> 2);
@@ -1843,14 +1847,13 @@ struct CellBlocks {
     scratch.resize(scratch.size() + pad);
     return count;
   }
-  // lists cell index `id` in cube (x, y, z); false (nothing listed) where that needed a brick past
-  // max_bricks
-  bool add(int32_t x, int32_t y, int32_t z, uint32_t id) {
+  // lists cell index `id` in cube (x, y, z)
+  void add(int32_t x, int32_t y, int32_t z, uint32_t id) {
     uint32_t* hp;
     if constexpr (kBricked) {
       uint32_t& b = top[brickOf(x, y, z)];
       if (b == 0) {
-        if (bricks.size() >= max_bricks) return false;
+        assert(bricks.size() < bricks.capacity());  // reserved for countVertexBricks's count
         b = uint32_t(bricks.size());
         bricks.emplace_back();
       }
@@ -1882,14 +1885,49 @@ struct CellBlocks {
       }
       blocks[b].id[k4] = id;
     }
-    return true;
   }
 };
 
-// false where the bricked grid ran out of bricks (out is then partly filled)
+// The bricks of 4 x 4 x 4 cubes of side 1 / inv (numbered as CellBlocks<true> numbers them) that
+// hold a referenced vertex, counted until they pass `limit`: at least the bricks a level's cells
+// take, each cell being listed in the cube of its centre, a vertex (the same products and floors)
+size_t countVertexBricks(const PreparedMesh& p, float inv, const int32_t lo_cube[3], const size_t dims[3],
+                         size_t limit) {
+  const size_t bx = (dims[0] + 3) / 4, by = (dims[1] + 3) / 4, bz = (dims[2] + 3) / 4;
+  std::vector<uint64_t> seen((bx * by * bz + 63) / 64, 0);  // (fewer than 2^32 bricks: the caller's test)
+  const PositionsByWeight pos(p);
+  const uint32_t sy = uint32_t(bx), sz = uint32_t(bx * by);
+  size_t count = 0;
+  uint32_t brick[512];  // a run's brick indices first, in a loop the compiler vectorises
+  for (size_t i0 = 0, n = p.order.size(); i0 < n && count <= limit; i0 += 512) {
+    const size_t m = std::min<size_t>(512, n - i0);
+    if (pos.sorted) {
+      const glm::vec3* s = pos.sorted + i0;
+      for (size_t k = 0; k < m; ++k)
+        brick[k] = (uint32_t(floorToInt(s[k].z * inv) - lo_cube[2]) >> 2) * sz +
+                   (uint32_t(floorToInt(s[k].y * inv) - lo_cube[1]) >> 2) * sy +
+                   (uint32_t(floorToInt(s[k].x * inv) - lo_cube[0]) >> 2);
+    } else {
+      for (size_t k = 0; k < m; ++k) {
+        const glm::vec3 v = pos[i0 + k];
+        brick[k] = (uint32_t(floorToInt(v.z * inv) - lo_cube[2]) >> 2) * sz +
+                   (uint32_t(floorToInt(v.y * inv) - lo_cube[1]) >> 2) * sy +
+                   (uint32_t(floorToInt(v.x * inv) - lo_cube[0]) >> 2);
+      }
+    }
+    for (size_t k = 0; k < m; ++k) {
+      const uint32_t b = brick[k];
+      const uint64_t bit = uint64_t(1) << (b & 63);
+      count += (seen[b >> 6] & bit) == 0;
+      seen[b >> 6] |= bit;
+    }
+  }
+  return count;
+}
+
 template <bool kCube, bool kNearest, bool kBricked>
-bool assignBlocksT(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
-                   JoinRule rule, size_t expected, size_t brick_limit, Assignment& out) {
+void assignBlocksT(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
+                   JoinRule rule, size_t expected, size_t brick_count, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t zero;  // no chain: testCellLanes' OR of these is unused
@@ -1898,7 +1936,7 @@ bool assignBlocksT(const PreparedMesh& p, float cube_width, const int32_t lo_cub
   cells.reserve(CellBlocks<kBricked>::reservedCells(expected, p.order.size()));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  CellBlocks<kBricked> grid(dims, expected, brick_limit);
+  CellBlocks<kBricked> grid(dims, expected, brick_count);
   std::vector<uint32_t> scratch;  // the general gather's list
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack;  // the reach is half a cube
@@ -1945,25 +1983,22 @@ bool assignBlocksT(const PreparedMesh& p, float cube_width, const int32_t lo_cub
 #endif
     if (best == kNone) {
       best = out.cluster_count;
-      if (!grid.add(floorToInt(q.x) - lo_cube[0], floorToInt(q.y) - lo_cube[1], floorToInt(q.z) - lo_cube[2],
-                    best + 1))
-        return false;
+      grid.add(floorToInt(q.x) - lo_cube[0], floorToInt(q.y) - lo_cube[1], floorToInt(q.z) - lo_cube[2], best + 1);
       ++out.cluster_count;
       out.heaviest.push_back(p.order[i]);
       cells.push_back({pv.x, pv.y, pv.z, 0});
     }
     out.cluster_of[p.order[i]] = best;
   }
-  return true;
 }
 
 #if defined(SCENELOD_FLOATING_AVX2)
 // assignBlocksT on AVX2: the searched range on the three axes at once, the same copies of the
 // first blocks, the cells tested 8 at a time (testCellLanes8, laneBest8)
 template <bool kCube, bool kNearest, bool kBricked>
-SCENELOD_FLOATING_AVX2_TARGET bool assignBlocksAvx2T(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3],
+SCENELOD_FLOATING_AVX2_TARGET void assignBlocksAvx2T(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3],
                                                      const size_t dims[3], JoinRule rule, size_t expected,
-                                                     size_t brick_limit, Assignment& out) {
+                                                     size_t brick_count, Assignment& out) {
   struct Cell {
     float x, y, z;
     uint32_t zero;
@@ -1972,7 +2007,7 @@ SCENELOD_FLOATING_AVX2_TARGET bool assignBlocksAvx2T(const PreparedMesh& p, floa
   cells.reserve(CellBlocks<kBricked>::reservedCells(expected, p.order.size()));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cells.push_back({nan, nan, nan, 0});
-  CellBlocks<kBricked> grid(dims, expected, brick_limit);
+  CellBlocks<kBricked> grid(dims, expected, brick_count);
   const size_t sy = grid.sy, sz = grid.sz;
   std::vector<uint32_t> scratch;
   const float inv = 1.0f / cube_width;
@@ -2058,21 +2093,20 @@ SCENELOD_FLOATING_AVX2_TARGET bool assignBlocksAvx2T(const PreparedMesh& p, floa
     if (best == kNone) {
       best = out.cluster_count;
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
-      if (!grid.add(_mm_cvtsi128_si32(c4), _mm_extract_epi32(c4, 1), _mm_extract_epi32(c4, 2), best + 1)) return false;
+      grid.add(_mm_cvtsi128_si32(c4), _mm_extract_epi32(c4, 1), _mm_extract_epi32(c4, 2), best + 1);
       ++out.cluster_count;
       out.heaviest.push_back(p.order[i]);
       cells.push_back({pv.x, pv.y, pv.z, 0});
     }
     cluster_of[order[i]] = best;
   }
-  return true;
 }
 #endif
 
-// the grid of side w in blocks (assignBlocksT), flat or bricked; false where the bricks ran out
-bool assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
-                  JoinRule rule, size_t expected, bool bricked, size_t brick_limit, Assignment& out) {
-  using Fn = bool (*)(const PreparedMesh&, float, const int32_t*, const size_t*, JoinRule, size_t, size_t,
+// the grid of side w in blocks (assignBlocksT), flat or bricked (brick_count: countVertexBricks)
+void assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3], const size_t dims[3],
+                  JoinRule rule, size_t expected, bool bricked, size_t brick_count, Assignment& out) {
+  using Fn = void (*)(const PreparedMesh&, float, const int32_t*, const size_t*, JoinRule, size_t, size_t,
                       Assignment&);
 #if defined(SCENELOD_FLOATING_AVX2)
   if (useAvx2()) {
@@ -2081,7 +2115,8 @@ bool assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube
          {assignBlocksAvx2T<true, false, false>, assignBlocksAvx2T<true, true, false>}},
         {{assignBlocksAvx2T<false, false, true>, assignBlocksAvx2T<false, true, true>},
          {assignBlocksAvx2T<true, false, true>, assignBlocksAvx2T<true, true, true>}}};
-    return kAvx2BlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_limit, out);
+    kAvx2BlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_count, out);
+    return;
   }
 #endif
   static constexpr Fn kBlockFns[2][2][2] = {
@@ -2089,7 +2124,7 @@ bool assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube
        {assignBlocksT<true, false, false>, assignBlocksT<true, true, false>}},
       {{assignBlocksT<false, false, true>, assignBlocksT<false, true, true>},
        {assignBlocksT<true, false, true>, assignBlocksT<true, true, true>}}};
-  return kBlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_limit, out);
+  kBlockFns[bricked][rule.cube][rule.nearest](p, cube_width, lo_cube, dims, rule, expected, brick_count, out);
 }
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
@@ -2100,7 +2135,7 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
   // block ids fit a head's 29 bits (blocks are at most the cells, which are at most the vertices)
   if (blocks && reach == 0.5f && p.order.size() < (size_t(1) << 28)) {
-    assignBlocks(p, cube_width, lo_cube, dims, rule, expected, false, 0, out);  // flat: never fails
+    assignBlocks(p, cube_width, lo_cube, dims, rule, expected, false, 0, out);
     return;
   }
   // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
@@ -2190,13 +2225,17 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       return;
     }
   }
-  // else cubes of side w in blocks under bricked heads where the table of the box's bricks fits the
-  // budget (1/256 of a flat array of heads); they give up for the hash when the cells spread over
-  // more bricks than kBrickBytesPerVertex allows (scattered parts). The 1 M sphere's 50 % and 25 %
-  // levels (the hash's 17 and 8.5 MB of slots) assigned in 40.9 and 29.9 ms instead of 80.1 and 74.2
-  // (Intel Xeon, minima of 5; docs/bench/clustering.md)
+  // else cubes of side w in blocks under bricked heads where the table of the box's bricks (1/256 of
+  // a flat array of heads) and the bricks holding vertices, counted first (a pass over the
+  // positions, 3.1-3.3 ms on the 1 M sphere), take at most kBrickBytesPerCell per expected cell;
+  // scattered parts, whose vertices spread over many bricks, and boxes whose table alone passes
+  // that, take the hash. The bricks are reserved exactly, never regrown (a regrowth, old and new
+  // bricks at once, a try given up past a limit and a table of up to the dense budget put a chain
+  // of 10 M triangles in 8,000 parts 3 % past its memory target). The 1 M sphere's 50 % and 25 %
+  // levels (the hash's 17 and 8.5 MB of slots) assigned in about 41 and 30 ms instead of 80.1 and
+  // 74.2 (Intel Xeon, minima of 5; docs/bench/clustering.md)
   const int block_bricks = g_block_bricks.load(std::memory_order_relaxed);
-  bool bricks_ran_out = false;
+  bool too_many_bricks = false;
   if (block_bricks != 0 && p.order.size() < (size_t(1) << 28)) {
     int32_t lo_cube[3];
     size_t dims[3];
@@ -2206,20 +2245,21 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
       dims[a] = size_t(floorToInt(p.bounds.max[a] * inv) + 4 - lo_cube[a]);
       top_bytes *= double((dims[a] + 3) / 4);
     }
-    if (top_bytes <= dense_budget) {
+    // the table and the bricks together within kBrickBytesPerCell per expected cell (16 KB at least)
+    const double allowance = std::max(16384.0, kBrickBytesPerCell * double(expected));
+    if (top_bytes <= dense_budget && top_bytes < 17179869184.0 && (block_bricks > 0 || top_bytes < allowance)) {
       const size_t brick_limit =
-          block_bricks > 0 ? size_t(block_bricks)
-                           : std::max<size_t>(64, size_t(kBrickBytesPerVertex * double(p.order.size()) / 256.0));
-      if (assignBlocks(p, cell_width, lo_cube, dims, rule, expected, true, brick_limit, out)) {
+          block_bricks > 0 ? size_t(block_bricks) : size_t((allowance - top_bytes) / double(kBrickBytes));
+      const size_t brick_count = countVertexBricks(p, inv, lo_cube, dims, brick_limit);
+      if (brick_count <= brick_limit) {
+        assignBlocks(p, cell_width, lo_cube, dims, rule, expected, true, brick_count, out);
         g_last_grid.store(kGridBricked, std::memory_order_relaxed);
         return;
       }
-      out.reset(p.mesh->vertexCount(), cell_width, false, shape);  // scattered: the hash below
-      out.heaviest.reserve(expected);
-      bricks_ran_out = true;
+      too_many_bricks = true;  // scattered: the hash below
     }
   }
-  g_last_grid.store(bricks_ran_out ? kGridHashAfterBricks : kGridHash, std::memory_order_relaxed);
+  g_last_grid.store(too_many_bricks ? kGridHashForBricks : kGridHash, std::memory_order_relaxed);
   // occupied grid cubes per expected cell, measured on the 1 M sphere's chain: 0.46 (the width
   // search's first probe), 0.48, 0.53, 0.48 (levels 1-3). Sized for 0.5, level 2 passed the 3/4 load
   // and doubled, old and new slots at once (3.9 + 7.9 MB): part of that chain's peak
@@ -2309,11 +2349,11 @@ void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
   g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
   g_bricks_allowed.store(bricks, std::memory_order_relaxed);
 }
-// the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 giving up
-// for the hash past k bricks; returns the mode it replaces
+// the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 the hash
+// where the vertices' bricks are more than k; returns the mode it replaces
 int setFloatingBlockBricksForTest(int mode) { return g_block_bricks.exchange(mode < 0 ? -1 : mode); }
 // the grid the last assignFloating call searched: 0 a flat one, 1 the bricked grid of side w, 2 the
-// hash, 3 the hash after the bricked grid ran out of bricks
+// hash, 3 the hash where the bricked grid would have taken too many bricks
 int lastFloatingGridForTest() { return g_last_grid.load(std::memory_order_relaxed); }
 // false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
 void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }

@@ -18,9 +18,9 @@ namespace scenelod::detail {
 // floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
 // short_heads false keeps the flat grids' list heads at 32 bits, bricks false keeps them flat
 void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
-// the bricked grid of side w in blocks: -1 the default, 0 never (the hash), k > 0 giving up for the
-// hash past k bricks; and the grid the last assignment searched (0 flat, 1 bricked, 2 the hash, 3
-// the hash after the bricks ran out)
+// the bricked grid of side w in blocks: -1 the default, 0 never (the hash), k > 0 the hash only where
+// the vertices' bricks are more than k (and its table past the dense budget); and the grid the last
+// assignment searched (0 flat, 1 bricked, 2 the hash, 3 the hash where the bricks were too many)
 int setFloatingBlockBricksForTest(int mode);
 int lastFloatingGridForTest();
 }  // namespace scenelod::detail
@@ -187,11 +187,14 @@ TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
 
 // The bricked grid of side w (cells in blocks under heads in bricks of 4 x 4 x 4 cubes, for boxes
 // too large for flat heads) chooses the hash's cells, on the AVX2 and SSE2 paths, for both rules and
-// shapes: on a sphere with a triangle at 20 (at w = 0.1 and 0.25 the box's flat heads would pass
-// the dense budget and its bricks' table does not), on a lattice of point pairs holding about 10.5
-// sphere cells per grid cube (chained blocks, the general gather), and where it runs out of bricks:
-// with a limit of 2, and by default on 2,197 small triangles 8 cubes apart (a brick each, past the
-// limit of one per 16 vertices), which then take the hash.
+// shapes: on a sphere with a triangle at 20 (at w = 0.1 and 0.25 the box's flat heads would pass the
+// dense budget, its bricks' table does not), on a lattice of point pairs holding about 10.5 sphere
+// cells per grid cube (chained blocks, the general gather), on 2,197 small triangles 8 cubes apart
+// (a brick each), on a finer sphere of 72,360 vertices and on 512 small spheres 16 cubes apart. The
+// default takes it where the table and the bricks the vertices fill take at most 21 bytes per
+// expected cell: the fine sphere; the small meshes' tables alone pass that (the hash), and the 512
+// spheres' 4,096 bricks do (the hash, once counted). A limit of 2 bricks always gives the hash, one
+// of 2^20 always the bricked grid.
 TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
   Mesh sphere_far = test::makeBumpySphere(60, 80);
   Mesh far_triangle;
@@ -225,7 +228,13 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
     float w;
     int grid;  // the grid the default settings take
   };
-  for (Run run : {Run{&sphere_far, 0.1f, 1}, Run{&sphere_far, 0.25f, 1}, Run{&lattice, 0.4f, 1}, Run{&scattered, 0.1f, 3}}) {
+  const Mesh fine_sphere = test::makeBumpySphere(200, 360);  // 72,360 vertices: 32-bit heads
+  Mesh spheres;  // w = 0.5: a sphere of diameter 1 every 8, on the bricks' corners (8 bricks each)
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 8; ++z) test::appendMesh(spheres, test::makeSphere(glm::vec3(x, y, z) * 8.0f, 0.5f, 12, 16));
+  for (Run run : {Run{&sphere_far, 0.1f, 2}, Run{&sphere_far, 0.25f, 2}, Run{&lattice, 0.4f, 2}, Run{&scattered, 0.1f, 2},
+                  Run{&fine_sphere, 0.02f, 1}, Run{&spheres, 0.5f, 3}}) {
     PreparedMesh p;
     ClusterParams params;
     ASSERT_TRUE(prepareMesh(*run.mesh, params, p).ok());
@@ -255,8 +264,8 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
         EXPECT_GT(most, 4);
       }
       for (bool avx2 : {true, false})
-        for (int mode : {-1, 2}) {
-          SCOPED_TRACE(std::string(avx2 ? "avx2" : "sse2") + (mode < 0 ? " default" : " 2 bricks"));
+        for (int mode : {-1, 2, 1 << 20}) {
+          SCOPED_TRACE(std::string(avx2 ? "avx2" : "sse2") + " bricks " + std::to_string(mode));
           ClusterAssignment other;
           detail::setFloatingPathsForTest(avx2, true, true);
           detail::setFloatingBlockBricksForTest(mode);
@@ -265,7 +274,7 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
           detail::setFloatingBlockBricksForTest(-1);
           detail::setFloatingPathsForTest(true, true, true);
           ASSERT_TRUE(ok);
-          EXPECT_EQ(grid, mode < 0 ? run.grid : 3);
+          EXPECT_EQ(grid, mode < 0 ? run.grid : mode == 2 ? 3 : 1);
           EXPECT_EQ(other.heaviest, hash.heaviest);
           EXPECT_EQ(other.cluster_of, hash.cluster_of);
         }
