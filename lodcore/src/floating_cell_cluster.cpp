@@ -270,6 +270,8 @@ constexpr double kBlockBytes = 20.0;
 // and a table of 1.2 MB, 19 bytes in all)
 constexpr double kBrickBytesPerCell = 21.0;
 constexpr size_t kBrickBytes = 256;  // one CellBlocks<true>::Brick
+// bricks are numbered in 32 bits (countVertexBricks, CellBlocks::top): a table of 4 bytes per brick
+constexpr double kMaxBrickTableBytes = 4.0 * 4294967296.0;
 inline size_t expectedBlocks(size_t expected_cells) { return expected_cells * 11 / 20 + 16; }
 
 #if defined(__SSE2__)
@@ -1898,22 +1900,14 @@ size_t countVertexBricks(const PreparedMesh& p, float inv, const int32_t lo_cube
   const PositionsByWeight pos(p);
   const uint32_t sy = uint32_t(bx), sz = uint32_t(bx * by);
   size_t count = 0;
-  uint32_t brick[512];  // a run's brick indices first, in a loop the compiler vectorises
+  uint32_t brick[512];  // a run's brick indices first (no dependence between vertices), then their bits
   for (size_t i0 = 0, n = p.order.size(); i0 < n && count <= limit; i0 += 512) {
     const size_t m = std::min<size_t>(512, n - i0);
-    if (pos.sorted) {
-      const glm::vec3* s = pos.sorted + i0;
-      for (size_t k = 0; k < m; ++k)
-        brick[k] = (uint32_t(floorToInt(s[k].z * inv) - lo_cube[2]) >> 2) * sz +
-                   (uint32_t(floorToInt(s[k].y * inv) - lo_cube[1]) >> 2) * sy +
-                   (uint32_t(floorToInt(s[k].x * inv) - lo_cube[0]) >> 2);
-    } else {
-      for (size_t k = 0; k < m; ++k) {
-        const glm::vec3 v = pos[i0 + k];
-        brick[k] = (uint32_t(floorToInt(v.z * inv) - lo_cube[2]) >> 2) * sz +
-                   (uint32_t(floorToInt(v.y * inv) - lo_cube[1]) >> 2) * sy +
-                   (uint32_t(floorToInt(v.x * inv) - lo_cube[0]) >> 2);
-      }
+    for (size_t k = 0; k < m; ++k) {
+      const glm::vec3 v = pos[i0 + k];
+      brick[k] = (uint32_t(floorToInt(v.z * inv) - lo_cube[2]) >> 2) * sz +
+                 (uint32_t(floorToInt(v.y * inv) - lo_cube[1]) >> 2) * sy +
+                 (uint32_t(floorToInt(v.x * inv) - lo_cube[0]) >> 2);
     }
     for (size_t k = 0; k < m; ++k) {
       const uint32_t b = brick[k];
@@ -2247,7 +2241,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     }
     // the table and the bricks together within kBrickBytesPerCell per expected cell (16 KB at least)
     const double allowance = std::max(16384.0, kBrickBytesPerCell * double(expected));
-    if (top_bytes <= dense_budget && top_bytes < 17179869184.0 && (block_bricks > 0 || top_bytes < allowance)) {
+    if (top_bytes <= dense_budget && top_bytes < kMaxBrickTableBytes && (block_bricks > 0 || top_bytes < allowance)) {
       const size_t brick_limit =
           block_bricks > 0 ? size_t(block_bricks) : size_t((allowance - top_bytes) / double(kBrickBytes));
       const size_t brick_count = countVertexBricks(p, inv, lo_cube, dims, brick_limit);
