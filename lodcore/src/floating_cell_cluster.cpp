@@ -2169,6 +2169,18 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
 
 }  // namespace
 
+// The grid cubes of side 1 / inv around a box: the first one (lo_cube) and the counts along each
+// axis (dims), 3 cubes of margin below and 3 above the box's, so that every searched cube lies
+// inside (the slack is far below a cube)
+namespace {
+void gridBox(const Aabb& box, float inv, int32_t lo_cube[3], size_t dims[3]) {
+  for (int a = 0; a < 3; ++a) {
+    lo_cube[a] = floorToInt(box.min[a] * inv) - 3;
+    dims[a] = size_t(floorToInt(box.max[a] * inv) + 4 - lo_cube[a]);
+  }
+}
+}  // namespace
+
 void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bool nearest, Assignment& out) {
   out.reset(p.mesh->vertexCount(), cell_width, false, shape);
   const float inv = 1.0f / cell_width;
@@ -2192,12 +2204,8 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     // every searched cube lies within two cubes of the box's (the slack is far below a cube)
     int32_t lo_cube[3];
     size_t dims[3];
-    double volume = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      lo_cube[a] = floorToInt(p.bounds.min[a] * cube_inv) - 3;
-      dims[a] = size_t(floorToInt(p.bounds.max[a] * cube_inv) + 4 - lo_cube[a]);
-      volume *= double(dims[a]);
-    }
+    gridBox(p.bounds, cube_inv, lo_cube, dims);
+    const double volume = double(dims[0]) * double(dims[1]) * double(dims[2]);
     // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
     // these fit (the bunny: its 50 % level's flat heads 1.72 -> 0.86 MB; see the bricks below)
     const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
@@ -2233,12 +2241,9 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   if (block_bricks != 0 && p.order.size() < (size_t(1) << 28)) {
     int32_t lo_cube[3];
     size_t dims[3];
+    gridBox(p.bounds, inv, lo_cube, dims);
     double top_bytes = sizeof(uint32_t);
-    for (int a = 0; a < 3; ++a) {
-      lo_cube[a] = floorToInt(p.bounds.min[a] * inv) - 3;
-      dims[a] = size_t(floorToInt(p.bounds.max[a] * inv) + 4 - lo_cube[a]);
-      top_bytes *= double((dims[a] + 3) / 4);
-    }
+    for (int a = 0; a < 3; ++a) top_bytes *= double((dims[a] + 3) / 4);
     // the table and the bricks together within kBrickBytesPerCell per expected cell (16 KB at least)
     const double allowance = std::max(16384.0, kBrickBytesPerCell * double(expected));
     if (top_bytes <= dense_budget && top_bytes < kMaxBrickTableBytes && (block_bricks > 0 || top_bytes < allowance)) {
