@@ -152,30 +152,24 @@ double minimumOf(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::
 // every benchmark of this file registered with the min statistic
 #define SCENELOD_BENCHMARK(fn) BENCHMARK(fn)->ComputeStatistics("min", minimumOf)
 
-void BM_FloatingLevel_Bunny(benchmark::State& state) {
-  const double fraction = double(state.range(0)) / 100.0;
-  Prepared& pr = prepared(bunny(), fraction);
+// one level of `m` (prepared once) at the width keeping Arg % of its triangles, timed alone
+void levelAtArg(benchmark::State& state, const Mesh& m, LodMethod method) {
+  ClusterParams params;
+  params.method = method;
+  Prepared& pr = prepared(m, double(state.range(0)) / 100.0, params);
   Mesh out;
   for (auto _ : state) {
     clusterPrepared(pr.p, pr.params, out);
     benchmark::DoNotOptimize(out.triangles.data());
   }
-  reportTriangles(state, bunny(), out.triangleCount());
+  reportTriangles(state, m, out.triangleCount());
   state.counters["cell_width"] = pr.params.cell_width;
 }
+
+void BM_FloatingLevel_Bunny(benchmark::State& state) { levelAtArg(state, bunny(), ClusterParams().method); }
 SCENELOD_BENCHMARK(BM_FloatingLevel_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
 
-void BM_UniformLevel_Bunny(benchmark::State& state) {
-  ClusterParams params;
-  params.method = LodMethod::kUniform;
-  Prepared& pr = prepared(bunny(), double(state.range(0)) / 100.0, params);
-  Mesh out;
-  for (auto _ : state) {
-    clusterPrepared(pr.p, pr.params, out);
-    benchmark::DoNotOptimize(out.triangles.data());
-  }
-  reportTriangles(state, bunny(), out.triangleCount());
-}
+void BM_UniformLevel_Bunny(benchmark::State& state) { levelAtArg(state, bunny(), LodMethod::kUniform); }
 SCENELOD_BENCHMARK(BM_UniformLevel_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
 
 // the once-per-mesh part: validation, grading, sort by weight
@@ -266,15 +260,17 @@ SCENELOD_BENCHMARK(BM_Sloppy10pct_Bunny)->Unit(benchmark::kMillisecond);
 // levels, whose cells are past every cache) as well as 10 % and 1 %
 void BM_FloatingLevel_1M(benchmark::State& state) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-  Prepared& pr = prepared(bigMesh(), double(state.range(0)) / 100.0);
-  Mesh out;
-  for (auto _ : state) {
-    clusterPrepared(pr.p, pr.params, out);
-    benchmark::DoNotOptimize(out.triangles.data());
-  }
-  reportTriangles(state, bigMesh(), out.triangleCount());
+  levelAtArg(state, bigMesh(), ClusterParams().method);
 }
 SCENELOD_BENCHMARK(BM_FloatingLevel_1M)->Arg(50)->Arg(25)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
+
+// Rossignac & Borrel's uniform grid at the same counts, one thread: the pipeline's floor without the
+// floating cells' weight-ordered search (the same elimination, synthesis and output passes follow)
+void BM_UniformLevel_1M(benchmark::State& state) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+  levelAtArg(state, bigMesh(), LodMethod::kUniform);
+}
+SCENELOD_BENCHMARK(BM_UniformLevel_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
 
 void BM_Sloppy_1M(benchmark::State& state) {
   const Mesh& m = bigMesh();

@@ -8,7 +8,10 @@
 // build's libscenelod_core.a. Not a unit test: it times.
 // With `hash` last, the levels that would search the bricked grid of side w search the hash
 // instead (the grid before the bricked one, for comparisons); the grid column names the one searched.
-// Usage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] REPETITIONS [hash]
+// With `uniform` last, the levels are Rossignac & Borrel's uniform grid instead of floating cells:
+// the same elimination, synthesis and output passes after an assignment with no weight order, so
+// the floor under any floating-cell assignment at that count (the grid column reads "-").
+// Usage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] REPETITIONS [hash|uniform]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -42,7 +45,7 @@ namespace {
 int usage(const char* why) {
   std::fprintf(stderr,
                "level_phases: %s\nusage: level_phases bunny|sphere1M|MESH.obj chain|FRACTION[,FRACTION...] "
-               "REPETITIONS [hash]\n",
+               "REPETITIONS [hash|uniform]\n",
                why);
   return 2;
 }
@@ -64,8 +67,9 @@ struct Row {
 
 int main(int argc, char** argv) {
   if (argc != 4 && argc != 5) return usage("three or four arguments expected");
-  if (argc == 5) {
-    if (std::strcmp(argv[4], "hash") != 0) return usage("the fourth argument, if any, must be `hash`");
+  const bool uniform = argc == 5 && std::strcmp(argv[4], "uniform") == 0;
+  if (argc == 5 && !uniform) {
+    if (std::strcmp(argv[4], "hash") != 0) return usage("the fourth argument, if any, must be `hash` or `uniform`");
     if (!detail::setFloatingBlockBricksForTest) return usage("this build's library has no bricked grid to switch off");
     detail::setFloatingBlockBricksForTest(0);
   }
@@ -86,6 +90,7 @@ int main(int argc, char** argv) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   const bool chain_levels = std::strcmp(argv[2], "chain") == 0;
   ClusterParams params;
+  if (uniform) params.method = LodMethod::kUniform;
   PreparedMesh p;
   double prepare_ms = std::numeric_limits<double>::infinity();
   for (int i = 0; i < repetitions; ++i) {
@@ -150,12 +155,13 @@ int main(int argc, char** argv) {
       for (int k = 0; k < 5; ++k) r.phase[k] = std::min(r.phase[k], t[k]);
       r.clusters = a.cluster_count;
       r.triangles = out.triangleCount();
-      if (detail::lastFloatingGridForTest) r.grid = detail::lastFloatingGridForTest();
+      if (detail::lastFloatingGridForTest && !uniform) r.grid = detail::lastFloatingGridForTest();
     }
   }
 
-  std::printf("%s: %zu vertices, %zu triangles; prepare %.3f ms; all on one thread, minima of %d (ms)\n\n", argv[1],
-              m.vertexCount(), m.triangleCount(), prepare_ms, repetitions);
+  std::printf("%s: %zu vertices, %zu triangles; %s; prepare %.3f ms; all on one thread, minima of %d (ms)\n\n",
+              argv[1], m.vertexCount(), m.triangleCount(), uniform ? "uniform grid" : "floating cells", prepare_ms,
+              repetitions);
   std::printf(
       "| level | cell width | clusters | triangles | grid | assign | renumber | elimination | synthesis | output | sum |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
