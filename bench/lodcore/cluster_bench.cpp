@@ -212,35 +212,45 @@ void BM_MeshoptSimplify_Bunny(benchmark::State& state) {
 }
 SCENELOD_BENCHMARK(BM_MeshoptSimplify_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
 
-// whole 8-level chain (grading, sort, w1 search when Arg 0, levels in parallel on all threads)
-void BM_Chain8_Bunny(benchmark::State& state) {
+// a whole 8-level chain of the bunny: grading, sort, the w1 search unless w1 is given (the width
+// keeping half the triangles), the levels in parallel on all threads, or on one
+void chainOfBunny(benchmark::State& state, LodMethod method, bool w1_given, const char* label) {
   ChainParams cp;
   cp.level_count = 8;
-  if (state.range(0) == 1) cp.first_cell_width = prepared(bunny(), 0.5).params.cell_width;
+  cp.cluster.method = method;
+  if (w1_given) {
+    ClusterParams params;
+    params.method = method;
+    cp.first_cell_width = prepared(bunny(), 0.5, params).params.cell_width;
+  }
   LodChain chain;
   for (auto _ : state) {
     buildChain(bunny(), cp, chain);
     benchmark::DoNotOptimize(chain.levels.data());
   }
   reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
-  state.SetLabel(state.range(0) == 1 ? "w1 given" : "w1 searched");
+  state.SetLabel(label);
+}
+
+void BM_Chain8_Bunny(benchmark::State& state) {
+  const bool given = state.range(0) == 1;
+  chainOfBunny(state, ClusterParams().method, given, given ? "w1 given" : "w1 searched");
 }
 SCENELOD_BENCHMARK(BM_Chain8_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Chain8_Bunny_OneThread(benchmark::State& state) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-  ChainParams cp;
-  cp.level_count = 8;
-  cp.first_cell_width = prepared(bunny(), 0.5).params.cell_width;
-  LodChain chain;
-  for (auto _ : state) {
-    buildChain(bunny(), cp, chain);
-    benchmark::DoNotOptimize(chain.levels.data());
-  }
-  reportTriangles(state, bunny(), chain.levels.back().mesh.triangleCount());
-  state.SetLabel("w1 given, 1 thread");
+  chainOfBunny(state, ClusterParams().method, true, "w1 given, 1 thread");
 }
 SCENELOD_BENCHMARK(BM_Chain8_Bunny_OneThread)->Unit(benchmark::kMillisecond);
+
+// the same chain on Rossignac & Borrel's uniform grid: the chain's floor without the floating
+// cells' weight-ordered search (the grading and sort still run: prepareMesh does them for every method)
+void BM_Chain8_Bunny_Uniform(benchmark::State& state) {
+  const bool given = state.range(0) == 1;
+  chainOfBunny(state, LodMethod::kUniform, given, given ? "uniform, w1 given" : "uniform, w1 searched");
+}
+SCENELOD_BENCHMARK(BM_Chain8_Bunny_Uniform)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Sloppy10pct_Bunny(benchmark::State& state) {
   const Mesh& m = bunny();
