@@ -170,7 +170,7 @@ void BM_FloatingLevel_Bunny(benchmark::State& state) { levelAtArg(state, bunny()
 SCENELOD_BENCHMARK(BM_FloatingLevel_Bunny)->Arg(50)->Arg(10)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_UniformLevel_Bunny(benchmark::State& state) { levelAtArg(state, bunny(), LodMethod::kUniform); }
-SCENELOD_BENCHMARK(BM_UniformLevel_Bunny)->Arg(10)->Unit(benchmark::kMillisecond);
+SCENELOD_BENCHMARK(BM_UniformLevel_Bunny)->Arg(50)->Arg(10)->Unit(benchmark::kMillisecond);
 
 // the once-per-mesh part: validation, grading, sort by weight
 void BM_Prepare_Bunny(benchmark::State& state) {
@@ -280,7 +280,7 @@ void BM_UniformLevel_1M(benchmark::State& state) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
   levelAtArg(state, bigMesh(), LodMethod::kUniform);
 }
-SCENELOD_BENCHMARK(BM_UniformLevel_1M)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
+SCENELOD_BENCHMARK(BM_UniformLevel_1M)->Arg(50)->Arg(25)->Arg(10)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
 
 void BM_Sloppy_1M(benchmark::State& state) {
   const Mesh& m = bigMesh();
