@@ -67,11 +67,13 @@ struct Row {
 
 int main(int argc, char** argv) {
   if (argc != 4 && argc != 5) return usage("three or four arguments expected");
-  const bool uniform = argc == 5 && std::strcmp(argv[4], "uniform") == 0;
-  if (argc == 5 && !uniform) {
-    if (std::strcmp(argv[4], "hash") != 0) return usage("the fourth argument, if any, must be `hash` or `uniform`");
+  const char* option = argc == 5 ? argv[4] : "";
+  const bool uniform = std::strcmp(option, "uniform") == 0;
+  if (std::strcmp(option, "hash") == 0) {
     if (!detail::setFloatingBlockBricksForTest) return usage("this build's library has no bricked grid to switch off");
     detail::setFloatingBlockBricksForTest(0);
+  } else if (*option != '\0' && !uniform) {
+    return usage("the fourth argument, if any, must be `hash` or `uniform`");
   }
   const int repetitions = std::atoi(argv[3]);
   if (repetitions < 1) return usage("REPETITIONS must be at least 1");
