@@ -1,6 +1,8 @@
 // A fixed number of selection frames on the benchmark scene (selector_scene.h), for deterministic
 // instruction and branch-misprediction counts under callgrind (scripts/selection-callgrind); the
-// timing benchmarks are in selector_bench.cpp.
+// timing benchmarks are in selector_bench.cpp. It also prints a fingerprint (FNV-1a over every
+// frame's levels and statistics), so a change meant to keep the selector's output can be checked
+// bit for bit: run it before and after and diff the lines.
 // Usage: selector_frames OBJECTS FRAMES MODE, MODE one of
 //   smooth   budget, Lagrangian, camera turning 1/600 of the orbit per frame, history kept
 //   cold     budget, Lagrangian, camera jump and history reset every frame
@@ -9,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <cstdint>
 
 #include "selection/selector_scene.h"
 
@@ -34,6 +37,11 @@ int main(int argc, char** argv) {
   SelectionStats st;
   double t = 0.0;
   size_t drawn = 0;
+  uint64_t hash = 1469598103934665603ull;
+  auto mixBytes = [&hash](const void* p, size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < bytes; ++i) hash = (hash ^ b[i]) * 1099511628211ull;
+  };
   for (int f = 0; f < frames; ++f) {
     t += cold ? 2.0 : 6.2831853 / 600.0;
     if (cold) resetSelectorHistory(s.ctx);
@@ -45,7 +53,15 @@ int main(int argc, char** argv) {
     j.params.calibrate = false;
     if (!j.run()) return 1;
     drawn += st.drawn_count;
+    mixBytes(s.levels.data(), s.levels.size());
+    const double sums[] = {st.predicted_ms, st.mandatory_ms, st.total_benefit, st.lambda};
+    const uint32_t counts[] = {st.drawn_count, st.culled_count,  st.dropped_count,
+                               st.switch_count, st.search_passes, st.flags};
+    mixBytes(sums, sizeof sums);
+    mixBytes(counts, sizeof counts);
+    mixBytes(&st.features, sizeof st.features);
   }
-  std::printf("%d frames, %.1f drawn per frame\n", frames, static_cast<double>(drawn) / frames);
+  std::printf("%d frames, %.1f drawn per frame, fingerprint %016llx\n", frames,
+              static_cast<double>(drawn) / frames, static_cast<unsigned long long>(hash));
   return 0;
 }
