@@ -22,8 +22,9 @@ struct ChainParams {
 
 // Builds level 0 (a copy of `original`) and `level_count` simplified levels with cell widths
 // w_k = w_1 * growth^(k-1), dispatching on params.cluster.method (kUniform, kFloatingHeaviest,
-// kFloatingNearest; kZhang goes to buildZhangChain; generators not built yet return kUnsupported;
-// ChainStats are only filled for the clustering methods). Each level records
+// kFloatingNearest; kZhang goes to buildZhangChain, kScrooge to buildScroogeChain with default
+// ScroogeParams; kOriginal generates nothing and is an error; ChainStats are only filled for the
+// clustering methods, and total_seconds for kScrooge). Each level records
 // its cell width, its measured maximum vertex displacement and a bounding sphere (centre of the
 // level's vertex box, radius to the farthest vertex). Levels that come out identical in counts to
 // the previous one are kept, so level indices always match cell widths.

@@ -82,8 +82,9 @@ Aabb computeBounds(Span<const glm::vec3> positions);
 // Faces with fewer than 3 corners are dropped. Returns the number of triangles written.
 size_t triangulateFaces(Mesh& mesh);
 
-// Per-vertex normals from area-weighted face normals (no crease handling: see normals.h of the
-// clustering generator for crease-aware normals). Leaves normals of unreferenced vertices at 0,0,1.
+// Per-vertex normals from area-weighted face normals (no crease handling: the clustering levels get
+// crease-aware normals, ClusterParams::crease_angle_deg in cluster.h). Leaves normals of
+// unreferenced vertices at 0,0,1.
 void computeVertexNormals(Mesh& mesh);
 
 }  // namespace scenelod

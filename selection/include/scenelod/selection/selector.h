@@ -3,10 +3,11 @@
 // distance mode (the coarsest accurate-enough level, Low & Tan 1997 §4) or under a frame-time budget
 // (Funkhouser & Sequin 1993, with Mason & Blake 1997's convex-hull greedy and its Lagrangian twin).
 //
-// Shape (STYLE.md §3): a SelectionJob holds const spans over caller-owned per-object arrays (SoA), a
-// flat per-chain level table, spans for the outputs, and a pointer to a SelectorContext created once
-// for the largest object count. run() allocates nothing, locks nothing, throws nothing, and the same
-// inputs on a context in the same state give bit-identical outputs.
+// Shape (the per-frame job of ../shared/STYLE.md §3, the style guide beside the repository): a
+// SelectionJob holds const spans over caller-owned per-object arrays (SoA), a flat per-chain level
+// table, spans for the outputs, and a pointer to a SelectorContext created once for the largest
+// object count. run() allocates nothing, locks nothing, throws nothing, and the same inputs on a
+// context in the same state give bit-identical outputs.
 //
 // Threads: one thread calls run() on a context at a time. reportFrameTime() may be called from any
 // one other thread at the same time (the engine's render thread reporting the frame it just
