@@ -253,25 +253,13 @@ Sphere boundingSphere(const Mesh& m) {
 
 }  // namespace
 
-Error scroogeMesh(const Mesh& in, const ScroogeParams& params, Mesh& out, ScroogeStats* stats, const char* what) {
-  const std::string name = what ? what : "mesh";
-  if (Error e = checkParams(params, true, name)) return e;
-  if (Error e = validateMesh(in, name)) return e;
-  ScroogeStats local;
-  ScroogeStats& st = stats ? *stats : local;
-  st = ScroogeStats{};
-  out = Mesh{};
-  if (in.vertexCount() == 0) return {};
-  scrooge::Model model;
-  scrooge::normaliseModel(in, params, model, st);
-  scrooge::degradeInSubvolumes(model, params, st);
-  scrooge::assembleMesh(in, model, params, out, st);
-  return {};
-}
+namespace {
 
-Error scroogeNormalise(const Mesh& in, const ScroogeParams& params, Mesh& out, ScroogeStats* stats, const char* what) {
+// normalisation (§2), then with `degrade` the subvolumes' reduction (§3), then the output mesh
+Error runScrooge(const Mesh& in, const ScroogeParams& params, bool degrade, Mesh& out, ScroogeStats* stats,
+                 const char* what) {
   const std::string name = what ? what : "mesh";
-  if (Error e = checkParams(params, false, name)) return e;
+  if (Error e = checkParams(params, degrade, name)) return e;
   if (Error e = validateMesh(in, name)) return e;
   ScroogeStats local;
   ScroogeStats& st = stats ? *stats : local;
@@ -281,9 +269,22 @@ Error scroogeNormalise(const Mesh& in, const ScroogeParams& params, Mesh& out, S
   scrooge::Model model;
   scrooge::normaliseModel(in, params, model, st);
   ScroogeParams p = params;
-  p.convex_polygons = false;  // nothing was rebuilt
+  if (degrade)
+    scrooge::degradeInSubvolumes(model, params, st);
+  else
+    p.convex_polygons = false;  // nothing was rebuilt
   scrooge::assembleMesh(in, model, p, out, st);
   return {};
+}
+
+}  // namespace
+
+Error scroogeMesh(const Mesh& in, const ScroogeParams& params, Mesh& out, ScroogeStats* stats, const char* what) {
+  return runScrooge(in, params, true, out, stats, what);
+}
+
+Error scroogeNormalise(const Mesh& in, const ScroogeParams& params, Mesh& out, ScroogeStats* stats, const char* what) {
+  return runScrooge(in, params, false, out, stats, what);
 }
 
 glm::vec3 scroogeSubvolumeForCellRel(const Aabb& bounds, float cell_rel) {
