@@ -2,6 +2,8 @@
 // (std::from_chars, no iostreams per token), so a 70k-triangle model loads in milliseconds.
 #include "scenelod/lodcore/obj_io.h"
 
+#include "scenelod/lodcore/atomic_file.h"
+
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -470,11 +472,7 @@ Error writeObj(const std::string& path, const Mesh& mesh) {
     }
     for (uint32_t p : mesh.points) s += 'p', plain(p), s += '\n';
 
-    FilePtr f(std::fopen(path.c_str(), "wb"));
-    if (!f) return {Status::kIoError, path + ": cannot create file (" + std::strerror(errno) + ")"};
-    if (std::fwrite(s.data(), 1, s.size(), f.get()) != s.size()) return {Status::kIoError, path + ": write error"};
-    if (std::fclose(f.release()) != 0) return {Status::kIoError, path + ": write error on close"};
-    return {};
+    return writeFileAtomic(path, s.data(), s.size());
   } catch (const std::bad_alloc&) {
     return {Status::kOutOfMemory, path + ": out of memory while writing"};
   }
