@@ -201,7 +201,23 @@ class ObjReader {
     return {};
   }
 
+  // OBJ is text: a control byte other than white space means another format (a GLB renamed .obj) or
+  // a damaged file, which would otherwise read as an OBJ whose lines are all unknown statements
+  Error checkText(const std::string& data) const {
+    for (size_t i = 0; i < data.size(); ++i) {
+      const unsigned char c = static_cast<unsigned char>(data[i]);
+      if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\v' && c != '\f') {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "0x%02x", c);
+        return {Status::kParseError, path_ + ": binary data (byte " + hex + " at offset " + std::to_string(i) +
+                                         "): not an OBJ file"};
+      }
+    }
+    return {};
+  }
+
   Error parse(const std::string& data) {
+    if (Error e = checkText(data)) return e;
     const char* p = data.data();
     const char* end = p + data.size();
     uint32_t line = 0;
@@ -274,6 +290,8 @@ class ObjReader {
       }
       // o, g, s, usemtl, mtllib, vp, curves and anything else: skipped
     }
+    if (positions_.empty() && elements_.empty())
+      return {Status::kParseError, path_ + ": no vertices and no elements (v, f, l or p statements): an empty OBJ or not an OBJ file"};
     if (!colors_.empty()) colors_.resize(positions_.size(), glm::vec3(1.0f));
     return {};
   }

@@ -210,6 +210,30 @@ TEST(ObjIo, MalformedNumbersAreRefused) {
   }
 }
 
+TEST(ObjIo, FilesThatAreNotObjAreRefused) {
+  // an empty file, prose, and a GLB renamed .obj must not read as an empty mesh
+  const std::string glb = std::string("glTF\x02\0\0\0", 8) + std::string("\x14\0\0\0JSON{}", 10);
+  const struct {
+    const char* name;
+    std::string text;
+    const char* expect;
+  } cases[] = {
+      {"empty.obj", "", "no vertices and no elements"},
+      {"prose.obj", "Dear reader,\nthis is a letter, not a model.\n", "no vertices and no elements"},
+      {"comments.obj", "# only a comment\no name\n", "no vertices and no elements"},
+      {"renamed.obj", glb, "binary data"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = writeFile(c.name, c.text);
+    Mesh m;
+    const Error e = readObj(path, m);
+    ASSERT_FALSE(e.ok()) << c.name;
+    EXPECT_EQ(e.status, Status::kParseError) << c.name;
+    EXPECT_TRUE(contains(e.message, path)) << e.message;
+    EXPECT_TRUE(contains(e.message, c.expect)) << e.message;
+  }
+}
+
 TEST(ObjIo, ReadsTheBunny) {
   SCENELOD_REQUIRE_BUNNY();
   Mesh m;
