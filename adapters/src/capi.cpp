@@ -9,8 +9,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <new>
@@ -32,18 +34,81 @@
 
 using namespace scenelod;
 
+namespace {
+
+// Handles of a dense array kept compact by swap-remove: slot + 1 in the low 32 bits (0 stays null),
+// the slot's generation in the next 31 and the kind of handle (object or chain) in the top bit, so a
+// removed element's handle, or another kind's, is refused even after its slot is reused.
+struct SlotMap {
+  static constexpr uint64_t kKindBit = uint64_t{1} << 63;
+  static constexpr uint32_t kGenerationMask = 0x7fffffffu;
+
+  explicit SlotMap(uint64_t kind_bit) : kind(kind_bit) {}
+
+  uint64_t kind;                     // 0 or kKindBit
+  std::vector<uint32_t> generation;  // per slot
+  std::vector<uint32_t> dense;       // per slot: dense index, UINT32_MAX when free
+  std::vector<uint32_t> slot_of;     // per dense index
+  std::vector<uint32_t> free_slots;
+
+  uint64_t handle(uint32_t d) const {
+    const uint32_t slot = slot_of[d];
+    return kind | (static_cast<uint64_t>(generation[slot] & kGenerationMask) << 32) | (static_cast<uint64_t>(slot) + 1);
+  }
+  bool resolve(uint64_t h, uint32_t& d) const {
+    const uint64_t low = h & 0xffffffffu;
+    if (low == 0 || (h & kKindBit) != kind) return false;
+    const uint32_t slot = static_cast<uint32_t>(low - 1);
+    if (slot >= generation.size() || (generation[slot] & kGenerationMask) != ((h >> 32) & kGenerationMask)) return false;
+    d = dense[slot];
+    return d != UINT32_MAX;
+  }
+  // Gives the next dense index (slot_of.size()) a handle.
+  uint64_t add() {
+    uint32_t slot;
+    if (!free_slots.empty()) {
+      slot = free_slots.back();
+      free_slots.pop_back();
+    } else {
+      slot = static_cast<uint32_t>(generation.size());
+      generation.push_back(1);
+      dense.push_back(UINT32_MAX);
+    }
+    dense[slot] = static_cast<uint32_t>(slot_of.size());
+    slot_of.push_back(slot);
+    return handle(dense[slot]);
+  }
+  // Frees dense index d's handle; the last dense index moves to d, as the caller's arrays do.
+  void remove(uint32_t d) {
+    const uint32_t slot = slot_of[d], last = static_cast<uint32_t>(slot_of.size() - 1);
+    slot_of[d] = slot_of[last];
+    slot_of.pop_back();
+    if (d != last) dense[slot_of[d]] = d;
+    dense[slot] = UINT32_MAX;
+    generation[slot]++;
+    free_slots.push_back(slot);
+  }
+};
+
+// Moves v's last element to index i and drops the last.
+template <class V>
+void swapPop(V& v, size_t i) {
+  if (i + 1 < v.size()) v[i] = std::move(v.back());
+  v.pop_back();
+}
+
+}  // namespace
+
 struct slod_context {
   slod_context_desc desc{};
   slod_status last_status = SLOD_OK;
   std::string last_message;
 
-  std::vector<LodChain> chains;
+  std::vector<LodChain> chains;            // per dense chain index (= level table chain id)
+  SlotMap chain_handles{SlotMap::kKindBit};
   selection::ReplayScene objects;          // node i = object i (roots), chain spheres per chain
-  std::vector<uint32_t> slot_generation;   // per slot
-  std::vector<uint32_t> slot_dense;        // per slot: dense index, UINT32_MAX when free
-  std::vector<uint32_t> dense_slot;        // per dense index
-  std::vector<uint64_t> user_data;         // per dense index
-  std::vector<uint32_t> free_slots;
+  SlotMap object_handles{0};
+  std::vector<uint64_t> user_data;         // per object
 
   std::vector<glm::vec3> centers;
   std::vector<float> radii, scales;
@@ -51,7 +116,7 @@ struct slod_context {
   bool spheres_dirty = true;
 
   selection::SelectorContext* selector = nullptr;
-  size_t selector_rows = 0;
+  size_t selector_rows = 0, selector_levels = 0;
 
   std::unique_ptr<selection::RayScene> rays;
   bool rays_chains_dirty = true;
@@ -84,12 +149,19 @@ slod_status toC(Status s) {
   return SLOD_ERROR_UNKNOWN;
 }
 
+// the last failure of a call that had no context (slod_context_create), per thread
+thread_local slod_status orphan_status = SLOD_OK;
+thread_local std::string orphan_message;
+
 slod_status fail(slod_context* ctx, slod_status s, const std::string& message) {
-  if (ctx) {
-    ctx->last_status = s;
-    ctx->last_message = message;
-    if (ctx->desc.error_callback) ctx->desc.error_callback(ctx->desc.error_user, s, ctx->last_message.c_str());
+  if (!ctx) {
+    orphan_status = s;
+    orphan_message = message;
+    return s;
   }
+  ctx->last_status = s;
+  ctx->last_message = message;
+  if (ctx->desc.error_callback) ctx->desc.error_callback(ctx->desc.error_user, s, ctx->last_message.c_str());
   return s;
 }
 
@@ -114,17 +186,58 @@ slod_status guarded(slod_context* ctx, F&& body) {
   }
 }
 
-slod_object makeHandle(uint32_t slot, uint32_t generation) {
-  return (static_cast<uint64_t>(generation) << 32) | (static_cast<uint64_t>(slot) + 1);  // 0 stays null
+// Per size-tagged struct: its name and the smallest size accepted, the end of its first field after
+// `size` (a caller's struct of any version covers it; 0 means the struct skipped its _init).
+template <class T>
+struct Abi;
+#define SLOD_ABI(T, first_field)                                                          \
+  template <>                                                                             \
+  struct Abi<T> {                                                                         \
+    static constexpr const char* name = #T;                                               \
+    static constexpr size_t min_size = offsetof(T, first_field) + sizeof(T::first_field); \
+  }
+SLOD_ABI(slod_context_desc, max_objects);
+SLOD_ABI(slod_mesh_desc, positions);
+SLOD_ABI(slod_chain_desc, method);
+SLOD_ABI(slod_level_data, cell_width);
+SLOD_ABI(slod_object_desc, chain);
+SLOD_ABI(slod_camera, eye);
+SLOD_ABI(slod_frame_params, budget_ms);
+SLOD_ABI(slod_frame_result, frame);
+SLOD_ABI(slod_pick_result, object);
+#undef SLOD_ABI
+constexpr size_t kSelectionMinStride = offsetof(slod_selection, object) + sizeof(slod_object);
+
+// Checks a caller's struct (input or output): a failure naming it when it is null or its size is
+// below the smallest accepted.
+template <class T>
+slod_status checkSize(slod_context* ctx, const char* fn, const T* p) {
+  if (!p) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": " + Abi<T>::name + " is null");
+  if (p->size < Abi<T>::min_size)
+    return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT,
+                std::string(fn) + ": " + Abi<T>::name + ".size is " + std::to_string(p->size) +
+                    ", below its smallest size " + std::to_string(Abi<T>::min_size) + " (fill it with " +
+                    Abi<T>::name + "_init)");
+  return SLOD_OK;
 }
 
-bool resolve(const slod_context* ctx, slod_object h, uint32_t& dense) {
-  const uint64_t low = h & 0xffffffffu;
-  if (low == 0) return false;
-  const uint32_t slot = static_cast<uint32_t>(low - 1);
-  if (slot >= ctx->slot_generation.size() || ctx->slot_generation[slot] != static_cast<uint32_t>(h >> 32)) return false;
-  dense = ctx->slot_dense[slot];
-  return dense != UINT32_MAX;
+// Reads a caller's struct into `out`: the bytes its size covers over the header's defaults (`init`),
+// so an older caller's shorter struct gets defaults for the fields it lacks and a newer caller's
+// longer one is read as far as this library knows it.
+template <class T>
+slod_status readStruct(slod_context* ctx, const char* fn, const T* in, void (*init)(T*), T& out) {
+  if (slod_status s = checkSize(ctx, fn, in)) return s;
+  init(&out);
+  std::memcpy(&out, in, std::min<size_t>(in->size, sizeof(T)));
+  return SLOD_OK;
+}
+
+// Writes `value` into a caller's struct that checkSize accepted: only the bytes its size covers, the
+// caller's size field kept.
+template <class T>
+void writeStruct(T value, T* out) {
+  value.size = out->size;
+  std::memcpy(out, &value, std::min<size_t>(out->size, sizeof(T)));
 }
 
 bool finite(const float* v, int n) {
@@ -161,18 +274,19 @@ void updateSpheres(slod_context* ctx) {
 
 // (Re)creates the selector when the level table outgrew it, with the configuration runReplay uses.
 Error ensureSelector(slod_context* ctx) {
-  const size_t rows = ctx->objects.table.cell_width.size();
-  if (ctx->selector && rows <= ctx->selector_rows) return {};
+  const size_t rows = ctx->objects.table.cell_width.size(), levels = ctx->objects.table.maxLevelsPerChain();
+  if (ctx->selector && rows <= ctx->selector_rows && levels <= ctx->selector_levels) return {};
   selection::destroySelectorContext(ctx->selector);
   selection::SelectorConfig cfg;
   cfg.max_object_count = std::max<size_t>(ctx->desc.max_objects, 1);
-  cfg.max_levels_per_chain = std::max<size_t>(ctx->objects.table.maxLevelsPerChain(), 1);
+  cfg.max_levels_per_chain = std::max<size_t>(levels, 1);
   cfg.max_level_rows = std::max<size_t>(rows, 1);
   cfg.allocator.allocate = ctx->desc.allocator.allocate;
   cfg.allocator.free = ctx->desc.allocator.free;
   cfg.allocator.user = ctx->desc.allocator.user;
   ctx->selector = selection::createSelectorContext(cfg);
   ctx->selector_rows = rows;
+  ctx->selector_levels = levels;
   if (!ctx->selector) return {Status::kOutOfMemory, "cannot create the selector context"};
   return {};
 }
@@ -191,7 +305,8 @@ selection::Camera toCamera(const slod_camera& c) {
   return cam;
 }
 
-Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, const std::string& what, uint32_t& id) {
+// Builds a chain and appends it at the next dense index (= its level table chain id).
+Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, const std::string& what, slod_chain& handle) {
   ChainParams params;
   switch (d.method) {
     case SLOD_METHOD_FLOATING: break;
@@ -207,40 +322,83 @@ Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, co
   if (Error e = buildChain(mesh, params, chain)) return e;
   if (chain.levels.empty()) return {Status::kInvalidMesh, what + ": the mesh is empty"};
   const Sphere bounds = scene::computeChainBounds(chain);
-  id = ctx->objects.table.addChain(chain);
+  ctx->objects.table.addChain(chain);
   ctx->objects.chain_bounds.push_back(bounds);
   ctx->objects.chain_names.push_back(what);
   ctx->chains.push_back(std::move(chain));
+  handle = ctx->chain_handles.add();
   ctx->rays_chains_dirty = true;
   return {};
+}
+
+// Removes dense chain c, which no object uses: the last chain takes its index (objects follow), and
+// the level table is rebuilt so that its chain ids stay the dense indices.
+void removeChain(slod_context* ctx, uint32_t c) {
+  selection::ReplayScene& s = ctx->objects;
+  const uint32_t last = static_cast<uint32_t>(ctx->chains.size() - 1);
+  for (uint32_t& oc : s.object_chain)
+    if (oc == last) oc = c;
+  swapPop(ctx->chains, c);
+  swapPop(s.chain_bounds, c);
+  swapPop(s.chain_names, c);
+  ctx->chain_handles.remove(c);
+  s.table = selection::LevelTableData{};
+  for (const LodChain& chain : ctx->chains) s.table.addChain(chain);
+  ctx->spheres_dirty = true;
+  ctx->rays_chains_dirty = true;
+}
+
+// The selector's levels as the caller's array of slod_selection, out_stride bytes apart.
+void writeSelections(const slod_context* ctx, void* out, size_t out_stride) {
+  const size_t bytes = std::min(out_stride, sizeof(slod_selection));
+  for (size_t i = 0; i < ctx->levels.size(); ++i) {
+    slod_selection e{};
+    e.object = ctx->object_handles.handle(static_cast<uint32_t>(i));
+    e.user_data = ctx->user_data[i];
+    e.level = ctx->levels[i];
+    std::memcpy(static_cast<char*>(out) + i * out_stride, &e, bytes);
+  }
+}
+
+void recordFrame(slod_context* ctx, const selection::Camera& cam, const slod_camera& camera,
+                 const slod_frame_params& params, uint64_t frame) {
+  selection::ReplayFrame f;
+  if (ctx->replay.frames.empty()) ctx->record_base = frame;
+  f.frame = ctx->replay.frames.size();
+  f.time_s = static_cast<double>(f.frame) / 60.0;
+  f.eye = cam.eye;
+  f.target = cam.target;
+  f.up = cam.up;
+  f.moves.swap(ctx->pending_moves);
+  ctx->replay.frames.push_back(std::move(f));
+  const bool budget = params.budget_ms > 0.0f;
+  ctx->replay.header.has_budget = budget;
+  ctx->replay.header.budget_ms = budget ? params.budget_ms : 0.0;
+  ctx->replay.header.pixels_per_cell = params.pixels_per_cell;
+  ctx->replay.header.viewport_width_px = camera.viewport_width;
+  ctx->replay.header.viewport_height_px = camera.viewport_height;
+  ctx->replay.header.fov_y_deg = camera.fov_y_deg;
 }
 
 }  // namespace
 
 extern "C" {
 
-void slod_context_desc_init(slod_context_desc* d) {
-  if (!d) return;
-  *d = slod_context_desc{};
-  d->max_objects = 1024;
-}
-
 slod_status slod_context_create(const slod_context_desc* desc, slod_context** out) {
-  if (!out) return SLOD_ERROR_INVALID_ARGUMENT;
+  if (!out) return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: out is null");
   *out = nullptr;
-  if (!desc || desc->max_objects == 0) return SLOD_ERROR_INVALID_ARGUMENT;
-  if ((desc->allocator.allocate == nullptr) != (desc->allocator.free == nullptr)) return SLOD_ERROR_INVALID_ARGUMENT;
-  try {
-    auto* ctx = new slod_context();
-    ctx->desc = *desc;
+  return guarded(nullptr, [&] {
+    slod_context_desc d;
+    if (slod_status s = readStruct(nullptr, "slod_context_create", desc, slod_context_desc_init, d)) return s;
+    if (d.max_objects == 0) return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: max_objects is 0");
+    if ((d.allocator.allocate == nullptr) != (d.allocator.free == nullptr))
+      return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: allocator has only one of allocate and free");
+    auto ctx = std::make_unique<slod_context>();
+    ctx->desc = d;
     ctx->objects.name = "slod_context";
-    *out = ctx;
-    return SLOD_OK;
-  } catch (const std::bad_alloc&) {
-    return SLOD_ERROR_OUT_OF_MEMORY;
-  } catch (...) {
-    return SLOD_ERROR_UNKNOWN;
-  }
+    *out = ctx.release();
+    return ok(nullptr);
+  });
 }
 
 void slod_context_destroy(slod_context* ctx) {
@@ -250,9 +408,10 @@ void slod_context_destroy(slod_context* ctx) {
   }
 }
 
-slod_status slod_last_error(const slod_context* ctx) { return ctx ? ctx->last_status : SLOD_ERROR_INVALID_ARGUMENT; }
+slod_status slod_last_error(const slod_context* ctx) { return ctx ? ctx->last_status : orphan_status; }
 const char* slod_last_error_message(const slod_context* ctx) {
-  return ctx && ctx->last_status != SLOD_OK ? ctx->last_message.c_str() : "";
+  if (!ctx) return orphan_status != SLOD_OK ? orphan_message.c_str() : "";
+  return ctx->last_status != SLOD_OK ? ctx->last_message.c_str() : "";
 }
 
 const char* slod_status_name(slod_status s) {
@@ -268,142 +427,146 @@ const char* slod_status_name(slod_status s) {
     case SLOD_ERROR_NOT_FOUND: return "not found";
     case SLOD_ERROR_CAPACITY: return "capacity exceeded";
     case SLOD_ERROR_UNKNOWN: return "unknown error";
+    case SLOD_ERROR_IN_USE: return "in use";
   }
   return "unknown status";
 }
 
-const char* slod_version_string(void) { return "scenelod 0.1.0"; }
-
-void slod_mesh_desc_init(slod_mesh_desc* d) {
-  if (d) *d = slod_mesh_desc{};
+#define SLOD_STRINGIFY2(x) #x
+#define SLOD_STRINGIFY(x) SLOD_STRINGIFY2(x)
+const char* slod_version_string(void) {
+  return "scenelod " SLOD_STRINGIFY(SLOD_VERSION_MAJOR) "." SLOD_STRINGIFY(SLOD_VERSION_MINOR) "." SLOD_STRINGIFY(
+      SLOD_VERSION_PATCH);
 }
 
-void slod_chain_desc_init(slod_chain_desc* d) {
-  if (!d) return;
-  *d = slod_chain_desc{};
-  d->method = SLOD_METHOD_FLOATING;
-  d->level_count = 8;
-}
-
-slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh, const slod_chain_desc* desc, uint32_t* out_chain) {
+slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh_in, const slod_chain_desc* desc_in,
+                             slod_chain* out_chain) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!mesh || !desc || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_build: null argument");
-    const std::string what = mesh->name ? mesh->name : "mesh";
-    if (mesh->vertex_count > 0 && !mesh->positions) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, what + ": positions is null");
-    if (mesh->index_count > 0 && !mesh->indices) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, what + ": indices is null");
-    if (mesh->index_count % 3 != 0)
-      return fail(ctx, SLOD_ERROR_INVALID_MESH, what + ": index count " + std::to_string(mesh->index_count) + " is not a multiple of 3");
+    slod_mesh_desc mesh;
+    slod_chain_desc desc;
+    if (slod_status s = readStruct(ctx, "slod_chain_build", mesh_in, slod_mesh_desc_init, mesh)) return s;
+    if (slod_status s = readStruct(ctx, "slod_chain_build", desc_in, slod_chain_desc_init, desc)) return s;
+    if (!out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_build: out_chain is null");
+    const std::string what = mesh.name ? mesh.name : "mesh";
+    if (mesh.vertex_count > 0 && !mesh.positions) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, what + ": positions is null");
+    if (mesh.index_count > 0 && !mesh.indices) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, what + ": indices is null");
+    if (mesh.index_count % 3 != 0)
+      return fail(ctx, SLOD_ERROR_INVALID_MESH, what + ": index count " + std::to_string(mesh.index_count) + " is not a multiple of 3");
     MeshView view;
-    view.positions = StridedSpan<const glm::vec3>(reinterpret_cast<const glm::vec3*>(mesh->positions), mesh->vertex_count,
-                                                  mesh->position_stride ? mesh->position_stride : sizeof(float) * 3);
-    view.triangles = Span<const uint32_t>(mesh->indices, mesh->index_count);
+    view.positions = StridedSpan<const glm::vec3>(reinterpret_cast<const glm::vec3*>(mesh.positions), mesh.vertex_count,
+                                                  mesh.position_stride ? mesh.position_stride : sizeof(float) * 3);
+    view.triangles = Span<const uint32_t>(mesh.indices, mesh.index_count);
     Mesh m;
     if (Error e = meshFromView(view, m, what)) return fail(ctx, e);
-    uint32_t id = 0;
-    if (Error e = addChain(ctx, m, *desc, what, id)) return fail(ctx, e);
-    *out_chain = id;
+    if (Error e = addChain(ctx, m, desc, what, *out_chain)) return fail(ctx, e);
     return ok(ctx);
   });
 }
 
-slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc, uint32_t* out_chain) {
+slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc_in, slod_chain* out_chain) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!path || !desc || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_load_file: null argument");
+    slod_chain_desc desc;
+    if (slod_status s = readStruct(ctx, "slod_chain_load_file", desc_in, slod_chain_desc_init, desc)) return s;
+    if (!path || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_load_file: null argument");
     scene::SceneData data;
     if (Error e = scene::loadScene(path, data)) return fail(ctx, e);
     const Mesh m = scene::flattenScene(data);
-    uint32_t id = 0;
-    if (Error e = addChain(ctx, m, *desc, path, id)) return fail(ctx, e);
-    *out_chain = id;
+    if (Error e = addChain(ctx, m, desc, path, *out_chain)) return fail(ctx, e);
+    return ok(ctx);
+  });
+}
+
+slod_status slod_chain_destroy(slod_context* ctx, slod_chain chain) {
+  if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
+  return guarded(ctx, [&] {
+    uint32_t c;
+    if (!ctx->chain_handles.resolve(chain, c))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_chain_destroy: stale or unknown chain handle");
+    if (ctx->recording) return fail(ctx, SLOD_ERROR_UNSUPPORTED, "slod_chain_destroy: chains cannot be destroyed while recording");
+    const std::vector<uint32_t>& users = ctx->objects.object_chain;
+    const size_t n = static_cast<size_t>(std::count(users.begin(), users.end(), c));
+    if (n > 0)
+      return fail(ctx, SLOD_ERROR_IN_USE, "slod_chain_destroy: chain '" + ctx->objects.chain_names[c] + "' is used by " +
+                                              std::to_string(n) + " objects; remove them first");
+    removeChain(ctx, c);
     return ok(ctx);
   });
 }
 
 uint32_t slod_chain_count(const slod_context* ctx) { return ctx ? static_cast<uint32_t>(ctx->chains.size()) : 0; }
 
-uint32_t slod_chain_level_count(const slod_context* ctx, uint32_t chain) {
-  return ctx && chain < ctx->chains.size() ? static_cast<uint32_t>(ctx->chains[chain].levels.size()) : 0;
+uint32_t slod_chain_level_count(const slod_context* ctx, slod_chain chain) {
+  uint32_t c;
+  if (!ctx || !ctx->chain_handles.resolve(chain, c)) return 0;
+  return static_cast<uint32_t>(ctx->chains[c].levels.size());
 }
 
-slod_status slod_level_get(const slod_context* cctx, uint32_t chain, uint32_t level, slod_level_data* out) {
+slod_status slod_level_get(const slod_context* cctx, slod_chain chain, uint32_t level, slod_level_data* out) {
   slod_context* ctx = const_cast<slod_context*>(cctx);
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_level_get: out is null");
-    if (chain >= ctx->chains.size()) return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: no chain " + std::to_string(chain));
-    const LodChain& c = ctx->chains[chain];
-    if (level >= c.levels.size())
-      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: chain " + std::to_string(chain) + " has " +
-                                                 std::to_string(c.levels.size()) + " levels, not level " + std::to_string(level));
-    const LodLevel& l = c.levels[level];
-    *out = slod_level_data{};
-    out->cell_width = l.cell_width;
-    out->max_error = l.max_error;
-    out->vertex_count = static_cast<uint32_t>(l.mesh.vertexCount());
-    out->triangle_count = static_cast<uint32_t>(l.mesh.triangleCount());
-    out->edge_count = static_cast<uint32_t>(l.mesh.edgeCount());
-    out->point_count = static_cast<uint32_t>(l.mesh.pointCount());
-    out->positions = l.mesh.positions.empty() ? nullptr : &l.mesh.positions[0].x;
-    out->normals = l.mesh.normals.empty() ? nullptr : &l.mesh.normals[0].x;
-    out->triangles = l.mesh.triangles.empty() ? nullptr : l.mesh.triangles.data();
-    out->edges = l.mesh.edges.empty() ? nullptr : l.mesh.edges.data();
-    out->edge_thickness = l.mesh.edge_thickness.empty() ? nullptr : l.mesh.edge_thickness.data();
-    out->points = l.mesh.points.empty() ? nullptr : l.mesh.points.data();
+    if (slod_status s = checkSize(ctx, "slod_level_get", out)) return s;
+    uint32_t c;
+    if (!ctx->chain_handles.resolve(chain, c))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: stale or unknown chain handle");
+    const LodChain& lc = ctx->chains[c];
+    if (level >= lc.levels.size())
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: chain '" + ctx->objects.chain_names[c] + "' has " +
+                                                 std::to_string(lc.levels.size()) + " levels, not level " + std::to_string(level));
+    const LodLevel& l = lc.levels[level];
+    slod_level_data d{};
+    d.cell_width = l.cell_width;
+    d.max_error = l.max_error;
+    d.vertex_count = static_cast<uint32_t>(l.mesh.vertexCount());
+    d.triangle_count = static_cast<uint32_t>(l.mesh.triangleCount());
+    d.edge_count = static_cast<uint32_t>(l.mesh.edgeCount());
+    d.point_count = static_cast<uint32_t>(l.mesh.pointCount());
+    d.positions = l.mesh.positions.empty() ? nullptr : &l.mesh.positions[0].x;
+    d.normals = l.mesh.normals.empty() ? nullptr : &l.mesh.normals[0].x;
+    d.triangles = l.mesh.triangles.empty() ? nullptr : l.mesh.triangles.data();
+    d.edges = l.mesh.edges.empty() ? nullptr : l.mesh.edges.data();
+    d.edge_thickness = l.mesh.edge_thickness.empty() ? nullptr : l.mesh.edge_thickness.data();
+    d.points = l.mesh.points.empty() ? nullptr : l.mesh.points.data();
+    writeStruct(d, out);
     return ok(ctx);
   });
 }
 
-void slod_object_desc_init(slod_object_desc* d) {
-  if (!d) return;
-  *d = slod_object_desc{};
-  d->rotation[3] = 1.0f;
-  d->scale = 1.0f;
-  d->importance = 1.0f;
-}
-
-slod_status slod_object_add(slod_context* ctx, const slod_object_desc* d, slod_object* out) {
+slod_status slod_object_add(slod_context* ctx, const slod_object_desc* desc, slod_object* out) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!d || !out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_add: null argument");
+    slod_object_desc d;
+    if (slod_status s = readStruct(ctx, "slod_object_add", desc, slod_object_desc_init, d)) return s;
+    if (!out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_add: out is null");
     if (ctx->recording) return fail(ctx, SLOD_ERROR_UNSUPPORTED, "slod_object_add: objects cannot be added while recording");
-    if (d->chain >= ctx->chains.size())
-      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_add: no chain " + std::to_string(d->chain));
-    if (!finite(d->translation, 3) || !finite(d->rotation, 4) || !(d->scale > 0.0f) || !std::isfinite(d->scale))
+    uint32_t chain;
+    if (!ctx->chain_handles.resolve(d.chain, chain))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_add: stale or unknown chain handle");
+    if (!finite(d.translation, 3) || !finite(d.rotation, 4) || !(d.scale > 0.0f) || !std::isfinite(d.scale))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_add: transform has a non-finite value or a scale <= 0");
-    if (!(d->importance >= 0.0f) || !std::isfinite(d->importance))
+    if (!(d.importance >= 0.0f) || !std::isfinite(d.importance))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_add: importance must be finite and >= 0");
     const size_t n = ctx->objects.objectCount();
     if (n >= ctx->desc.max_objects)
       return fail(ctx, SLOD_ERROR_CAPACITY, "slod_object_add: the context holds max_objects = " + std::to_string(ctx->desc.max_objects));
-    uint32_t slot;
-    if (!ctx->free_slots.empty()) {
-      slot = ctx->free_slots.back();
-      ctx->free_slots.pop_back();
-    } else {
-      slot = static_cast<uint32_t>(ctx->slot_generation.size());
-      ctx->slot_generation.push_back(1);
-      ctx->slot_dense.push_back(UINT32_MAX);
-    }
     selection::ReplayScene& s = ctx->objects;
     s.node_parent.push_back(-1);
     s.node_local.push_back(glm::mat4(1.0f));
     s.object_node.push_back(static_cast<int32_t>(n));
-    s.object_chain.push_back(d->chain);
-    s.importance.push_back(d->importance);
-    s.must_draw.push_back(d->must_draw ? 1 : 0);
-    ctx->move_scratch.assign(1, makeMove(static_cast<uint32_t>(n), d->translation, d->rotation, d->scale));
+    s.object_chain.push_back(chain);
+    s.importance.push_back(d.importance);
+    s.must_draw.push_back(d.must_draw ? 1 : 0);
+    ctx->move_scratch.assign(1, makeMove(static_cast<uint32_t>(n), d.translation, d.rotation, d.scale));
     if (Error e = selection::applyMoves(s, ctx->move_scratch, "slod_object_add")) return fail(ctx, e);
-    ctx->slot_dense[slot] = static_cast<uint32_t>(n);
-    ctx->dense_slot.push_back(slot);
-    ctx->user_data.push_back(d->user_data);
+    ctx->user_data.push_back(d.user_data);
     ctx->centers.resize(n + 1);
     ctx->radii.resize(n + 1);
     ctx->scales.resize(n + 1);
     ctx->levels.resize(n + 1, -1);
     ctx->spheres_dirty = true;
-    *out = makeHandle(slot, ctx->slot_generation[slot]);
+    *out = ctx->object_handles.add();
     return ok(ctx);
   });
 }
@@ -412,29 +575,20 @@ slod_status slod_object_remove(slod_context* ctx, slod_object h) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
     uint32_t dense;
-    if (!resolve(ctx, h, dense)) return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_remove: stale or unknown object handle");
+    if (!ctx->object_handles.resolve(h, dense))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_remove: stale or unknown object handle");
     if (ctx->recording) return fail(ctx, SLOD_ERROR_UNSUPPORTED, "slod_object_remove: objects cannot be removed while recording");
     selection::ReplayScene& s = ctx->objects;
-    const size_t last = s.objectCount() - 1;
     // swap-remove; node i stays object i's node
-    auto swapPop = [&](auto& v) {
-      v[dense] = v[last];
-      v.pop_back();
-    };
-    swapPop(s.node_local);
+    swapPop(s.node_local, dense);
     s.node_parent.pop_back();
     s.object_node.pop_back();
-    swapPop(s.object_chain);
-    swapPop(s.importance);
-    swapPop(s.must_draw);
-    swapPop(ctx->user_data);
-    swapPop(ctx->levels);
-    const uint32_t slot = ctx->dense_slot[dense], moved_slot = ctx->dense_slot[last];
-    swapPop(ctx->dense_slot);
-    if (dense != last) ctx->slot_dense[moved_slot] = dense;
-    ctx->slot_dense[slot] = UINT32_MAX;
-    ctx->slot_generation[slot]++;
-    ctx->free_slots.push_back(slot);
+    swapPop(s.object_chain, dense);
+    swapPop(s.importance, dense);
+    swapPop(s.must_draw, dense);
+    swapPop(ctx->user_data, dense);
+    swapPop(ctx->levels, dense);
+    ctx->object_handles.remove(dense);
     ctx->centers.pop_back();
     ctx->radii.pop_back();
     ctx->scales.pop_back();
@@ -448,11 +602,11 @@ slod_status slod_object_set_trs(slod_context* ctx, slod_object h, const float t[
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
     uint32_t dense;
-    if (!resolve(ctx, h, dense)) return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_set_trs: stale or unknown object handle");
+    if (!ctx->object_handles.resolve(h, dense))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_set_trs: stale or unknown object handle");
     if (!t || !q) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_set_trs: null argument");
     if (!finite(t, 3) || !finite(q, 4) || !(scale > 0.0f) || !std::isfinite(scale))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_set_trs: non-finite value or scale <= 0");
-    if (ctx->move_scratch.empty()) ctx->move_scratch.resize(1);
     ctx->move_scratch.resize(1);
     ctx->move_scratch[0] = makeMove(dense, t, q, scale);
     if (Error e = selection::applyMoves(ctx->objects, ctx->move_scratch, "slod_object_set_trs")) return fail(ctx, e);
@@ -466,7 +620,8 @@ slod_status slod_object_set_importance(slod_context* ctx, slod_object h, float i
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
     uint32_t dense;
-    if (!resolve(ctx, h, dense)) return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_set_importance: stale or unknown object handle");
+    if (!ctx->object_handles.resolve(h, dense))
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_object_set_importance: stale or unknown object handle");
     if (!(importance >= 0.0f) || !std::isfinite(importance))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_set_importance: importance must be finite and >= 0");
     if (ctx->recording) return fail(ctx, SLOD_ERROR_UNSUPPORTED, "slod_object_set_importance: replays cannot record importance changes");
@@ -477,48 +632,40 @@ slod_status slod_object_set_importance(slod_context* ctx, slod_object h, float i
 
 uint32_t slod_object_count(const slod_context* ctx) { return ctx ? static_cast<uint32_t>(ctx->objects.objectCount()) : 0; }
 
-void slod_camera_init(slod_camera* c) {
-  if (!c) return;
-  *c = slod_camera{};
-  c->eye[2] = 5.0f;
-  c->up[1] = 1.0f;
-  c->fov_y_deg = 60.0f;
-  c->viewport_width = 1280;
-  c->viewport_height = 720;
-}
-
-void slod_frame_params_init(slod_frame_params* p) {
-  if (!p) return;
-  *p = slod_frame_params{};
-  p->budget_ms = 16.7f;
-  p->pixels_per_cell = 1.0f;
-}
-
-slod_status slod_select(slod_context* ctx, const slod_camera* camera, const slod_frame_params* params, slod_selection* out,
-                        size_t capacity, slod_frame_result* result) {
+slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const slod_frame_params* params_in, void* out,
+                        size_t out_stride, size_t capacity, slod_frame_result* result) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!camera || !params) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: null camera or params");
+    slod_camera camera;
+    slod_frame_params params;
+    if (slod_status s = readStruct(ctx, "slod_select", camera_in, slod_camera_init, camera)) return s;
+    if (slod_status s = readStruct(ctx, "slod_select", params_in, slod_frame_params_init, params)) return s;
+    if (result)
+      if (slod_status s = checkSize(ctx, "slod_select", result)) return s;
     const size_t n = ctx->objects.objectCount();
     if (n > 0 && !out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: out is null");
+    if (out_stride < kSelectionMinStride)
+      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: out_stride " + std::to_string(out_stride) +
+                                                        " is below slod_selection's smallest size " +
+                                                        std::to_string(kSelectionMinStride) + " (pass sizeof(slod_selection))");
     if (capacity < n)
       return fail(ctx, SLOD_ERROR_CAPACITY, "slod_select: out holds " + std::to_string(capacity) + " entries for " +
                                                 std::to_string(n) + " objects");
-    if (!finite(camera->eye, 3) || !finite(camera->target, 3) || !finite(camera->up, 3) || !(camera->fov_y_deg > 0.0f) ||
-        !(camera->fov_y_deg < 180.0f) || camera->viewport_width == 0 || camera->viewport_height == 0)
+    if (!finite(camera.eye, 3) || !finite(camera.target, 3) || !finite(camera.up, 3) || !(camera.fov_y_deg > 0.0f) ||
+        !(camera.fov_y_deg < 180.0f) || camera.viewport_width == 0 || camera.viewport_height == 0)
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: camera has a non-finite value, a field of view outside "
                                                     "(0, 180) degrees or an empty viewport");
-    if (!(params->pixels_per_cell > 0.0f) || !std::isfinite(params->budget_ms))
+    if (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.budget_ms))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: pixels_per_cell must be > 0 and budget_ms finite");
     if (Error e = ensureSelector(ctx)) return fail(ctx, e);
     if (ctx->spheres_dirty) updateSpheres(ctx);
-    const selection::Camera cam = toCamera(*camera);
+    const selection::Camera cam = toCamera(camera);
     selection::SelectionJob job;
     job.camera = &cam;
-    job.params.pixels_per_cell = params->pixels_per_cell;
-    const bool budget = params->budget_ms > 0.0f;
+    job.params.pixels_per_cell = params.pixels_per_cell;
+    const bool budget = params.budget_ms > 0.0f;
     job.params.mode = budget ? selection::SelectionMode::kBudget : selection::SelectionMode::kDistance;
-    job.params.budget_ms = budget ? params->budget_ms : 1.0f;
+    job.params.budget_ms = budget ? params.budget_ms : 1.0f;
     job.levels = ctx->objects.table.view();
     job.centers = Span<const glm::vec3>(ctx->centers.data(), n);
     job.radii = Span<const float>(ctx->radii.data(), n);
@@ -531,39 +678,19 @@ slod_status slod_select(slod_context* ctx, const slod_camera* camera, const slod
     job.stats = &st;
     job.context = ctx->selector;
     if (!job.run()) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: the selector refused the frame (degenerate camera?)");
-    for (size_t i = 0; i < n; ++i) {
-      const uint32_t slot = ctx->dense_slot[i];
-      out[i].object = makeHandle(slot, ctx->slot_generation[slot]);
-      out[i].user_data = ctx->user_data[i];
-      out[i].level = ctx->levels[i];
-    }
+    writeSelections(ctx, out, out_stride);
     if (result) {
-      *result = slod_frame_result{};
-      result->frame = st.frame;
-      result->predicted_ms = static_cast<float>(st.predicted_ms);
-      result->drawn_count = st.drawn_count;
-      result->culled_count = st.culled_count;
-      result->dropped_count = st.dropped_count;
-      result->switch_count = st.switch_count;
-      result->over_budget = (st.flags & selection::kFlagOverBudget) ? 1 : 0;
+      slod_frame_result r{};
+      r.frame = st.frame;
+      r.predicted_ms = static_cast<float>(st.predicted_ms);
+      r.drawn_count = st.drawn_count;
+      r.culled_count = st.culled_count;
+      r.dropped_count = st.dropped_count;
+      r.switch_count = st.switch_count;
+      r.over_budget = (st.flags & selection::kFlagOverBudget) ? 1 : 0;
+      writeStruct(r, result);
     }
-    if (ctx->recording) {
-      selection::ReplayFrame f;
-      if (ctx->replay.frames.empty()) ctx->record_base = st.frame;
-      f.frame = ctx->replay.frames.size();
-      f.time_s = static_cast<double>(f.frame) / 60.0;
-      f.eye = cam.eye;
-      f.target = cam.target;
-      f.up = cam.up;
-      f.moves.swap(ctx->pending_moves);
-      ctx->replay.frames.push_back(std::move(f));
-      ctx->replay.header.has_budget = budget;
-      ctx->replay.header.budget_ms = budget ? params->budget_ms : 0.0;
-      ctx->replay.header.pixels_per_cell = params->pixels_per_cell;
-      ctx->replay.header.viewport_width_px = camera->viewport_width;
-      ctx->replay.header.viewport_height_px = camera->viewport_height;
-      ctx->replay.header.fov_y_deg = camera->fov_y_deg;
-    }
+    if (ctx->recording) recordFrame(ctx, cam, camera, params, st.frame);
     return ok(ctx);
   });
 }
@@ -582,15 +709,20 @@ slod_status slod_report_frame_time(slod_context* ctx, uint64_t frame, float meas
   return SLOD_OK;
 }
 
-slod_status slod_pick(slod_context* ctx, const slod_camera* camera, float x, float y, slod_pick_result* out) {
+slod_status slod_pick(slod_context* ctx, const slod_camera* camera_in, float x, float y, slod_pick_result* out) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
-    if (!camera || !out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_pick: null argument");
-    *out = slod_pick_result{};
-    out->level = -1;
+    slod_camera camera;
+    if (slod_status s = readStruct(ctx, "slod_pick", camera_in, slod_camera_init, camera)) return s;
+    if (slod_status s = checkSize(ctx, "slod_pick", out)) return s;
+    slod_pick_result r{};
+    r.level = -1;
     const size_t n = ctx->objects.objectCount();
+    if (ctx->chains.empty()) {
+      writeStruct(r, out);
+      return ok(ctx);
+    }
     if (ctx->rays_chains_dirty || !ctx->rays) {
-      if (ctx->chains.empty()) return ok(ctx);
       ctx->rays = std::make_unique<selection::RayScene>();
       std::vector<const LodChain*> ptrs;
       for (const LodChain& c : ctx->chains) ptrs.push_back(&c);
@@ -603,16 +735,16 @@ slod_status slod_pick(slod_context* ctx, const slod_camera* camera, float x, flo
                                         Span<const int32_t>(drawn.data(), n)))
       return fail(ctx, e);
     ctx->rays->commit();
-    const selection::PickHit hit = ctx->rays->pick(toCamera(*camera), glm::vec2(x, y));
+    const selection::PickHit hit = ctx->rays->pick(toCamera(camera), glm::vec2(x, y));
     if (hit.object >= 0 && static_cast<size_t>(hit.object) < n) {
-      const uint32_t slot = ctx->dense_slot[static_cast<size_t>(hit.object)];
-      out->object = makeHandle(slot, ctx->slot_generation[slot]);
-      out->level = hit.level;
-      out->point[0] = hit.point.x;
-      out->point[1] = hit.point.y;
-      out->point[2] = hit.point.z;
-      out->distance = hit.distance;
+      r.object = ctx->object_handles.handle(static_cast<uint32_t>(hit.object));
+      r.level = hit.level;
+      r.point[0] = hit.point.x;
+      r.point[1] = hit.point.y;
+      r.point[2] = hit.point.z;
+      r.distance = hit.distance;
     }
+    writeStruct(r, out);
     return ok(ctx);
   });
 }

@@ -32,7 +32,7 @@ static void sleepMs(double ms) {
 }
 
 /* a closed mesh: a torus with `rings` x `sides` quads, radii R and r */
-static slod_status buildTorusChain(slod_context* ctx, int rings, int sides, float R, float r, uint32_t* chain) {
+static slod_status buildTorusChain(slod_context* ctx, int rings, int sides, float R, float r, slod_chain* chain) {
   const size_t vc = (size_t)rings * (size_t)sides, ic = vc * 6;
   float* p = (float*)malloc(vc * 3 * sizeof(float));
   uint32_t* idx = (uint32_t*)malloc(ic * sizeof(uint32_t));
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
   slod_context* ctx = NULL;
   slod_object* handles;
   slod_selection* sel;
-  uint32_t chains[3];
+  slod_chain chains[3];
   uint32_t* tri_count[3];
   slod_camera cam;
   slod_frame_params fp;
@@ -127,6 +127,7 @@ int main(int argc, char** argv) {
     tri_count[i] = (uint32_t*)malloc(n * sizeof(uint32_t));
     for (l = 0; l < n; ++l) {
       slod_level_data ld;
+      slod_level_data_init(&ld);
       slod_level_get(ctx, chains[i], l, &ld);
       tri_count[i][l] = ld.triangle_count + ld.edge_count + ld.point_count;
     }
@@ -178,7 +179,8 @@ int main(int argc, char** argv) {
       const float q[4] = {0.0f, (float)sin(0.5 * t), 0.0f, (float)cos(0.5 * t)};
       slod_object_set_trs(ctx, handles[i], tr, q, 1.0f);
     }
-    if (slod_select(ctx, &cam, &fp, sel, (size_t)objects, &fr) != SLOD_OK) {
+    slod_frame_result_init(&fr);
+    if (slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), (size_t)objects, &fr) != SLOD_OK) {
       fprintf(stderr, "frame_loop: %s\n", slod_last_error_message(ctx));
       return 1;
     }

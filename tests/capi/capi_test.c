@@ -1,20 +1,12 @@
-/* Uses the whole C API from a C99 program (compiled with -std=c99 -pedantic-errors). Exits non-zero
- * with a message on the first failed check. */
+/* Uses the whole C API from a C99 program (compiled with -std=c99 -pedantic-errors), chains' whole
+ * life included. Exits non-zero when a check failed, with a message per failed check. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scenelod/scenelod.h"
-
-static int failures = 0;
-#define CHECK(cond)                                                         \
-  do {                                                                      \
-    if (!(cond)) {                                                          \
-      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                           \
-    }                                                                       \
-  } while (0)
+#include "test_support.h"
 
 static int callback_calls = 0;
 static void onError(void* user, slod_status status, const char* message) {
@@ -24,30 +16,68 @@ static void onError(void* user, slod_status status, const char* message) {
   ++callback_calls;
 }
 
-/* a UV sphere of radius 1 with rings x segments quads */
-static void makeSphere(int rings, int segments, float** positions, size_t* vertex_count, uint32_t** indices,
-                       size_t* index_count) {
-  int r, s;
-  size_t v = 0, i = 0;
-  *vertex_count = (size_t)(rings + 1) * (size_t)(segments + 1);
-  *index_count = (size_t)rings * (size_t)segments * 6;
-  *positions = (float*)malloc(*vertex_count * 3 * sizeof(float));
-  *indices = (uint32_t*)malloc(*index_count * sizeof(uint32_t));
-  for (r = 0; r <= rings; ++r) {
-    const double theta = 3.14159265358979 * r / rings;
-    for (s = 0; s <= segments; ++s) {
-      const double phi = 2.0 * 3.14159265358979 * s / segments;
-      (*positions)[v++] = (float)(sin(theta) * cos(phi));
-      (*positions)[v++] = (float)cos(theta);
-      (*positions)[v++] = (float)(sin(theta) * sin(phi));
-    }
+/* Chains are handles: destroying one that objects use is refused, destroying an unused one leaves the
+ * others' objects selecting as before, and a destroyed chain's handle is stale even once its slot is
+ * reused. `used` is a chain every object of ctx uses, `probe` one of them. */
+static int checkChainLifecycle(slod_context* ctx, slod_chain used, const slod_mesh_desc* md, const slod_camera* cam,
+                               const slod_frame_params* fp, slod_object probe) {
+  const int before_failures = failures;
+  slod_chain spare = SLOD_NULL_CHAIN, kept = SLOD_NULL_CHAIN, again = SLOD_NULL_CHAIN;
+  slod_chain_desc chd;
+  slod_object_desc od;
+  slod_object kept_objects[4];
+  slod_selection before[64], after[64];
+  slod_level_data ld_before, ld_after;
+  const uint32_t chains = slod_chain_count(ctx), n = slod_object_count(ctx) + 4;
+  uint32_t i;
+
+  slod_chain_desc_init(&chd);
+  chd.level_count = 3;
+  CHECK(slod_chain_build(ctx, md, &chd, &spare) == SLOD_OK);
+  chd.method = SLOD_METHOD_UNIFORM;
+  CHECK(slod_chain_build(ctx, md, &chd, &kept) == SLOD_OK);
+  for (i = 0; i < 4; ++i) {
+    slod_object_desc_init(&od);
+    od.chain = kept;
+    od.translation[0] = 2.0f;
+    od.translation[2] = -4.0f * (float)i;
+    CHECK(slod_object_add(ctx, &od, &kept_objects[i]) == SLOD_OK);
   }
-  for (r = 0; r < rings; ++r)
-    for (s = 0; s < segments; ++s) {
-      const uint32_t a = (uint32_t)(r * (segments + 1) + s), b = a + (uint32_t)segments + 1;
-      (*indices)[i++] = a; (*indices)[i++] = b; (*indices)[i++] = a + 1;
-      (*indices)[i++] = a + 1; (*indices)[i++] = b; (*indices)[i++] = b + 1;
-    }
+  CHECK(slod_select(ctx, cam, fp, before, sizeof(slod_selection), 64, NULL) == SLOD_OK);
+  slod_level_data_init(&ld_before);
+  CHECK(slod_level_get(ctx, kept, 1, &ld_before) == SLOD_OK);
+
+  CHECK(slod_chain_destroy(ctx, used) == SLOD_ERROR_IN_USE);
+  CHECK(strstr(slod_last_error_message(ctx), "'sphere' is used by") != NULL);
+  CHECK(slod_chain_level_count(ctx, used) > 0);
+  CHECK(slod_chain_destroy(ctx, probe) == SLOD_ERROR_NOT_FOUND); /* an object handle is no chain handle */
+
+  /* the spare chain sits before the kept one: destroying it moves the kept one's internal index */
+  CHECK(slod_chain_destroy(ctx, spare) == SLOD_OK);
+  CHECK(slod_chain_count(ctx) == chains + 1);
+  CHECK(slod_chain_destroy(ctx, spare) == SLOD_ERROR_NOT_FOUND);
+  CHECK(strstr(slod_last_error_message(ctx), "stale") != NULL);
+  CHECK(slod_chain_level_count(ctx, spare) == 0);
+  slod_level_data_init(&ld_after);
+  CHECK(slod_level_get(ctx, spare, 0, &ld_after) == SLOD_ERROR_NOT_FOUND);
+  od.chain = spare;
+  CHECK(slod_object_add(ctx, &od, &kept_objects[0]) == SLOD_ERROR_NOT_FOUND);
+
+  CHECK(slod_select(ctx, cam, fp, after, sizeof(slod_selection), 64, NULL) == SLOD_OK);
+  for (i = 0; i < n; ++i) CHECK(after[i].object == before[i].object && after[i].level == before[i].level);
+  CHECK(slod_level_get(ctx, kept, 1, &ld_after) == SLOD_OK);
+  CHECK(ld_after.positions == ld_before.positions && ld_after.triangle_count == ld_before.triangle_count);
+
+  /* the freed slot is reused with a new generation: the old handle stays stale */
+  CHECK(slod_chain_build(ctx, md, &chd, &again) == SLOD_OK);
+  CHECK(again != spare && (again & 0xffffffffu) == (spare & 0xffffffffu));
+  CHECK(slod_chain_level_count(ctx, spare) == 0 && slod_chain_level_count(ctx, again) == 4);
+
+  for (i = 0; i < 4; ++i) CHECK(slod_object_remove(ctx, kept_objects[i]) == SLOD_OK);
+  CHECK(slod_chain_destroy(ctx, kept) == SLOD_OK);
+  CHECK(slod_chain_destroy(ctx, again) == SLOD_OK);
+  CHECK(slod_chain_count(ctx) == chains);
+  return failures == before_failures;
 }
 
 int main(int argc, char** argv) {
@@ -66,8 +96,10 @@ int main(int argc, char** argv) {
   float* positions;
   uint32_t* indices;
   size_t vertex_count, index_count;
-  uint32_t chain = 99, levels, l;
+  slod_chain chain = SLOD_NULL_CHAIN, levels_chain = SLOD_NULL_CHAIN;
+  uint32_t levels, l;
   int i, frame;
+  float saved_y;
   const char* dir = argc > 1 ? argv[1] : ".";
   char replay_path[1024], pack_path[1024];
 
@@ -82,7 +114,7 @@ int main(int argc, char** argv) {
   cd.max_objects = 64;
   cd.error_callback = onError;
   CHECK(slod_context_create(&cd, &ctx) == SLOD_OK && ctx != NULL);
-  CHECK(slod_select(NULL, NULL, NULL, NULL, 0, NULL) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(slod_select(NULL, NULL, NULL, NULL, 0, 0, NULL) == SLOD_ERROR_INVALID_ARGUMENT);
 
   /* a chain from caller memory */
   makeSphere(24, 48, &positions, &vertex_count, &indices, &index_count);
@@ -95,9 +127,10 @@ int main(int argc, char** argv) {
   slod_chain_desc_init(&chd);
   chd.level_count = 5;
   CHECK(slod_chain_build(ctx, &md, &chd, &chain) == SLOD_OK);
-  CHECK(chain == 0);
+  CHECK(chain != SLOD_NULL_CHAIN);
   levels = slod_chain_level_count(ctx, chain);
   CHECK(levels == 6);
+  slod_level_data_init(&ld);
   for (l = 0; l < levels; ++l) {
     CHECK(slod_level_get(ctx, chain, l, &ld) == SLOD_OK);
     CHECK(ld.vertex_count > 0 && ld.positions != NULL);
@@ -109,27 +142,29 @@ int main(int argc, char** argv) {
 
   /* bad meshes are refused with a message */
   indices[5] = 100000;
-  CHECK(slod_chain_build(ctx, &md, &chd, &chain) == SLOD_ERROR_INVALID_MESH);
+  CHECK(slod_chain_build(ctx, &md, &chd, &levels_chain) == SLOD_ERROR_INVALID_MESH);
   CHECK(strstr(slod_last_error_message(ctx), "sphere") != NULL);
   indices[5] = 0;
+  saved_y = positions[4];
   positions[4] = NAN;
-  CHECK(slod_chain_build(ctx, &md, &chd, &chain) == SLOD_ERROR_INVALID_MESH);
-  CHECK(slod_chain_load_file(ctx, "/nonexistent/model.glb", &chd, &chain) == SLOD_ERROR_IO);
+  CHECK(slod_chain_build(ctx, &md, &chd, &levels_chain) == SLOD_ERROR_INVALID_MESH);
+  CHECK(slod_chain_load_file(ctx, "/nonexistent/model.glb", &chd, &levels_chain) == SLOD_ERROR_IO);
+  positions[4] = saved_y;
   CHECK(slod_chain_count(ctx) == 1);
   CHECK(callback_calls >= 4);
 
   /* objects on a line along -z */
   for (i = 0; i < 40; ++i) {
     slod_object_desc_init(&od);
-    od.chain = 0;
+    od.chain = chain;
     od.translation[2] = -3.0f * (float)i;
     od.user_data = (uint64_t)(1000 + i);
     CHECK(slod_object_add(ctx, &od, &objects[i]) == SLOD_OK);
   }
   CHECK(slod_object_count(ctx) == 40);
-  od.chain = 7;
+  od.chain = chain + ((slod_chain)1 << 32); /* the right slot, a wrong generation */
   CHECK(slod_object_add(ctx, &od, &objects[40]) == SLOD_ERROR_NOT_FOUND);
-  od.chain = 0;
+  od.chain = chain;
   od.scale = -1.0f;
   CHECK(slod_object_add(ctx, &od, &objects[40]) == SLOD_ERROR_INVALID_ARGUMENT);
 
@@ -138,8 +173,9 @@ int main(int argc, char** argv) {
   cam.target[2] = -10.0f;
   slod_frame_params_init(&fp);
   fp.budget_ms = 0.0f; /* distance mode */
-  CHECK(slod_select(ctx, &cam, &fp, sel, 10, &fr) == SLOD_ERROR_CAPACITY);
-  CHECK(slod_select(ctx, &cam, &fp, sel, 64, &fr) == SLOD_OK);
+  slod_frame_result_init(&fr);
+  CHECK(slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), 10, &fr) == SLOD_ERROR_CAPACITY);
+  CHECK(slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
   for (i = 0; i < 40; ++i) {
     CHECK(sel[i].level >= -1 && sel[i].level < (int32_t)levels);
     CHECK(sel[i].user_data == (uint64_t)(1000 + i));
@@ -150,6 +186,7 @@ int main(int argc, char** argv) {
   CHECK(sel[0].level >= 0);
 
   /* picking hits the nearest object at its drawn level */
+  slod_pick_result_init(&pr);
   CHECK(slod_pick(ctx, &cam, 640.0f, 360.0f, &pr) == SLOD_OK);
   CHECK(pr.object == objects[0]);
   CHECK(pr.level == sel[0].level);
@@ -165,10 +202,11 @@ int main(int argc, char** argv) {
     const float t[3] = {0.0f, 0.1f * (float)frame, 0.0f};
     const float q[4] = {0.0f, 0.0f, 0.0f, 1.0f};
     CHECK(slod_object_set_trs(ctx, objects[1], t, q, 1.0f) == SLOD_OK);
-    CHECK(slod_select(ctx, &cam, &fp, sel, 64, &fr) == SLOD_OK);
+    CHECK(slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
     CHECK(fr.over_budget || fr.predicted_ms <= fp.budget_ms * 1.0001f);
     CHECK(slod_report_frame_time(ctx, fr.frame, 1.5f) == SLOD_OK);
   }
+  CHECK(slod_chain_destroy(ctx, chain) == SLOD_ERROR_UNSUPPORTED);
   CHECK(slod_record_stop(ctx) == SLOD_OK);
   CHECK(slod_record_stop(ctx) == SLOD_ERROR_UNSUPPORTED);
 
@@ -178,16 +216,13 @@ int main(int argc, char** argv) {
   CHECK(slod_object_set_importance(ctx, objects[3], 2.0f) == SLOD_ERROR_NOT_FOUND);
   CHECK(slod_object_set_importance(ctx, objects[4], 2.0f) == SLOD_OK);
   CHECK(slod_object_count(ctx) == 39);
-  CHECK(slod_select(ctx, &cam, &fp, sel, 64, &fr) == SLOD_OK);
+  CHECK(slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
   for (i = 0; i < 39; ++i) CHECK(sel[i].object != objects[3]);
+
+  CHECK(checkChainLifecycle(ctx, chain, &md, &cam, &fp, objects[0]));
 
   slod_context_destroy(ctx);
   free(positions);
   free(indices);
-  if (failures) {
-    fprintf(stderr, "%d checks failed\n", failures);
-    return 1;
-  }
-  printf("capi_test: all checks passed\n");
-  return 0;
+  return finish("capi_test");
 }

@@ -1,29 +1,41 @@
 /* scenelod C API (C99).
  *
  * A stable way into scenelod for engines that are not C++ or not built with the same compiler:
- * opaque handles, status codes, argument structs with *_init functions (new fields are added at the
- * end and get defaults there, so old callers keep working), no C++ exception crosses this boundary.
+ * opaque handles, status codes, size-tagged argument structs, no C++ exception crosses this boundary.
  *
  * Typical frame loop:
  *   slod_context_desc cd; slod_context_desc_init(&cd); cd.max_objects = 5000;
  *   slod_context* ctx; slod_context_create(&cd, &ctx);
  *   slod_chain_build(ctx, &mesh, &chain_desc, &chain);          (once per unique mesh)
  *   slod_object_add(ctx, &object_desc, &object);                 (once per instance)
- *   each frame: slod_object_set_trs(...) for what moved; slod_select(ctx, &camera, &params, out, n, &result);
+ *   each frame: slod_object_set_trs(...) for what moved;
+ *               slod_select(ctx, &camera, &params, out, sizeof(slod_selection), n, &result);
  *               draw out[i].level of out[i].object; slod_report_frame_time(ctx, result.frame, ms);
  *
  * Threads: a context is used by one thread at a time, except slod_report_frame_time, which may be
  * called from one other thread (the render thread) while slod_select runs. Different contexts are
  * independent. Each function's comment repeats what applies.
  *
- * ABI policy: libscenelod.so.MAJOR; within a major version functions and enum values are only added,
- * struct fields only appended (callers always go through *_init), so binaries built against an older
- * 0.x minor keep working. Only slod_ symbols are exported. */
+ * ABI policy: libscenelod.so.MAJOR exports only slod_ symbols. Within a major version functions and
+ * enum values are only added and struct fields only appended, so a binary built against an older
+ * minor version keeps working with a newer library:
+ * - every struct the caller passes in or out starts with `uint32_t size`, set to the caller's sizeof
+ *   by its *_init function (static inline below, so it is compiled into the caller). The library reads
+ *   and writes only the first min(size, its own sizeof) bytes: fields an older caller does not know
+ *   get their defaults on input and are not written on output; the size field is never changed.
+ *   A size that does not cover the struct's first field after `size` (0: the struct never went
+ *   through *_init) is refused with SLOD_ERROR_INVALID_ARGUMENT and a message naming the struct;
+ * - arrays of structs the library writes (slod_select's output) come with their element stride in
+ *   bytes (the caller's sizeof); the library writes only min(stride, its own sizeof) bytes per element;
+ * - slod_allocator is nested in slod_context_desc and never grows.
+ * A binary built against a newer header needs a library at least as new (as for any shared library).
+ * docs/INTEGRATION.md ("Migration") lists what changed between major versions. */
 #ifndef SCENELOD_SCENELOD_H
 #define SCENELOD_SCENELOD_H
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -35,21 +47,24 @@ extern "C" {
 #define SLOD_API
 #endif
 
-#define SLOD_VERSION_MAJOR 0
-#define SLOD_VERSION_MINOR 1
+/* the library's version; the major version is the SONAME's (libscenelod.so.1) */
+#define SLOD_VERSION_MAJOR 1
+#define SLOD_VERSION_MINOR 0
+#define SLOD_VERSION_PATCH 0
 
 typedef enum slod_status {
   SLOD_OK = 0,
-  SLOD_ERROR_INVALID_ARGUMENT = 1, /* null pointer, value out of range, stale handle */
+  SLOD_ERROR_INVALID_ARGUMENT = 1, /* null pointer, value out of range, struct size too small */
   SLOD_ERROR_INVALID_MESH = 2,     /* NaN coordinate, index out of range */
   SLOD_ERROR_IO = 3,               /* missing or unwritable file */
   SLOD_ERROR_PARSE = 4,            /* malformed file */
   SLOD_ERROR_UNSUPPORTED = 5,
   SLOD_ERROR_CORRUPT = 6,          /* truncated or damaged binary data */
   SLOD_ERROR_OUT_OF_MEMORY = 7,
-  SLOD_ERROR_NOT_FOUND = 8,        /* stale object handle, unknown chain */
+  SLOD_ERROR_NOT_FOUND = 8,        /* stale or unknown object or chain handle */
   SLOD_ERROR_CAPACITY = 9,         /* more objects than max_objects, output array too small */
-  SLOD_ERROR_UNKNOWN = 10
+  SLOD_ERROR_UNKNOWN = 10,
+  SLOD_ERROR_IN_USE = 11           /* a chain that objects still use */
 } slod_status;
 
 typedef struct slod_context slod_context;
@@ -57,6 +72,10 @@ typedef struct slod_context slod_context;
 /* An object handle: slot and generation; a removed object's handle is refused, never reused. */
 typedef uint64_t slod_object;
 #define SLOD_NULL_OBJECT ((slod_object)0)
+
+/* A chain handle: slot and generation, as for objects; a destroyed chain's handle is refused. */
+typedef uint64_t slod_chain;
+#define SLOD_NULL_CHAIN ((slod_chain)0)
 
 typedef struct slod_allocator {
   void* (*allocate)(void* user, size_t bytes, size_t alignment); /* null = the C library's */
@@ -68,21 +87,30 @@ typedef struct slod_allocator {
 typedef void (*slod_error_callback)(void* user, slod_status status, const char* message);
 
 typedef struct slod_context_desc {
+  uint32_t size;                   /* sizeof(slod_context_desc), set by slod_context_desc_init */
   size_t max_objects;              /* objects the context can hold, > 0 (default 1024) */
   slod_allocator allocator;        /* memory of the per-frame selector state (default: C library) */
   slod_error_callback error_callback; /* optional */
   void* error_user;
 } slod_context_desc;
 
-SLOD_API void slod_context_desc_init(slod_context_desc* desc);
-/* Creates a context. Thread-safe (contexts are independent). */
+static inline void slod_context_desc_init(slod_context_desc* desc) {
+  if (!desc) return;
+  memset(desc, 0, sizeof *desc);
+  desc->size = (uint32_t)sizeof *desc;
+  desc->max_objects = 1024;
+}
+/* Creates a context. Thread-safe (contexts are independent). On failure *out is null and the message
+ * is kept for this thread (slod_last_error_message(NULL)); the error callback is not called. */
 SLOD_API slod_status slod_context_create(const slod_context_desc* desc, slod_context** out);
 /* Destroys a context and everything in it. Null is ignored. */
 SLOD_API void slod_context_destroy(slod_context* ctx);
-/* The status and message of the last failing call on this context ("" when none). */
+/* The status and message of the last failing call on this context (SLOD_OK and "" when none). With
+ * a null ctx: those of the last failing slod_context_create on the calling thread. */
 SLOD_API slod_status slod_last_error(const slod_context* ctx);
 SLOD_API const char* slod_last_error_message(const slod_context* ctx);
 SLOD_API const char* slod_status_name(slod_status status);
+/* "scenelod MAJOR.MINOR.PATCH" of the library (which may be newer than the header). */
 SLOD_API const char* slod_version_string(void);
 
 /* ---- LOD chains ---- */
@@ -95,6 +123,7 @@ typedef enum slod_method {
 } slod_method;
 
 typedef struct slod_mesh_desc {
+  uint32_t size;               /* sizeof(slod_mesh_desc), set by slod_mesh_desc_init */
   const float* positions;      /* 3 floats per vertex */
   size_t vertex_count;
   size_t position_stride;      /* bytes between vertices; 0 = 12 */
@@ -104,24 +133,42 @@ typedef struct slod_mesh_desc {
 } slod_mesh_desc;
 
 typedef struct slod_chain_desc {
+  uint32_t size;               /* sizeof(slod_chain_desc), set by slod_chain_desc_init */
   slod_method method;          /* default SLOD_METHOD_FLOATING */
   uint32_t level_count;        /* simplified levels after the original (default 8) */
   float first_cell_width;      /* object space; 0 = automatic (level 1 has about half the triangles) */
 } slod_chain_desc;
 
-SLOD_API void slod_mesh_desc_init(slod_mesh_desc* desc);
-SLOD_API void slod_chain_desc_init(slod_chain_desc* desc);
-/* Builds a chain from caller memory (copied). Writes its id to *out_chain. Not thread-safe on ctx. */
+static inline void slod_mesh_desc_init(slod_mesh_desc* desc) {
+  if (!desc) return;
+  memset(desc, 0, sizeof *desc);
+  desc->size = (uint32_t)sizeof *desc;
+}
+static inline void slod_chain_desc_init(slod_chain_desc* desc) {
+  if (!desc) return;
+  memset(desc, 0, sizeof *desc);
+  desc->size = (uint32_t)sizeof *desc;
+  desc->method = SLOD_METHOD_FLOATING;
+  desc->level_count = 8;
+}
+/* Builds a chain from caller memory (copied). Writes its handle to *out_chain. Not thread-safe on ctx. */
 SLOD_API slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh, const slod_chain_desc* desc,
-                                      uint32_t* out_chain);
+                                      slod_chain* out_chain);
 /* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space). */
 SLOD_API slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc,
-                                          uint32_t* out_chain);
+                                          slod_chain* out_chain);
+/* Destroys a chain and frees its levels; its handle becomes stale, and so do the pointers
+ * slod_level_get gave into it. Refused with SLOD_ERROR_IN_USE while objects use the chain (the
+ * message names the chain and how many: remove them first), with SLOD_ERROR_UNSUPPORTED while
+ * recording, with SLOD_ERROR_NOT_FOUND for a stale or unknown handle. Not thread-safe on ctx. */
+SLOD_API slod_status slod_chain_destroy(slod_context* ctx, slod_chain chain);
+/* Number of chains built and not destroyed. */
 SLOD_API uint32_t slod_chain_count(const slod_context* ctx);
-/* Number of levels of a chain (0 for an unknown chain). */
-SLOD_API uint32_t slod_chain_level_count(const slod_context* ctx, uint32_t chain);
+/* Number of levels of a chain (0 for a stale or unknown handle). */
+SLOD_API uint32_t slod_chain_level_count(const slod_context* ctx, slod_chain chain);
 
 typedef struct slod_level_data {
+  uint32_t size;               /* sizeof(slod_level_data), set by slod_level_data_init */
   float cell_width;            /* object space; 0 for level 0 */
   float max_error;             /* measured maximum vertex displacement, object space */
   uint32_t vertex_count, triangle_count, edge_count, point_count;
@@ -133,14 +180,21 @@ typedef struct slod_level_data {
   const uint32_t* points;      /* 1 per point */
 } slod_level_data;
 
-/* Fills *out with a level's counts and pointers into the context's memory (valid until the context is
- * destroyed), for upload to the GPU. Not thread-safe with chain building on the same ctx. */
-SLOD_API slod_status slod_level_get(const slod_context* ctx, uint32_t chain, uint32_t level, slod_level_data* out);
+static inline void slod_level_data_init(slod_level_data* data) {
+  if (!data) return;
+  memset(data, 0, sizeof *data);
+  data->size = (uint32_t)sizeof *data;
+}
+/* Fills *out (its size set by slod_level_data_init) with a level's counts and pointers into the
+ * context's memory (valid until the chain or the context is destroyed), for upload to the GPU. Not
+ * thread-safe with chain building or destruction on the same ctx. */
+SLOD_API slod_status slod_level_get(const slod_context* ctx, slod_chain chain, uint32_t level, slod_level_data* out);
 
 /* ---- objects ---- */
 
 typedef struct slod_object_desc {
-  uint32_t chain;
+  uint32_t size;               /* sizeof(slod_object_desc), set by slod_object_desc_init */
+  slod_chain chain;
   float translation[3];        /* world placement: T * R * S */
   float rotation[4];           /* unit quaternion x, y, z, w (default 0, 0, 0, 1) */
   float scale;                 /* uniform scale, > 0 (default 1) */
@@ -149,7 +203,15 @@ typedef struct slod_object_desc {
   uint64_t user_data;          /* returned untouched in slod_selection */
 } slod_object_desc;
 
-SLOD_API void slod_object_desc_init(slod_object_desc* desc);
+static inline void slod_object_desc_init(slod_object_desc* desc) {
+  if (!desc) return;
+  memset(desc, 0, sizeof *desc);
+  desc->size = (uint32_t)sizeof *desc;
+  desc->rotation[3] = 1.0f;
+  desc->scale = 1.0f;
+  desc->importance = 1.0f;
+}
+/* Adds an object using a chain; writes its handle to *out. Refused while recording. */
 SLOD_API slod_status slod_object_add(slod_context* ctx, const slod_object_desc* desc, slod_object* out);
 /* Removes an object; its handle becomes stale. Refused while recording. */
 SLOD_API slod_status slod_object_remove(slod_context* ctx, slod_object object);
@@ -162,16 +224,19 @@ SLOD_API uint32_t slod_object_count(const slod_context* ctx);
 /* ---- per frame ---- */
 
 typedef struct slod_camera {
-  float eye[3], target[3], up[3];
+  uint32_t size;               /* sizeof(slod_camera), set by slod_camera_init */
+  float eye[3], target[3], up[3]; /* default eye (0, 0, 5), target (0, 0, 0), up (0, 1, 0) */
   float fov_y_deg;             /* default 60 */
   uint32_t viewport_width, viewport_height; /* pixels, default 1280 x 720 */
 } slod_camera;
 
 typedef struct slod_frame_params {
+  uint32_t size;               /* sizeof(slod_frame_params), set by slod_frame_params_init */
   float budget_ms;             /* > 0: budget mode (Funkhouser & Sequin); <= 0: distance mode. Default 16.7 */
   float pixels_per_cell;       /* X: a level is accurate enough when a cell covers <= X pixels. Default 1 */
 } slod_frame_params;
 
+/* One element of slod_select's output; the caller passes its sizeof as the stride. */
 typedef struct slod_selection {
   slod_object object;
   uint64_t user_data;
@@ -179,31 +244,60 @@ typedef struct slod_selection {
 } slod_selection;
 
 typedef struct slod_frame_result {
+  uint32_t size;               /* sizeof(slod_frame_result), set by slod_frame_result_init */
   uint64_t frame;              /* pass to slod_report_frame_time */
   float predicted_ms;          /* predicted cost of the chosen levels */
   uint32_t drawn_count, culled_count, dropped_count, switch_count;
   int over_budget;             /* nonzero when even the mandatory levels did not fit */
 } slod_frame_result;
 
-SLOD_API void slod_camera_init(slod_camera* camera);
-SLOD_API void slod_frame_params_init(slod_frame_params* params);
-/* Selects one level per object. Writes slod_object_count() entries to out (capacity entries available).
+static inline void slod_camera_init(slod_camera* camera) {
+  if (!camera) return;
+  memset(camera, 0, sizeof *camera);
+  camera->size = (uint32_t)sizeof *camera;
+  camera->eye[2] = 5.0f;
+  camera->up[1] = 1.0f;
+  camera->fov_y_deg = 60.0f;
+  camera->viewport_width = 1280;
+  camera->viewport_height = 720;
+}
+static inline void slod_frame_params_init(slod_frame_params* params) {
+  if (!params) return;
+  memset(params, 0, sizeof *params);
+  params->size = (uint32_t)sizeof *params;
+  params->budget_ms = 16.7f;
+  params->pixels_per_cell = 1.0f;
+}
+static inline void slod_frame_result_init(slod_frame_result* result) {
+  if (!result) return;
+  memset(result, 0, sizeof *result);
+  result->size = (uint32_t)sizeof *result;
+}
+/* Selects one level per object. Writes slod_object_count() elements to out, out_stride bytes apart
+ * (pass sizeof(slod_selection); at least 8, the object handle), of which capacity are available;
+ * result (size set by slod_frame_result_init) may be null.
  * No heap allocation after the first frame (unless recording); one thread at a time per context. */
 SLOD_API slod_status slod_select(slod_context* ctx, const slod_camera* camera, const slod_frame_params* params,
-                                 slod_selection* out, size_t capacity, slod_frame_result* result);
+                                 void* out, size_t out_stride, size_t capacity, slod_frame_result* result);
 /* Reports how long frame `frame` really took, to calibrate the cost model. May be called from one
  * other thread while slod_select runs (lock-free hand-over). */
 SLOD_API slod_status slod_report_frame_time(slod_context* ctx, uint64_t frame, float measured_ms);
 
 typedef struct slod_pick_result {
+  uint32_t size;               /* sizeof(slod_pick_result), set by slod_pick_result_init */
   slod_object object;          /* SLOD_NULL_OBJECT when nothing was hit */
   int32_t level;               /* the level drawn in the last selection, the one the ray hit */
   float point[3];              /* world-space hit point */
   float distance;
 } slod_pick_result;
 
+static inline void slod_pick_result_init(slod_pick_result* result) {
+  if (!result) return;
+  memset(result, 0, sizeof *result);
+  result->size = (uint32_t)sizeof *result;
+}
 /* Casts a ray through pixel (x, y) (top-left origin) against the levels chosen by the last
- * slod_select. Not thread-safe on ctx. */
+ * slod_select; out's size is set by slod_pick_result_init. Not thread-safe on ctx. */
 SLOD_API slod_status slod_pick(slod_context* ctx, const slod_camera* camera, float x, float y, slod_pick_result* out);
 
 /* ---- record and replay ---- */
