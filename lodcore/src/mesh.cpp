@@ -5,6 +5,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -47,6 +48,79 @@ Error checkIndices(const std::vector<uint32_t>& idx, size_t per, size_t vertex_c
       return {Status::kInvalidMesh, what + ": " + kind + " " +
                                         std::to_string(i / per) + " uses vertex index " + std::to_string(idx[i]) +
                                         " but the mesh has " + std::to_string(vertex_count) + " vertices"};
+  return {};
+}
+
+template <class Vec>
+Error checkStream(const std::vector<Vec>& v, size_t n, const std::string& name, const std::string& what) {
+  if (v.empty()) return {};
+  if (v.size() != n)
+    return {Status::kInvalidMesh, what + ": " + std::to_string(v.size()) + " " + name + " for " + std::to_string(n) +
+                                      " vertices"};
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < Vec::length(); ++c)
+      if (!std::isfinite(v[i][c]))
+        return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " has a NaN or infinite value in its " + name};
+  return {};
+}
+
+// the skeleton: parents in range and no cycle (each walk to a root ends within joint-count steps)
+Error checkSkeleton(const std::vector<int32_t>& parents, const std::string& what) {
+  const size_t j = parents.size();
+  for (size_t i = 0; i < j; ++i)
+    if (parents[i] < -1 || parents[i] >= static_cast<int64_t>(j))
+      return {Status::kInvalidMesh, what + ": joint " + std::to_string(i) + " has parent " + std::to_string(parents[i]) +
+                                        " but the skeleton has " + std::to_string(j) + " joints"};
+  std::vector<uint8_t> state(j, 0);  // 0 unvisited, 1 on the current walk, 2 reaches a root
+  std::vector<size_t> walk;
+  for (size_t i = 0; i < j; ++i) {
+    walk.clear();
+    size_t k = i;
+    while (state[k] == 0) {
+      state[k] = 1;
+      walk.push_back(k);
+      if (parents[k] < 0) break;
+      k = static_cast<size_t>(parents[k]);
+    }
+    if (state[k] == 1 && parents[k] >= 0)
+      return {Status::kInvalidMesh, what + ": the skeleton's joint parents form a cycle through joint " + std::to_string(k)};
+    for (size_t w : walk) state[w] = 2;
+  }
+  return {};
+}
+
+// texture coordinates, tangents and skin: sizes, finite values, tangent signs, weights, joints
+Error checkAttributes(const Mesh& m, const std::string& what) {
+  const size_t n = m.positions.size();
+  if (Error e = checkStream(m.uvs, n, "texture coordinates", what)) return e;
+  for (size_t s = 0; s < m.extra_uvs.size(); ++s)
+    if (Error e = checkStream(m.extra_uvs[s], n, "texture coordinates (set " + std::to_string(s + 1) + ")", what))
+      return e;
+  if (Error e = checkStream(m.tangents, n, "tangents", what)) return e;
+  for (size_t i = 0; i < m.tangents.size(); ++i)
+    if (std::fabs(m.tangents[i].w) != 1.0f)
+      return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " has tangent sign w = " +
+                                        std::to_string(m.tangents[i].w) + " (must be +1 or -1)"};
+  if (m.joints.empty() != m.weights.empty())
+    return {Status::kInvalidMesh, what + (m.joints.empty() ? ": skin weights without joints" : ": skin joints without weights")};
+  if (!m.joints.empty() && m.joints.size() != n)
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.joints.size()) + " skin joints for " + std::to_string(n) +
+                                      " vertices"};
+  if (Error e = checkStream(m.weights, n, "skin weights", what)) return e;
+  for (size_t i = 0; i < m.weights.size(); ++i) {
+    const glm::vec4& w = m.weights[i];
+    if (w.x < 0.0f || w.y < 0.0f || w.z < 0.0f || w.w < 0.0f || !(w.x + w.y + w.z + w.w > 0.0f))
+      return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) +
+                                        " has a negative skin weight or weights summing to 0"};
+  }
+  if (Error e = checkSkeleton(m.joint_parents, what)) return e;
+  if (!m.joint_parents.empty())
+    for (size_t i = 0; i < m.joints.size(); ++i)
+      for (int c = 0; c < 4; ++c)
+        if (m.joints[i][c] >= m.joint_parents.size())
+          return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " uses joint " +
+                                            std::to_string(m.joints[i][c]) + " but the skeleton has " +
+                                            std::to_string(m.joint_parents.size()) + " joints"};
   return {};
 }
 
@@ -94,11 +168,12 @@ Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinat
   if (!m.colors.empty() && m.colors.size() != n)
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.colors.size()) + " colours for " +
                                       std::to_string(n) + " vertices"};
-  if (!m.uvs.empty() && m.uvs.size() != n)
-    return {Status::kInvalidMesh, what + ": " + std::to_string(m.uvs.size()) + " texture coordinates for " +
-                                      std::to_string(n) + " vertices"};
+  if (Error e = checkAttributes(m, what)) return e;
   if (Error e = checkIndices(m.triangles, 3, n, "triangle", what, indices_in_range)) return e;
   if (Error e = checkIndices(m.edges, 2, n, "edge", what, indices_in_range)) return e;
+  if (!m.triangle_groups.empty() && m.triangle_groups.size() != m.triangleCount())
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.triangle_groups.size()) + " triangle groups for " +
+                                      std::to_string(m.triangleCount()) + " triangles"};
   if (Error e = checkIndices(m.points, 1, n, "point", what)) return e;
   if (!m.edge_thickness.empty()) {
     if (m.edge_thickness.size() != m.edgeCount())

@@ -12,6 +12,8 @@
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <glm/ext/vector_uint4_sized.hpp>
 
 #include "scenelod/lodcore/span.h"
 #include "scenelod/lodcore/status.h"
@@ -32,13 +34,25 @@ struct Mesh {
   std::vector<glm::vec3> positions;
   std::vector<glm::vec3> normals;
   std::vector<glm::vec3> colors;  // linear RGB (sRGB inputs are converted before any averaging)
-  std::vector<glm::vec2> uvs;
+  std::vector<glm::vec2> uvs;                     // texture coordinates, set 0 (glTF TEXCOORD_0)
+  std::vector<std::vector<glm::vec2>> extra_uvs;  // sets 1, 2, ... (TEXCOORD_1, ...), each one per vertex
+  std::vector<glm::vec4> tangents;                // xyz a unit tangent, w = +1 or -1 (the bitangent's sign)
+  // skinning (glTF JOINTS_0 / WEIGHTS_0): four joints per vertex and their weights (non-negative,
+  // summing to more than 0; unused slots weight 0); both empty or both one per vertex
+  std::vector<glm::u16vec4> joints;
+  std::vector<glm::vec4> weights;
+  // the skeleton, optional: the parent of each joint (-1 for a root), so that clustering can tell
+  // neighbouring bones from unrelated limbs; when given, every joint index is below its size
+  std::vector<int32_t> joint_parents;
 
   // primitives, as indices into the vertex arrays
   std::vector<uint32_t> triangles;       // 3 per triangle, counter-clockwise front faces
   std::vector<uint32_t> edges;           // 2 per edge
   std::vector<float> edge_thickness;     // one per edge (object space, 0 = hairline); empty = all 0
   std::vector<uint32_t> points;          // 1 per point
+  // the primitive (material) each triangle belongs to, one per triangle; empty = all in group 0.
+  // Triangles of different groups never merge and a group border is a seam between UV charts.
+  std::vector<uint32_t> triangle_groups;
 
   // original polygon faces (optional): face f has corners face_corners[face_offsets[f] ..
   // face_offsets[f+1]); face_offsets is empty or face_count + 1 long, starting at 0
@@ -53,6 +67,8 @@ struct Mesh {
   bool empty() const { return triangles.empty() && edges.empty() && points.empty(); }
 
   float edgeThickness(size_t e) const { return edge_thickness.empty() ? 0.0f : edge_thickness[e]; }
+  uint32_t triangleGroup(size_t t) const { return triangle_groups.empty() ? 0u : triangle_groups[t]; }
+  bool skinned() const { return !joints.empty(); }
 };
 
 // Non-owning view of a triangle mesh in caller memory; strides are in bytes, so positions may be

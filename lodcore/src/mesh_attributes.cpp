@@ -1,0 +1,187 @@
+// Vertex welding and UV charts. Both find, for each vertex, the first vertex equal to it in a chosen
+// set of attributes (a row of 32-bit words per vertex, found again through an open-addressing hash
+// table); the charts then join triangles across edges of equal vertices (union-find).
+#include "scenelod/lodcore/mesh_attributes.h"
+
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <tuple>
+
+namespace scenelod {
+
+namespace {
+
+// each vertex's attributes as a row of words; -0.0 written as +0.0 so that equal values compare equal
+class VertexRows {
+ public:
+  VertexRows(const Mesh& m, bool all_attributes) : n_(m.vertexCount()) {
+    addFloats(&m.positions[0].x, 3, n_);  // callers pass a mesh with vertices
+    if (!m.uvs.empty()) addFloats(&m.uvs[0].x, 2, n_);
+    for (const std::vector<glm::vec2>& set : m.extra_uvs)
+      if (!set.empty()) addFloats(&set[0].x, 2, n_);
+    if (!all_attributes) return;
+    if (!m.normals.empty()) addFloats(&m.normals[0].x, 3, n_);
+    if (!m.colors.empty()) addFloats(&m.colors[0].x, 3, n_);
+    if (!m.tangents.empty()) addFloats(&m.tangents[0].x, 4, n_);
+    if (!m.weights.empty()) addFloats(&m.weights[0].x, 4, n_);
+    if (!m.joints.empty()) {
+      static_assert(sizeof(glm::u16vec4) == 8, "packed joints");
+      columns_.push_back({reinterpret_cast<const uint32_t*>(&m.joints[0].x), 2, false});
+    }
+  }
+
+  size_t width() const {
+    size_t w = 0;
+    for (const Column& c : columns_) w += c.words;
+    return w;
+  }
+
+  // the row of vertex i into `row` (width() words)
+  void row(size_t i, uint32_t* row) const {
+    for (const Column& c : columns_) {
+      const uint32_t* src = c.data + i * c.words;
+      for (size_t k = 0; k < c.words; ++k) row[k] = c.floats && src[k] == 0x80000000u ? 0u : src[k];
+      row += c.words;
+    }
+  }
+
+ private:
+  struct Column {
+    const uint32_t* data;
+    size_t words;
+    bool floats;
+  };
+
+  void addFloats(const float* data, size_t words, size_t count) {
+    if (count == 0) return;
+    static_assert(sizeof(float) == sizeof(uint32_t), "32-bit floats");
+    columns_.push_back({reinterpret_cast<const uint32_t*>(data), words, true});
+  }
+
+  size_t n_;
+  std::vector<Column> columns_;
+};
+
+uint64_t hashRow(const uint32_t* row, size_t width) {
+  uint64_t h = 0x9e3779b97f4a7c15ull;
+  for (size_t k = 0; k < width; ++k) {
+    h ^= row[k];
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 32;
+  }
+  return h;
+}
+
+// for each vertex, the index of the first vertex with the same row
+std::vector<uint32_t> firstEqualVertex(const Mesh& m, bool all_attributes) {
+  const size_t n = m.vertexCount();
+  std::vector<uint32_t> first(n);
+  if (n == 0) return first;
+  const VertexRows rows(m, all_attributes);
+  const size_t w = rows.width();
+  std::vector<uint32_t> flat(n * w);
+  for (size_t i = 0; i < n; ++i) rows.row(i, &flat[i * w]);
+  size_t slots = 1;
+  while (slots < 2 * n) slots <<= 1;
+  std::vector<uint32_t> table(slots, UINT32_MAX);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t* r = &flat[i * w];
+    size_t s = hashRow(r, w) & (slots - 1);
+    while (table[s] != UINT32_MAX && std::memcmp(&flat[size_t(table[s]) * w], r, w * sizeof(uint32_t)) != 0)
+      s = (s + 1) & (slots - 1);
+    if (table[s] == UINT32_MAX) table[s] = static_cast<uint32_t>(i);
+    first[i] = table[s];
+  }
+  return first;
+}
+
+void remapIndices(std::vector<uint32_t>& idx, const std::vector<uint32_t>& to) {
+  for (uint32_t& i : idx) i = to[i];
+}
+
+template <class T>
+void compact(std::vector<T>& v, const std::vector<uint32_t>& keep) {
+  if (v.empty()) return;
+  std::vector<T> out;
+  out.reserve(keep.size());
+  for (uint32_t i : keep) out.push_back(v[i]);
+  v.swap(out);
+}
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
+  return x;
+}
+
+}  // namespace
+
+size_t weldVertices(Mesh& m, std::vector<uint32_t>* old_to_new) {
+  const size_t n = m.vertexCount();
+  const std::vector<uint32_t> first = firstEqualVertex(m, true);
+  std::vector<uint32_t> to(n), keep;
+  for (size_t i = 0; i < n; ++i) {
+    if (first[i] == i) {
+      to[i] = static_cast<uint32_t>(keep.size());
+      keep.push_back(static_cast<uint32_t>(i));
+    } else {
+      to[i] = to[first[i]];
+    }
+  }
+  const size_t removed = n - keep.size();
+  if (removed > 0) {
+    compact(m.positions, keep);
+    compact(m.normals, keep);
+    compact(m.colors, keep);
+    compact(m.uvs, keep);
+    for (std::vector<glm::vec2>& set : m.extra_uvs) compact(set, keep);
+    compact(m.tangents, keep);
+    compact(m.joints, keep);
+    compact(m.weights, keep);
+    remapIndices(m.triangles, to);
+    remapIndices(m.edges, to);
+    remapIndices(m.points, to);
+    remapIndices(m.face_corners, to);
+  }
+  if (old_to_new) old_to_new->swap(to);
+  return removed;
+}
+
+uint32_t computeUvCharts(const Mesh& m, std::vector<uint32_t>& triangle_chart) {
+  const size_t tn = m.triangleCount();
+  triangle_chart.assign(tn, 0);
+  if (tn == 0) return 0;
+  const std::vector<uint32_t> same = firstEqualVertex(m, false);
+  // every edge as (smaller vertex, larger vertex, group, triangle); equal keys side by side
+  std::vector<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t>> edges;
+  edges.reserve(3 * tn);
+  for (size_t t = 0; t < tn; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = same[m.triangles[3 * t + k]], b = same[m.triangles[3 * t + (k + 1) % 3]];
+      if (a != b) edges.emplace_back(std::min(a, b), std::max(a, b), m.triangleGroup(t), static_cast<uint32_t>(t));
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<uint32_t> parent(tn);
+  std::iota(parent.begin(), parent.end(), 0u);
+  for (size_t i = 1; i < edges.size(); ++i) {
+    const auto& [a0, b0, g0, t0] = edges[i - 1];
+    const auto& [a1, b1, g1, t1] = edges[i];
+    if (a0 == a1 && b0 == b1 && g0 == g1) {
+      const uint32_t r0 = findRoot(parent, t0), r1 = findRoot(parent, t1);
+      parent[std::max(r0, r1)] = std::min(r0, r1);  // the root is the chart's first triangle
+    }
+  }
+  uint32_t charts = 0;
+  std::vector<uint32_t> id_of_root(tn, UINT32_MAX);
+  for (size_t t = 0; t < tn; ++t) {
+    const uint32_t r = findRoot(parent, static_cast<uint32_t>(t));
+    if (id_of_root[r] == UINT32_MAX) id_of_root[r] = charts++;
+    triangle_chart[t] = id_of_root[r];
+  }
+  return charts;
+}
+
+}  // namespace scenelod
