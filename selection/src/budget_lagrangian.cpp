@@ -74,58 +74,101 @@ struct PassResult {
   size_t above = 0;         // upgrades with ratio in (lambda, hi]
 };
 
-// One linear pass of the price search at lambda, counting the upgrades in (lo, hi].
+// The hulls' points as ctx.pointCost / ctx.pointBenefit give them, every array in a local: the
+// compiler keeps them in registers instead of reloading the context's arrays for every point.
+struct HullPoints {
+  const uint8_t* hull;
+  const uint8_t* count;
+  size_t stride;
+  const float* a;
+  const float* b;
+  const float* q;
+  const uint32_t* row0;
+  const int8_t* prev;
+  const float* row_cost;
+  const float* row_inv_w;
+  float h1;
+};
+HullPoints hullPoints(const SelectorContext& ctx) {
+  return HullPoints{ctx.hull,   ctx.hull_count, ctx.hull_stride, ctx.slot_a,   ctx.slot_b,    ctx.slot_q,
+                    ctx.slot_row0, ctx.slot_prev, ctx.row_cost, ctx.row_inv_w, ctx.h1};
+}
+
+// Where a slot's hull walk ended: the point it took (step along the hull) and that point's cost,
+// in double like the sums it goes into; stopped when `inside` ended the walk.
+struct WalkEnd {
+  double cost;
+  uint8_t step;
+  bool stopped;
+};
+
+// Walks slot s's hull from its first point, upgrade by upgrade while the ratio is above lo: the
+// upgrades above `take` (a prefix: a hull's ratios fall) are taken, each reported to taken(ratio);
+// every later one goes to inside(step, ratio), which returns false to stop the walk. The ratios
+// are the floats the hull was built with, compared in double with the price's bounds.
+template <typename Taken, typename Inside>
+inline __attribute__((always_inline)) WalkEnd walkHull(const HullPoints& pts, size_t s, double lo, double take,
+                                                       Taken&& taken, Inside&& inside) {
+  const size_t n = pts.count[s];
+  const uint8_t* const h = pts.hull + s * pts.stride;
+  const float a = pts.a[s], b = pts.b[s], q = pts.q[s];
+  const uint32_t row0 = pts.row0[s];
+  const int prev = pts.prev[s];
+  const float* const rc = pts.row_cost;
+  const float* const riw = pts.row_inv_w;
+  const float hh = pts.h1;
+  auto cost_of = [&](int l) { return l < 0 ? 0.0f : a + rc[row0 + static_cast<uint32_t>(l)]; };
+  auto benefit_of = [&](int l) {
+    if (l < 0) return 0.0f;
+    float acc = std::min(1.0f, q * riw[row0 + static_cast<uint32_t>(l)]);
+    if (l == prev) acc *= hh;
+    return b * acc;
+  };
+  size_t k = 0;
+  const int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
+  float c0 = cost_of(l0), b0 = benefit_of(l0);
+  WalkEnd end{c0, 0, false};
+  bool taking = true;
+  while (k + 1 < n) {
+    const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
+    const float c1 = cost_of(l1), b1 = benefit_of(l1);
+    const float r = SelectorContext::ratio(c0, b0, c1, b1);
+    if (static_cast<double>(r) <= lo) break;
+    if (taking && static_cast<double>(r) > take) {
+      end.cost = c1;
+      end.step = static_cast<uint8_t>(k + 1);
+      taken(r);
+    } else {
+      taking = false;
+      if (!inside(k, r)) {
+        end.stopped = true;
+        return end;
+      }
+    }
+    ++k;
+    c0 = c1;
+    b0 = b1;
+  }
+  return end;
+}
+
+// One linear pass of the price search at lambda: the total cost with every upgrade above lambda
+// taken, and the upgrades in (lo, hi] counted on either side of lambda.
 PassResult pricePass(const SelectorContext& ctx, size_t slot_count, double lambda, double lo, double hi) {
-  // pointCost / pointBenefit spelled out over locals, and the sums in locals: the compiler keeps
-  // them in registers instead of reloading the context's arrays for every hull point
-  const uint8_t* const hull_levels = ctx.hull;
-  const uint8_t* const counts = ctx.hull_count;
-  const float* const sa = ctx.slot_a;
-  const float* const sb = ctx.slot_b;
-  const float* const sq = ctx.slot_q;
-  const float* const rc = ctx.row_cost;
-  const float* const riw = ctx.row_inv_w;
-  const uint32_t* const r0 = ctx.slot_row0;
-  const int8_t* const sp = ctx.slot_prev;
-  const float hh = ctx.h1;
-  const size_t stride = ctx.hull_stride;
+  const HullPoints pts = hullPoints(ctx);
   double cost = 0.0;
   size_t above = 0, below = 0;
   for (size_t s = 0; s < slot_count; ++s) {
-    const size_t n = counts[s];
-    const uint8_t* const h = hull_levels + s * stride;
-    const float a = sa[s], b = sb[s], q = sq[s];
-    const uint32_t row0 = r0[s];
-    const int prev = sp[s];
-    auto cost_of = [&](int l) { return l < 0 ? 0.0f : a + rc[row0 + static_cast<uint32_t>(l)]; };
-    auto benefit_of = [&](int l) {
-      if (l < 0) return 0.0f;
-      float acc = std::min(1.0f, q * riw[row0 + static_cast<uint32_t>(l)]);
-      if (l == prev) acc *= hh;
-      return b * acc;
-    };
-    size_t k = 0;
-    int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
-    float c0 = cost_of(l0), b0 = benefit_of(l0);
-    double chosen_cost = c0;
-    bool taking = true;
-    while (k + 1 < n) {
-      const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
-      const float c1 = cost_of(l1), b1 = benefit_of(l1);
-      const double r = SelectorContext::ratio(c0, b0, c1, b1);
-      if (r <= lo) break;
-      if (taking && r > lambda) {
-        chosen_cost = c1;
-        if (r <= hi) ++above;
-      } else {
-        taking = false;
-        ++below;
-      }
-      ++k;
-      c0 = c1;
-      b0 = b1;
-    }
-    cost += chosen_cost;
+    const WalkEnd end = walkHull(
+        pts, s, lo, lambda,
+        [&](float r) {
+          if (static_cast<double>(r) <= hi) ++above;
+        },
+        [&](size_t, float) {
+          ++below;
+          return true;
+        });
+    cost += end.cost;
   }
   PassResult result;
   result.cost = cost;
@@ -288,65 +331,23 @@ Collected collect(const SelectorContext& ctx, const BudgetFrame& frame, const Pr
                   BudgetChoice* choice) {
   choice->lambda = range.hi;
   choice->split_slot = -1;
-  const double lo = range.lo, hi = range.hi;
-  const size_t slots = frame.slots;
-  const uint8_t* const hull_count = ctx.hull_count;
-  const uint8_t* const hull = ctx.hull;
-  const size_t hull_stride = ctx.hull_stride;
-  const float* const slot_a = ctx.slot_a;
-  const float* const slot_b = ctx.slot_b;
-  const float* const slot_q = ctx.slot_q;
-  const uint32_t* const slot_row0 = ctx.slot_row0;
-  const int8_t* const slot_prev = ctx.slot_prev;
-  const float* const row_cost = ctx.row_cost;
-  const float* const row_inv_w = ctx.row_inv_w;
-  const float h1 = ctx.h1;
-  double total = 0.0;
-  size_t count = 0;
+  const HullPoints pts = hullPoints(ctx);
   uint8_t* const chosen = ctx.chosen;
   BracketEntry* const bracket = ctx.bracket;
   const size_t capacity = ctx.bracket_capacity;
-  for (size_t s = 0; s < slots; ++s) {
-    const size_t hn = hull_count[s];
-    const uint8_t* const h = hull + s * hull_stride;
-    const float sa = slot_a[s], sb = slot_b[s], sq = slot_q[s];
-    const uint32_t row0 = slot_row0[s];
-    const int prev = slot_prev[s];
-    // ctx.pointCost / ctx.pointBenefit over the slot's terms in registers
-    auto cost_of = [&](int l) { return l < 0 ? 0.0f : sa + row_cost[row0 + static_cast<uint32_t>(l)]; };
-    auto benefit_of = [&](int l) {
-      if (l < 0) return 0.0f;
-      float acc = std::min(1.0f, sq * row_inv_w[row0 + static_cast<uint32_t>(l)]);
-      if (l == prev) acc *= h1;
-      return sb * acc;
-    };
-    size_t k = 0;
-    int l0 = h[0] == kNotDrawn ? -1 : static_cast<int>(h[0]);
-    float c0 = cost_of(l0), b0 = benefit_of(l0);
-    float chosen_cost = c0;
-    bool taking = true;
-    uint8_t pick = 0;
-    while (k + 1 < hn) {
-      const int l1 = h[k + 1] == kNotDrawn ? -1 : static_cast<int>(h[k + 1]);
-      const float c1 = cost_of(l1), b1 = benefit_of(l1);
-      const float q = SelectorContext::ratio(c0, b0, c1, b1);
-      if (static_cast<double>(q) <= lo) break;
-      if (taking && static_cast<double>(q) > hi) {
-        chosen_cost = c1;
-        pick = static_cast<uint8_t>(k + 1);
-      } else {
-        if (taking) pick = static_cast<uint8_t>(k);
-        taking = false;
-        if (count == capacity) return Collected::kOverflow;
-        bracket[count++] = {q, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
-      }
-      ++k;
-      c0 = c1;
-      b0 = b1;
-    }
-    if (taking) pick = static_cast<uint8_t>(k);
-    chosen[s] = pick;
-    total += chosen_cost;
+  double total = 0.0;
+  size_t count = 0;
+  for (size_t s = 0; s < frame.slots; ++s) {
+    const WalkEnd end = walkHull(
+        pts, s, range.lo, range.hi, [](float) {},
+        [&](size_t k, float r) {
+          if (count == capacity) return false;
+          bracket[count++] = {r, static_cast<uint32_t>(s), static_cast<uint32_t>(k)};
+          return true;
+        });
+    if (end.stopped) return Collected::kOverflow;
+    chosen[s] = end.step;
+    total += end.cost;
   }
   return bracketGreedy(ctx, frame.obj_cap, range, count, total, choice);
 }
