@@ -26,9 +26,6 @@ namespace scenelod::selection {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-// objects per block of the slot pass, and slots per block handed on (loops of a constant trip
-// count, which predict)
-constexpr size_t kSlotBlock = 64;
 
 // The frame's inputs as the phases read them: the job's spans as plain pointers (null for an
 // absent optional column), the camera's terms and the cost model's.
@@ -145,7 +142,8 @@ struct SlotPass {
 // before this block's terms overwrite them), then the chain terms and the finest candidate. The float
 // terms run as plain loops over local columns that the compiler vectorises (sqrt and divisions 4 or
 // 8 wide; the same IEEE operations as one object at a time, so the same bits).
-void slotTerms(const FrameInput& in, const SelectorContext& ctx, size_t s0, size_t m, const SlotColumns& g) {
+inline __attribute__((always_inline)) void slotTerms(const FrameInput& in, const SelectorContext& ctx, size_t s0,
+                                                     size_t m, const SlotColumns& g) {
   alignas(32) float gx[kSlotBlock], gy[kSlotBlock], gz[kSlotBlock], gr[kSlotBlock], gs[kSlotBlock];
   alignas(32) float gi[kSlotBlock], gf[kSlotBlock], gm[kSlotBlock], gv[kSlotBlock];
   // locals for every array: the stores would otherwise make the compiler reload them
@@ -204,8 +202,8 @@ void slotTerms(const FrameInput& in, const SelectorContext& ctx, size_t s0, size
 
 // Budget mode's part of a block of slots (in the context's columns from s0): the settling keys,
 // and the must-draw objects (never settled) with their cheapest level's cost to the mandatory part.
-void budgetSlotTerms(const FrameInput& in, SelectorContext& ctx, size_t s0, size_t m, const SlotColumns& g,
-                     SlotPass* pass) {
+inline __attribute__((always_inline)) void budgetSlotTerms(const FrameInput& in, SelectorContext& ctx, size_t s0,
+                                                           size_t m, const SlotColumns& g, SlotPass* pass) {
   uint16_t* const key = ctx.slot_key + s0;
   uint8_t* const must = ctx.slot_must + s0;
   pass->prev_dropped += (ctx.use_avx2 ? settleKeysAvx2 : settleKeysSse2)(g.a, g.b, g.levels, g.finest, g.prev, m, key);
@@ -233,8 +231,8 @@ void budgetSlotTerms(const FrameInput& in, SelectorContext& ctx, size_t s0, size
 // Distance mode's levels of a block of m slots: the finest candidate, or a coarser current level
 // while it is within the hysteresis margin; each slot's cost and benefit at it added to the
 // frame's sums in slot order (the slot is drawn: ctx.pointCost / ctx.pointBenefit at its level).
-void distanceLevels(const FrameInput& in, const SelectorContext& ctx, size_t m, const SlotColumns& g,
-                    SlotSums* sums) {
+inline __attribute__((always_inline)) void distanceLevels(const FrameInput& in, const SelectorContext& ctx, size_t m,
+                                                          const SlotColumns& g, SlotSums* sums) {
   const float* const row_cost = ctx.row_cost;
   const float* const row_inv_w = ctx.row_inv_w;
   const uint32_t* const tri = in.tri;
@@ -333,7 +331,8 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
   alignas(32) float lq[kSlotBlock], la[kSlotBlock], lb[kSlotBlock], lpx[kSlotBlock];
   alignas(32) uint8_t lfinest[kSlotBlock], llevels[kSlotBlock];
   alignas(32) int8_t lprev[kSlotBlock];
-  auto slotBlock = [&](size_t s0, size_t m) {
+  // inlined at both calls: a full block's loops get their constant trip count
+  auto slotBlock = [&](size_t s0, size_t m) __attribute__((always_inline)) {
     const SlotColumns g =
         in.budget ? SlotColumns{ctx.slot_object + s0, ctx.slot_row0 + s0,  ctx.slot_q + s0,
                                 ctx.slot_a + s0,      ctx.slot_b + s0,     ctx.slot_px + s0,

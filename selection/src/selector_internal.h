@@ -31,6 +31,8 @@ constexpr size_t kHistMaxBuckets = (size_t(kHistBinades) << kHistMaxSubBits) + 2
 constexpr double kPredictWidthStart = 1.0 / 16.0;
 // levels of one chain side by side: kLanes floats, two SSE2 vectors or one AVX2 vector
 constexpr int kLanes = 8;
+// slots per block of the slot pass: full blocks run loops of a constant trip count, which predict
+constexpr size_t kSlotBlock = 64;
 // A slot's settling key (settleKeys*): kSettleIneligible, or the lane-mask row
 // finest * (kLanes + 1) + level count in bits 4.. and the candidate (last frame's level) + 1 in bits 0..3.
 constexpr uint16_t kSettleIneligible = 0x8000;

@@ -567,12 +567,15 @@ SCENELOD_AVX2_TARGET __attribute__((noinline)) SlotSums writeOutSlotsAvx2(const 
 }
 }  // namespace
 
+// (a full block of the slot pass gets its constant trip count: loops that predict)
 uint32_t settleKeysSse2(const float* ga, const float* gb, const uint8_t* glevels, const uint8_t* gfinest,
                         const int8_t* gprev, size_t m, uint16_t* gkey) {
+  if (m == kSlotBlock) return settleKeys(ga, gb, glevels, gfinest, gprev, kSlotBlock, gkey);
   return settleKeys(ga, gb, glevels, gfinest, gprev, m, gkey);
 }
 SCENELOD_AVX2_TARGET uint32_t settleKeysAvx2(const float* ga, const float* gb, const uint8_t* glevels,
                                              const uint8_t* gfinest, const int8_t* gprev, size_t m, uint16_t* gkey) {
+  if (m == kSlotBlock) return settleKeys(ga, gb, glevels, gfinest, gprev, kSlotBlock, gkey);
   return settleKeys(ga, gb, glevels, gfinest, gprev, m, gkey);
 }
 size_t settleSlots(bool avx2, bool fuse, const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
@@ -697,8 +700,12 @@ bool cpuHasAvx2() {
 void chainTermsSse2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
                     const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
                     uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels, int8_t* level_of) {
-  chainTermsBody<false>(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
-                        level_of);
+  if (m == kSlotBlock)  // a full block of the slot pass: loops of a constant trip count
+    chainTermsBody<false>(gobj, gq, kSlotBlock, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev,
+                         glevels, level_of);
+  else
+    chainTermsBody<false>(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
+                         level_of);
 }
 #if defined(__x86_64__) || defined(__i386__)
 __attribute__((target("avx2,popcnt")))
@@ -706,8 +713,12 @@ __attribute__((target("avx2,popcnt")))
 void chainTermsAvx2(const uint32_t* gobj, const float* gq, size_t m, const uint32_t* chain_of,
                     const uint32_t* chain_offset, const float* row_inv_w, const int8_t* prev_level,
                     uint8_t* gfinest, uint32_t* grow0, int8_t* gprev, uint8_t* glevels, int8_t* level_of) {
-  chainTermsBody<true>(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
-                       level_of);
+  if (m == kSlotBlock)  // a full block of the slot pass: loops of a constant trip count
+    chainTermsBody<true>(gobj, gq, kSlotBlock, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev,
+                         glevels, level_of);
+  else
+    chainTermsBody<true>(gobj, gq, m, chain_of, chain_offset, row_inv_w, prev_level, gfinest, grow0, gprev, glevels,
+                         level_of);
 }
 SlotSums writeOutSlots(bool avx2, bool count_rows, const WriteOutInput& in, size_t slot_count, double predicted0,
                        int8_t* level_of) {
