@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <type_traits>
+#include <vector>
 
+#include "scenelod/lodcore/atomic_file.h"
 #include "scenelod/scene/mesh_order.h"
 #include "scenelod/scene/scene.h"
 
@@ -310,12 +312,7 @@ Error writePack(const std::string& path, const SceneData& scene, const std::vect
                 const std::vector<Sphere>& chain_spheres, const PackWriteOptions& options, PackWriteStats* stats) {
   std::vector<uint8_t> bytes;
   if (Error e = writePackBytes(bytes, scene, chains, chain_spheres, options, stats, path)) return e;
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) return {Status::kIoError, path + ": cannot open for writing: " + std::strerror(errno)};
-  const size_t written = std::fwrite(bytes.data(), 1, bytes.size(), f);
-  const bool closed = std::fclose(f) == 0;
-  if (written != bytes.size() || !closed) return {Status::kIoError, path + ": write failed (disk full?)"};
-  return {};
+  return writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
 // ---- loading ----
@@ -342,13 +339,42 @@ Error Pack::fromBytes(const uint8_t* data, size_t size, Pack& out, const std::st
 }
 
 namespace {
+
+// [offset, offset + count x element_bytes) lies inside `size` bytes, in arithmetic that cannot wrap
+// (a hostile offset near 2^64 plus a small count must not pass for a small offset)
+bool inside(uint64_t offset, uint64_t count, uint64_t element_bytes, uint64_t size) {
+  return offset <= size && (element_bytes == 0 || count <= (size - offset) / element_bytes);
+}
+
+// every record of the pack is read through here: out of range reads give a zeroed record, never
+// bytes past the end (parse() refuses such packs before any accessor runs)
 template <class T>
-T read(const std::vector<uint8_t>& b, size_t offset) {
+T read(const std::vector<uint8_t>& b, uint64_t offset) {
   static_assert(std::is_trivially_copyable<T>::value, "records are plain data");
-  T t;
-  std::memcpy(&t, b.data() + offset, sizeof t);
+  T t{};
+  if (inside(offset, 1, sizeof t, b.size())) std::memcpy(&t, b.data() + offset, sizeof t);
   return t;
 }
+
+// the node parents form no cycle: each walk up ends at a root within node-count steps
+bool parentsAcyclic(const std::vector<int32_t>& parent) {
+  std::vector<uint8_t> state(parent.size(), 0);  // 0 unvisited, 1 on this walk, 2 reaches a root
+  std::vector<size_t> walk;
+  for (size_t i = 0; i < parent.size(); ++i) {
+    walk.clear();
+    size_t k = i;
+    while (state[k] == 0) {
+      state[k] = 1;
+      walk.push_back(k);
+      if (parent[k] < 0) break;
+      k = static_cast<size_t>(parent[k]);
+    }
+    if (state[k] == 1 && parent[k] >= 0) return false;
+    for (size_t w : walk) state[w] = 2;
+  }
+  return true;
+}
+
 }  // namespace
 
 Error Pack::parse(const std::string& what, bool check_indices) {
@@ -377,7 +403,7 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   }
   // from here on the bytes are what the writer wrote, unless made by hand: keep checking bounds
   if (h.header_bytes != sizeof(FileHeader) || h.section_table_offset % 16 != 0 || h.section_count > 64 ||
-      h.section_table_offset + uint64_t(h.section_count) * sizeof(SectionEntry) > size)
+      !inside(h.section_table_offset, h.section_count, sizeof(SectionEntry), size))
     return corrupt("section table out of bounds");
   size_t offset[kSectionKindCount + 1] = {}, count[kSectionKindCount + 1] = {};
   bool seen[kSectionKindCount + 1] = {};
@@ -387,7 +413,7 @@ Error Pack::parse(const std::string& what, bool check_indices) {
     if (e.element_bytes != kElementBytes[e.kind])
       return corrupt("section " + std::to_string(e.kind) + " has " + std::to_string(e.element_bytes) + "-byte elements, expected " +
                      std::to_string(kElementBytes[e.kind]));
-    if (e.offset % 4 != 0 || e.offset > size || e.count > (size - e.offset) / e.element_bytes)
+    if (e.offset % 4 != 0 || !inside(e.offset, e.count, e.element_bytes, size))
       return corrupt("section " + std::to_string(e.kind) + " lies outside the file");
     offset[e.kind] = e.offset;
     count[e.kind] = e.count;
@@ -404,12 +430,15 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   names_ = offset[kNames]; names_size_ = count[kNames];
   if (names_size_ > 0 && bytes_[names_ + names_size_ - 1] != 0) return corrupt("names section is not terminated");
   auto nameOk = [&](uint32_t n) { return names_size_ > 0 && n < names_size_; };
+  std::vector<int32_t> parents(node_count_);
   for (size_t i = 0; i < node_count_; ++i) {
     const NodeRecord r = read<NodeRecord>(bytes_, nodes_ + i * sizeof(NodeRecord));
     if (r.parent < -1 || r.parent >= int64_t(node_count_) || r.mesh < -1 || r.mesh >= int64_t(chain_count_) ||
         uint64_t(r.first_child) + r.child_count > children_count_ || !nameOk(r.name))
       return corrupt("node " + std::to_string(i) + " has an index out of range");
+    parents[i] = r.parent;
   }
+  if (!parentsAcyclic(parents)) return corrupt("the node parents form a cycle");
   for (size_t i = 0; i < children_count_; ++i)
     if (read<uint32_t>(bytes_, children_ + 4 * i) >= node_count_) return corrupt("child list entry out of range");
   for (size_t i = 0; i < root_count_; ++i)
@@ -422,6 +451,7 @@ Error Pack::parse(const std::string& what, bool check_indices) {
     const ChainRecord r = read<ChainRecord>(bytes_, chains_ + c * sizeof(ChainRecord));
     if (uint64_t(r.first_level) + r.level_count > level_count_ || !nameOk(r.name))
       return corrupt("chain " + std::to_string(c) + " has a level range out of bounds");
+    if (r.level_count == 0) return corrupt("chain " + std::to_string(c) + " has no levels (level 0 is the original)");
   }
   const size_t data_begin = offset[kData], data_end = offset[kData] + count[kData];
   for (size_t l = 0; l < level_count_; ++l) {

@@ -294,3 +294,86 @@ TEST(Pack, HandMadeBadIndexIsCaughtEvenWithAValidChecksum) {
   // without the index check the structure is still sound and loads
   EXPECT_TRUE(Pack::fromBytes(bytes.data(), bytes.size(), p, "handmade", false).ok());
 }
+
+namespace {
+
+// the checksum of hand-edited bytes made valid again, so that only the edit is wrong
+void resign(std::vector<uint8_t>& bytes) {
+  const uint64_t size = bytes.size();
+  std::memcpy(bytes.data() + 16, &size, 8);  // file_bytes
+  std::memset(bytes.data() + 24, 0, 4);
+  const uint32_t crc = crc32(bytes.data(), bytes.size());
+  std::memcpy(bytes.data() + 24, &crc, 4);
+}
+
+// the byte offset of the first record of section `kind` (1 nodes, 5 chains), from the section table
+size_t sectionOffset(const std::vector<uint8_t>& bytes, uint32_t kind) {
+  uint32_t count;
+  uint64_t table;
+  std::memcpy(&count, bytes.data() + 28, 4);
+  std::memcpy(&table, bytes.data() + 32, 8);
+  for (uint32_t s = 0; s < count; ++s) {
+    uint32_t k;
+    uint64_t offset;
+    std::memcpy(&k, bytes.data() + table + 32 * s, 4);
+    std::memcpy(&offset, bytes.data() + table + 32 * s + 8, 8);
+    if (k == kind) return static_cast<size_t>(offset);
+  }
+  return 0;
+}
+
+Error parseBytes(const std::vector<uint8_t>& bytes) {
+  Pack p;
+  return Pack::fromBytes(bytes.data(), bytes.size(), p, "hostile.slodpack");
+}
+
+}  // namespace
+
+TEST(Pack, SectionTableOffsetNearTwoToThe64IsRefused) {
+  // a wrapping bounds check once let this read far outside a pack of 128 KiB or more
+  std::vector<uint8_t> bytes = makePack();
+  bytes.resize(std::max<size_t>(bytes.size(), 160 * 1024), 0);
+  const uint64_t huge = ~uint64_t(0) - 15;  // 16-aligned, and huge + 8 x 32 wraps to a small number
+  std::memcpy(bytes.data() + 32, &huge, 8);
+  resign(bytes);
+  const Error e = parseBytes(bytes);
+  EXPECT_EQ(e.status, Status::kCorrupt);
+  EXPECT_NE(e.message.find("hostile.slodpack: section table out of bounds"), std::string::npos) << e.message;
+}
+
+TEST(Pack, SectionOffsetNearTwoToThe64IsRefused) {
+  std::vector<uint8_t> bytes = makePack();
+  uint64_t table;
+  std::memcpy(&table, bytes.data() + 32, 8);
+  const uint64_t huge = ~uint64_t(0) - 3;
+  std::memcpy(bytes.data() + table + 8, &huge, 8);  // the first section's offset
+  resign(bytes);
+  const Error e = parseBytes(bytes);
+  EXPECT_EQ(e.status, Status::kCorrupt);
+  EXPECT_NE(e.message.find("lies outside the file"), std::string::npos) << e.message;
+}
+
+TEST(Pack, ChainWithoutLevelsIsRefused) {
+  // such a pack once passed `pack --check`, and a replay then culled every object
+  std::vector<uint8_t> bytes = makePack();
+  const size_t chains = sectionOffset(bytes, 5);
+  ASSERT_NE(chains, 0u);
+  const uint32_t zero = 0;
+  std::memcpy(bytes.data() + chains + 4, &zero, 4);  // chain 0's level_count
+  resign(bytes);
+  const Error e = parseBytes(bytes);
+  EXPECT_EQ(e.status, Status::kCorrupt);
+  EXPECT_NE(e.message.find("chain 0 has no levels"), std::string::npos) << e.message;
+}
+
+TEST(Pack, NodeParentCycleIsRefused) {
+  std::vector<uint8_t> bytes = makePack();
+  const size_t nodes = sectionOffset(bytes, 1);
+  ASSERT_NE(nodes, 0u);
+  const int32_t self = 0;
+  std::memcpy(bytes.data() + nodes, &self, 4);  // node 0 is its own parent
+  resign(bytes);
+  const Error e = parseBytes(bytes);
+  EXPECT_EQ(e.status, Status::kCorrupt);
+  EXPECT_NE(e.message.find("the node parents form a cycle"), std::string::npos) << e.message;
+}
