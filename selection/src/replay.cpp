@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json_number.h"
+
 namespace scenelod::selection {
 
 namespace {
@@ -44,8 +46,8 @@ bool vec3(const json& j, const char* key, bool required, glm::vec3& out, std::st
     return false;
   }
   for (int i = 0; i < 3; ++i) {
-    if (!(*it)[i].is_number() || !std::isfinite((*it)[i].get<double>())) {
-      err = std::string("key \"") + key + "\" must be an array of 3 finite numbers";
+    if (!(*it)[i].is_number() || !(std::fabs((*it)[i].get<double>()) <= detail::kMaxCoordinate)) {
+      err = std::string("key \"") + key + "\" must be an array of 3 numbers within +-1e18";
       return false;
     }
     out[i] = (*it)[i].get<float>();
@@ -88,7 +90,8 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
     if (!have_header) {
       auto v = j.find("scenelod_replay");
       if (v == j.end()) return fail("the first line must be the header with \"scenelod_replay\"");
-      if (!v->is_number_integer() || v->get<int>() != 1)
+      int64_t version = 0;
+      if (!detail::wholeNumber(*v, 1, 1, version))
         return fail("unsupported replay version (this reader knows version 1)");
       ReplayHeader& h = out.header;
       auto s = j.find("scene");
@@ -96,11 +99,12 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       h.scene = s->get<std::string>();
       auto vp = j.find("viewport");
       if (vp != j.end()) {
-        if (!vp->is_array() || vp->size() != 2 || !(*vp)[0].is_number_integer() || !(*vp)[1].is_number_integer() ||
-            (*vp)[0].get<long>() < 1 || (*vp)[1].get<long>() < 1 || (*vp)[0].get<long>() > 65536 || (*vp)[1].get<long>() > 65536)
+        int64_t w = 0, ht = 0;
+        if (!vp->is_array() || vp->size() != 2 || !detail::wholeNumber((*vp)[0], 1, 65536, w) ||
+            !detail::wholeNumber((*vp)[1], 1, 65536, ht))
           return fail("\"viewport\" must be [width, height] in whole pixels, 1..65536");
-        h.viewport_width_px = (*vp)[0].get<uint32_t>();
-        h.viewport_height_px = (*vp)[1].get<uint32_t>();
+        h.viewport_width_px = static_cast<uint32_t>(w);
+        h.viewport_height_px = static_cast<uint32_t>(ht);
       }
       h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
       if (!err.empty()) return fail(err);
@@ -119,10 +123,11 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       continue;
     }
     ReplayFrame f;
-    const double fi = number(j, "frame", true, 0.0, err);
-    if (!err.empty()) return fail(err);
-    if (fi < 0 || fi != std::floor(fi)) return fail("\"frame\" must be a whole number >= 0");
-    f.frame = static_cast<uint64_t>(fi);
+    auto fr = j.find("frame");
+    if (fr == j.end()) return fail("missing key \"frame\"");
+    int64_t frame = 0;
+    if (!detail::wholeNumber(*fr, 0, int64_t(1) << 53, frame)) return fail("\"frame\" must be a whole number from 0 to 2^53");
+    f.frame = static_cast<uint64_t>(frame);
     if (!out.frames.empty() && f.frame <= out.frames.back().frame) return fail("frames must be in increasing order");
     f.time_s = number(j, "time_s", false, 0.0, err);
     if (!err.empty()) return fail(err);
@@ -153,14 +158,19 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       for (const json& e : *mv) {
         if (!e.is_array() || e.size() != 9) return fail("each move must be [object, tx, ty, tz, qx, qy, qz, qw, s]");
         for (const json& x : e)
-          if (!x.is_number() || !std::isfinite(x.get<double>())) return fail("a move holds a value that is not a finite number");
-        if (!e[0].is_number_integer() || e[0].get<long>() < 0) return fail("a move's object must be a whole number >= 0");
+          if (!x.is_number() || !(std::fabs(x.get<double>()) <= detail::kMaxCoordinate))
+            return fail("a move holds a value that is not a number within +-1e18");
+        int64_t object = 0;
+        if (!detail::wholeNumber(e[0], 0, UINT32_MAX - 1, object))
+          return fail("a move's object must be a whole number from 0 to 4294967294");
         ReplayMove rm;
-        rm.object = e[0].get<uint32_t>();
+        rm.object = static_cast<uint32_t>(object);
         rm.translation = glm::vec3(e[1].get<float>(), e[2].get<float>(), e[3].get<float>());
         rm.rotation = glm::quat(e[7].get<float>(), e[4].get<float>(), e[5].get<float>(), e[6].get<float>());
         rm.scale = e[8].get<float>();
         if (!(rm.scale > 0.0f)) return fail("a move's scale must be > 0");
+        const float qn = glm::dot(rm.rotation, rm.rotation);
+        if (!(qn > 1e-12f)) return fail("a move's rotation quaternion has zero length");
         f.moves.push_back(rm);
       }
     }

@@ -1,6 +1,8 @@
 // Replay driver: the selector in a simulated frame loop, with a synthetic renderer whose true costs
 // follow the same linear model (Funkhouser & Sequin 1993 §4.1) plus seeded Gaussian noise.
 #include "scenelod/selection/replay_runner.h"
+
+#include "json_number.h"
 #include "scenelod/selection/replay_visibility.h"
 
 #include <cmath>
@@ -12,6 +14,22 @@
 namespace scenelod::selection {
 
 namespace {
+
+// the world spheres reach the selector, whose preconditions want finite values (and squared
+// distances that stay finite): a move or a transform large enough to overflow float is refused here, naming the object, instead of printing
+// NaN costs into the log
+Error checkWorldSpheres(const std::vector<glm::vec3>& centers, const std::vector<float>& radii,
+                        const std::vector<float>& scales, const std::string& where) {
+  const float limit = static_cast<float>(detail::kMaxCoordinate);
+  for (size_t i = 0; i < centers.size(); ++i) {
+    const glm::vec3& c = centers[i];
+    if (!(std::fabs(c.x) <= limit && std::fabs(c.y) <= limit && std::fabs(c.z) <= limit && radii[i] <= limit &&
+          std::isfinite(scales[i])))
+      return Error(Status::kInvalidArgument, where + ": object " + std::to_string(i) +
+                                                 "'s world bounding sphere is beyond +-1e18 or not finite (a move or transform too large)");
+  }
+  return Error();
+}
 
 // Box-Muller on mt19937_64 (fully specified), so the noise is the same with every standard library
 class Gaussian {
@@ -88,6 +106,7 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
   std::vector<glm::vec3> centers;
   std::vector<float> radii, scales;
   computeWorldSpheres(scene, centers, radii, scales);
+  if (Error e = checkWorldSpheres(centers, radii, scales, scene.name)) return e;
   const LevelTable table = scene.table.view();
   Gaussian noise(options.seed);
 
@@ -96,6 +115,7 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
     if (!f.moves.empty()) {
       if (Error e = applyMoves(scene, f.moves, where)) return e;
       computeWorldSpheres(scene, centers, radii, scales);
+      if (Error e = checkWorldSpheres(centers, radii, scales, where)) return e;
     }
     cam.eye = f.eye;
     cam.target = f.target;

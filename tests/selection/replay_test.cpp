@@ -281,6 +281,23 @@ TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
        "scale must be > 0"},
       {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1], \"target\": [0,0,0], \"measured_ms\": -1}\n",
        "measured_ms"},
+      // hostile numbers: none may wrap, be cast out of range or reach the selector
+      {"{\"scenelod_replay\": 4294967297, \"scene\": \"a\"}\n", "unsupported replay version"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 1e300, \"eye\": [0,0,1], \"target\": [0,0,0]}\n",
+       ":2: \"frame\" must be a whole number from 0 to 2^53"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0.5, \"eye\": [0,0,1], \"target\": [0,0,0]}\n",
+       "\"frame\" must be a whole number"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1], \"target\": [0,0,0], "
+       "\"moves\": [[4294967297,0,0,0,0,0,0,1,1]]}\n",
+       "a move's object must be a whole number from 0 to 4294967294"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1], \"target\": [0,0,0], "
+       "\"moves\": [[0,1e38,0,0,0,0,0,1,1]]}\n",
+       "not a number within +-1e18"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1], \"target\": [0,0,0], "
+       "\"moves\": [[0,0,0,0,0,0,0,0,1]]}\n",
+       "rotation quaternion has zero length"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1e30], \"target\": [0,0,0]}\n",
+       "\"eye\" must be an array of 3 numbers within +-1e18"},
   };
   for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
     const std::string path = dir + "/bad" + std::to_string(i) + ".jsonl";
@@ -333,6 +350,21 @@ TEST(Replay, BadScenesAndFramesAreRefused) {
   const Error e = runReplay(r, s, ReplayRunOptions(), log);
   EXPECT_EQ(e.status, Status::kInvalidArgument);
   EXPECT_NE(e.message.find("frame 1"), std::string::npos) << e.message;
+  // a move inside the reader's bounds whose world sphere still overflows: refused before the
+  // selector, so the log never holds NaN costs
+  const std::string one = dir + "/one_object.json";
+  writeText(one, "{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,2], \"levels\": [[0, 10, 5, 0]]}],"
+                 " \"nodes\": [{}], \"objects\": [{\"node\": 0, \"chain\": 0}]}");
+  ASSERT_TRUE(loadReplayScene(one, s).ok());
+  r.frames[1].eye = glm::vec3(0.0f, 0.0f, 50.0f);
+  ReplayMove huge;
+  huge.object = 0;
+  huge.scale = 1e18f;  // the radius 2 becomes 2e18
+  r.frames[1].moves = {huge};
+  const Error big = runReplay(r, s, ReplayRunOptions(), log);
+  EXPECT_EQ(big.status, Status::kInvalidArgument);
+  EXPECT_NE(big.message.find("frame 1: object 0's world bounding sphere is beyond +-1e18"), std::string::npos)
+      << big.message;
 }
 
 #include "scenelod/scene/pack.h"
