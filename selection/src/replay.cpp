@@ -8,7 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "json_number.h"
+#include "json_read.h"
+#include "scenelod/lodcore/json_depth.h"
 
 namespace scenelod::selection {
 
@@ -83,6 +84,8 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
   while (std::getline(in, line)) {
     ++line_no;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (jsonNestingDepth(line.data(), line.size()) > kMaxJsonNesting)
+      return fail("JSON nested deeper than " + std::to_string(kMaxJsonNesting) + " levels");
     json j = json::parse(line, nullptr, false);
     if (j.is_discarded()) return fail("not valid JSON");
     if (!j.is_object()) return fail("expected a JSON object");

@@ -2,7 +2,7 @@
 // follow the same linear model (Funkhouser & Sequin 1993 §4.1) plus seeded Gaussian noise.
 #include "scenelod/selection/replay_runner.h"
 
-#include "json_number.h"
+#include "json_read.h"
 #include "scenelod/selection/replay_visibility.h"
 
 #include <cmath>

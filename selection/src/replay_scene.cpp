@@ -10,7 +10,11 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <iterator>
 #include <nlohmann/json.hpp>
+
+#include "json_read.h"
+#include "scenelod/lodcore/json_depth.h"
 
 #include "scenelod/scene/gltf_io.h"
 #include "scenelod/scene/lod_build.h"
@@ -253,13 +257,17 @@ namespace {
 Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
   s = ReplayScene();
   s.name = path;
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) return Error(Status::kIoError, path + ": cannot open level scene");
-  json j = json::parse(in, nullptr, false);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   auto fail = [&](const std::string& m) { return Error(Status::kParseError, path + ": " + m); };
+  if (jsonNestingDepth(text.data(), text.size()) > kMaxJsonNesting)
+    return fail("JSON nested deeper than " + std::to_string(kMaxJsonNesting) + " levels");
+  json j = json::parse(text, nullptr, false);
   if (j.is_discarded() || !j.is_object()) return fail("not a JSON object");
   auto v = j.find("scenelod_level_scene");
-  if (v == j.end() || !v->is_number_integer() || v->get<int>() != 1) return fail("missing \"scenelod_level_scene\": 1");
+  int64_t version = 0;
+  if (v == j.end() || !detail::wholeNumber(*v, 1, 1, version)) return fail("missing \"scenelod_level_scene\": 1");
   auto num = [](const json& x) { return x.is_number() && std::isfinite(x.get<double>()); };
   auto vecN = [&](const json& x, size_t n) {
     if (!x.is_array() || x.size() != n) return false;
@@ -280,13 +288,14 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
     std::vector<float> w;
     std::vector<uint32_t> t, vv, lp;
     for (const json& l : ch["levels"]) {
-      if (!vecN(l, 4) || l[1].get<double>() < 0 || l[2].get<double>() < 0 || l[3].get<double>() < 0 ||
-          l[1].get<double>() > 4e9 || l[2].get<double>() > 4e9 || l[3].get<double>() > 4e9)
-        return fail(where + ": each level is [cell_width, triangles, vertices, line_points] with counts >= 0");
+      int64_t counts[3] = {};
+      if (!vecN(l, 4) || !detail::wholeNumber(l[1], 0, UINT32_MAX, counts[0]) ||
+          !detail::wholeNumber(l[2], 0, UINT32_MAX, counts[1]) || !detail::wholeNumber(l[3], 0, UINT32_MAX, counts[2]))
+        return fail(where + ": each level is [cell_width, triangles, vertices, line_points] with whole counts from 0 to 2^32 - 1");
       w.push_back(l[0].get<float>());
-      t.push_back(l[1].get<uint32_t>());
-      vv.push_back(l[2].get<uint32_t>());
-      lp.push_back(l[3].get<uint32_t>());
+      t.push_back(static_cast<uint32_t>(counts[0]));
+      vv.push_back(static_cast<uint32_t>(counts[1]));
+      lp.push_back(static_cast<uint32_t>(counts[2]));
     }
     s.table.addChain(Span<const float>(w.data(), w.size()), Span<const uint32_t>(t.data(), t.size()),
                      Span<const uint32_t>(vv.data(), vv.size()), Span<const uint32_t>(lp.data(), lp.size()));
@@ -300,7 +309,9 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
     const json& nd = nodes[n];
     const std::string where = "node " + std::to_string(n);
     if (!nd.is_object()) return fail(where + ": not an object");
-    const int parent = nd.contains("parent") && nd["parent"].is_number_integer() ? nd["parent"].get<int>() : -1;
+    int64_t parent = -1;
+    if (nd.contains("parent") && !detail::wholeNumber(nd["parent"], -1, int64_t(nodes.size()) - 1, parent))
+      return fail(where + ": \"parent\" must be -1 or a node index below " + std::to_string(nodes.size()));
     glm::vec3 t(0.0f);
     glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
     float sc = 1.0f;
@@ -318,17 +329,18 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
       if (!num(nd["s"]) || !(nd["s"].get<double>() > 0)) return fail(where + ": \"s\" must be a number > 0");
       sc = nd["s"].get<float>();
     }
-    s.node_parent.push_back(parent);
+    s.node_parent.push_back(static_cast<int32_t>(parent));
     s.node_local.push_back(trs(t, q, sc));
   }
   for (size_t o = 0; o < objects.size(); ++o) {
     const json& ob = objects[o];
     const std::string where = "object " + std::to_string(o);
-    if (!ob.is_object() || !ob.contains("node") || !ob["node"].is_number_integer() || !ob.contains("chain") ||
-        !ob["chain"].is_number_integer() || ob["chain"].get<long>() < 0)
-      return fail(where + ": needs whole numbers \"node\" and \"chain\"");
-    s.object_node.push_back(ob["node"].get<int32_t>());
-    s.object_chain.push_back(ob["chain"].get<uint32_t>());
+    int64_t node = 0, chain = 0;
+    if (!ob.is_object() || !ob.contains("node") || !ob.contains("chain") ||
+        !detail::wholeNumber(ob["node"], 0, INT32_MAX, node) || !detail::wholeNumber(ob["chain"], 0, UINT32_MAX, chain))
+      return fail(where + ": needs whole numbers \"node\" and \"chain\" (0 to 2^31 - 1)");
+    s.object_node.push_back(static_cast<int32_t>(node));
+    s.object_chain.push_back(static_cast<uint32_t>(chain));
     double imp = 1.0;
     if (ob.contains("importance")) {
       if (!num(ob["importance"])) return fail(where + ": \"importance\" must be a number");

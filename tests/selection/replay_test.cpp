@@ -259,7 +259,7 @@ TEST(Replay, SyntheticRendererBudgetAdherence) {
 TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
   const std::string dir = scenelod::test::scratchDir();
   struct Bad {
-    const char* text;
+    std::string text;
     const char* expect;  // part of the message
   };
   const Bad cases[] = {
@@ -298,6 +298,9 @@ TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
        "rotation quaternion has zero length"},
       {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"eye\": [0,0,1e30], \"target\": [0,0,0]}\n",
        "\"eye\" must be an array of 3 numbers within +-1e18"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"x\": " + std::string(20000, '[') +
+           std::string(20000, ']') + "}\n",
+       ":2: JSON nested deeper than 64 levels"},
   };
   for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
     const std::string path = dir + "/bad" + std::to_string(i) + ".jsonl";
@@ -317,7 +320,7 @@ TEST(Replay, BadScenesAndFramesAreRefused) {
   ReplayScene s;
   EXPECT_EQ(loadReplayScene("builtin:nothing", s).status, Status::kNotFound);
   EXPECT_EQ(loadReplayScene(dir + "/none.json", s).status, Status::kIoError);
-  const std::pair<const char*, const char*> bad_scenes[] = {
+  const std::pair<std::string, const char*> bad_scenes[] = {
       {"[1, 2]", "not a JSON object"},
       {"{\"scenelod_level_scene\": 1}", "needs arrays"},
       {"{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,1], \"levels\": [[0, 10, 5, 0], [0.5, 4, 3, 0], [0.2, 2, 2, 0]]}],"
@@ -330,6 +333,24 @@ TEST(Replay, BadScenesAndFramesAreRefused) {
        " \"nodes\": [{}], \"objects\": [{\"node\": 0, \"chain\": 3}]}",
        "chain out of range"},
       {"{\"scenelod_level_scene\": 1, \"chains\": [{\"levels\": [[0, 10, 5, 0]]}], \"nodes\": [], \"objects\": []}", "sphere"},
+      // hostile numbers and nesting: nothing wraps, nothing recurses 20,000 levels deep
+      {"{\"scenelod_level_scene\": 4294967297, \"chains\": [], \"nodes\": [], \"objects\": []}",
+       "missing \"scenelod_level_scene\": 1"},
+      {"{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,1], \"levels\": [[0, 10, 5, 0]]}],"
+       " \"nodes\": [{}, {\"parent\": \"0\"}], \"objects\": [{\"node\": 0, \"chain\": 0}]}",
+       "node 1: \"parent\" must be -1 or a node index below 2"},
+      {"{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,1], \"levels\": [[0, 10, 5, 0]]}],"
+       " \"nodes\": [{}, {\"parent\": 4294967296}], \"objects\": [{\"node\": 0, \"chain\": 0}]}",
+       "node 1: \"parent\" must be -1 or a node index"},
+      {"{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,1], \"levels\": [[0, 10, 5, 0]]}],"
+       " \"nodes\": [{}], \"objects\": [{\"node\": 4294967296, \"chain\": 0}]}",
+       "object 0: needs whole numbers \"node\" and \"chain\""},
+      {"{\"scenelod_level_scene\": 1, \"chains\": [{\"sphere\": [0,0,0,1], \"levels\": [[0, 1e300, 5, 0]]}],"
+       " \"nodes\": [{}], \"objects\": [{\"node\": 0, \"chain\": 0}]}",
+       "with whole counts from 0 to 2^32 - 1"},
+      {"{\"scenelod_level_scene\": 1, \"chains\": " + std::string(20000, '[') + std::string(20000, ']') +
+           ", \"nodes\": [], \"objects\": []}",
+       "JSON nested deeper than 64 levels"},
   };
   for (size_t i = 0; i < sizeof(bad_scenes) / sizeof(bad_scenes[0]); ++i) {
     const std::string path = dir + "/scene" + std::to_string(i) + ".json";
