@@ -12,10 +12,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <tuple>
+#include <type_traits>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -237,34 +239,25 @@ int componentSize(int type) {
   }
 }
 
+// a stored integer as glTF reads it: normalised, signed types map to [-1, 1] (the most negative value
+// clamped to -1) and unsigned ones to [0, 1]
+template <class T>
+double readInteger(const unsigned char* p, bool normalized) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  if (!normalized) return v;
+  const double n = v / static_cast<double>(std::numeric_limits<T>::max());
+  return std::is_signed<T>::value ? std::max(n, -1.0) : n;
+}
+
 double readComponent(const unsigned char* p, int type, bool normalized) {
   switch (type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE: {
-      int8_t v;
-      std::memcpy(&v, p, 1);
-      return normalized ? std::max(v / 127.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? *p / 255.0 : *p;
-    case TINYGLTF_COMPONENT_TYPE_SHORT: {
-      int16_t v;
-      std::memcpy(&v, p, 2);
-      return normalized ? std::max(v / 32767.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-      uint16_t v;
-      std::memcpy(&v, p, 2);
-      return normalized ? v / 65535.0 : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_INT: {
-      int32_t v;
-      std::memcpy(&v, p, 4);
-      return normalized ? std::max(v / 2147483647.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
-      uint32_t v;
-      std::memcpy(&v, p, 4);
-      return normalized ? v / 4294967295.0 : v;
-    }
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return readInteger<int8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return readInteger<uint8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return readInteger<int16_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return readInteger<uint16_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_INT: return readInteger<int32_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return readInteger<uint32_t>(p, normalized);
     default: {
       float v;
       std::memcpy(&v, p, 4);
@@ -781,14 +774,11 @@ void readLevelExtras(const tinygltf::Node& node, LodLevel& level) {
   }
 }
 
-}  // namespace
-
-Error importGltf(const std::string& path, SceneData& out) {
+// runs `read`, turning what tinygltf and the standard library may throw into errors naming the file
+template <class Read>
+Error withoutExceptions(const std::string& path, Read read) {
   try {
-    tinygltf::Model model;
-    LoadContext ctx;
-    if (Error e = loadModel(path, model, ctx)) return e;
-    return readScene(path, model, ctx, out);
+    return read();
   } catch (const std::bad_alloc&) {
     return {Status::kOutOfMemory, path + ": out of memory while reading"};
   } catch (const std::exception& e) {
@@ -798,8 +788,19 @@ Error importGltf(const std::string& path, SceneData& out) {
   }
 }
 
+}  // namespace
+
+Error importGltf(const std::string& path, SceneData& out) {
+  return withoutExceptions(path, [&]() -> Error {
+    tinygltf::Model model;
+    LoadContext ctx;
+    if (Error e = loadModel(path, model, ctx)) return e;
+    return readScene(path, model, ctx, out);
+  });
+}
+
 Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodChain>& chains) {
-  try {
+  return withoutExceptions(path, [&]() -> Error {
     tinygltf::Model model;
     LoadContext ctx;
     if (Error e = loadModel(path, model, ctx)) return e;
@@ -899,13 +900,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
     out = std::move(s);
     chains = std::move(c);
     return {};
-  } catch (const std::bad_alloc&) {
-    return {Status::kOutOfMemory, path + ": out of memory while reading"};
-  } catch (const std::exception& e) {
-    return {Status::kParseError, path + ": cannot parse glTF: " + e.what()};
-  } catch (...) {
-    return {Status::kParseError, path + ": cannot parse glTF (unknown exception)"};
-  }
+  });
 }
 
 }  // namespace scenelod::scene
