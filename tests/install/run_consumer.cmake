@@ -56,3 +56,9 @@ if(NOT link_args MATCHES "^[^;]*/libscenelod_selector\\.a$")
   message(FATAL_ERROR "the selector consumer links more than libscenelod_selector.a: ${link_args}\n${link_command}")
 endif()
 message(STATUS "selector consumer links: ${link_args}")
+
+# the runtime scene graph alone: a scene and its pack round trip
+run_step("run scene graph consumer" "${WORK_DIR}/build/consumer_scene_graph")
+if(NOT step_output STREQUAL "scene: objects=2 radii 0.707 1.414\npack: objects=2 radii 0.707 1.414\n")
+  message(FATAL_ERROR "unexpected scene graph consumer output:\n${step_output}")
+endif()
