@@ -37,6 +37,13 @@ struct Model {
 
 constexpr uint32_t kNoPoint = 0xffffffffu;
 
+// splitmix64 finaliser, for hashing grid cell keys (small correlated integers)
+inline uint64_t mix(uint64_t x) {
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
 // §4 step 1: fills `model` from `in` (validated by the caller). Counts go to `stats`.
 void normaliseModel(const Mesh& in, const ScroogeParams& params, Model& model, ScroogeStats& stats);
 

@@ -16,13 +16,6 @@ namespace scenelod::scrooge {
 
 namespace {
 
-// splitmix64 finaliser: grid keys are small correlated integers
-uint64_t mix(uint64_t x) {
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 struct CellKey {
   int64_t x, y, z;
   bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }

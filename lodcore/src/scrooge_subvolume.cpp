@@ -19,13 +19,6 @@ namespace scenelod::scrooge {
 
 namespace {
 
-// splitmix64 finaliser: grid keys are small correlated integers
-uint64_t mix(uint64_t x) {
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 constexpr uint32_t kMixed = 0xffffffffu;  // point used by polygons of several cells or none
 constexpr uint32_t kUnset = 0xfffffffeu;
 

@@ -1,6 +1,5 @@
 #include "cluster_options.h"
 
-#include <cctype>
 #include <cstdio>
 
 #include "scenelod/lodcore/obj_io.h"
@@ -64,15 +63,6 @@ bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error)
   return true;
 }
 
-std::string fileExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 Error loadWorldMesh(const std::string& path, Mesh& out) {
   scene::SceneData s;
   if (Error e = scene::loadScene(path, s)) return e;
@@ -81,7 +71,7 @@ Error loadWorldMesh(const std::string& path, Mesh& out) {
 }
 
 Error writeMeshFile(const std::string& path, const Mesh& mesh, const std::string& name) {
-  const std::string ext = fileExtension(path);
+  const std::string ext = scene::lowerExtension(path);
   if (ext == ".obj") return writeObj(path, mesh);
   if (ext != ".glb") return {Status::kInvalidArgument, "cannot write '" + path + "': the output must end in .obj or .glb"};
   scene::SceneData s;

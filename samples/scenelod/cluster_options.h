@@ -28,9 +28,6 @@ Error loadWorldMesh(const std::string& path, Mesh& out);
 // refused. `name` names the mesh and node in a GLB.
 Error writeMeshFile(const std::string& path, const Mesh& mesh, const std::string& name);
 
-// lower-case extension with the dot ("" when none)
-std::string fileExtension(const std::string& path);
-
 // Prints the table of a chain's levels: cell width, vertices, triangles, edges, points, max error,
 // and the build time of each level when `stats` is given.
 void printLevelTable(const LodChain& chain, const ChainStats* stats);

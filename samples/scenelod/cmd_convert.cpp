@@ -1,5 +1,4 @@
 // scenelod convert: OBJ <-> GLB, glTF -> GLB, and any scene -> OBJ flattened in world space.
-#include <cctype>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -28,15 +27,6 @@ const char kUsage[] =
     "\n"
     "  -o, --out OUT  the output file (instead of the second positional argument)";
 
-std::string lowerExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 int runConvert(const std::vector<std::string>& argv) {
   Args args(argv, {}, {"--out"});
   if (!args.ok()) return usageError("convert", args.error());
@@ -45,7 +35,7 @@ int runConvert(const std::vector<std::string>& argv) {
   if (pos.size() != 2) return usageError("convert", "expected IN and OUT (OUT positional or with -o)");
   const std::string& in = pos[0];
   const std::string& out = pos[1];
-  const std::string ext = lowerExtension(out);
+  const std::string ext = scene::lowerExtension(out);
   if (ext != ".glb" && ext != ".obj")
     return usageError("convert", "cannot write '" + out + "': the output must end in .glb or .obj");
 

@@ -118,7 +118,7 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.positional().size() != 1) return usageError("lods", "expected one input file");
   if (!args.has("--out")) return usageError("lods", "missing -o OUT");
   const std::string in = args.positional()[0], out = args.get("--out");
-  const std::string ext = fileExtension(out);
+  const std::string ext = scene::lowerExtension(out);
   if (ext != ".obj" && ext != ".glb") return usageError("lods", "the output must end in .obj or .glb: " + out);
   if (args.has("--cell") && args.has("--cell-rel")) return usageError("lods", "give only one of --cell, --cell-rel");
   ChainParams cp;

@@ -11,6 +11,7 @@
 #include "command.h"
 #include "scrooge_options.h"
 #include "zhang_options.h"
+#include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::tool {
 
@@ -65,7 +66,7 @@ int runSimplify(const std::vector<std::string>& argv) {
   if (args.positional().size() != 1) return usageError("simplify", "expected one input file");
   if (!args.has("--out")) return usageError("simplify", "missing -o OUT");
   const std::string in = args.positional()[0], out = args.get("--out");
-  const std::string ext = fileExtension(out);
+  const std::string ext = scene::lowerExtension(out);
   if (ext != ".obj" && ext != ".glb") return usageError("simplify", "the output must end in .obj or .glb: " + out);
   if (isScroogeMethod(args)) return runScroogeSimplify(args, in, out);
   if (args.has("--subvolume") || args.has("--theta-max"))

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <sstream>
+#include <utility>
 
 #include <tiny_gltf.h>
 
@@ -110,69 +111,63 @@ class GlbWriter {
     return vs;
   }
 
+  // edges with a thickness: glTF has per-vertex attributes only, so when every vertex's edges agree
+  // on their thickness the lines share the mesh's vertices, otherwise each edge gets two of its own
+  tinygltf::Primitive addThickLines(const Mesh& m, const VertexSet& shared) {
+    tinygltf::Primitive p;
+    std::vector<float> vertex_thickness(m.vertexCount(), -1.0f);
+    bool consistent = true;
+    for (size_t e = 0; e < m.edgeCount() && consistent; ++e)
+      for (int k = 0; k < 2; ++k) {
+        float& t = vertex_thickness[m.edges[2 * e + static_cast<size_t>(k)]];
+        if (t >= 0.0f && t != m.edge_thickness[e]) consistent = false;
+        t = m.edge_thickness[e];
+      }
+    if (consistent) {
+      for (float& t : vertex_thickness) t = std::max(t, 0.0f);
+      p.attributes = shared.attributes;
+      p.attributes["_THICKNESS"] =
+          addFloatAccessor(vertex_thickness.data(), vertex_thickness.size(), TINYGLTF_TYPE_SCALAR, 1, false);
+      p.indices = addIndexAccessor(m.edges);
+      return p;
+    }
+    std::vector<glm::vec3> pos;
+    std::vector<float> thick;
+    std::vector<uint32_t> idx;
+    for (size_t e = 0; e < m.edgeCount(); ++e)
+      for (int k = 0; k < 2; ++k) {
+        pos.push_back(m.positions[m.edges[2 * e + static_cast<size_t>(k)]]);
+        thick.push_back(m.edge_thickness[e]);
+        idx.push_back(static_cast<uint32_t>(idx.size()));
+      }
+    const VertexSet own = addVertices(m, pos, &m.edges);
+    p.attributes = own.attributes;
+    p.attributes["_THICKNESS"] = addFloatAccessor(thick.data(), thick.size(), TINYGLTF_TYPE_SCALAR, 1, false);
+    p.indices = addIndexAccessor(idx);
+    return p;
+  }
+
   // writes a mesh; returns its index
   int addMesh(const Mesh& m, const std::string& name, int material) {
     tinygltf::Mesh out;
     out.name = name;
     const VertexSet shared = addVertices(m, m.positions, nullptr);
-    if (!m.triangles.empty()) {
+    const auto add = [&](tinygltf::Primitive p, int mode) {
+      p.mode = mode;
+      p.material = material;
+      out.primitives.push_back(std::move(p));
+    };
+    // a primitive over the mesh's own vertices
+    const auto sharing = [&](const std::vector<uint32_t>& indices) {
       tinygltf::Primitive p;
       p.attributes = shared.attributes;
-      p.indices = addIndexAccessor(m.triangles);
-      p.mode = TINYGLTF_MODE_TRIANGLES;
-      p.material = material;
-      out.primitives.push_back(p);
-    }
-    if (!m.edges.empty()) {
-      tinygltf::Primitive p;
-      p.mode = TINYGLTF_MODE_LINE;
-      p.material = material;
-      if (m.edge_thickness.empty()) {
-        p.attributes = shared.attributes;
-        p.indices = addIndexAccessor(m.edges);
-      } else {
-        // glTF has per-vertex attributes only: when every vertex's edges agree on their thickness the
-        // lines share the mesh's vertices, otherwise each edge gets two vertices of its own
-        std::vector<float> vertex_thickness(m.vertexCount(), -1.0f);
-        bool consistent = true;
-        for (size_t e = 0; e < m.edgeCount() && consistent; ++e)
-          for (int k = 0; k < 2; ++k) {
-            float& t = vertex_thickness[m.edges[2 * e + static_cast<size_t>(k)]];
-            if (t >= 0.0f && t != m.edge_thickness[e]) consistent = false;
-            t = m.edge_thickness[e];
-          }
-        if (consistent) {
-          for (float& t : vertex_thickness) t = std::max(t, 0.0f);
-          p.attributes = shared.attributes;
-          p.attributes["_THICKNESS"] =
-              addFloatAccessor(vertex_thickness.data(), vertex_thickness.size(), TINYGLTF_TYPE_SCALAR, 1, false);
-          p.indices = addIndexAccessor(m.edges);
-        } else {
-          std::vector<glm::vec3> pos;
-          std::vector<float> thick;
-          std::vector<uint32_t> idx;
-          for (size_t e = 0; e < m.edgeCount(); ++e)
-            for (int k = 0; k < 2; ++k) {
-              pos.push_back(m.positions[m.edges[2 * e + static_cast<size_t>(k)]]);
-              thick.push_back(m.edge_thickness[e]);
-              idx.push_back(static_cast<uint32_t>(idx.size()));
-            }
-          const VertexSet own = addVertices(m, pos, &m.edges);
-          p.attributes = own.attributes;
-          p.attributes["_THICKNESS"] = addFloatAccessor(thick.data(), thick.size(), TINYGLTF_TYPE_SCALAR, 1, false);
-          p.indices = addIndexAccessor(idx);
-        }
-      }
-      out.primitives.push_back(p);
-    }
-    if (!m.points.empty()) {
-      tinygltf::Primitive p;
-      p.attributes = shared.attributes;
-      p.indices = addIndexAccessor(m.points);
-      p.mode = TINYGLTF_MODE_POINTS;
-      p.material = material;
-      out.primitives.push_back(p);
-    }
+      p.indices = addIndexAccessor(indices);
+      return p;
+    };
+    if (!m.triangles.empty()) add(sharing(m.triangles), TINYGLTF_MODE_TRIANGLES);
+    if (!m.edges.empty())
+      add(m.edge_thickness.empty() ? sharing(m.edges) : addThickLines(m, shared), TINYGLTF_MODE_LINE);
+    if (!m.points.empty()) add(sharing(m.points), TINYGLTF_MODE_POINTS);
     model.meshes.push_back(out);
     return static_cast<int>(model.meshes.size() - 1);
   }

@@ -12,10 +12,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <tuple>
+#include <type_traits>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -237,34 +239,25 @@ int componentSize(int type) {
   }
 }
 
+// a stored integer as glTF reads it: normalised, signed types map to [-1, 1] (the most negative value
+// clamped to -1) and unsigned ones to [0, 1]
+template <class T>
+double readInteger(const unsigned char* p, bool normalized) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  if (!normalized) return v;
+  const double n = v / static_cast<double>(std::numeric_limits<T>::max());
+  return std::is_signed<T>::value ? std::max(n, -1.0) : n;
+}
+
 double readComponent(const unsigned char* p, int type, bool normalized) {
   switch (type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE: {
-      int8_t v;
-      std::memcpy(&v, p, 1);
-      return normalized ? std::max(v / 127.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? *p / 255.0 : *p;
-    case TINYGLTF_COMPONENT_TYPE_SHORT: {
-      int16_t v;
-      std::memcpy(&v, p, 2);
-      return normalized ? std::max(v / 32767.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-      uint16_t v;
-      std::memcpy(&v, p, 2);
-      return normalized ? v / 65535.0 : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_INT: {
-      int32_t v;
-      std::memcpy(&v, p, 4);
-      return normalized ? std::max(v / 2147483647.0, -1.0) : v;
-    }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
-      uint32_t v;
-      std::memcpy(&v, p, 4);
-      return normalized ? v / 4294967295.0 : v;
-    }
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return readInteger<int8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return readInteger<uint8_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return readInteger<int16_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return readInteger<uint16_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_INT: return readInteger<int32_t>(p, normalized);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return readInteger<uint32_t>(p, normalized);
     default: {
       float v;
       std::memcpy(&v, p, 4);
@@ -438,23 +431,151 @@ class GltfReader {
     return {};
   }
 
+  // what readMesh gathers over a mesh's primitives before it sets the mesh's optional attributes
+  struct MeshBuild {
+    struct Vertices {
+      uint32_t offset, count;
+    };
+    std::map<std::tuple<int, int, int, int, int>, Vertices> shared;  // attribute accessors + material -> vertices
+    std::vector<char> has_normal;
+    bool any_normal = false, any_uv = false, any_color = false, any_thickness = false;
+    std::vector<glm::vec3> vertex_color;
+    std::vector<float> edge_thickness;  // one per edge, from its own primitive's _THICKNESS
+  };
+  // a primitive's attribute accessors, -1 when absent
+  struct Attributes {
+    int position, normal, uv, color, thickness;
+  };
+
+  // appends the vertices of one primitive's attributes (POSITION, NORMAL, TEXCOORD_0, COLOR_0 times
+  // the material colour) to `m`, from `base` on; `count` is their number
+  Error readVertices(const tinygltf::Primitive& p, const Attributes& a, const std::string& what, const std::string& mesh_what,
+                     Mesh& m, MeshBuild& b, uint32_t& base, uint32_t& count) const {
+    std::vector<double> v;
+    int comps = 0;
+    if (Error e = readVec(a.position, what, "POSITION", 3, 3, v, comps)) return e;
+    count = static_cast<uint32_t>(v.size() / 3);
+    if (m.positions.size() + count > (size_t(1) << 31)) return fail(Status::kUnsupported, mesh_what + ": too many vertices");
+    base = static_cast<uint32_t>(m.positions.size());
+    for (uint32_t i = 0; i < count; ++i) {
+      const glm::vec3 q(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
+      if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+        return fail(Status::kInvalidMesh, what + " POSITION: accessor " + std::to_string(a.position) + " element " +
+                                              std::to_string(i) + " has a NaN or infinite coordinate");
+      m.positions.push_back(q);
+    }
+    m.normals.resize(m.positions.size(), glm::vec3(0.0f));
+    b.has_normal.resize(m.positions.size(), 0);
+    if (a.normal >= 0) {
+      if (Error e = readVec(a.normal, what, "NORMAL", 3, 3, v, comps)) return e;
+      if (v.size() / 3 != count)
+        return fail(Status::kInvalidMesh, what + ": NORMAL has " + std::to_string(v.size() / 3) + " elements, POSITION " +
+                                              std::to_string(count));
+      for (uint32_t i = 0; i < count; ++i) {
+        const glm::vec3 n(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
+        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
+          return fail(Status::kInvalidMesh, what + " NORMAL: element " + std::to_string(i) + " is NaN or infinite");
+        m.normals[base + i] = n;
+        b.has_normal[base + i] = 1;
+      }
+      b.any_normal = true;
+    }
+    m.uvs.resize(m.positions.size(), glm::vec2(0.0f));
+    if (a.uv >= 0) {
+      if (Error e = readVec(a.uv, what, "TEXCOORD_0", 2, 2, v, comps)) return e;
+      if (v.size() / 2 != count)
+        return fail(Status::kInvalidMesh, what + ": TEXCOORD_0 has " + std::to_string(v.size() / 2) + " elements, POSITION " +
+                                              std::to_string(count));
+      for (uint32_t i = 0; i < count; ++i) m.uvs[base + i] = glm::vec2(float(v[2 * i]), float(v[2 * i + 1]));
+      b.any_uv = true;
+    }
+    bool has_material = false;
+    const glm::vec3 mat_color = materialColor(p.material, has_material);
+    b.vertex_color.resize(m.positions.size(), mat_color);
+    if (has_material) b.any_color = true;
+    if (a.color >= 0) {
+      if (Error e = readVec(a.color, what, "COLOR_0", 3, 4, v, comps)) return e;
+      if (v.size() / static_cast<size_t>(comps) != count)
+        return fail(Status::kInvalidMesh, what + ": COLOR_0 has " + std::to_string(v.size() / static_cast<size_t>(comps)) +
+                                              " elements, POSITION " + std::to_string(count));
+      for (uint32_t i = 0; i < count; ++i) {
+        const size_t o = static_cast<size_t>(i) * static_cast<size_t>(comps);
+        b.vertex_color[base + i] = mat_color * glm::vec3(float(v[o]), float(v[o + 1]), float(v[o + 2]));
+      }
+      b.any_color = true;
+    }
+    return {};
+  }
+
+  // a primitive's indices (0 .. count - 1 when it has none), each checked against its vertex count
+  Error readPrimitiveIndices(const tinygltf::Primitive& p, uint32_t count, const std::string& what,
+                             std::vector<uint32_t>& idx) const {
+    if (p.indices < 0) {
+      idx.resize(count);
+      for (uint32_t i = 0; i < count; ++i) idx[i] = i;
+      return {};
+    }
+    if (Error e = readIndices(p.indices, what, idx)) return e;
+    for (size_t i = 0; i < idx.size(); ++i)
+      if (idx[i] >= count)
+        return fail(Status::kInvalidMesh, what + ": index " + std::to_string(i) + " is " + std::to_string(idx[i]) +
+                                              ", not below the vertex count " + std::to_string(count));
+    return {};
+  }
+
+  // appends a primitive's triangles (strips and fans as triangles), edges or points to `m`;
+  // `thickness` is per vertex of the primitive when it has a _THICKNESS attribute (`has_thickness`)
+  Error addPrimitive(int mode, const std::vector<uint32_t>& idx, uint32_t base, const std::vector<double>& thickness,
+                     bool has_thickness, const std::string& what, Mesh& m, MeshBuild& b) const {
+    // per-vertex thickness to per-edge: the mean of the two ends (equal for files we write)
+    auto addEdge = [&](uint32_t i, uint32_t j) {
+      m.edges.insert(m.edges.end(), {base + i, base + j});
+      b.edge_thickness.push_back(thickness.empty() ? 0.0f : static_cast<float>(0.5 * (thickness[i] + thickness[j])));
+    };
+    const size_t n = idx.size();
+    switch (mode) {
+      case TINYGLTF_MODE_TRIANGLES:
+        if (n % 3 != 0)
+          return fail(Status::kInvalidMesh, what + ": TRIANGLES with " + std::to_string(n) + " indices (not a multiple of 3)");
+        for (uint32_t i : idx) m.triangles.push_back(base + i);
+        break;
+      case TINYGLTF_MODE_TRIANGLE_STRIP:
+        // triangle i is (i, i+1, i+2) for even i and (i, i+2, i+1) for odd i (glTF 2.0 §3.7.2.1)
+        for (size_t i = 0; i + 2 < n; ++i) {
+          const bool odd = i % 2 == 1;
+          m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[odd ? i + 2 : i + 1], base + idx[odd ? i + 1 : i + 2]});
+        }
+        break;
+      case TINYGLTF_MODE_TRIANGLE_FAN:
+        for (size_t i = 1; i + 1 < n; ++i) m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[i + 1], base + idx[0]});
+        break;
+      case TINYGLTF_MODE_LINE:
+        if (n % 2 != 0)
+          return fail(Status::kInvalidMesh, what + ": LINES with " + std::to_string(n) + " indices (not a multiple of 2)");
+        for (size_t i = 0; i < n; i += 2) addEdge(idx[i], idx[i + 1]);
+        b.any_thickness |= has_thickness;
+        break;
+      case TINYGLTF_MODE_LINE_STRIP:
+      case TINYGLTF_MODE_LINE_LOOP:
+        for (size_t i = 0; i + 1 < n; ++i) addEdge(idx[i], idx[i + 1]);
+        if (mode == TINYGLTF_MODE_LINE_LOOP && n > 2) addEdge(idx[n - 1], idx[0]);
+        b.any_thickness |= has_thickness;
+        break;
+      case TINYGLTF_MODE_POINTS:
+        for (uint32_t i : idx) m.points.push_back(base + i);
+        break;
+      default: break;
+    }
+    return {};
+  }
+
   Error readMesh(size_t mesh_index, MeshData& out) const {
     const tinygltf::Mesh& src = model_.meshes[mesh_index];
     out = MeshData{};
     out.name = src.name;
     Mesh& m = out.mesh;
     const std::string mesh_what = "mesh " + std::to_string(mesh_index) + (src.name.empty() ? "" : " '" + src.name + "'");
-
-    struct Cached {
-      uint32_t offset, count;
-    };
-    std::map<std::tuple<int, int, int, int, int>, Cached> shared;  // attribute accessors + material -> vertices
-    std::vector<char> has_normal;
-    bool any_normal = false, any_uv = false, any_color = false;
-    std::vector<glm::vec3> vertex_color;
-    std::vector<float> edge_thickness;  // one per edge, from its own primitive's _THICKNESS
-    bool any_thickness = false;
-
+    MeshBuild b;
     for (size_t pi = 0; pi < src.primitives.size(); ++pi) {
       const tinygltf::Primitive& p = src.primitives[pi];
       const std::string what = mesh_what + " primitive " + std::to_string(pi);
@@ -470,151 +591,49 @@ class GltfReader {
         auto it = p.attributes.find(name);
         return it == p.attributes.end() ? -1 : it->second;
       };
-      const int pos_acc = attr("POSITION"), nrm_acc = attr("NORMAL"), uv_acc = attr("TEXCOORD_0"), col_acc = attr("COLOR_0"),
-                thick_acc = attr("_THICKNESS");
-      if (pos_acc < 0) return fail(Status::kInvalidMesh, what + " has no POSITION attribute");
+      const Attributes a{attr("POSITION"), attr("NORMAL"), attr("TEXCOORD_0"), attr("COLOR_0"), attr("_THICKNESS")};
+      if (a.position < 0) return fail(Status::kInvalidMesh, what + " has no POSITION attribute");
       out.primitive_materials.push_back(p.material);
 
-      const auto key = std::make_tuple(pos_acc, nrm_acc, uv_acc, col_acc, p.material);
+      const auto key = std::make_tuple(a.position, a.normal, a.uv, a.color, p.material);
       uint32_t base = 0, count = 0;
-      auto found = shared.find(key);
-      if (found != shared.end()) {
+      auto found = b.shared.find(key);
+      if (found != b.shared.end()) {
         base = found->second.offset;
         count = found->second.count;
       } else {
-        std::vector<double> v;
-        int comps = 0;
-        if (Error e = readVec(pos_acc, what, "POSITION", 3, 3, v, comps)) return e;
-        count = static_cast<uint32_t>(v.size() / 3);
-        if (m.positions.size() + count > (size_t(1) << 31)) return fail(Status::kUnsupported, mesh_what + ": too many vertices");
-        base = static_cast<uint32_t>(m.positions.size());
-        for (uint32_t i = 0; i < count; ++i) {
-          const glm::vec3 q(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
-          if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
-            return fail(Status::kInvalidMesh, what + " POSITION: accessor " + std::to_string(pos_acc) + " element " +
-                                                  std::to_string(i) + " has a NaN or infinite coordinate");
-          m.positions.push_back(q);
-        }
-        m.normals.resize(m.positions.size(), glm::vec3(0.0f));
-        has_normal.resize(m.positions.size(), 0);
-        if (nrm_acc >= 0) {
-          if (Error e = readVec(nrm_acc, what, "NORMAL", 3, 3, v, comps)) return e;
-          if (v.size() / 3 != count)
-            return fail(Status::kInvalidMesh, what + ": NORMAL has " + std::to_string(v.size() / 3) + " elements, POSITION " +
-                                                  std::to_string(count));
-          for (uint32_t i = 0; i < count; ++i) {
-            const glm::vec3 n(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
-            if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
-              return fail(Status::kInvalidMesh, what + " NORMAL: element " + std::to_string(i) + " is NaN or infinite");
-            m.normals[base + i] = n;
-            has_normal[base + i] = 1;
-          }
-          any_normal = true;
-        }
-        m.uvs.resize(m.positions.size(), glm::vec2(0.0f));
-        if (uv_acc >= 0) {
-          if (Error e = readVec(uv_acc, what, "TEXCOORD_0", 2, 2, v, comps)) return e;
-          if (v.size() / 2 != count)
-            return fail(Status::kInvalidMesh, what + ": TEXCOORD_0 has " + std::to_string(v.size() / 2) + " elements, POSITION " +
-                                                  std::to_string(count));
-          for (uint32_t i = 0; i < count; ++i) m.uvs[base + i] = glm::vec2(float(v[2 * i]), float(v[2 * i + 1]));
-          any_uv = true;
-        }
-        bool has_material = false;
-        const glm::vec3 mat_color = materialColor(p.material, has_material);
-        vertex_color.resize(m.positions.size(), mat_color);
-        if (has_material) any_color = true;
-        if (col_acc >= 0) {
-          if (Error e = readVec(col_acc, what, "COLOR_0", 3, 4, v, comps)) return e;
-          if (v.size() / static_cast<size_t>(comps) != count)
-            return fail(Status::kInvalidMesh, what + ": COLOR_0 has " + std::to_string(v.size() / static_cast<size_t>(comps)) +
-                                                  " elements, POSITION " + std::to_string(count));
-          for (uint32_t i = 0; i < count; ++i) {
-            const size_t o = static_cast<size_t>(i) * static_cast<size_t>(comps);
-            vertex_color[base + i] = mat_color * glm::vec3(float(v[o]), float(v[o + 1]), float(v[o + 2]));
-          }
-          any_color = true;
-        }
-        shared.emplace(key, Cached{base, count});
+        if (Error e = readVertices(p, a, what, mesh_what, m, b, base, count)) return e;
+        b.shared.emplace(key, MeshBuild::Vertices{base, count});
       }
       std::vector<double> thickness;  // per vertex of this primitive, when it has _THICKNESS
-      if (thick_acc >= 0) {
-        std::vector<double>& v = thickness;
+      if (a.thickness >= 0) {
         int comps = 0;
-        if (Error e = readVec(thick_acc, what, "_THICKNESS", 1, 1, v, comps)) return e;
-        if (v.size() != count)
-          return fail(Status::kInvalidMesh, what + ": _THICKNESS has " + std::to_string(v.size()) + " elements, POSITION " +
+        if (Error e = readVec(a.thickness, what, "_THICKNESS", 1, 1, thickness, comps)) return e;
+        if (thickness.size() != count)
+          return fail(Status::kInvalidMesh, what + ": _THICKNESS has " + std::to_string(thickness.size()) + " elements, POSITION " +
                                                 std::to_string(count));
         for (uint32_t i = 0; i < count; ++i) {
-          if (!std::isfinite(v[i]) || v[i] < 0.0)
+          if (!std::isfinite(thickness[i]) || thickness[i] < 0.0)
             return fail(Status::kInvalidMesh, what + " _THICKNESS: element " + std::to_string(i) + " is negative or not finite");
         }
       }
-      // per-vertex thickness to per-edge: the mean of the two ends (equal for files we write)
-      auto addEdge = [&](uint32_t a, uint32_t b) {
-        m.edges.insert(m.edges.end(), {base + a, base + b});
-        edge_thickness.push_back(thickness.empty() ? 0.0f : static_cast<float>(0.5 * (thickness[a] + thickness[b])));
-      };
-
       std::vector<uint32_t> idx;
-      if (p.indices >= 0) {
-        if (Error e = readIndices(p.indices, what, idx)) return e;
-        for (size_t i = 0; i < idx.size(); ++i)
-          if (idx[i] >= count)
-            return fail(Status::kInvalidMesh, what + ": index " + std::to_string(i) + " is " + std::to_string(idx[i]) +
-                                                  ", not below the vertex count " + std::to_string(count));
-      } else {
-        idx.resize(count);
-        for (uint32_t i = 0; i < count; ++i) idx[i] = i;
-      }
-      const size_t n = idx.size();
-      switch (mode) {
-        case TINYGLTF_MODE_TRIANGLES:
-          if (n % 3 != 0)
-            return fail(Status::kInvalidMesh, what + ": TRIANGLES with " + std::to_string(n) + " indices (not a multiple of 3)");
-          for (uint32_t i : idx) m.triangles.push_back(base + i);
-          break;
-        case TINYGLTF_MODE_TRIANGLE_STRIP:
-          // triangle i is (i, i+1, i+2) for even i and (i, i+2, i+1) for odd i (glTF 2.0 §3.7.2.1)
-          for (size_t i = 0; i + 2 < n; ++i) {
-            const bool odd = i % 2 == 1;
-            m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[odd ? i + 2 : i + 1], base + idx[odd ? i + 1 : i + 2]});
-          }
-          break;
-        case TINYGLTF_MODE_TRIANGLE_FAN:
-          for (size_t i = 1; i + 1 < n; ++i) m.triangles.insert(m.triangles.end(), {base + idx[i], base + idx[i + 1], base + idx[0]});
-          break;
-        case TINYGLTF_MODE_LINE:
-          if (n % 2 != 0)
-            return fail(Status::kInvalidMesh, what + ": LINES with " + std::to_string(n) + " indices (not a multiple of 2)");
-          for (size_t i = 0; i < n; i += 2) addEdge(idx[i], idx[i + 1]);
-          any_thickness |= thick_acc >= 0;
-          break;
-        case TINYGLTF_MODE_LINE_STRIP:
-        case TINYGLTF_MODE_LINE_LOOP:
-          for (size_t i = 0; i + 1 < n; ++i) addEdge(idx[i], idx[i + 1]);
-          if (mode == TINYGLTF_MODE_LINE_LOOP && n > 2) addEdge(idx[n - 1], idx[0]);
-          any_thickness |= thick_acc >= 0;
-          break;
-        case TINYGLTF_MODE_POINTS:
-          for (uint32_t i : idx) m.points.push_back(base + i);
-          break;
-        default: break;
-      }
+      if (Error e = readPrimitiveIndices(p, count, what, idx)) return e;
+      if (Error e = addPrimitive(mode, idx, base, thickness, a.thickness >= 0, what, m, b)) return e;
     }
-    if (any_thickness) m.edge_thickness = std::move(edge_thickness);
-    if (!any_uv) m.uvs.clear();
-    if (any_color) m.colors = std::move(vertex_color);
-    if (!any_normal) {
+    if (b.any_thickness) m.edge_thickness = std::move(b.edge_thickness);
+    if (!b.any_uv) m.uvs.clear();
+    if (b.any_color) m.colors = std::move(b.vertex_color);
+    if (!b.any_normal) {
       m.normals.clear();
-    } else if (std::find(has_normal.begin(), has_normal.end(), 0) != has_normal.end()) {
+    } else if (std::find(b.has_normal.begin(), b.has_normal.end(), 0) != b.has_normal.end()) {
       // primitives without NORMAL next to ones with: area-weighted normals for the missing ones
       Mesh tmp;
       tmp.positions = m.positions;
       tmp.triangles = m.triangles;
       computeVertexNormals(tmp);
-      for (size_t i = 0; i < has_normal.size(); ++i)
-        if (!has_normal[i]) m.normals[i] = tmp.normals[i];
+      for (size_t i = 0; i < b.has_normal.size(); ++i)
+        if (!b.has_normal[i]) m.normals[i] = tmp.normals[i];
     }
     return {};
   }
@@ -687,15 +706,6 @@ class GltfReader {
   const LoadContext& ctx_;
   std::vector<MaterialData> materials_;
 };
-
-std::string lowerExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 // extensions that change the geometry we would read: refused when required
 const char* const kGeometryExtensions[] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "EXT_mesh_gpu_instancing",
@@ -790,14 +800,11 @@ void readLevelExtras(const tinygltf::Node& node, LodLevel& level) {
   }
 }
 
-}  // namespace
-
-Error importGltf(const std::string& path, SceneData& out) {
+// runs `read`, turning what tinygltf and the standard library may throw into errors naming the file
+template <class Read>
+Error withoutExceptions(const std::string& path, Read read) {
   try {
-    tinygltf::Model model;
-    LoadContext ctx;
-    if (Error e = loadModel(path, model, ctx)) return e;
-    return readScene(path, model, ctx, out);
+    return read();
   } catch (const std::bad_alloc&) {
     return {Status::kOutOfMemory, path + ": out of memory while reading"};
   } catch (const std::exception& e) {
@@ -807,8 +814,19 @@ Error importGltf(const std::string& path, SceneData& out) {
   }
 }
 
+}  // namespace
+
+Error importGltf(const std::string& path, SceneData& out) {
+  return withoutExceptions(path, [&]() -> Error {
+    tinygltf::Model model;
+    LoadContext ctx;
+    if (Error e = loadModel(path, model, ctx)) return e;
+    return readScene(path, model, ctx, out);
+  });
+}
+
 Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodChain>& chains) {
-  try {
+  return withoutExceptions(path, [&]() -> Error {
     tinygltf::Model model;
     LoadContext ctx;
     if (Error e = loadModel(path, model, ctx)) return e;
@@ -908,13 +926,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
     out = std::move(s);
     chains = std::move(c);
     return {};
-  } catch (const std::bad_alloc&) {
-    return {Status::kOutOfMemory, path + ": out of memory while reading"};
-  } catch (const std::exception& e) {
-    return {Status::kParseError, path + ": cannot parse glTF: " + e.what()};
-  } catch (...) {
-    return {Status::kParseError, path + ": cannot parse glTF (unknown exception)"};
-  }
+  });
 }
 
 }  // namespace scenelod::scene

@@ -33,6 +33,18 @@ glm::mat4 composeTrs(const Trs& trs) {
 
 namespace {
 
+// a free slot of a handle table (generations and dense positions by slot), or a new one at its end
+uint32_t takeSlot(std::vector<uint32_t>& free, std::vector<uint32_t>& generation, std::vector<uint32_t>& dense) {
+  if (!free.empty()) {
+    const uint32_t slot = free.back();
+    free.pop_back();
+    return slot;
+  }
+  generation.push_back(0);
+  dense.push_back(kInvalidSlot);
+  return static_cast<uint32_t>(generation.size() - 1);
+}
+
 // inlined into the update pass; see maxScaleBound
 inline float scaleBound(const float* m) {
   const float a0 = m[0], a1 = m[1], a2 = m[2], b0 = m[4], b1 = m[5], b2 = m[6], c0 = m[8], c1 = m[9], c2 = m[10];
@@ -418,15 +430,7 @@ Error Scene::addNode(NodeHandle parent, const glm::mat4& local, NodeHandle& out)
     if (!nodeLive(parent)) return stale("parent node");
     parent_dense = static_cast<int32_t>(node_dense_[parent.slot]);
   }
-  uint32_t slot;
-  if (!node_free_.empty()) {
-    slot = node_free_.back();
-    node_free_.pop_back();
-  } else {
-    slot = static_cast<uint32_t>(node_generation_.size());
-    node_generation_.push_back(0);
-    node_dense_.push_back(kInvalidSlot);
-  }
+  const uint32_t slot = takeSlot(node_free_, node_generation_, node_dense_);
   node_dense_[slot] = static_cast<uint32_t>(order_.size());
   order_.push_back(slot);
   parent_dense_.push_back(parent_dense);
@@ -663,15 +667,7 @@ Error Scene::addObject(const ObjectDesc& d, ObjectHandle& out) {
                                           std::to_string(chain_spheres_.size()) + " chains)"};
   if (!std::isfinite(d.importance) || d.importance < 0.0f)
     return {Status::kInvalidArgument, "object importance must be finite and >= 0"};
-  uint32_t slot;
-  if (!object_free_.empty()) {
-    slot = object_free_.back();
-    object_free_.pop_back();
-  } else {
-    slot = static_cast<uint32_t>(object_generation_.size());
-    object_generation_.push_back(0);
-    object_dense_.push_back(kInvalidSlot);
-  }
+  const uint32_t slot = takeSlot(object_free_, object_generation_, object_dense_);
   object_dense_[slot] = static_cast<uint32_t>(object_chain_.size());
   world_center_.push_back(glm::vec3(0.0f));
   world_radius_.push_back(0.0f);

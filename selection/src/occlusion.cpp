@@ -440,6 +440,56 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
   return active;
 }
 
+// The beam from the eye around an object's bounding sphere (centre, radius r): a cone (perspective)
+// or the object's own line of sight (orthographic); `disc_r` gets the radius of the disc through the
+// centre, across the axis, that fills the sphere's outline.
+Beam objectBeam(const View& view, const glm::vec3& center, float r, float& disc_r) {
+  Beam beam;
+  beam.apex = view.eye;
+  beam.ortho = view.ortho;
+  beam.t_near = view.near_plane;
+  disc_r = r;
+  if (view.ortho) {
+    // parallel rays from the eye's plane: the beam's axis is the object's own line of sight
+    beam.axis = view.forward;
+    beam.apex = center - beam.axis * glm::dot(center - view.eye, beam.axis);
+    beam.radius = r;
+    beam.t_end = glm::dot(center - beam.apex, beam.axis) + r;
+  } else {
+    const glm::vec3 d = center - view.eye;
+    const float dist = glm::length(d);
+    beam.axis = d / dist;
+    // the disc through the centre that fills the sphere's tangent cone
+    disc_r = r * dist / std::sqrt(std::max(dist * dist - r * r, 1e-12f));
+    beam.sin_a = std::min(r / dist, 1.0f);
+    beam.cos_a = std::sqrt(std::max(1.0f - beam.sin_a * beam.sin_a, 0.0f));
+    beam.t_end = dist + r;
+  }
+  beam.finish();
+  return beam;
+}
+
+// Visible fractions out, per id: the latest estimate while the id is live and its object is the one
+// tested, 1 otherwise.
+void writeVisibleFractions(const uint8_t* live, const uint32_t* gen, const uint32_t* tested_gen, const float* vis,
+                           size_t cap, float* out) {
+  size_t id = 0;
+#if defined(__SSE2__)
+  const __m128 one = _mm_set1_ps(1.0f);
+  for (; id + 4 <= cap; id += 4) {
+    uint32_t live4;
+    std::memcpy(&live4, live + id, 4);
+    const __m128i lb = _mm_cvtsi32_si128(static_cast<int>(live4));
+    const __m128i lw = _mm_unpacklo_epi16(_mm_unpacklo_epi8(lb, _mm_setzero_si128()), _mm_setzero_si128());
+    const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(tested_gen + id)),
+                                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(gen + id)));
+    const __m128 keep = _mm_castsi128_ps(_mm_and_si128(same, _mm_cmpgt_epi32(lw, _mm_setzero_si128())));
+    _mm_storeu_ps(out + id, _mm_or_ps(_mm_and_ps(keep, _mm_loadu_ps(vis + id)), _mm_andnot_ps(keep, one)));
+  }
+#endif
+  for (; id < cap; ++id) out[id] = (live[id] != 0) & (tested_gen[id] == gen[id]) ? vis[id] : 1.0f;
+}
+
 }  // namespace
 
 struct OcclusionEstimator::State {
@@ -461,7 +511,87 @@ struct OcclusionEstimator::State {
   // scratch: candidates as (priority bits << 32 | ~id), so one integer order is "priority down, id up"
   std::vector<uint64_t> keys;                 // the chosen objects, then (screen code << 32 | id)
   std::vector<uint32_t> histogram;            // kBuckets counters over the top bits of the priority
+
+  // One object's test: rays_per_test samples over the disc that fills its outline (the pattern turned
+  // by the frame's rotation), each counted when it meets the object at its occluder level and hidden
+  // when another object blocks it first; updates the object's estimate and the statistics.
+  void testObject(const RayScene::Impl& m, const View& view, const ErrorLimit& limit, float cos_rot, float sin_rot,
+                  uint32_t id);
 };
+
+void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& view, const ErrorLimit& limit,
+                                           float cos_rot, float sin_rot, uint32_t id) {
+  const glm::vec4 sph = m.world_sphere[id];
+  const glm::vec3 center(sph);
+  const ChainPrototypes& proto = m.chains[m.chain[id]];
+  RTCScene self_scene = proto.levels[static_cast<size_t>(proto.occluder_level)];
+  const float t_near = view.near_plane;
+  float disc_r = sph.w;
+  const Beam beam = objectBeam(view, center, sph.w, disc_r);
+  const glm::vec3 w = beam.axis;
+  const glm::vec3 ref = std::fabs(glm::dot(w, view.up)) < 0.9f ? view.up : view.right;
+  const glm::vec3 u0 = glm::normalize(glm::cross(w, ref));
+  const glm::vec3 v0 = glm::cross(u0, w);
+  // the frame's rotation of the pattern, applied to the disc's axes
+  const glm::vec3 u = cos_rot * u0 + sin_rot * v0;
+  const glm::vec3 v = cos_rot * v0 - sin_rot * u0;
+
+  const uint32_t n = params.rays_per_test;
+  uint32_t counted = 0, hidden = 0;
+  for (uint32_t k0 = 0; k0 < n; k0 += kChunk) {
+    const uint32_t lanes = std::min(kChunk, n - k0);
+    RaysSoA rays;
+    for (uint32_t k = 0; k < lanes; ++k) {
+      const uint32_t sample = k0 + k;
+      const glm::vec3 pat = pattern[sample];
+      const glm::vec3 p = center + (disc_r * pat.x) * (pat.y * u + pat.z * v);
+      glm::vec3 o, dir;
+      if (view.ortho) {
+        dir = w;
+        o = p - w * glm::dot(p - view.eye, w);
+      } else {
+        o = view.eye;
+        dir = glm::normalize(p - view.eye);
+      }
+      rays.set(k, o, dir);
+    }
+    // where each ray meets the object itself, at its occluder level (a 16-ray packet was slower)
+    float t_self[kChunk];
+    uint32_t self_hits = 0;
+    for (uint32_t k = 0; k < lanes; ++k) {
+      t_self[k] = std::numeric_limits<float>::infinity();
+      if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
+    }
+    counted += bitCount(self_hits);
+    // rays outside the object's silhouette are not counted; the others are open until blocked
+    uint32_t active = 0;
+    float t_end[kChunk];
+    for (uint32_t k = 0; k < lanes; ++k) {
+      if (!(self_hits >> k & 1u)) continue;
+      t_end[k] = t_self[k] * (1.0f - 1e-4f);
+      if (t_end[k] <= t_near) continue;
+      active |= 1u << k;
+      ++stats.occlusion_rays;
+    }
+    const uint32_t open = active;
+    // objects that can stand between the eye and the object, nearer roughly first, until every
+    // ray is blocked
+    if (active != 0)
+      forEachCandidate(m, beam, id, [&](uint32_t other) {
+        ++stats.occluder_candidates;
+        active = blockRays(m, other, rays, active, t_end, t_near, limit);
+        return active == 0;
+      });
+    hidden += bitCount(open & ~active);
+  }
+  stats.samples += n;
+  stats.self_hits += counted;
+  ++stats.objects_tested;
+  visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
+  tested_frame[id] = frame;
+  tested_generation[id] = m.generation[id];
+  age_origin[id] = static_cast<uint32_t>(frame);
+}
 
 OcclusionEstimator::OcclusionEstimator() : state_(new State) {}
 OcclusionEstimator::~OcclusionEstimator() { delete state_; }
@@ -522,8 +652,7 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   const size_t cand_count = priorityPass(view, cols, cap, s.frame, s.params.untested_age_frames);
   s.stats.candidates = static_cast<uint32_t>(cand_count);
 
-  const uint32_t n = s.params.rays_per_test;
-  const size_t test_count = std::min<size_t>(cand_count, s.params.ray_budget / n);
+  const size_t test_count = std::min<size_t>(cand_count, s.params.ray_budget / s.params.rays_per_test);
   if (test_count > 0) chooseLargest(s.priority.data(), cap, test_count, cand_count, s.histogram.data(), s.keys.data());
 
   ErrorLimit limit;
@@ -533,8 +662,6 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
   } else {
     limit.per_t = err_px / view.px_per_unit_at_1;
   }
-  const float t_near = view.near_plane;
-
   const float rotation = std::fmod(static_cast<float>(s.frame % 100003u) * kGoldenAngle, 6.2831853f);
   const float cos_rot = std::cos(rotation), sin_rot = std::sin(rotation);
   // test in screen order (a Morton code of the centre's view direction), so consecutive beams cross
@@ -544,124 +671,12 @@ bool OcclusionEstimator::update(const RayScene& scene, const Camera& camera, Spa
     s.keys[c] = (uint64_t(screenCode(view, glm::vec3(m.world_sphere[id]))) << 32) | id;
   }
   std::sort(s.keys.begin(), s.keys.begin() + static_cast<std::ptrdiff_t>(test_count));
-  for (size_t c = 0; c < test_count; ++c) {
-    const uint32_t id = static_cast<uint32_t>(s.keys[c]);
-    const glm::vec4 sph = m.world_sphere[id];
-    const glm::vec3 center(sph);
-    const float r = sph.w;
-    const ChainPrototypes& proto = m.chains[m.chain[id]];
-    RTCScene self_scene = proto.levels[static_cast<size_t>(proto.occluder_level)];
+  for (size_t c = 0; c < test_count; ++c)
+    s.testObject(m, view, limit, cos_rot, sin_rot, static_cast<uint32_t>(s.keys[c]));
 
-    glm::vec3 w;
-    float disc_r = r;
-    Beam beam;
-    beam.apex = view.eye;
-    beam.ortho = view.ortho;
-    beam.t_near = t_near;
-    if (view.ortho) {
-      // parallel rays from the eye's plane: the beam's axis is the object's own line of sight
-      w = view.forward;
-      beam.apex = center - w * glm::dot(center - view.eye, w);
-      beam.radius = r;
-      beam.t_end = glm::dot(center - beam.apex, w) + r;
-    } else {
-      const glm::vec3 d = center - view.eye;
-      const float dist = glm::length(d);
-      w = d / dist;
-      // the disc through the centre that fills the sphere's tangent cone
-      disc_r = r * dist / std::sqrt(std::max(dist * dist - r * r, 1e-12f));
-      beam.sin_a = std::min(r / dist, 1.0f);
-      beam.cos_a = std::sqrt(std::max(1.0f - beam.sin_a * beam.sin_a, 0.0f));
-      beam.t_end = dist + r;
-    }
-    beam.axis = w;
-    beam.finish();
-    const glm::vec3 ref = std::fabs(glm::dot(w, view.up)) < 0.9f ? view.up : view.right;
-    const glm::vec3 u0 = glm::normalize(glm::cross(w, ref));
-    const glm::vec3 v0 = glm::cross(u0, w);
-    // the frame's rotation of the pattern, applied to the disc's axes
-    const glm::vec3 u = cos_rot * u0 + sin_rot * v0;
-    const glm::vec3 v = cos_rot * v0 - sin_rot * u0;
-
-
-    uint32_t counted = 0, hidden = 0;
-    for (uint32_t k0 = 0; k0 < n; k0 += kChunk) {
-      const uint32_t lanes = std::min(kChunk, n - k0);
-      RaysSoA rays;
-      for (uint32_t k = 0; k < lanes; ++k) {
-        const uint32_t sample = k0 + k;
-        const glm::vec3 pat = s.pattern[sample];
-        const glm::vec3 p = center + (disc_r * pat.x) * (pat.y * u + pat.z * v);
-        glm::vec3 o, dir;
-        if (view.ortho) {
-          dir = w;
-          o = p - w * glm::dot(p - view.eye, w);
-        } else {
-          o = view.eye;
-          dir = glm::normalize(p - view.eye);
-        }
-        rays.set(k, o, dir);
-      }
-      // where each ray meets the object itself, at its occluder level (a 16-ray packet was slower)
-      float t_self[kChunk];
-      uint32_t self_hits = 0;
-      for (uint32_t k = 0; k < lanes; ++k) {
-        t_self[k] = std::numeric_limits<float>::infinity();
-        if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
-      }
-      counted += bitCount(self_hits);
-      // rays outside the object's silhouette are not counted; the others are open until blocked
-      uint32_t active = 0;
-      float t_end[kChunk];
-      for (uint32_t k = 0; k < lanes; ++k) {
-        if (!(self_hits >> k & 1u)) continue;
-        t_end[k] = t_self[k] * (1.0f - 1e-4f);
-        if (t_end[k] <= t_near) continue;
-        active |= 1u << k;
-        ++s.stats.occlusion_rays;
-      }
-      const uint32_t open = active;
-      // objects that can stand between the eye and the object, nearer roughly first, until every
-      // ray is blocked
-      if (active != 0)
-        forEachCandidate(m, beam, id, [&](uint32_t other) {
-          ++s.stats.occluder_candidates;
-          active = blockRays(m, other, rays, active, t_end, t_near, limit);
-          return active == 0;
-        });
-      hidden += bitCount(open & ~active);
-    }
-    s.stats.samples += n;
-    s.stats.self_hits += counted;
-    ++s.stats.objects_tested;
-    s.visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
-    s.tested_frame[id] = s.frame;
-    s.tested_generation[id] = m.generation[id];
-    s.age_origin[id] = static_cast<uint32_t>(s.frame);
-  }
-
-  if (visible_fraction.count) {
-    const uint8_t* live = m.live.data();
-    const uint32_t* gen = m.generation.data();
-    const uint32_t* tested_gen = s.tested_generation.data();
-    const float* vis = s.visible.data();
-    float* out = visible_fraction.data;
-    size_t id = 0;
-#if defined(__SSE2__)
-    const __m128 one = _mm_set1_ps(1.0f);
-    for (; id + 4 <= cap; id += 4) {
-      uint32_t live4;
-      std::memcpy(&live4, live + id, 4);
-      const __m128i lb = _mm_cvtsi32_si128(static_cast<int>(live4));
-      const __m128i lw = _mm_unpacklo_epi16(_mm_unpacklo_epi8(lb, _mm_setzero_si128()), _mm_setzero_si128());
-      const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(tested_gen + id)),
-                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(gen + id)));
-      const __m128 keep = _mm_castsi128_ps(_mm_and_si128(same, _mm_cmpgt_epi32(lw, _mm_setzero_si128())));
-      _mm_storeu_ps(out + id, _mm_or_ps(_mm_and_ps(keep, _mm_loadu_ps(vis + id)), _mm_andnot_ps(keep, one)));
-    }
-#endif
-    for (; id < cap; ++id) out[id] = (live[id] != 0) & (tested_gen[id] == gen[id]) ? vis[id] : 1.0f;
-  }
+  if (visible_fraction.count)
+    writeVisibleFractions(m.live.data(), m.generation.data(), s.tested_generation.data(), s.visible.data(), cap,
+                          visible_fraction.data);
   return true;
 }
 

@@ -123,8 +123,7 @@ Error validateReplayScene(const ReplayScene& s, const std::string& what) {
   return Error();
 }
 
-void computeWorldSpheres(const ReplayScene& s, std::vector<glm::vec3>& centers, std::vector<float>& radii,
-                         std::vector<float>& max_scales) {
+void computeObjectWorlds(const ReplayScene& s, std::vector<glm::mat4>& worlds) {
   const size_t nodes = s.node_parent.size();
   std::vector<glm::mat4> world(nodes);
   std::vector<char> done(nodes, 0);
@@ -143,12 +142,20 @@ void computeWorldSpheres(const ReplayScene& s, std::vector<glm::vec3>& centers, 
       done[k] = 1;
     }
   }
+  worlds.resize(s.objectCount());
+  for (size_t o = 0; o < worlds.size(); ++o) worlds[o] = world[static_cast<size_t>(s.object_node[o])];
+}
+
+void computeWorldSpheres(const ReplayScene& s, std::vector<glm::vec3>& centers, std::vector<float>& radii,
+                         std::vector<float>& max_scales) {
+  std::vector<glm::mat4> world;
+  computeObjectWorlds(s, world);
   const size_t objects = s.objectCount();
   centers.resize(objects);
   radii.resize(objects);
   max_scales.resize(objects);
   for (size_t o = 0; o < objects; ++o) {
-    const glm::mat4& m = world[static_cast<size_t>(s.object_node[o])];
+    const glm::mat4& m = world[o];
     const Sphere& b = s.chain_bounds[s.object_chain[o]];
     const float sx = glm::length(glm::vec3(m[0])), sy = glm::length(glm::vec3(m[1])), sz = glm::length(glm::vec3(m[2]));
     const float scale = std::max(sx, std::max(sy, sz));

@@ -18,31 +18,6 @@ Mesh cubeMesh(glm::vec3 lo, glm::vec3 hi) {
   return m;
 }
 
-// world transform of every object, parents before children by walking up (as computeWorldSpheres)
-void objectWorlds(const ReplayScene& s, std::vector<glm::mat4>& node_world, std::vector<char>& done,
-                  std::vector<size_t>& stack, std::vector<glm::mat4>& out) {
-  const size_t nodes = s.node_parent.size();
-  node_world.resize(nodes);
-  done.assign(nodes, 0);
-  for (size_t n = 0; n < nodes; ++n) {
-    size_t m = n;
-    while (!done[m]) {
-      stack.push_back(m);
-      if (s.node_parent[m] < 0) break;
-      m = static_cast<size_t>(s.node_parent[m]);
-    }
-    while (!stack.empty()) {
-      const size_t k = stack.back();
-      stack.pop_back();
-      node_world[k] =
-          s.node_parent[k] < 0 ? s.node_local[k] : node_world[static_cast<size_t>(s.node_parent[k])] * s.node_local[k];
-      done[k] = 1;
-    }
-  }
-  out.resize(s.objectCount());
-  for (size_t o = 0; o < out.size(); ++o) out[o] = node_world[static_cast<size_t>(s.object_node[o])];
-}
-
 struct ShadowDeleter {
   void operator()(SelectorContext* c) const { destroySelectorContext(c); }
 };
@@ -62,10 +37,6 @@ struct ReplayVisibility::State {
   std::vector<glm::mat4> world, next_world;
   std::vector<float> visible, focus, cost, shadow_cost;
   std::vector<int8_t> shadow_levels;
-  // scratch for objectWorlds
-  std::vector<glm::mat4> node_world;
-  std::vector<char> done;
-  std::vector<size_t> stack;
 };
 
 ReplayVisibility::ReplayVisibility() : state_(new State) {}
@@ -96,7 +67,7 @@ Error ReplayVisibility::init(const ReplayScene& scene, const ReplayVisibilityPar
     }
   }
   if (Error e = s.rays.init(Span<const LodChain* const>(chains.data(), chains.size()), params.ray_scene)) return e;
-  objectWorlds(scene, s.node_world, s.done, s.stack, s.world);
+  computeObjectWorlds(scene, s.world);
   const std::vector<int32_t> levels(s.objects, 0);
   if (Error e = s.rays.setObjects(s.world, scene.object_chain, levels)) return e;
   s.rays.commit();
@@ -120,7 +91,7 @@ Error ReplayVisibility::beforeSelect(const ReplayScene& scene, const Camera& cam
   if (scene.objectCount() != s.objects)
     return Error(Status::kInvalidArgument, "visibility was set up for " + std::to_string(s.objects) +
                                                " objects, the scene has " + std::to_string(scene.objectCount()));
-  objectWorlds(scene, s.node_world, s.done, s.stack, s.next_world);
+  computeObjectWorlds(scene, s.next_world);
   for (size_t i = 0; i < s.objects; ++i)
     if (s.next_world[i] != s.world[i]) s.rays.setTransform(static_cast<uint32_t>(i), s.next_world[i]);
   s.world.swap(s.next_world);

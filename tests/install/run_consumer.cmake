@@ -37,3 +37,28 @@ set(expected "obj: nodes=1 meshes=1 vertices=5 triangles=2 edges=1 points=1\nglb
 if(NOT step_output STREQUAL expected)
   message(FATAL_ERROR "unexpected consumer output:\n${step_output}\nexpected:\n${expected}")
 endif()
+
+# the per-frame core alone: it selects, and its link command names one library, its own archive
+run_step("run selector consumer" "${WORK_DIR}/build/consumer_selector")
+if(NOT step_output STREQUAL "levels: 0 1 2\n")
+  message(FATAL_ERROR "unexpected selector consumer output:\n${step_output}")
+endif()
+set(link_txt "${WORK_DIR}/build/CMakeFiles/consumer_selector.dir/link.txt")
+if(EXISTS "${link_txt}")
+  file(READ "${link_txt}" link_command)
+else()
+  run_step("read the link command" ${CMAKE_COMMAND} --build "${WORK_DIR}/build" -- -t commands consumer_selector)
+  string(REGEX MATCH "[^\n]*-o consumer_selector[^\n]*" link_command "${step_output}")
+endif()
+separate_arguments(link_args UNIX_COMMAND "${link_command}")
+list(FILTER link_args INCLUDE REGEX "^-l|\\.(a|so)(\\.[0-9.]*)?$")
+if(NOT link_args MATCHES "^[^;]*/libscenelod_selector\\.a$")
+  message(FATAL_ERROR "the selector consumer links more than libscenelod_selector.a: ${link_args}\n${link_command}")
+endif()
+message(STATUS "selector consumer links: ${link_args}")
+
+# the runtime scene graph alone: a scene and its pack round trip
+run_step("run scene graph consumer" "${WORK_DIR}/build/consumer_scene_graph")
+if(NOT step_output STREQUAL "scene: objects=2 radii 0.707 1.414\npack: objects=2 radii 0.707 1.414\n")
+  message(FATAL_ERROR "unexpected scene graph consumer output:\n${step_output}")
+endif()

@@ -47,6 +47,10 @@ constexpr float kCoverageViewportPx = 1080.0f;
 // extension (case-insensitive); other extensions are refused.
 Error loadScene(const std::string& path, SceneData& out);
 
+// The extension of the file name in `path`, dot included, in lower case ("dir/Box.GLB" -> ".glb"),
+// or "" when the name has none: what loadScene chooses by.
+std::string lowerExtension(const std::string& path);
+
 // Writes a GLB with the node hierarchy and meshes; edges become LINES with a _THICKNESS attribute,
 // points become POINTS. When `chains` is given (one per mesh, or null entries), each mesh node is
 // written with the MSFT_lod extension pointing at nodes of the coarser levels.

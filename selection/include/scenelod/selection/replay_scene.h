@@ -43,6 +43,10 @@ struct ReplayScene {
 // are valid for selection (widths non-decreasing within a chain). `what` names the source.
 Error validateReplayScene(const ReplayScene& scene, const std::string& what);
 
+// World transform of every object: its node's local transform under its ancestors' (a root's is its
+// local one), computed parents before children. Cost: O(nodes + objects); allocates.
+void computeObjectWorlds(const ReplayScene& scene, std::vector<glm::mat4>& worlds);
+
 // World bounding sphere and largest axis scale of every object (the chain's sphere under the node's
 // world transform; the radius is scaled by the largest column length, conservative under
 // non-uniform scale). Cost: O(nodes + objects); allocates the outputs.
