@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "command.h"
+#include "scenelod/lodcore/atomic_file.h"
 #include "scenelod/scene/gltf_io.h"
 
 namespace scenelod::tool {
@@ -103,10 +104,7 @@ int runInfo(const std::vector<std::string>& argv) {
   }
   if (args.has("--out")) {
     const std::string out = args.get("--out");
-    std::FILE* f = std::fopen(out.c_str(), "wb");
-    if (!f) return runError("info", out + ": cannot create file");
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    if (std::fclose(f) != 0 || !ok) return runError("info", out + ": write error");
+    if (Error e = writeFileAtomic(out, text.data(), text.size())) return runError("info", e.message);
   } else {
     std::fputs(text.c_str(), stdout);
   }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "scenelod/eval/plot.h"
+#include "scenelod/lodcore/atomic_file.h"
 
 namespace scenelod::tool {
 
@@ -186,12 +187,8 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     for (const auto& im : images) o << "![" << im.first << "](" << im.second << ")\n\n";
   }
 
-  std::ofstream out(md_path);
-  if (!out) return Error(Status::kIoError, md_path + ": cannot write the report");
-  out << o.str();
-  out.flush();
-  if (!out) return Error(Status::kIoError, md_path + ": write failed");
-  return Error();
+  const std::string text = o.str();
+  return writeFileAtomic(md_path, text.data(), text.size());
 }
 
 }  // namespace scenelod::tool

@@ -14,6 +14,8 @@
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
 
+#include "scenelod/lodcore/atomic_file.h"
+
 namespace scenelod::scene {
 
 namespace {
@@ -310,10 +312,7 @@ Error exportGlb(const std::string& path, const SceneData& scene, const std::vect
     if (!writer.WriteGltfSceneToStream(&w.model, glb, false, true))
       return {Status::kIoError, path + ": cannot serialise the GLB"};
     const std::string bytes = glb.str();
-    std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) return {Status::kIoError, path + ": cannot create file (" + std::strerror(errno) + ")"};
-    const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    if (std::fclose(f) != 0 || !ok) return {Status::kIoError, path + ": write error"};
+    if (Error e = writeFileAtomic(path, bytes.data(), bytes.size())) return e;
   } catch (const std::bad_alloc&) {
     return {Status::kOutOfMemory, path + ": out of memory while writing"};
   } catch (const std::exception& e) {

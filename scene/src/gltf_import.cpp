@@ -24,8 +24,10 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <stb_image.h>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "scenelod/lodcore/json_limits.h"
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
 
@@ -266,8 +268,9 @@ double readComponent(const unsigned char* p, int type, bool normalized) {
   }
 }
 
-// an accessor without a buffer view (zeros, maybe sparse) holds no data to bound its count
-constexpr size_t kMaxUnbackedCount = size_t(1) << 26;
+// an accessor without a buffer view (zeros, maybe sparse) holds no data to bound its size: at most
+// this many values (128 MiB as doubles), whatever its type
+constexpr size_t kMaxUnbackedValues = size_t(1) << 24;
 
 class GltfReader {
  public:
@@ -329,7 +332,7 @@ class GltfReader {
     size_t stride = 0;
     if (a.bufferView >= 0) {
       if (Error e = viewBytes(a.bufferView, a.byteOffset, 0, a.count, elem, what, p, stride)) return e;
-    } else if (a.count > kMaxUnbackedCount) {
+    } else if (a.count > kMaxUnbackedValues / static_cast<size_t>(ccount)) {
       return fail(Status::kInvalidMesh, what + " has no buffer view and an implausible count " + std::to_string(a.count));
     }
     out.assign(a.count * static_cast<size_t>(ccount), 0.0);
@@ -707,6 +710,69 @@ class GltfReader {
   std::vector<MaterialData> materials_;
 };
 
+// ---------------------------------------------------------------------------------------------
+// hostile JSON, checked before tinygltf sees it: tinygltf recurses once per nesting level (20,000
+// levels overflow the stack) and narrows sizes into int or converts doubles into size_t, so that
+// 2^32 + 1 reads as 1 and 1e300 as 0. Each size and offset scenelod reads must be a whole number
+// in range.
+
+// the JSON text of a .gltf, or the first chunk of a checked GLB
+std::pair<const char*, size_t> gltfJsonText(const std::vector<unsigned char>& data, bool binary) {
+  const char* text = reinterpret_cast<const char*>(data.data());
+  if (!binary) return {text, data.size()};
+  return {text + 20, std::min<size_t>(readU32(&data[12]), data.size() - 20)};
+}
+
+Error checkGltfJson(const std::string& path, const std::vector<unsigned char>& data, bool binary) {
+  const auto [text, size] = gltfJsonText(data, binary);
+  if (jsonNestingDepth(text, size) > kMaxJsonNesting)
+    return {Status::kParseError, path + ": JSON nested deeper than " + std::to_string(kMaxJsonNesting) + " levels"};
+  const nlohmann::json j = nlohmann::json::parse(text, text + size, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return {};  // tinygltf reports malformed JSON in its words
+  // (array, key, smallest value): the members tinygltf narrows
+  struct Field {
+    const char* array;
+    const char* key;
+    int64_t lo;
+  };
+  const Field fields[] = {{"accessors", "count", 1},       {"accessors", "byteOffset", 0}, {"bufferViews", "byteOffset", 0},
+                          {"bufferViews", "byteLength", 1}, {"bufferViews", "byteStride", 4}, {"buffers", "byteLength", 1}};
+  const int64_t kMaxSize = (int64_t(1) << 32) - 1;  // GLB and tinygltf sizes are 32-bit
+  for (const Field& f : fields) {
+    const auto list = j.find(f.array);
+    if (list == j.end() || !list->is_array()) continue;
+    for (size_t i = 0; i < list->size(); ++i) {
+      const nlohmann::json& element = (*list)[i];
+      if (!element.is_object()) continue;
+      const auto v = element.find(f.key);
+      int64_t n = 0;
+      if (v != element.end() && !jsonWholeNumber(*v, f.lo, kMaxSize, n))
+        return {Status::kParseError, path + ": " + std::string(f.array).substr(0, std::strlen(f.array) - 1) + " " +
+                                         std::to_string(i) + ": \"" + f.key + "\" must be a whole number from " +
+                                         std::to_string(f.lo) + " to 2^32 - 1"};
+    }
+  }
+  const auto accessors = j.find("accessors");
+  if (accessors == j.end() || !accessors->is_array()) return {};
+  for (size_t i = 0; i < accessors->size(); ++i) {
+    const nlohmann::json& a = (*accessors)[i];
+    if (!a.is_object() || !a.contains("sparse")) continue;
+    const nlohmann::json& sp = a["sparse"];
+    int64_t count = 0, n = 0, total = 0;
+    const std::string where = path + ": accessor " + std::to_string(i) + ": sparse ";
+    if (!sp.is_object() || !sp.contains("count") || !jsonWholeNumber(sp["count"], 1, kMaxSize, count))
+      return {Status::kParseError, where + "\"count\" must be a whole number from 1 to 2^32 - 1"};
+    if (a.contains("count") && jsonWholeNumber(a["count"], 1, kMaxSize, total) && count > total)
+      return {Status::kParseError, where + "\"count\" " + std::to_string(count) + " exceeds the accessor's count " +
+                                       std::to_string(total)};
+    for (const char* part : {"indices", "values"})
+      if (sp.contains(part) && sp[part].is_object() && sp[part].contains("byteOffset") &&
+          !jsonWholeNumber(sp[part]["byteOffset"], 0, kMaxSize, n))
+        return {Status::kParseError, where + part + " \"byteOffset\" must be a whole number from 0 to 2^32 - 1"};
+  }
+  return {};
+}
+
 // extensions that change the geometry we would read: refused when required
 const char* const kGeometryExtensions[] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "EXT_mesh_gpu_instancing",
                                            "KHR_meshopt_compression"};
@@ -720,6 +786,7 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
   if (ext == ".glb" || binary)
     if (Error e = checkGlbContainer(path, data)) return e;
   if (data.size() > UINT_MAX) return {Status::kUnsupported, path + ": file larger than 4 GiB"};
+  if (Error e = checkGltfJson(path, data, binary)) return e;
 
   const size_t slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));

@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "json_read.h"
-#include "scenelod/lodcore/json_depth.h"
+#include "scenelod/lodcore/json_limits.h"
+#include "scenelod/lodcore/atomic_file.h"
 
 namespace scenelod::selection {
 
@@ -47,7 +47,7 @@ bool vec3(const json& j, const char* key, bool required, glm::vec3& out, std::st
     return false;
   }
   for (int i = 0; i < 3; ++i) {
-    if (!(*it)[i].is_number() || !(std::fabs((*it)[i].get<double>()) <= detail::kMaxCoordinate)) {
+    if (!(*it)[i].is_number() || !(std::fabs((*it)[i].get<double>()) <= kMaxReplayCoordinate)) {
       err = std::string("key \"") + key + "\" must be an array of 3 numbers within +-1e18";
       return false;
     }
@@ -94,7 +94,7 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       auto v = j.find("scenelod_replay");
       if (v == j.end()) return fail("the first line must be the header with \"scenelod_replay\"");
       int64_t version = 0;
-      if (!detail::wholeNumber(*v, 1, 1, version))
+      if (!jsonWholeNumber(*v, 1, 1, version))
         return fail("unsupported replay version (this reader knows version 1)");
       ReplayHeader& h = out.header;
       auto s = j.find("scene");
@@ -103,8 +103,8 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       auto vp = j.find("viewport");
       if (vp != j.end()) {
         int64_t w = 0, ht = 0;
-        if (!vp->is_array() || vp->size() != 2 || !detail::wholeNumber((*vp)[0], 1, 65536, w) ||
-            !detail::wholeNumber((*vp)[1], 1, 65536, ht))
+        if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
+            !jsonWholeNumber((*vp)[1], 1, 65536, ht))
           return fail("\"viewport\" must be [width, height] in whole pixels, 1..65536");
         h.viewport_width_px = static_cast<uint32_t>(w);
         h.viewport_height_px = static_cast<uint32_t>(ht);
@@ -129,7 +129,7 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
     auto fr = j.find("frame");
     if (fr == j.end()) return fail("missing key \"frame\"");
     int64_t frame = 0;
-    if (!detail::wholeNumber(*fr, 0, int64_t(1) << 53, frame)) return fail("\"frame\" must be a whole number from 0 to 2^53");
+    if (!jsonWholeNumber(*fr, 0, int64_t(1) << 53, frame)) return fail("\"frame\" must be a whole number from 0 to 2^53");
     f.frame = static_cast<uint64_t>(frame);
     if (!out.frames.empty() && f.frame <= out.frames.back().frame) return fail("frames must be in increasing order");
     f.time_s = number(j, "time_s", false, 0.0, err);
@@ -161,10 +161,10 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
       for (const json& e : *mv) {
         if (!e.is_array() || e.size() != 9) return fail("each move must be [object, tx, ty, tz, qx, qy, qz, qw, s]");
         for (const json& x : e)
-          if (!x.is_number() || !(std::fabs(x.get<double>()) <= detail::kMaxCoordinate))
+          if (!x.is_number() || !(std::fabs(x.get<double>()) <= kMaxReplayCoordinate))
             return fail("a move holds a value that is not a number within +-1e18");
         int64_t object = 0;
-        if (!detail::wholeNumber(e[0], 0, UINT32_MAX - 1, object))
+        if (!jsonWholeNumber(e[0], 0, UINT32_MAX - 1, object))
           return fail("a move's object must be a whole number from 0 to 4294967294");
         ReplayMove rm;
         rm.object = static_cast<uint32_t>(object);
@@ -184,8 +184,7 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
 }
 
 static Error writeReplayImpl(const std::string& path, const Replay& r) {
-  std::ofstream out(path);
-  if (!out) return Error(Status::kIoError, path + ": cannot write replay file");
+  std::ostringstream out;
   const ReplayHeader& h = r.header;
   json hj;
   std::ostringstream s;
@@ -214,9 +213,8 @@ static Error writeReplayImpl(const std::string& path, const Replay& r) {
     l << "}\n";
     out << l.str();
   }
-  out.flush();
-  if (!out) return Error(Status::kIoError, path + ": write failed");
-  return Error();
+  const std::string text = out.str();
+  return writeFileAtomic(path, text.data(), text.size());
 }
 
 Error readReplay(const std::string& path, Replay& out) {

@@ -2,8 +2,8 @@
 // follow the same linear model (Funkhouser & Sequin 1993 §4.1) plus seeded Gaussian noise.
 #include "scenelod/selection/replay_runner.h"
 
-#include "json_read.h"
 #include "scenelod/selection/replay_visibility.h"
+#include "scenelod/lodcore/atomic_file.h"
 
 #include <cmath>
 #include <cstdio>
@@ -20,7 +20,7 @@ namespace {
 // NaN costs into the log
 Error checkWorldSpheres(const std::vector<glm::vec3>& centers, const std::vector<float>& radii,
                         const std::vector<float>& scales, const std::string& where) {
-  const float limit = static_cast<float>(detail::kMaxCoordinate);
+  const float limit = static_cast<float>(kMaxReplayCoordinate);
   for (size_t i = 0; i < centers.size(); ++i) {
     const glm::vec3& c = centers[i];
     if (!(std::fabs(c.x) <= limit && std::fabs(c.y) <= limit && std::fabs(c.z) <= limit && radii[i] <= limit &&
@@ -205,12 +205,10 @@ std::string replayLogLine(const ReplayLogFrame& f) {
 }
 
 Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log) {
-  std::ofstream out(path);
-  if (!out) return Error(Status::kIoError, path + ": cannot write the replay log");
-  for (const ReplayLogFrame& f : log) out << replayLogLine(f) << "\n";
-  out.flush();
-  if (!out) return Error(Status::kIoError, path + ": write failed");
-  return Error();
+  AtomicFile out;
+  if (Error e = out.open(path)) return e;
+  for (const ReplayLogFrame& f : log) out.write(replayLogLine(f) + "\n");
+  return out.commit();
 }
 
 ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup) {

@@ -13,8 +13,8 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
-#include "json_read.h"
-#include "scenelod/lodcore/json_depth.h"
+#include "scenelod/lodcore/json_limits.h"
+#include "scenelod/lodcore/atomic_file.h"
 
 #include "scenelod/scene/gltf_io.h"
 #include "scenelod/scene/lod_build.h"
@@ -274,7 +274,7 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
   if (j.is_discarded() || !j.is_object()) return fail("not a JSON object");
   auto v = j.find("scenelod_level_scene");
   int64_t version = 0;
-  if (v == j.end() || !detail::wholeNumber(*v, 1, 1, version)) return fail("missing \"scenelod_level_scene\": 1");
+  if (v == j.end() || !jsonWholeNumber(*v, 1, 1, version)) return fail("missing \"scenelod_level_scene\": 1");
   auto num = [](const json& x) { return x.is_number() && std::isfinite(x.get<double>()); };
   auto vecN = [&](const json& x, size_t n) {
     if (!x.is_array() || x.size() != n) return false;
@@ -296,8 +296,8 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
     std::vector<uint32_t> t, vv, lp;
     for (const json& l : ch["levels"]) {
       int64_t counts[3] = {};
-      if (!vecN(l, 4) || !detail::wholeNumber(l[1], 0, UINT32_MAX, counts[0]) ||
-          !detail::wholeNumber(l[2], 0, UINT32_MAX, counts[1]) || !detail::wholeNumber(l[3], 0, UINT32_MAX, counts[2]))
+      if (!vecN(l, 4) || !jsonWholeNumber(l[1], 0, UINT32_MAX, counts[0]) ||
+          !jsonWholeNumber(l[2], 0, UINT32_MAX, counts[1]) || !jsonWholeNumber(l[3], 0, UINT32_MAX, counts[2]))
         return fail(where + ": each level is [cell_width, triangles, vertices, line_points] with whole counts from 0 to 2^32 - 1");
       w.push_back(l[0].get<float>());
       t.push_back(static_cast<uint32_t>(counts[0]));
@@ -317,7 +317,7 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
     const std::string where = "node " + std::to_string(n);
     if (!nd.is_object()) return fail(where + ": not an object");
     int64_t parent = -1;
-    if (nd.contains("parent") && !detail::wholeNumber(nd["parent"], -1, int64_t(nodes.size()) - 1, parent))
+    if (nd.contains("parent") && !jsonWholeNumber(nd["parent"], -1, int64_t(nodes.size()) - 1, parent))
       return fail(where + ": \"parent\" must be -1 or a node index below " + std::to_string(nodes.size()));
     glm::vec3 t(0.0f);
     glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
@@ -344,7 +344,7 @@ Error loadLevelSceneImpl(const std::string& path, ReplayScene& s) {
     const std::string where = "object " + std::to_string(o);
     int64_t node = 0, chain = 0;
     if (!ob.is_object() || !ob.contains("node") || !ob.contains("chain") ||
-        !detail::wholeNumber(ob["node"], 0, INT32_MAX, node) || !detail::wholeNumber(ob["chain"], 0, UINT32_MAX, chain))
+        !jsonWholeNumber(ob["node"], 0, INT32_MAX, node) || !jsonWholeNumber(ob["chain"], 0, UINT32_MAX, chain))
       return fail(where + ": needs whole numbers \"node\" and \"chain\" (0 to 2^31 - 1)");
     s.object_node.push_back(static_cast<int32_t>(node));
     s.object_chain.push_back(static_cast<uint32_t>(chain));
@@ -370,8 +370,6 @@ Error loadLevelScene(const std::string& path, ReplayScene& out) {
 }
 
 Error writeLevelScene(const std::string& path, const ReplayScene& s) {
-  std::ofstream out(path);
-  if (!out) return Error(Status::kIoError, path + ": cannot write level scene");
   std::ostringstream o;
   o << "{\"scenelod_level_scene\": 1,\n \"chains\": [";
   for (size_t c = 0; c < s.table.chainCount(); ++c) {
@@ -397,10 +395,8 @@ Error writeLevelScene(const std::string& path, const ReplayScene& s) {
     o << (i ? ",\n  " : "\n  ") << "{\"node\": " << s.object_node[i] << ", \"chain\": " << s.object_chain[i]
       << ", \"importance\": " << fmt(s.importance[i]) << ", \"must_draw\": " << (s.must_draw[i] ? "true" : "false") << "}";
   o << "]}\n";
-  out << o.str();
-  out.flush();
-  if (!out) return Error(Status::kIoError, path + ": write failed");
-  return Error();
+  const std::string text = o.str();
+  return writeFileAtomic(path, text.data(), text.size());
 }
 
 Error loadPackScene(const std::string& path, ReplayScene& s) {

@@ -706,3 +706,63 @@ TEST(GltfImport, CorruptedGlbNeverCrashes) {
       check(bytes);
     }
 }
+
+namespace {
+
+// the square with one edit of its JSON text
+std::string editedSquare(const std::string& dir, const std::string& from, const std::string& to) {
+  const std::string path = SquareGltf().write(makeDir(dir));
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string edited = replaceAll(text, from, to);
+  EXPECT_NE(edited, text) << "the edit '" << from << "' found nothing";
+  writeText(path, edited);
+  return path;
+}
+
+}  // namespace
+
+TEST(GltfImport, HostileNumbersAreRefusedNotNarrowed) {
+  // tinygltf narrows sizes into int and converts doubles into size_t: 2^32 + 1 would read as 1 and
+  // 1e300 as 0, silently; each case must be refused naming the element and key
+  const std::string pos = R"("bufferView":0,"componentType":5126,"count":4,"type":"VEC3")";
+  const std::string sparse = R"(,"sparse":{"count":@N@,"indices":{"bufferView":1,"componentType":5123},"values":{"bufferView":0}})";
+  const struct {
+    std::string from, to, expect;
+  } cases[] = {
+      {"\"count\":4,", "\"count\":4294967297,", "accessor 0: \"count\" must be a whole number from 1 to 2^32 - 1"},
+      {"\"bufferView\":0,\"componentType\":5126", "\"bufferView\":0,\"byteOffset\":1e300,\"componentType\":5126",
+       "accessor 0: \"byteOffset\" must be a whole number"},
+      {"\"byteOffset\":48", "\"byteOffset\":-48", "bufferView 1: \"byteOffset\" must be a whole number"},
+      {pos, pos + replaceAll(sparse, "@N@", "-5"), "accessor 0: sparse \"count\" must be a whole number from 1"},
+      {pos, pos + replaceAll(sparse, "@N@", "0"), "accessor 0: sparse \"count\" must be a whole number from 1"},
+      {pos, pos + replaceAll(sparse, "@N@", "2147483648"), "accessor 0: sparse \"count\" 2147483648 exceeds the accessor's count 4"},
+      {pos, pos + replaceAll(sparse, "@N@", "4294967297"), "accessor 0: sparse \"count\" must be a whole number"},
+  };
+  int i = 0;
+  for (const auto& c : cases) {
+    const std::string path = editedSquare("hostile_number_" + std::to_string(i++), c.from, c.to);
+    const Error e = importExpectingError(path);
+    EXPECT_EQ(e.status, Status::kParseError) << c.to;
+    EXPECT_TRUE(contains(e.message, path + ": " + c.expect)) << e.message;
+  }
+}
+
+TEST(GltfImport, DeeplyNestedJsonIsRefusedBeforeParsing) {
+  // 20,000 nested arrays in a 40 KB file once overflowed the stack inside the parser
+  SquareGltf g;
+  g.extra = ",\"extras\":" + std::string(20000, '[') + std::string(20000, ']');
+  const std::string path = g.write(makeDir("deep_json"));
+  const Error e = importExpectingError(path);
+  EXPECT_EQ(e.status, Status::kParseError);
+  EXPECT_TRUE(contains(e.message, path + ": JSON nested deeper than 64 levels")) << e.message;
+}
+
+TEST(GltfImport, AccessorWithoutBufferViewIsCappedByBytes) {
+  // an accessor without a buffer view holds zeros: its count alone once asked for gigabytes
+  const std::string path = editedSquare("unbacked", R"("bufferView":0,"componentType":5126,"count":4,)",
+                                        R"("componentType":5126,"count":16777216,)");
+  const Error e = importExpectingError(path);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_TRUE(contains(e.message, "has no buffer view and an implausible count 16777216")) << e.message;
+}

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -162,4 +163,38 @@ TEST(SceneCommands, LodsWritesOneGlbWithAChainPerMesh) {
     EXPECT_EQ(chains[m].levelCount(), 4u) << in.meshes[m].name;
     EXPECT_EQ(chains[m].levels[0].mesh.triangleCount(), in.meshes[m].mesh.triangleCount());
   }
+}
+
+TEST(SceneCommands, InPlaceConvertThatCannotWriteKeepsItsInput) {
+  // `convert x.glb x.glb` on a full disk once truncated x.glb; here a 16 KiB file-size limit (the
+  // shell ignores SIGXFSZ so that the write fails with EFBIG instead of killing the tool)
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the scenelod tool is not built";
+  const std::string dir = scenelod::test::scratchDir() + "/in_place";
+  ::mkdir(dir.c_str(), 0755);
+  const std::string glb = dir + "/x.glb";
+  const ToolRun made = runTool("demo-scene -o " + glb + " --segments 8 --gearboxes 2 --bunnies 0");
+  ASSERT_EQ(made.code, 0) << made.output;
+  const std::string before = scenelod::test::readText(glb);
+  ASSERT_GT(before.size(), 64u * 1024u);
+  const std::string cmd = "trap '' XFSZ; ulimit -f 32; " + scenelod::test::shellQuote(SCENELOD_TOOL_PATH) + " convert " +
+                          glb + " " + glb + " 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string output;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
+  const int status = ::pclose(p);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+  EXPECT_NE(output.find(glb + ": write error"), std::string::npos) << output;
+  EXPECT_EQ(scenelod::test::readText(glb), before);
+  // nothing left beside it
+  const ToolRun listing = runTool("info " + glb);
+  EXPECT_EQ(listing.code, 0) << listing.output;
+  FILE* ls = ::popen(("ls -A " + dir).c_str(), "r");
+  std::string names;
+  while ((n = std::fread(buf, 1, sizeof buf, ls)) > 0) names.append(buf, n);
+  ::pclose(ls);
+  EXPECT_EQ(names, "x.glb\n");
 }

@@ -13,6 +13,10 @@
 
 namespace scenelod::selection {
 
+// The largest coordinate a replay takes (eye, target, up, move values) and the farthest a world
+// bounding sphere may reach in a run: squared distances then stay finite in float.
+constexpr double kMaxReplayCoordinate = 1e18;
+
 struct ReplayHeader {
   int version = 1;               // "scenelod_replay"
   std::string scene;             // glTF/GLB, pack, level-scene JSON or "builtin:NAME"; relative to the replay file

@@ -1,4 +1,4 @@
-#include "scenelod/lodcore/json_depth.h"
+#include "scenelod/lodcore/json_limits.h"
 
 #include <string>
 

@@ -1,5 +1,5 @@
 // JSON nesting depth by a linear scan (strings and their escapes skipped).
-#include "scenelod/lodcore/json_depth.h"
+#include "scenelod/lodcore/json_limits.h"
 
 namespace scenelod {
 
