@@ -6,6 +6,7 @@
 #include "args.h"
 #include "command.h"
 #include "replay_report.h"
+#include "scenelod/lodcore/atomic_file.h"
 #include "scenelod/selection/replay_visibility.h"
 #include "scenelod/selection/replay.h"
 #include "scenelod/selection/replay_runner.h"
@@ -72,9 +73,11 @@ int run(const std::vector<std::string>& argv) {
   opt.noise = noise;
 
   const std::string path = args.positional()[0];
-  Replay replay;
-  if (Error e = readReplay(path, replay)) return runError("replay", e.message);
-  const std::string scene_path = resolveReplayScene(path, replay.header.scene);
+  // the replay is read, run and logged one frame at a time: memory does not grow with its length
+  ReplayReader reader;
+  if (Error e = reader.open(path)) return runError("replay", e.message);
+  const ReplayHeader header = reader.header();
+  const std::string scene_path = resolveReplayScene(path, header.scene);
   ReplayScene scene;
   if (Error e = loadReplayScene(scene_path, scene)) return runError("replay", e.message);
   ReplayVisibility visibility;
@@ -84,11 +87,22 @@ int run(const std::vector<std::string>& argv) {
     if (Error e = visibility.init(scene, vp)) return runError("replay", scene_path + ": visibility: " + e.message);
     opt.visibility = &visibility;
   }
-  std::vector<ReplayLogFrame> log;
-  if (Error e = runReplay(replay, scene, opt, log)) return runError("replay", e.message);
+  AtomicFile log;
   if (args.has("--out"))
-    if (Error e = writeReplayLog(args.get("--out"), log)) return runError("replay", e.message);
-  const ReplaySummary s = summarizeReplay(log);
+    if (Error e = log.open(args.get("--out"))) return runError("replay", e.message);
+  ReplayRunDigest digest;
+  size_t frames = 0;
+  auto next = [&](ReplayFrame& f, Error& e) { return reader.next(f, e); };
+  auto sink = [&](const ReplayLogFrame& f) {
+    if (log.stream()) log.write(replayLogLine(f) + "\n");
+    digest.add(f);
+    ++frames;
+    return Error();
+  };
+  if (Error e = runReplayStream(header, next, scene, opt, sink)) return runError("replay", e.message);
+  if (log.stream())
+    if (Error e = log.commit()) return runError("replay", e.message);
+  const ReplaySummary s = digest.summary.summary();
   std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s, "
               "mean benefit %.6g\n", s.frames, s.objects, s.mean_predicted_ms, s.mean_measured_ms,
               s.switches_per_object_per_second, s.mean_benefit);
@@ -106,9 +120,10 @@ int run(const std::vector<std::string>& argv) {
     std::string cmd = "scenelod replay";
     for (const auto& a : argv) cmd += " " + a;
     in.command = cmd;
-    in.replay = &replay;
-    in.run_names = {log.empty() || !log[0].has_budget ? "distance" : "budget"};
-    in.runs = {&log};
+    in.header = &header;
+    in.frame_count = frames;
+    in.run_names = {digest.has_budget ? "budget" : "distance"};
+    in.runs = {&digest};
     std::vector<std::string> lines;
     if (Error e = writeReplayReport(args.get("--report"), in, lines)) return runError("replay", e.message);
     std::printf("report: %s\n", args.get("--report").c_str());

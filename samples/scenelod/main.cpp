@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -48,7 +50,15 @@ int main(int argc, char** argv) {
         std::printf("%s\n", c.usage);
         return 0;
       }
-    return c.run(args);
+    // the commands return errors as exit codes; what escapes them is reported, never a core dump
+    try {
+      return c.run(args);
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "scenelod %s: out of memory\n", c.name);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "scenelod %s: %s\n", c.name, e.what());
+    }
+    return 1;
   }
   std::fprintf(stderr, "scenelod: unknown command '%s' (see 'scenelod --help')\n", argv[1]);
   return 2;

@@ -47,9 +47,11 @@ Error runSelectionDemo(const ReplayScene& scene, const std::string& out_dir, siz
   char cmd[512];
   std::snprintf(cmd, sizeof(cmd), "scenelod replay %s --distance / --budget %.2f", replay_path.c_str(), budget.budget_ms);
   in.command = cmd;
-  in.replay = &replay;
+  in.header = &replay.header;
+  in.frame_count = replay.frames.size();
   in.run_names = {"distance", "budget"};
-  in.runs = {&dlog, &blog};
+  const ReplayRunDigest ddigest = digestOf(dlog), bdigest = digestOf(blog);
+  in.runs = {&ddigest, &bdigest};
   result.report_path = dir + "demo_report.md";
   std::vector<std::string> lines;
   if (Error e = writeReplayReport(result.report_path, in, lines)) return e;

@@ -22,34 +22,57 @@ std::string num(double v, int digits = 3) {
 
 }  // namespace
 
+void ReplayRunDigest::add(const ReplayLogFrame& f) {
+  summary.add(f);
+  if (seen_ == 0) {
+    has_budget = f.has_budget;
+    budget_ms = f.budget_ms;
+  } else {
+    switches_per_second[static_cast<long>(f.time_s)] += f.switches;
+  }
+  if (seen_++ % stride != 0) return;
+  points.push_back({f.frame, f.time_s, f.predicted_ms, f.measured_ms, f.budget_ms, f.has_measured, f.has_budget, f.switches});
+  if (points.size() <= kMaxPoints) return;
+  // keep every other point: the kept frames are then multiples of twice the stride
+  for (size_t i = 0; 2 * i < points.size(); ++i) points[i] = points[2 * i];
+  points.resize((points.size() + 1) / 2);
+  stride *= 2;
+}
+
+ReplayRunDigest digestOf(const std::vector<ReplayLogFrame>& log) {
+  ReplayRunDigest d;
+  for (const ReplayLogFrame& f : log) d.add(f);
+  return d;
+}
+
 Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in, std::vector<std::string>& summary) {
   summary.clear();
   std::ostringstream o;
   o << "# Replay report\n\n";
   o << "- replay: `" << in.replay_path << "`\n- scene: `" << in.scene_path << "`\n";
-  if (in.replay) {
-    const ReplayHeader& h = in.replay->header;
+  if (in.header) {
+    const ReplayHeader& h = *in.header;
     o << "- viewport " << h.viewport_width_px << " x " << h.viewport_height_px << ", fov " << num(h.fov_y_deg, 1)
-      << " deg, " << num(h.pixels_per_cell, 2) << " pixels per cell, " << in.replay->frames.size() << " frames\n";
+      << " deg, " << num(h.pixels_per_cell, 2) << " pixels per cell, " << in.frame_count << " frames\n";
   }
   if (!in.command.empty()) o << "- command: `" << in.command << "`\n";
   o << "\n## Summary\n\n| run | mode | frames | objects | mean predicted ms | mean measured ms | |pred - meas| / meas | "
        "frames within +10 % of budget (after 30) | over-budget flags | switches / object / s | mean triangles |\n"
        "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (size_t r = 0; r < in.runs.size(); ++r) {
-    const auto& log = *in.runs[r];
-    const ReplaySummary s = summarizeReplay(log);
-    const bool budget = !log.empty() && log[0].has_budget;
+    const ReplayRunDigest& run = *in.runs[r];
+    const ReplaySummary s = run.summary.summary();
+    const bool budget = run.has_budget;
     std::string within = "-";
     if (s.budget_frames) within = num(100.0 * s.within_10_percent / s.budget_frames, 1) + " % (" + std::to_string(s.within_10_percent) + "/" + std::to_string(s.budget_frames) + ")";
-    o << "| " << in.run_names[r] << " | " << (budget ? "budget " + num(log[0].budget_ms, 2) + " ms" : std::string("distance")) << " | " << s.frames
+    o << "| " << in.run_names[r] << " | " << (budget ? "budget " + num(run.budget_ms, 2) + " ms" : std::string("distance")) << " | " << s.frames
       << " | " << s.objects << " | " << num(s.mean_predicted_ms) << " | " << num(s.mean_measured_ms) << " | "
       << num(100.0 * s.mean_abs_prediction_error, 1) << " % | " << within << " | " << s.over_budget_flagged << " | "
       << num(s.switches_per_object_per_second, 4) << " | " << num(s.mean_triangles, 0) << " |\n";
     char line[256];
     if (budget)
       std::snprintf(line, sizeof(line), "%s: budget %.2f ms, measured within +10%% on %s of frames after warm-up, %.4f switches/object/s",
-                    in.run_names[r].c_str(), log[0].budget_ms, within.c_str(), s.switches_per_object_per_second);
+                    in.run_names[r].c_str(), run.budget_ms, within.c_str(), s.switches_per_object_per_second);
     else
       std::snprintf(line, sizeof(line), "%s: distance mode, mean measured %.2f ms, %.0f triangles/frame, %.4f switches/object/s",
                     in.run_names[r].c_str(), s.mean_measured_ms, s.mean_triangles, s.switches_per_object_per_second);
@@ -60,13 +83,13 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
 
   o << "\n## Level histogram (share of object-frames)\n\n| run | not drawn |";
   size_t max_levels = 0;
-  for (const auto* log : in.runs) max_levels = std::max(max_levels, summarizeReplay(*log).level_histogram.size());
+  for (const ReplayRunDigest* run : in.runs) max_levels = std::max(max_levels, run->summary.summary().level_histogram.size());
   for (size_t k = 1; k < max_levels; ++k) o << " L" << (k - 1) << " |";
   o << "\n|---|";
   for (size_t k = 0; k < max_levels; ++k) o << "---|";
   o << "\n";
   for (size_t r = 0; r < in.runs.size(); ++r) {
-    const ReplaySummary s = summarizeReplay(*in.runs[r]);
+    const ReplaySummary s = in.runs[r]->summary.summary();
     size_t total = 0;
     for (size_t c : s.level_histogram) total += c;
     o << "| " << in.run_names[r] << " |";
@@ -75,16 +98,18 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     o << "\n";
   }
 
-  o << "\n## Frame cost over time (every 10th frame)\n\n| frame | time s |";
+  // the runs replay the same frames, so their points are the same frames
+  const size_t stride = in.runs.empty() ? 1 : in.runs[0]->stride;
+  o << "\n## Frame cost over time (every " << 10 * stride << "th frame)\n\n| frame | time s |";
   for (const auto& n : in.run_names) o << " " << n << " predicted | " << n << " measured | " << n << " switches |";
   o << "\n|---|---|";
   for (size_t r = 0; r < in.runs.size(); ++r) o << "---|---|---|";
   o << "\n";
-  const size_t frames = in.runs.empty() ? 0 : in.runs[0]->size();
-  for (size_t i = 0; i < frames; i += 10) {
-    o << "| " << (*in.runs[0])[i].frame << " | " << num((*in.runs[0])[i].time_s, 2) << " |";
-    for (const auto* log : in.runs) {
-      const ReplayLogFrame& f = (*log)[i];
+  const size_t points = in.runs.empty() ? 0 : in.runs[0]->points.size();
+  for (size_t i = 0; i < points; i += 10) {
+    o << "| " << in.runs[0]->points[i].frame << " | " << num(in.runs[0]->points[i].time_s, 2) << " |";
+    for (const ReplayRunDigest* run : in.runs) {
+      const ReplayRunDigest::Point& f = run->points[std::min(i, run->points.size() - 1)];
       o << " " << num(f.predicted_ms) << " | " << (f.has_measured ? num(f.measured_ms) : std::string("-")) << " | " << f.switches << " |";
     }
     o << "\n";
@@ -92,8 +117,7 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
 
   // runs made with --visibility: what occlusion saved (docs/VISIBILITY.md)
   bool any_visibility = false;
-  for (const auto* log : in.runs)
-    for (const ReplayLogFrame& f : *log) any_visibility = any_visibility || f.has_visibility;
+  for (const ReplayRunDigest* run : in.runs) any_visibility = any_visibility || run->summary.summary().visibility_frames > 0;
   if (any_visibility) {
     o << "\n## Occlusion and focus\n\n"
          "Hidden objects read a visible fraction below 0.05 from the Embree occlusion estimate. The saving is the "
@@ -102,7 +126,7 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
          "| run | frames | hidden objects (mean share) | predicted ms on hidden objects without occlusion | "
          "occlusion saved ms / frame | frames whose pick hit an object |\n|---|---|---|---|---|---|\n";
     for (size_t r = 0; r < in.runs.size(); ++r) {
-      const ReplaySummary s = summarizeReplay(*in.runs[r]);
+      const ReplaySummary s = in.runs[r]->summary.summary();
       if (!s.visibility_frames) continue;
       o << "| " << in.run_names[r] << " | " << s.visibility_frames << " | " << num(100.0 * s.mean_hidden_share, 1) << " % | "
         << num(s.mean_hidden_cost_without_ms) << " | " << num(s.mean_occlusion_saved_ms) << " | " << s.pick_frames << " |\n";
@@ -117,13 +141,13 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
   std::vector<eval::PlotSeries> cost, levels, switches;
   int color = 0;
   for (size_t r = 0; r < in.runs.size(); ++r) {
-    const auto& log = *in.runs[r];
+    const ReplayRunDigest& run = *in.runs[r];
     eval::PlotSeries pred, meas, budget;
     pred.name = in.run_names[r] + " predicted";
     meas.name = in.run_names[r] + " measured";
     budget.name = in.run_names[r] + " budget";
     pred.markers = meas.markers = budget.markers = false;
-    for (const auto& f : log) {
+    for (const ReplayRunDigest::Point& f : run.points) {
       pred.x.push_back(f.time_s);
       pred.y.push_back(f.predicted_ms);
       if (f.has_measured) {
@@ -141,7 +165,7 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     cost.push_back(pred);
     if (!meas.x.empty()) cost.push_back(meas);
     if (!budget.x.empty()) cost.push_back(budget);
-    const ReplaySummary s = summarizeReplay(log);
+    const ReplaySummary s = run.summary.summary();
     size_t total = 0;
     for (size_t c : s.level_histogram) total += c;
     eval::PlotSeries h;
@@ -153,8 +177,7 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     }
     levels.push_back(h);
     // switches per second, in whole-second bins (the first frame's initial choice left out)
-    std::map<long, double> bins;
-    for (size_t i = 1; i < log.size(); ++i) bins[static_cast<long>(log[i].time_s)] += log[i].switches;
+    const std::map<long, double>& bins = run.switches_per_second;
     eval::PlotSeries sw;
     sw.name = in.run_names[r];
     sw.color = eval::seriesColor(static_cast<int>(r));

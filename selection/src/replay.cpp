@@ -71,116 +71,171 @@ std::string resolveReplayScene(const std::string& replay_path, const std::string
   return replay_path.substr(0, slash + 1) + scene;
 }
 
+namespace {
+
+// the header line's keys into `h`; an empty string when they are valid, else what is wrong
+std::string parseHeader(const json& j, ReplayHeader& h) {
+  std::string err;
+  auto v = j.find("scenelod_replay");
+  if (v == j.end()) return "the first line must be the header with \"scenelod_replay\"";
+  int64_t version = 0;
+  if (!jsonWholeNumber(*v, 1, 1, version)) return "unsupported replay version (this reader knows version 1)";
+  auto s = j.find("scene");
+  if (s == j.end() || !s->is_string() || s->get<std::string>().empty()) return "missing key \"scene\" (a path)";
+  h.scene = s->get<std::string>();
+  auto vp = j.find("viewport");
+  if (vp != j.end()) {
+    int64_t w = 0, ht = 0;
+    if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
+        !jsonWholeNumber((*vp)[1], 1, 65536, ht))
+      return "\"viewport\" must be [width, height] in whole pixels, 1..65536";
+    h.viewport_width_px = static_cast<uint32_t>(w);
+    h.viewport_height_px = static_cast<uint32_t>(ht);
+  }
+  h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
+  if (!err.empty()) return err;
+  if (!(h.fov_y_deg > 0.0 && h.fov_y_deg < 180.0)) return "\"fov_y_deg\" must be in (0, 180)";
+  auto b = j.find("budget_ms");
+  if (b != j.end() && !b->is_null()) {
+    h.budget_ms = number(j, "budget_ms", true, 0.0, err);
+    if (!err.empty()) return err;
+    if (!(h.budget_ms > 0.0)) return "\"budget_ms\" must be > 0 (or null for distance mode)";
+    h.has_budget = true;
+  }
+  h.pixels_per_cell = number(j, "pixels_per_cell", false, 1.0, err);
+  if (!err.empty()) return err;
+  if (!(h.pixels_per_cell > 0.0)) return "\"pixels_per_cell\" must be > 0";
+  return {};
+}
+
+// a frame line's keys into `f`; an empty string when they are valid, else what is wrong
+std::string parseFrame(const json& j, ReplayFrame& f) {
+  std::string err;
+  auto fr = j.find("frame");
+  if (fr == j.end()) return "missing key \"frame\"";
+  int64_t frame = 0;
+  if (!jsonWholeNumber(*fr, 0, int64_t(1) << 53, frame)) return "\"frame\" must be a whole number from 0 to 2^53";
+  f.frame = static_cast<uint64_t>(frame);
+  f.time_s = number(j, "time_s", false, 0.0, err);
+  if (!err.empty()) return err;
+  vec3(j, "eye", true, f.eye, err);
+  if (!err.empty()) return err;
+  vec3(j, "target", true, f.target, err);
+  if (!err.empty()) return err;
+  vec3(j, "up", false, f.up, err);
+  if (!err.empty()) return err;
+  auto m = j.find("measured_ms");
+  if (m != j.end() && !m->is_null()) {
+    f.measured_ms = number(j, "measured_ms", true, 0.0, err);
+    if (!err.empty()) return err;
+    if (f.measured_ms < 0.0) return "\"measured_ms\" must be >= 0";
+    f.has_measured = true;
+  }
+  auto p = j.find("pick");
+  if (p != j.end() && !p->is_null()) {
+    if (!p->is_array() || p->size() != 2 || !(*p)[0].is_number() || !(*p)[1].is_number())
+      return "\"pick\" must be [x, y] in pixels";
+    f.has_pick = true;
+    f.pick_px[0] = (*p)[0].get<float>();
+    f.pick_px[1] = (*p)[1].get<float>();
+  }
+  auto mv = j.find("moves");
+  if (mv != j.end() && !mv->is_null()) {
+    if (!mv->is_array()) return "\"moves\" must be an array of [object, tx, ty, tz, qx, qy, qz, qw, s]";
+    for (const json& e : *mv) {
+      if (!e.is_array() || e.size() != 9) return "each move must be [object, tx, ty, tz, qx, qy, qz, qw, s]";
+      for (const json& x : e)
+        if (!x.is_number() || !(std::fabs(x.get<double>()) <= kMaxReplayCoordinate))
+          return "a move holds a value that is not a number within +-1e18";
+      int64_t object = 0;
+      if (!jsonWholeNumber(e[0], 0, UINT32_MAX - 1, object))
+        return "a move's object must be a whole number from 0 to 4294967294";
+      ReplayMove rm;
+      rm.object = static_cast<uint32_t>(object);
+      rm.translation = glm::vec3(e[1].get<float>(), e[2].get<float>(), e[3].get<float>());
+      rm.rotation = glm::quat(e[7].get<float>(), e[4].get<float>(), e[5].get<float>(), e[6].get<float>());
+      rm.scale = e[8].get<float>();
+      if (!(rm.scale > 0.0f)) return "a move's scale must be > 0";
+      const float qn = glm::dot(rm.rotation, rm.rotation);
+      if (!(qn > 1e-12f)) return "a move's rotation quaternion has zero length";
+      f.moves.push_back(rm);
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+namespace {
+
+// one line of a replay as a JSON object; an empty string when it is one, else what is wrong
+std::string parseObject(const std::string& line, json& out) {
+  if (jsonNestingDepth(line.data(), line.size()) > kMaxJsonNesting)
+    return "JSON nested deeper than " + std::to_string(kMaxJsonNesting) + " levels";
+  out = json::parse(line, nullptr, false);
+  if (out.is_discarded()) return "not valid JSON";
+  if (!out.is_object()) return "expected a JSON object";
+  return {};
+}
+
+}  // namespace
+
+Error ReplayReader::open(const std::string& path) {
+  path_ = path;
+  line_no_ = 0;
+  frames_read_ = 0;
+  header_ = ReplayHeader();
+  in_.close();
+  in_.clear();
+  in_.open(path);
+  if (!in_) return Error(Status::kIoError, path + ": cannot open replay file");
+  std::string line;
+  if (!nextLine(line)) return Error(Status::kParseError, path + ": empty replay (no header line)");
+  json j;
+  std::string err = parseObject(line, j);
+  if (err.empty()) err = parseHeader(j, header_);
+  return err.empty() ? Error() : lineError(err);
+}
+
+bool ReplayReader::next(ReplayFrame& frame, Error& error) {
+  error = Error();
+  std::string line;
+  if (!nextLine(line)) return false;
+  json j;
+  frame = ReplayFrame();
+  std::string err = parseObject(line, j);
+  if (err.empty()) err = parseFrame(j, frame);
+  if (err.empty() && frames_read_ > 0 && frame.frame <= last_frame_) err = "frames must be in increasing order";
+  if (!err.empty()) {
+    error = lineError(err);
+    return false;
+  }
+  last_frame_ = frame.frame;
+  ++frames_read_;
+  return true;
+}
+
+Error ReplayReader::lineError(const std::string& what) const {
+  return Error(Status::kParseError, path_ + ":" + std::to_string(line_no_) + ": " + what);
+}
+
+bool ReplayReader::nextLine(std::string& line) {
+  while (std::getline(in_, line)) {
+    ++line_no_;
+    if (line.find_first_not_of(" \t\r") != std::string::npos) return true;
+  }
+  return false;
+}
+
 static Error readReplayImpl(const std::string& path, Replay& out) {
   out = Replay();
-  std::ifstream in(path);
-  if (!in) return Error(Status::kIoError, path + ": cannot open replay file");
-  std::string line;
-  size_t line_no = 0;
-  bool have_header = false;
-  auto fail = [&](const std::string& what) {
-    return Error(Status::kParseError, path + ":" + std::to_string(line_no) + ": " + what);
-  };
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    if (jsonNestingDepth(line.data(), line.size()) > kMaxJsonNesting)
-      return fail("JSON nested deeper than " + std::to_string(kMaxJsonNesting) + " levels");
-    json j = json::parse(line, nullptr, false);
-    if (j.is_discarded()) return fail("not valid JSON");
-    if (!j.is_object()) return fail("expected a JSON object");
-    std::string err;
-    if (!have_header) {
-      auto v = j.find("scenelod_replay");
-      if (v == j.end()) return fail("the first line must be the header with \"scenelod_replay\"");
-      int64_t version = 0;
-      if (!jsonWholeNumber(*v, 1, 1, version))
-        return fail("unsupported replay version (this reader knows version 1)");
-      ReplayHeader& h = out.header;
-      auto s = j.find("scene");
-      if (s == j.end() || !s->is_string() || s->get<std::string>().empty()) return fail("missing key \"scene\" (a path)");
-      h.scene = s->get<std::string>();
-      auto vp = j.find("viewport");
-      if (vp != j.end()) {
-        int64_t w = 0, ht = 0;
-        if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
-            !jsonWholeNumber((*vp)[1], 1, 65536, ht))
-          return fail("\"viewport\" must be [width, height] in whole pixels, 1..65536");
-        h.viewport_width_px = static_cast<uint32_t>(w);
-        h.viewport_height_px = static_cast<uint32_t>(ht);
-      }
-      h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
-      if (!err.empty()) return fail(err);
-      if (!(h.fov_y_deg > 0.0 && h.fov_y_deg < 180.0)) return fail("\"fov_y_deg\" must be in (0, 180)");
-      auto b = j.find("budget_ms");
-      if (b != j.end() && !b->is_null()) {
-        h.budget_ms = number(j, "budget_ms", true, 0.0, err);
-        if (!err.empty()) return fail(err);
-        if (!(h.budget_ms > 0.0)) return fail("\"budget_ms\" must be > 0 (or null for distance mode)");
-        h.has_budget = true;
-      }
-      h.pixels_per_cell = number(j, "pixels_per_cell", false, 1.0, err);
-      if (!err.empty()) return fail(err);
-      if (!(h.pixels_per_cell > 0.0)) return fail("\"pixels_per_cell\" must be > 0");
-      have_header = true;
-      continue;
-    }
-    ReplayFrame f;
-    auto fr = j.find("frame");
-    if (fr == j.end()) return fail("missing key \"frame\"");
-    int64_t frame = 0;
-    if (!jsonWholeNumber(*fr, 0, int64_t(1) << 53, frame)) return fail("\"frame\" must be a whole number from 0 to 2^53");
-    f.frame = static_cast<uint64_t>(frame);
-    if (!out.frames.empty() && f.frame <= out.frames.back().frame) return fail("frames must be in increasing order");
-    f.time_s = number(j, "time_s", false, 0.0, err);
-    if (!err.empty()) return fail(err);
-    vec3(j, "eye", true, f.eye, err);
-    if (!err.empty()) return fail(err);
-    vec3(j, "target", true, f.target, err);
-    if (!err.empty()) return fail(err);
-    vec3(j, "up", false, f.up, err);
-    if (!err.empty()) return fail(err);
-    auto m = j.find("measured_ms");
-    if (m != j.end() && !m->is_null()) {
-      f.measured_ms = number(j, "measured_ms", true, 0.0, err);
-      if (!err.empty()) return fail(err);
-      if (f.measured_ms < 0.0) return fail("\"measured_ms\" must be >= 0");
-      f.has_measured = true;
-    }
-    auto p = j.find("pick");
-    if (p != j.end() && !p->is_null()) {
-      if (!p->is_array() || p->size() != 2 || !(*p)[0].is_number() || !(*p)[1].is_number())
-        return fail("\"pick\" must be [x, y] in pixels");
-      f.has_pick = true;
-      f.pick_px[0] = (*p)[0].get<float>();
-      f.pick_px[1] = (*p)[1].get<float>();
-    }
-    auto mv = j.find("moves");
-    if (mv != j.end() && !mv->is_null()) {
-      if (!mv->is_array()) return fail("\"moves\" must be an array of [object, tx, ty, tz, qx, qy, qz, qw, s]");
-      for (const json& e : *mv) {
-        if (!e.is_array() || e.size() != 9) return fail("each move must be [object, tx, ty, tz, qx, qy, qz, qw, s]");
-        for (const json& x : e)
-          if (!x.is_number() || !(std::fabs(x.get<double>()) <= kMaxReplayCoordinate))
-            return fail("a move holds a value that is not a number within +-1e18");
-        int64_t object = 0;
-        if (!jsonWholeNumber(e[0], 0, UINT32_MAX - 1, object))
-          return fail("a move's object must be a whole number from 0 to 4294967294");
-        ReplayMove rm;
-        rm.object = static_cast<uint32_t>(object);
-        rm.translation = glm::vec3(e[1].get<float>(), e[2].get<float>(), e[3].get<float>());
-        rm.rotation = glm::quat(e[7].get<float>(), e[4].get<float>(), e[5].get<float>(), e[6].get<float>());
-        rm.scale = e[8].get<float>();
-        if (!(rm.scale > 0.0f)) return fail("a move's scale must be > 0");
-        const float qn = glm::dot(rm.rotation, rm.rotation);
-        if (!(qn > 1e-12f)) return fail("a move's rotation quaternion has zero length");
-        f.moves.push_back(rm);
-      }
-    }
-    out.frames.push_back(std::move(f));
-  }
-  if (!have_header) return Error(Status::kParseError, path + ": empty replay (no header line)");
-  return Error();
+  ReplayReader reader;
+  if (Error e = reader.open(path)) return e;
+  out.header = reader.header();
+  ReplayFrame f;
+  Error e;
+  while (reader.next(f, e)) out.frames.push_back(std::move(f));
+  return e;
 }
 
 static Error writeReplayImpl(const std::string& path, const Replay& r) {

@@ -72,8 +72,8 @@ CostCoefficients syntheticTrueCost() {
   return t;
 }
 
-Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options, std::vector<ReplayLogFrame>& log) {
-  log.clear();
+Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame, ReplayScene& scene,
+                      const ReplayRunOptions& options, const ReplayLogSink& sink) {
   if (Error e = validateReplayScene(scene, scene.name)) return e;
   const size_t n = scene.objectCount();
   SelectorConfig cfg;
@@ -83,7 +83,6 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
   ContextDeleter ctx{createSelectorContext(cfg)};
   if (!ctx.c) return Error(Status::kOutOfMemory, scene.name + ": cannot create the selector context");
 
-  const ReplayHeader& h = replay.header;
   Camera cam;
   cam.viewport_width_px = h.viewport_width_px;
   cam.viewport_height_px = h.viewport_height_px;
@@ -110,7 +109,9 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
   const LevelTable table = scene.table.view();
   Gaussian noise(options.seed);
 
-  for (const ReplayFrame& f : replay.frames) {
+  ReplayFrame f;
+  Error read_error;
+  while (next_frame(f, read_error)) {
     const std::string where = scene.name + ": replay frame " + std::to_string(f.frame);
     if (!f.moves.empty()) {
       if (Error e = applyMoves(scene, f.moves, where)) return e;
@@ -163,9 +164,24 @@ Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions
       out.measured_ms = std::max(0.0, truth * (1.0 + options.noise * noise.next()));
     }
     if (out.has_measured) reportFrameTime(ctx.c, st.frame, static_cast<float>(out.measured_ms));
-    log.push_back(std::move(out));
+    if (Error e = sink(out)) return e;
   }
-  return Error();
+  return read_error;
+}
+
+Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options, std::vector<ReplayLogFrame>& log) {
+  log.clear();
+  size_t next = 0;
+  auto frames = [&](ReplayFrame& f, Error&) {
+    if (next == replay.frames.size()) return false;
+    f = replay.frames[next++];
+    return true;
+  };
+  auto keep = [&](const ReplayLogFrame& out) {
+    log.push_back(out);
+    return Error();
+  };
+  return runReplayStream(replay.header, frames, scene, options, keep);
 }
 
 std::string replayLogLine(const ReplayLogFrame& f) {
@@ -211,60 +227,68 @@ Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>&
   return out.commit();
 }
 
-ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup) {
-  ReplaySummary s;
-  s.frames = log.size();
-  s.warmup = warmup;
-  if (log.empty()) return s;
-  s.objects = log[0].levels.size();
-  s.duration_s = log.back().time_s - log.front().time_s;
-  size_t measured = 0, switches = 0;
-  for (size_t i = 0; i < log.size(); ++i) {
-    const ReplayLogFrame& f = log[i];
-    if (f.flags & kFlagOverBudget) ++s.over_budget_flagged;
-    s.mean_predicted_ms += f.predicted_ms;
-    s.mean_triangles += f.triangles;
-    s.mean_benefit += f.benefit;
-    if (i > 0) switches += f.switches;
-    for (int8_t l : f.levels) {
-      const size_t b = static_cast<size_t>(l + 1);
-      if (s.level_histogram.size() <= b) s.level_histogram.resize(b + 1, 0);
-      ++s.level_histogram[b];
-    }
-    if (i < warmup || !f.has_measured) continue;
-    ++measured;
-    s.mean_measured_ms += f.measured_ms;
-    if (f.measured_ms > 0.0) s.mean_abs_prediction_error += std::fabs(f.predicted_ms - f.measured_ms) / f.measured_ms;
-    if (f.has_budget) {
-      ++s.budget_frames;
-      if (f.measured_ms <= 1.1 * f.budget_ms) ++s.within_10_percent;
-    }
+ReplaySummaryBuilder::ReplaySummaryBuilder(size_t warmup) { s_.warmup = warmup; }
+
+void ReplaySummaryBuilder::add(const ReplayLogFrame& f) {
+  const size_t i = s_.frames++;
+  if (i == 0) {
+    s_.objects = f.levels.size();
+    first_time_s_ = f.time_s;
   }
-  s.mean_predicted_ms /= static_cast<double>(log.size());
-  s.mean_triangles /= static_cast<double>(log.size());
-  s.mean_benefit /= static_cast<double>(log.size());
-  if (measured) {
-    s.mean_measured_ms /= static_cast<double>(measured);
-    s.mean_abs_prediction_error /= static_cast<double>(measured);
+  s_.duration_s = f.time_s - first_time_s_;
+  if (f.flags & kFlagOverBudget) ++s_.over_budget_flagged;
+  predicted_sum_ += f.predicted_ms;
+  triangles_sum_ += f.triangles;
+  benefit_sum_ += f.benefit;
+  if (i > 0) switches_ += f.switches;  // the first frame's switches are the initial choice
+  for (int8_t l : f.levels) {
+    const size_t bin = static_cast<size_t>(l + 1);
+    if (s_.level_histogram.size() <= bin) s_.level_histogram.resize(bin + 1, 0);
+    ++s_.level_histogram[bin];
   }
-  for (const ReplayLogFrame& f : log) {
-    if (!f.has_visibility) continue;
-    ++s.visibility_frames;
-    if (!f.visible.empty()) s.mean_hidden_share += static_cast<double>(f.hidden_count) / static_cast<double>(f.visible.size());
-    s.mean_occlusion_saved_ms += f.occlusion_saved_ms;
-    s.mean_hidden_cost_without_ms += f.hidden_cost_without_ms;
-    if (f.pick_object >= 0) ++s.pick_frames;
+  if (f.has_visibility) {
+    ++s_.visibility_frames;
+    if (!f.visible.empty()) hidden_share_sum_ += static_cast<double>(f.hidden_count) / static_cast<double>(f.visible.size());
+    saved_sum_ += f.occlusion_saved_ms;
+    hidden_without_sum_ += f.hidden_cost_without_ms;
+    if (f.pick_object >= 0) ++s_.pick_frames;
+  }
+  if (i < s_.warmup || !f.has_measured) return;
+  ++measured_;
+  measured_sum_ += f.measured_ms;
+  if (f.measured_ms > 0.0) error_sum_ += std::fabs(f.predicted_ms - f.measured_ms) / f.measured_ms;
+  if (f.has_budget) {
+    ++s_.budget_frames;
+    if (f.measured_ms <= 1.1 * f.budget_ms) ++s_.within_10_percent;
+  }
+}
+
+ReplaySummary ReplaySummaryBuilder::summary() const {
+  ReplaySummary s = s_;
+  if (s.frames == 0) return s;
+  const double frames = static_cast<double>(s.frames);
+  s.mean_predicted_ms = predicted_sum_ / frames;
+  s.mean_triangles = triangles_sum_ / frames;
+  s.mean_benefit = benefit_sum_ / frames;
+  if (measured_) {
+    s.mean_measured_ms = measured_sum_ / static_cast<double>(measured_);
+    s.mean_abs_prediction_error = error_sum_ / static_cast<double>(measured_);
   }
   if (s.visibility_frames) {
     const double k = static_cast<double>(s.visibility_frames);
-    s.mean_hidden_share /= k;
-    s.mean_occlusion_saved_ms /= k;
-    s.mean_hidden_cost_without_ms /= k;
+    s.mean_hidden_share = hidden_share_sum_ / k;
+    s.mean_occlusion_saved_ms = saved_sum_ / k;
+    s.mean_hidden_cost_without_ms = hidden_without_sum_ / k;
   }
-  // the first frame's switches are the initial choice, not switches
   if (s.duration_s > 0.0 && s.objects > 0)
-    s.switches_per_object_per_second = static_cast<double>(switches) / static_cast<double>(s.objects) / s.duration_s;
+    s.switches_per_object_per_second = static_cast<double>(switches_) / static_cast<double>(s.objects) / s.duration_s;
   return s;
+}
+
+ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup) {
+  ReplaySummaryBuilder b(warmup);
+  for (const ReplayLogFrame& f : log) b.add(f);
+  return b.summary();
 }
 
 }  // namespace scenelod::selection

@@ -77,3 +77,28 @@ TEST(ReplayCommands, BadInputGivesClearErrors) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("lost_scene.json: cannot open level scene"), std::string::npos) << r.err;
 }
+
+TEST(ReplayCommands, LongRunsStreamTheirLogAndDecimateTheReportsSeries) {
+  // the log streams to disk frame by frame and the report keeps at most 4,096 points a run, so memory
+  // does not grow with the frame count; 9,000 frames are kept every 4th (stride 1 -> 2 -> 4)
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  const std::string replay = dir + "/long.jsonl", log = dir + "/long_log.jsonl", report = dir + "/long_report.md";
+  ToolRun r = tool({"record", "builtin:small", "--path", "orbit", "--frames", "9000", "-o", replay});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = tool({"replay", replay, "--out", log, "--report", report});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(lineCount(slurp(log)), 9000u);
+  EXPECT_NE(r.out.find("9000 frames"), std::string::npos) << r.out;
+  const std::string md = slurp(report);
+  EXPECT_NE(md.find(", 9000 frames"), std::string::npos) << md.substr(0, 400);
+  EXPECT_NE(md.find("## Frame cost over time (every 40th frame)"), std::string::npos);
+  EXPECT_NE(md.find("\n| 8960 | "), std::string::npos);  // the last row: a multiple of 40
+  // a run that fails part-way leaves no log behind
+  const std::string bad = dir + "/bad_tail.jsonl", bad_log = dir + "/bad_tail_log.jsonl";
+  std::ofstream(bad) << slurp(replay) << "{\"frame\": 1, \"eye\": [0, 0, 1], \"target\": [0, 0, 0]}\n";
+  r = tool({"replay", bad, "--out", bad_log});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(bad + ":9002: frames must be in increasing order"), std::string::npos) << r.err;
+  EXPECT_FALSE(scenelod::test::fileExists(bad_log));
+}

@@ -3,6 +3,7 @@
 // optionally the measured frame time, a pick point and object moves. Offline code: allocates,
 // returns Error naming the file and line.
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,30 @@ struct Replay {
 // Reads a replay. Errors: missing file, a line that is not JSON, a missing or mistyped key, a
 // version other than 1, frames out of order, a non-finite number; each names the file and line.
 Error readReplay(const std::string& path, Replay& out);
+
+// Reads a replay one frame at a time, for runs whose memory must not grow with their length
+// (runReplayStream in replay_runner.h). Same checks and messages as readReplay.
+class ReplayReader {
+ public:
+  // Opens `path` and reads its header line.
+  Error open(const std::string& path);
+  const ReplayHeader& header() const { return header_; }
+  // The next frame into `frame`: true when there was one; false at the end of the file (`error`
+  // empty) or on a bad line (`error` names the file and line).
+  bool next(ReplayFrame& frame, Error& error);
+
+ private:
+  // the next line that is not blank, empty at the end of the file
+  bool nextLine(std::string& line);
+  Error lineError(const std::string& what) const;
+
+  std::ifstream in_;
+  std::string path_;
+  size_t line_no_ = 0;
+  size_t frames_read_ = 0;
+  uint64_t last_frame_ = 0;
+  ReplayHeader header_;
+};
 // Writes a replay (numbers with enough digits to read back the same floats).
 Error writeReplay(const std::string& path, const Replay& replay);
 

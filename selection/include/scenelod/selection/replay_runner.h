@@ -4,6 +4,7 @@
 // coefficients with seeded Gaussian noise) and report it to the selector before the next frame, as
 // an engine would. Produces the JSON-lines log of docs/REPLAY.md. Offline code: allocates.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,14 @@ struct ReplayLogFrame {
 Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options,
                 std::vector<ReplayLogFrame>& log);
 
+// The same run in constant memory: frames come one at a time from `next_frame` (true while there is
+// one; a false with its Error set ends the run with that error, e.g. ReplayReader::next), and each
+// frame's log goes to `sink` as soon as it is selected (an Error from the sink ends the run).
+using ReplayFrameSource = std::function<bool(ReplayFrame& frame, Error& error)>;
+using ReplayLogSink = std::function<Error(const ReplayLogFrame& frame)>;
+Error runReplayStream(const ReplayHeader& header, const ReplayFrameSource& next_frame, ReplayScene& scene,
+                      const ReplayRunOptions& options, const ReplayLogSink& sink);
+
 // One log line (no newline): {"frame", "time_s", "budget_ms", "predicted_ms", "measured_ms",
 // "levels", "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
 // fixed precision so logs compare exactly.
@@ -96,5 +105,21 @@ struct ReplaySummary {
 };
 
 ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup = 30);
+
+// summarizeReplay fed one log frame at a time, in constant memory (a streamed run's summary).
+class ReplaySummaryBuilder {
+ public:
+  explicit ReplaySummaryBuilder(size_t warmup = 30);
+  void add(const ReplayLogFrame& frame);
+  ReplaySummary summary() const;
+
+ private:
+  ReplaySummary s_;
+  double first_time_s_ = 0.0;
+  double predicted_sum_ = 0.0, triangles_sum_ = 0.0, benefit_sum_ = 0.0;
+  double measured_sum_ = 0.0, error_sum_ = 0.0;
+  double hidden_share_sum_ = 0.0, saved_sum_ = 0.0, hidden_without_sum_ = 0.0;
+  size_t measured_ = 0, switches_ = 0;
+};
 
 }  // namespace scenelod::selection
