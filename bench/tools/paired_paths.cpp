@@ -22,12 +22,8 @@
 #include "scenelod/lodcore/obj_io.h"
 
 namespace scenelod::detail {
-// private test hooks (lodcore/src/elimination.cpp, synthesis.cpp): each returns the previous choice
-bool useEdgeBlocks(bool on);
-bool useWindowedProbes(bool on);
-bool useRepeatedEdgeDrop(bool on);
+// private test hooks (lodcore/src/synthesis.cpp): each returns the previous choice
 bool useEigenvalueLanes(bool on);
-bool useGroupedSynthesis(bool on);
 int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
 }  // namespace scenelod::detail
 
@@ -103,11 +99,7 @@ int main(int argc, char** argv) {
       {"AVX2 variants: output pass", detail::useAvx2Paths, output},
       {"AVX2 variants: prepare", detail::useAvx2Paths, prepare},
       {"AVX2 variants: whole level", detail::useAvx2Paths, level},
-      {"edge blocks: elimination", detail::useEdgeBlocks, elimination},
-      {"windowed probes: elimination", detail::useWindowedProbes, elimination},
-      {"repeated edge drop: elimination", detail::useRepeatedEdgeDrop, elimination},
       {"eigenvalue lanes: synthesis", detail::useEigenvalueLanes, synthesis},
-      {"grouped synthesis: synthesis", detail::useGroupedSynthesis, synthesis},
       // last: the hook(true) after each pair leaves it on always, not by size as by default
       {"renumbering: whole level", [](bool on) { return detail::setRenumberingForTest(on ? 1 : 0) != 0; }, level},
   };

@@ -8,102 +8,32 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <type_traits>
 #include <utility>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#endif
 
 #include "cluster_internal.h"
 
 namespace scenelod::detail {
 
-// x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts and the
-// coverage pass's lookups in lanes
-#if defined(__x86_64__) || defined(__i386__)
-#define SCENELOD_ELIMINATION_AVX2_TARGET __attribute__((target("avx2,popcnt")))
-#else
-#define SCENELOD_ELIMINATION_AVX2_TARGET
-#endif
-
 namespace {
 inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
 
-// Candidate edges listed under their lower cluster id. Where the clusters are few enough (below),
-// a cluster's first four edges are kept inline in a 16-byte block (16-bit ids: blocks are used only
-// below 2^15 clusters), their other ids compared at once, so that a lookup is one block read and a
-// branch that is taken only for a new edge (the walk of a list mispredicted about once per lookup
-// at coarse levels, where a low id heads several edges); later edges, edges whose id does not fit
-// 16 bits, and all edges where the blocks would be too large, are chained through flat arrays
-// under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle wrote
-// recently: the input order is spatially coherent, the cluster ids are not). With blocks the heads
-// are made when the first edge is chained (each of the bunny's levels chains a few). The blocks, 32
-// bytes per cluster with 32-bit ids, were the largest part of the bunny chain's memory peak (its 50 %
-// level's elimination: 0.54 MB of 3.53).
+// Candidate edges listed under their lower cluster id, chained through flat arrays under a 4-byte
+// head per cluster (a walk of a node or two that a nearby input triangle wrote recently: the input
+// order is spatially coherent, the cluster ids are not).
 class EdgeLists {
  public:
-  EdgeLists(size_t clusters, bool use_blocks) : clusters_(clusters) {
-    if (use_blocks) blocks_.assign(clusters, Block{{kFree, kFree, kFree, kFree}, {kFree, kFree, kFree, kFree}});
-    else head_.assign(clusters, kNoNode);
+  explicit EdgeLists(size_t clusters) : head_(clusters, kNoNode) {
     node_hi_.reset(new uint32_t[1]);
     node_next_.reset(new uint32_t[1]);
     node_hi_[0] = kNone;  // node 0: the end of every list (its hi matches no cluster)
     node_next_[0] = kNoNode;
-    if (use_blocks) {
-      node_id_.reset(new uint32_t[1]);
-      node_id_[0] = kNone;
-    }
   }
-  // the id of edge (lo, hi), lo < hi, or kNone
-  SCENELOD_ALWAYS_INLINE uint32_t find(uint32_t lo, uint32_t hi) const {
-    if (blocks_.empty()) return walkNodes(lo, hi) - 1;  // (every edge chained, the heads made; node 0: kNone)
-    swapOwner(lo, hi);
-    const Block& b = blocks_[lo];
-#if defined(__SSE2__)
-    const __m128i eq = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                       _mm_set1_epi16(static_cast<short>(hi)));
-    const uint32_t found = uint32_t(_mm_movemask_epi8(eq)) & 0x55u;  // bit 2k: entry k
-#else
-    uint32_t found = 0;
-    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << (2 * k);
-#endif
-    // without a branch: the id when found inline, else kNone
-    const uint32_t id = uint32_t(b.id[__builtin_ctz(found | 0x40u) >> 1]) | (0u - uint32_t(found == 0));
-    // not found in a full block (or once some edge's id went past 16 bits): the rest are chained
-    // (one test, rarely taken)
-    if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(long_ids_)))
-      return head_.empty() ? kNone : walkBeyondBlock(lo, hi);  // (none chained yet)
-    return id;
-  }
-  // covered[min(find(edge), en)] = 1 for the three edges of each of the n triangles (each listed
-  // with its lowest id first: the min of a pair is then one select). find's work with the members
-  // read once: as find in a loop, each byte store may alias them, and the block array, the flags and
-  // the triangles' pointer were read again for every lookup.
-  // With avx2 (blocks only), eight triangles at a time in lanes (markCoveredInBlocksAvx2), the rest
-  // as below.
-  void markCovered(const uint32_t* tri, size_t n, uint8_t* __restrict covered, uint32_t en, bool avx2) const {
-    if (blocks_.empty()) {
-      for (size_t t = 0; t < 3 * n; t += 3) {
-        const uint32_t c0 = tri[t], c1 = tri[t + 1], c2 = tri[t + 2];
-        const uint32_t b = branchlessMin(c1, c2);
-        covered[branchlessMin(walkNodes(c0, c1) - 1, en)] = 1;
-        covered[branchlessMin(walkNodes(b, c1 ^ c2 ^ b) - 1, en)] = 1;
-        covered[branchlessMin(walkNodes(c0, c2) - 1, en)] = 1;
-      }
-      return;
-    }
-    markCoveredWithBlocks(tri, n, covered, en, avx2);
-  }
-  // whether every edge is chained (no blocks): findOrAdd's case
-  bool chained() const { return blocks_.empty(); }
-  // Without blocks: the id of edge (lo, hi), lo < hi; an edge not listed yet is listed as `id` (the
-  // count of edges so far), which is returned. Without a branch on which: the new node is written
-  // whatever and linked only for a new edge (a branch on it mispredicted: 1 M sphere 10 %, 135 k
-  // times, a quarter of the collapsed triangles' lookups making an edge).
+  // the id of edge (lo, hi), lo < hi, or kNone (kNoNode - 1)
+  SCENELOD_ALWAYS_INLINE uint32_t find(uint32_t lo, uint32_t hi) const { return walkNodes(lo, hi) - 1; }
+  // The id of edge (lo, hi), lo < hi; an edge not listed yet is listed as `id` (the count of edges
+  // so far), which is returned. Without a branch on which: the new node is written whatever and
+  // linked only for a new edge (a branch on it mispredicted: 1 M sphere 10 %, 135 k times, a quarter
+  // of the collapsed triangles' lookups making an edge).
   SCENELOD_ALWAYS_INLINE uint32_t findOrAdd(uint32_t lo, uint32_t hi, uint32_t id) {
     const uint32_t node = id + 1;
     if (node >= node_room_) growNodes();
@@ -116,235 +46,8 @@ class EdgeLists {
     head_[lo] = head ^ ((node ^ head) & made);
     return (found ^ ((node ^ found) & made)) - 1;
   }
-  // With blocks: findOrAdd's contract. The block's entry is written whatever, a found edge's over
-  // itself, a new one's into the first free entry; only a lookup that must go past the block (not
-  // found in a full block, ids past 16 bits) takes a branch, rarely taken. (find, then add where not
-  // found: that branch mispredicted at bunny 50 %, 15 k times for 34 k lookups, half of which make an
-  // edge.)
-  SCENELOD_ALWAYS_INLINE uint32_t findOrAddInBlock(uint32_t lo, uint32_t hi, uint32_t id) {
-    uint32_t owner = lo, other = hi;
-    swapOwner(owner, other);
-    Block& b = blocks_[owner];
-#if defined(__SSE2__)
-    const __m128i his = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi));
-    const uint32_t eq = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(his, _mm_set1_epi16(static_cast<short>(other)))));
-    const uint32_t free = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(his, _mm_set1_epi16(static_cast<short>(kFree)))));
-    const uint32_t found = eq & 0x55u, room = free & 0x55u;  // bit 2k: entry k
-#else
-    uint32_t found = 0, room = 0;
-    for (int k = 0; k < 4; ++k) {
-      found |= uint32_t(b.hi[k] == other) << (2 * k);
-      room |= uint32_t(b.hi[k] == kFree) << (2 * k);
-    }
-#endif
-    if ((0u - uint32_t(found == 0)) & (uint32_t(room == 0) | uint32_t(long_ids_) | uint32_t(id >= kFree)))
-      return findOrAddBeyondBlock(lo, hi, id);
-    const int k = __builtin_ctz(found | room) >> 1;  // found, or the first free entry
-    // (by index: as a select or masks, the compiler made it a branch, mispredicted as often as before)
-    const uint32_t pick[2] = {id, b.id[k]};
-    const uint32_t e = pick[found != 0];
-    // a found edge's entry is written to a spare block instead: written over itself, the block's next
-    // lookup (the next triangle's, at coarse levels, where most lookups find their edge) waited on
-    // the narrow stores (bunny 2 %, eliminate 0.31 -> 0.42 ms)
-    Block* const dst[2] = {&b, &spare_};
-    dst[found != 0]->hi[k] = static_cast<uint16_t>(other);
-    dst[found != 0]->id[k] = static_cast<uint16_t>(e);
-    return e;
-  }
-  // lists edge `id` = (lo, hi), not listed yet (with blocks)
-  void add(uint32_t lo, uint32_t hi, uint32_t id) {
-    if (!blocks_.empty()) {  // (else findOrAdd)
-      swapOwner(lo, hi);
-      Block& b = blocks_[lo];
-      if (id < kFree) {
-        // the first free entry without a branch per entry (the loop's exit mispredicted: bunny 50 %,
-        // 8.5 k of the level's 44.8 k mispredicts)
-#if defined(__SSE2__)
-        const __m128i free = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                             _mm_set1_epi16(static_cast<short>(kFree)));
-        const uint32_t room = uint32_t(_mm_movemask_epi8(free)) & 0x55u;  // bit 2k: entry k free
-#else
-        uint32_t room = 0;
-        for (int k = 0; k < 4; ++k) room |= uint32_t(b.hi[k] == kFree) << (2 * k);
-#endif
-        if (room) {
-          const int k = __builtin_ctz(room) >> 1;
-          b.hi[k] = static_cast<uint16_t>(hi);
-          b.id[k] = static_cast<uint16_t>(id);
-          return;
-        }
-      } else {
-        long_ids_ = true;
-      }
-      if (head_.empty()) head_.assign(clusters_, kNoNode);
-    }
-    const uint32_t node = node_count_++;
-    if (node >= node_room_) growNodes();
-    node_hi_[node] = hi;
-    node_id_[node] = id;
-    node_next_[node] = head_[lo];
-    head_[lo] = node;
-  }
 
  private:
-  // with blocks, an edge is listed under its lower id when the ids' sum is odd, else under the
-  // higher one: the lowest ids (the heaviest clusters) would otherwise head all their edges,
-  // overfilling blocks. Without blocks the lower id is kept (on the 1 M sphere's 10 % level the
-  // parity made the walks slower: 14.5 -> 18 ms)
-  static void swapOwner(uint32_t& lo, uint32_t& hi) {
-    const uint32_t flip = (((lo ^ hi) & 1u) - 1u) & (lo ^ hi);  // lo ^ hi when the sum is even
-    lo ^= flip;
-    hi ^= flip;
-  }
-  // markCovered with blocks (out of line: inlined, the chained loop above took 0.2 M instructions
-  // more on the 1 M sphere's 10 % level, 8.59 -> 8.80 M)
-  __attribute__((noinline)) void markCoveredWithBlocks(const uint32_t* tri, size_t n, uint8_t* __restrict covered,
-                                                       uint32_t en, bool avx2) const {
-    size_t done = 0;
-    if (avx2) done = long_ids_ ? markCoveredInBlocksAvx2<true>(tri, n, covered, en)
-                               : markCoveredInBlocksAvx2<false>(tri, n, covered, en);
-    if (long_ids_) markCoveredInBlocks<true>(tri + 3 * done, n - done, covered, en);
-    else markCoveredInBlocks<false>(tri + 3 * done, n - done, covered, en);
-  }
-  // markCovered with blocks; kLongIds: long_ids_ (a test per lookup otherwise, though it is nearly
-  // always false)
-  template <bool kLongIds>
-  void markCoveredInBlocks(const uint32_t* tri, size_t n, uint8_t* __restrict covered, uint32_t en) const {
-    const Block* const blocks = blocks_.data();
-    const bool chained_any = !head_.empty();
-    // find's result where it is an edge id, else en (not kNone: then no clamp on the common path)
-    auto lookup = [&](uint32_t lo, uint32_t hi) __attribute__((always_inline)) {
-      swapOwner(lo, hi);
-      const Block& b = blocks[lo];
-#if defined(__SSE2__)
-      const __m128i eq = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                         _mm_set1_epi16(static_cast<short>(hi)));
-      const uint32_t found = uint32_t(_mm_movemask_epi8(eq)) & 0x55u;
-#else
-      uint32_t found = 0;
-      for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << (2 * k);
-#endif
-      const uint32_t id = b.id[__builtin_ctz(found | 0x40u) >> 1];
-      // one test, as in find (as two, the block's fill mispredicted: chain level 2, 14.5 k -> 23.1 k
-      // simulated mispredicts)
-      if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(kLongIds)))
-        return chained_any ? branchlessMin(walkBeyondBlock(lo, hi), en) : en;
-      return found ? id : en;
-    };
-    for (size_t t = 0; t < 3 * n; t += 3) {
-      const uint32_t c0 = tri[t], c1 = tri[t + 1], c2 = tri[t + 2];
-      const uint32_t b = branchlessMin(c1, c2);
-      covered[lookup(c0, c1)] = 1;
-      covered[lookup(b, c1 ^ c2 ^ b)] = 1;
-      covered[lookup(c0, c2)] = 1;
-    }
-  }
-#if defined(__x86_64__) || defined(__i386__)
-  // markCoveredInBlocks for the first multiple of 8 of the n triangles, whose count it returns.
-  // Eight triangles' corners go into columns (as in classifyAvx2), then each of the three edges'
-  // eight lookups: the owner swapped in lanes, and for four lookups at a time the blocks' hi and id
-  // halves gathered as 64-bit words (index 2 x owner, signed 32 bits: blocks are used below 2^15
-  // clusters), the other id compared in each 16-bit entry, the id found picked with the compare's
-  // mask and shifts (a block's other ids are distinct: at most one entry matches).
-  // A lookup that must go past its block (not found in a full block, or any not found with kLongIds)
-  // is done as in find, one test per four lookups. The stores are scalar; each writes a 1, so their
-  // order is free. (The scalar pass: about 40 instructions a lookup, 4.18 M of the bunny 50 % level's
-  // 14.45 M.)
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET size_t markCoveredInBlocksAvx2(const uint32_t* tri, size_t n,
-                                                                  uint8_t* __restrict covered, uint32_t en) const {
-    static_assert(offsetof(Block, hi) == 0 && offsetof(Block, id) == 8, "a block's two 64-bit halves");
-    const long long* const words = reinterpret_cast<const long long*>(blocks_.data());  // block c: 2c hi, 2c + 1 id
-    const bool chained_any = !head_.empty();
-    const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
-    const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
-    const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
-    size_t t = 0;
-    for (; t + 8 <= n; t += 8) {
-      const uint32_t* v = tri + 3 * t;
-      const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v));
-      const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 8));
-      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 16));
-      const __m256i c0 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x92), c, 0x24), order0);
-      const __m256i c1 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x24), c, 0x49), order1);
-      const __m256i c2 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x49), c, 0x92), order2);
-      // c0 is each triangle's lowest id
-      cover8<kLongIds>(words, chained_any, covered, en, c0, c1);
-      cover8<kLongIds>(words, chained_any, covered, en, _mm256_min_epu32(c1, c2), _mm256_max_epu32(c1, c2));
-      cover8<kLongIds>(words, chained_any, covered, en, c0, c2);
-    }
-    return t;
-  }
-  // markCoveredInBlocksAvx2's eight lookups (lo, hi), lo < hi, in lanes
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET SCENELOD_ALWAYS_INLINE void cover8(const long long* words, bool chained_any,
-                                                                      uint8_t* __restrict covered, uint32_t en,
-                                                                      __m256i lo, __m256i hi) const {
-    const __m256i d = _mm256_xor_si256(lo, hi);
-    const __m256i one = _mm256_set1_epi32(1);
-    const __m256i flip = _mm256_and_si256(_mm256_sub_epi32(_mm256_and_si256(d, one), one), d);  // as swapOwner
-    lo = _mm256_xor_si256(lo, flip);
-    hi = _mm256_xor_si256(hi, flip);
-    cover4<kLongIds>(words, chained_any, covered, en, _mm256_castsi256_si128(lo), _mm256_castsi256_si128(hi));
-    cover4<kLongIds>(words, chained_any, covered, en, _mm256_extracti128_si256(lo, 1), _mm256_extracti128_si256(hi, 1));
-  }
-  // four lookups, owner lo and other id hi (swapped already)
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET SCENELOD_ALWAYS_INLINE void cover4(const long long* words, bool chained_any,
-                                                                      uint8_t* __restrict covered, uint32_t en,
-                                                                      __m128i lo, __m128i hi) const {
-    // a 64-bit lane's low 16 bits into its four 16-bit entries
-    const __m256i spread = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 8, 9, 8, 9, 8, 9, 8, 9,
-                                            0, 1, 0, 1, 0, 1, 0, 1, 8, 9, 8, 9, 8, 9, 8, 9);
-    const __m128i at = _mm_add_epi32(lo, lo);
-    const __m256i his = _mm256_i32gather_epi64(words, at, 8);
-    const __m256i ids = _mm256_i32gather_epi64(words + 1, at, 8);
-    const __m256i eq = _mm256_cmpeq_epi16(his, _mm256_shuffle_epi8(_mm256_cvtepu32_epi64(hi), spread));
-    __m256i id = _mm256_and_si256(eq, ids);
-    id = _mm256_or_si256(id, _mm256_srli_epi64(id, 32));
-    id = _mm256_and_si256(_mm256_or_si256(id, _mm256_srli_epi64(id, 16)), _mm256_set1_epi64x(0xFFFF));
-    const __m256i none = _mm256_cmpeq_epi64(eq, _mm256_setzero_si256());
-    alignas(32) uint64_t res[4];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(res),
-                       _mm256_blendv_epi8(id, _mm256_set1_epi64x(static_cast<long long>(en)), none));
-    uint32_t beyond = uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(none)));
-    if (!kLongIds) {
-      // hi[3] free: all ones once the other three entries are or'd with ones (a block that is not full)
-      const __m256i open = _mm256_cmpeq_epi64(_mm256_or_si256(his, _mm256_set1_epi64x(0x0000FFFFFFFFFFFFll)),
-                                              _mm256_set1_epi32(-1));
-      beyond &= ~uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(open)));
-    }
-    if (beyond) {  // (rarely taken, as find's test)
-      alignas(16) uint32_t l[4], h[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(l), lo);
-      _mm_store_si128(reinterpret_cast<__m128i*>(h), hi);
-      do {
-        const int k = __builtin_ctz(beyond);
-        res[k] = chained_any ? branchlessMin(walkBeyondBlock(l[k], h[k]), en) : en;
-        beyond &= beyond - 1;
-      } while (beyond);
-    }
-    covered[res[0]] = 1;
-    covered[res[1]] = 1;
-    covered[res[2]] = 1;
-    covered[res[3]] = 1;
-  }
-#else
-  template <bool kLongIds>
-  size_t markCoveredInBlocksAvx2(const uint32_t*, size_t, uint8_t*, uint32_t) const { return 0; }
-#endif
-  // findOrAddInBlock past its block: as find, then add where not found (out of line, as below)
-  __attribute__((noinline)) uint32_t findOrAddBeyondBlock(uint32_t lo, uint32_t hi, uint32_t id) {
-    const uint32_t e = find(lo, hi);
-    if (e != kNone) return e;
-    add(lo, hi, id);
-    return id;
-  }
-  // with blocks, the edges chained after a full block (out of line: inlined into find, the walk
-  // took find itself out of line on the bunny's levels, 13.3 -> 15.0 M instructions at 50 %)
-  __attribute__((noinline)) uint32_t walkBeyondBlock(uint32_t lo, uint32_t hi) const {
-    return node_id_[walkNodes(lo, hi)];  // (node 0: kNone)
-  }
   // The node of edge (lo, hi) in lo's list, or kNoNode. The first kWalkDepth nodes are read whatever
   // the list's length (node 0 ends a list and links to itself) and the match picked without a
   // branch; a branch only where the list goes on past them. (The loop's exits mispredicted: 1 M
@@ -370,34 +73,21 @@ class EdgeLists {
   }
   static constexpr int kWalkDepth = 3;
   static constexpr uint32_t kNoNode = 0;
-  static constexpr uint16_t kFree = 0xFFFF;  // a free entry; no cluster id or inline edge id is this
-  struct Block {
-    uint16_t hi[4];  // other cluster ids of the first four edges, kFree where free (filled in order)
-    uint16_t id[4];
-  };
-  static_assert(sizeof(Block) == 16, "a block is 16 bytes");
-  size_t clusters_;
   // the node arrays' size, doubled when full (as a vector's capacity; without the vector's zeroing of
-  // what findOrAdd writes anyway: 1 M sphere 10 %, 1 MB); with blocks, the nodes made
-  uint32_t node_room_ = 1, node_count_ = 1;
-  bool long_ids_ = false;  // some edge id did not fit a block (chained whatever its block's room)
-  std::vector<Block> blocks_;
-  Block spare_{};  // findOrAddInBlock's write where it found the edge (never read)
-  std::vector<uint32_t> head_;  // per cluster: its first chained node, kNoNode for none (with blocks, made when first needed)
-  // per node: the other cluster id, the edge's id (with blocks; without, the node's index - 1), the
-  // next node of its list
-  std::unique_ptr<uint32_t[]> node_hi_, node_id_, node_next_;
+  // what findOrAdd writes anyway: 1 M sphere 10 %, 1 MB)
+  uint32_t node_room_ = 1;
+  std::vector<uint32_t> head_;  // per cluster: its first node, kNoNode for none
+  // per node: the other cluster id (the edge's id is the node's index - 1), the next node of its list
+  std::unique_ptr<uint32_t[]> node_hi_, node_next_;
   void growNodes() {
     const uint32_t n = node_room_;
     node_room_ = 2 * n;
     auto grow = [&](std::unique_ptr<uint32_t[]>& a) {
-      if (!a) return;
       std::unique_ptr<uint32_t[]> b(new uint32_t[node_room_]);
       std::copy(a.get(), a.get() + n, b.get());
       a = std::move(b);
     };
     grow(node_hi_);
-    grow(node_id_);
     grow(node_next_);
   }
 };
@@ -405,17 +95,12 @@ class EdgeLists {
 constexpr size_t kBlock = 512;             // triangles classified at once
 constexpr size_t kPrefetchTriangles = 16;  // how far ahead the cluster ids are prefetched (large meshes)
 
-// One block's triangles by class, each list in input order; columns, so that the AVX2 classification
-// stores eight lanes of each at once (a store starts at most at kBlock - 8, since a list holds at
-// most the triangles before the group; the 8 entries past kBlock are a margin)
+// One block's triangles by class, each list in input order, in columns
 struct BlockLists {
-  // the corners' clusters of kept triangles, rotated (keeping the orientation) so that the smallest
-  // id comes first where `rotated`, else rotated when added
-  uint32_t kept[3][kBlock + 8];
-  uint32_t edge[3][kBlock + 8];  // collapsed to an edge: first corner's cluster, the other, the triangle
-  uint32_t point[kBlock + 8];    // collapsed to a point: its cluster
+  uint32_t kept[3][kBlock];  // the corners' clusters of kept triangles (rotated when added)
+  uint32_t edge[3][kBlock];  // collapsed to an edge: first corner's cluster, the other, the triangle
+  uint32_t point[kBlock];    // collapsed to a point: its cluster
   size_t kept_count, edge_count, point_count;
-  bool rotated;
 };
 
 // rotation (keeping orientation) that puts the smallest id first, by index rather than by selects
@@ -430,9 +115,8 @@ SCENELOD_ALWAYS_INLINE void rotateSmallestFirst(uint32_t& c0, uint32_t& c1, uint
 }
 
 // Classifies triangles [t, t1) onto the lists' ends. Compiled for each set of constants (a test of
-// a flag in memory per triangle otherwise); kRotate: kept triangles rotated (rotateSmallestFirst),
-// for the tail of the AVX2 classification.
-template <bool kPrefetch, bool kPointsFirst, bool kRotate = false>
+// a flag in memory per triangle otherwise).
+template <bool kPrefetch, bool kPointsFirst>
 SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
   size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
   for (const uint32_t* v = tri + 3 * t; t < t1; ++t, v += 3) {
@@ -448,17 +132,9 @@ SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* 
     }
     const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
     const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-    if (kRotate && kept) {
-      uint32_t r0 = c0, r1 = c1, r2 = c2;
-      rotateSmallestFirst(r0, r1, r2);
-      l.kept[0][nk] = r0;
-      l.kept[1][nk] = r1;
-      l.kept[2][nk] = r2;
-    } else {
-      l.kept[0][nk] = c0;
-      l.kept[1][nk] = c1;
-      l.kept[2][nk] = c2;
-    }
+    l.kept[0][nk] = c0;
+    l.kept[1][nk] = c1;
+    l.kept[2][nk] = c2;
     nk += kept;
     l.edge[0][ne] = c0;
     l.edge[1][ne] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
@@ -488,210 +164,11 @@ bool coherentOrder(const uint32_t* tri, size_t tn) {
   return 2 * near > n;
 }
 
-#if defined(__x86_64__) || defined(__i386__)
-// stores the lanes of `v` that `perm` (a row of kLaneCompaction) selects at dst[0, its count), in lane
-// order; all 8 lanes are written
-SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m256i v, __m256i perm) {
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, perm));
-}
-
-// The classification eight triangles at a time (the tail of a block scalar): the three corners'
-// vertex ids split into columns, their clusters gathered, the classes compared per lane and each
-// list's lanes compacted through a permutation table; the same lists as classifyScalar, with kRotate
-// the kept triangles rotated in lanes (rotateSmallestFirst, about 25 instructions a kept triangle
-// where it is added, against 8 per eight triangles here).
-template <bool kPrefetch, bool kRotate>
-SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1,
-                                                   BlockLists& l) {
-  size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
-  const int* ids = reinterpret_cast<const int*>(co);
-  // the triangles whose corner k the blends below put in lanes 0-7 are 0 3 6 1 4 7 2 5 (k = 0),
-  // 5 0 3 6 1 4 7 2 (k = 1), 2 5 0 3 6 1 4 7 (k = 2); these permutations put triangle j in lane j
-  const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
-  const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
-  const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  for (; t + 8 <= t1; t += 8) {
-    const uint32_t* v = tri + 3 * t;
-    if (kPrefetch) {
-      // (unrolled: as a loop, 15.8 M of the 1 M sphere 10 % level's 87 M instructions)
-#pragma GCC unroll 24
-      for (int k = 0; k < 24; ++k) __builtin_prefetch(co + v[3 * kPrefetchTriangles + k]);
-    }
-    // a = v0 v1 v2 | v0 v1 v2 | v0 v1, b = v2 | v0 v1 v2 | v0 v1 v2 | v0, c = v1 v2 | v0 v1 v2 | v0 v1 v2
-    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v));
-    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 8));
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 16));
-    // corner k of triangle j sits in a at 3j + k, in b at 3j + k - 8, in c at 3j + k - 16
-    const __m256i x0 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x92), c, 0x24);  // lanes 1 4 7 of b, 2 5 of c
-    const __m256i x1 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x24), c, 0x49);  // lanes 2 5 of b, 0 3 6 of c
-    const __m256i x2 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x49), c, 0x92);  // lanes 0 3 6 of b, 1 4 7 of c
-    const __m256i c0 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x0, order0), 4);
-    const __m256i c1 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x1, order1), 4);
-    const __m256i c2 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x2, order2), 4);
-    const __m256i e01 = _mm256_cmpeq_epi32(c0, c1), e12 = _mm256_cmpeq_epi32(c1, c2), e02 = _mm256_cmpeq_epi32(c0, c2);
-    const uint32_t any = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(e01, e12), e02))));
-    const uint32_t point = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(e01, e12))));
-    const uint32_t kept = ~any & 0xFFu, edge = any & ~point;
-    const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[kept])));
-    const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[edge])));
-    const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[point])));
-    if (kRotate) {
-      // as rotateSmallestFirst: exactly one corner of a kept triangle holds the smallest id
-      const __m256i lo = _mm256_min_epu32(_mm256_min_epu32(c0, c1), c2);
-      const __m256i at1 = _mm256_cmpeq_epi32(c1, lo), at2 = _mm256_cmpeq_epi32(c2, lo);
-      storeCompacted(l.kept[0] + nk, lo, pk);
-      storeCompacted(l.kept[1] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c1, c2, at1), c0, at2), pk);
-      storeCompacted(l.kept[2] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c2, c0, at1), c1, at2), pk);
-    } else {
-      storeCompacted(l.kept[0] + nk, c0, pk);
-      storeCompacted(l.kept[1] + nk, c1, pk);
-      storeCompacted(l.kept[2] + nk, c2, pk);
-    }
-    nk += size_t(__builtin_popcount(kept));
-    storeCompacted(l.edge[0] + ne, c0, pe);
-    storeCompacted(l.edge[1] + ne, _mm256_blendv_epi8(c1, c2, e01), pe);  // the corner not in c0's cluster
-    storeCompacted(l.edge[2] + ne, _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(t)), lane), pe);
-    ne += size_t(__builtin_popcount(edge));
-    storeCompacted(l.point + np, c0, pp);
-    np += size_t(__builtin_popcount(point));
-  }
-  l.kept_count = nk;
-  l.edge_count = ne;
-  l.point_count = np;
-  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
-}
-#else
-template <bool kPrefetch, bool kRotate>
-void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
-  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
-}
-#endif
-
-// Drops the entries of a block's edge list (x[j], y[j]) that are the same cluster pair as the
-// entry before them, in place, and leaves each kept pair as (lower id, higher id); returns the count
-// kept. A dropped entry equals the last kept one, so comparing with that is comparing with the
-// entry before. The lookup of a repeated pair finds the edge its predecessor found or made and
-// changes nothing (the branchless paths write a spare entry), so only the lookups made differ.
-// (The 1 M sphere's 10 % level in its generator's ring order: 268.9 k of its 522.5 k collapsed
-// triangles repeat the pair before, about 90 instructions a lookup on the chained lists; the
-// bunny's 50 % level 4.2 k of 34.0 k, chain level 2 6.8 k of 35.8 k.)
-size_t dropRepeatedEdgesScalar(uint32_t* x, uint32_t* y, size_t j, size_t n, size_t kept) {
-  uint32_t last_lo = kept ? x[kept - 1] : kNone, last_hi = kept ? y[kept - 1] : kNone;
-  for (; j < n; ++j) {
-    const uint32_t lo = branchlessMin(x[j], y[j]), hi = x[j] ^ y[j] ^ lo;
-    x[kept] = lo;  // (kept <= j: an entry already read)
-    y[kept] = hi;
-    kept += uint32_t(lo != last_lo) | uint32_t(hi != last_hi);
-    last_lo = lo;
-    last_hi = hi;
-  }
-  return kept;
-}
-
-#if defined(__x86_64__) || defined(__i386__)
-// dropRepeatedEdgesScalar eight entries at a time (the tail scalar): each lane compared with the
-// lane before (lane 0 with the last of the previous eight), the kept lanes compacted through
-// kLaneCompaction. In place: a store at `kept` <= j reaches at most the eight entries just read.
-SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) {
-  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
-  __m256i prev_lo = _mm256_set1_epi32(-1), prev_hi = prev_lo;  // (kNone: no pair's lower id)
-  size_t j = 0, kept = 0;
-  for (; j + 8 <= n; j += 8) {
-    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + j));
-    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(y + j));
-    const __m256i lo = _mm256_min_epu32(a, b), hi = _mm256_max_epu32(a, b);
-    const __m256i lo1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(lo, before),
-                                           _mm256_permutevar8x32_epi32(prev_lo, before), 0x01);
-    const __m256i hi1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(hi, before),
-                                           _mm256_permutevar8x32_epi32(prev_hi, before), 0x01);
-    const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(lo, lo1), _mm256_cmpeq_epi32(hi, hi1));
-    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(same))) & 0xFFu;
-    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
-    storeCompacted(x + kept, lo, perm);
-    storeCompacted(y + kept, hi, perm);
-    kept += size_t(__builtin_popcount(keep));
-    prev_lo = lo;
-    prev_hi = hi;
-  }
-  return dropRepeatedEdgesScalar(x, y, j, n, kept);
-}
-#else
-size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) { return dropRepeatedEdgesScalar(x, y, 0, n, 0); }
-#endif
-
-// Drops the entries of a block's point list that repeat the entry before them, in place; returns
-// the count kept (addPoint of a repeat finds its cluster listed and does nothing). (The 1 M
-// sphere's 1 % level: 798 k of its 1.04 M triangles collapse to a point, about 10 instructions
-// each in addPoint.)
-size_t dropRepeatedPointsScalar(uint32_t* c, size_t j, size_t n, size_t kept) {
-  uint32_t last = kept ? c[kept - 1] : kNone;
-  for (; j < n; ++j) {
-    const uint32_t x = c[j];
-    c[kept] = x;
-    kept += x != last;
-    last = x;
-  }
-  return kept;
-}
-
-#if defined(__x86_64__) || defined(__i386__)
-// dropRepeatedPointsScalar eight entries at a time, as dropRepeatedEdgesAvx2
-SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) {
-  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
-  __m256i prev = _mm256_set1_epi32(-1);  // (kNone: no cluster id)
-  size_t j = 0, kept = 0;
-  for (; j + 8 <= n; j += 8) {
-    const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c + j));
-    const __m256i x1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(x, before),
-                                          _mm256_permutevar8x32_epi32(prev, before), 0x01);
-    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, x1)))) & 0xFFu;
-    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
-    storeCompacted(c + kept, x, perm);
-    kept += size_t(__builtin_popcount(keep));
-    prev = x;
-  }
-  return dropRepeatedPointsScalar(c, j, n, kept);
-}
-#else
-size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) { return dropRepeatedPointsScalar(c, 0, n, 0); }
-#endif
-
-// the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
-// 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
-// their ids fit the blocks' 16 bits
-constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
-
-bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
-bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
-// false: every collapsed triangle's pair and point looked up (useRepeatedEdgeDrop, a test hook)
-bool g_drop_repeated_edges = true;
-// slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
-// for (the bunny's 50 % level: 256 KB)
-constexpr size_t kProbeWindow = 8;
-constexpr size_t kWindowedTableBytes = size_t(1) << 19;
-// how far ahead, in kept triangles, a large table's home slots are prefetched (eliminate)
+// how far ahead, in kept triangles, a large table's home slots are prefetched (eliminate), and the
+// table size from which they are (the bunny's 50 % level: 256 KB)
 constexpr size_t kPrefetchKept = 32;
+constexpr size_t kPrefetchTableBytes = size_t(1) << 19;
 }  // namespace
-
-// test hook (declared by tests/lodcore/elimination_test.cpp): false lists every candidate edge in the
-// chained lists, whatever the cluster count, for every later call; returns the previous choice
-bool useEdgeBlocks(bool on) {
-  return std::exchange(g_edge_blocks, on);
-}
-
-// test hook (declared by tests/lodcore/elimination_test.cpp): false probes the dedupe table one slot
-// at a time, the reference for the windowed probe, for every later call; returns the previous choice
-bool useWindowedProbes(bool on) {
-  return std::exchange(g_windowed_probes, on);
-}
-
-// test hook (declared by tests/lodcore/elimination_test.cpp): false looks up every collapsed
-// triangle's cluster pair and point, the reference for dropping the repeats (dropRepeatedEdges*,
-// dropRepeatedPoints*), for every later call; returns the previous choice
-bool useRepeatedEdgeDrop(bool on) {
-  return std::exchange(g_drop_repeated_edges, on);
-}
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
@@ -718,30 +195,15 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // the power of two was about 4 x the output, the largest array of the main pass at fine levels
   size_t cap = 64;
   while (cap * 2 < expected * 3) cap <<= 1;
-  // (kProbeWindow slots more: room to align the windowed probe's groups, below)
-  std::vector<uint32_t> table(cap + kProbeWindow, kNone);
-  // windowed probes (below) where the table stays in cache; else, and where the test hook asks for
-  // the reference (useWindowedProbes), one slot at a time. (At the 1 M sphere's 10 % level, 1 MB of
-  // slots read at random beside 1.6 MB of chained edge lists, the windows ran slower: eliminate
-  // 11.9-12.5 -> 12.5-13.4 ms, 88.6 -> 94.6 M instructions, mispredicts 103 k -> 62 k.)
-  const bool windowed = g_windowed_probes && cap * sizeof(uint32_t) <= kWindowedTableBytes;
-  // the slots: with windowed probes from the first 32-byte boundary in the table
-  auto slotsOf = [&]() {
-    const uintptr_t at = reinterpret_cast<uintptr_t>(table.data());
-    const uintptr_t align = windowed ? kProbeWindow * sizeof(uint32_t) - 1 : 0;
-    return table.data() + ((((at + align) & ~align) - at) / sizeof(uint32_t));
-  };
-  uint32_t* slots = slotsOf();
+  std::vector<uint32_t> table(cap, kNone);
+  uint32_t* slots = table.data();
   size_t mask = cap - 1;
   auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
     const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
                        (uint64_t(c2) * 0x165667B19E3779F9ull);
     return static_cast<size_t>(h ^ (h >> 31));
   };
-  // windowed probes start at the first slot of the aligned group of kProbeWindow that holds the
-  // slot the hash picks (as linear probing from there; every group within one cache line)
-  const size_t home_mask = windowed ? ~(kProbeWindow - 1) : ~size_t(0);
-  auto home = [&](size_t h) { return h & mask & home_mask; };
+  auto home = [&](size_t h) { return h & mask; };
   auto nextSlot = [&](size_t i) { return (i + 1) & mask; };
   // A slot holds the triangle's index in its low log2(cap) bits and, above them, bits of its hash
   // that do not pick its home: an occupant whose bits differ is passed over without reading its
@@ -774,7 +236,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
   const size_t listed = keep_edges || input_edges ? nc : 0;
-  EdgeLists edge_lists(listed, g_edge_blocks && listed * 32 <= kEdgeBlockBytes);
+  EdgeLists edge_lists(listed);
   // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
   // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
   // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
@@ -803,36 +265,19 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     point_state[c] = kListed;
     point_candidates.push_back(c);
   };
-  // The id of candidate edge (x, y), listed if new. `branchless` (the chained lists always are):
-  // without a branch on whether the edge is new (findOrAddInBlock), chosen per block of triangles
-  // (below): where about half the lookups make an edge (fine levels) that branch mispredicts, where
-  // few do (coarse levels) it is cheaper than the writes made whatever.
-  // (inlined: called out of line, its saves and restores were about a quarter of its cost)
-  auto edgeSlot = [&](uint32_t x, uint32_t y, bool branchless) __attribute__((always_inline)) {
+  // The id of candidate edge (x, y), listed if new: the new edge's entry is written whatever (past
+  // the last edge) and counted only when made; chunks are allocated whole when the first edge could
+  // go in them. (inlined: called out of line, its saves and restores were about a quarter of its cost)
+  auto edgeSlot = [&](uint32_t x, uint32_t y) __attribute__((always_inline)) {
     const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
-    if (edge_lists.chained() || branchless) {
-      // the new edge's entry is written whatever (past the last edge) and counted only when made;
-      // chunks are allocated whole when the first edge could go in them
-      uint32_t* entry = edgeEntry();
-      const uint32_t id = static_cast<uint32_t>(edge_total);
-      const uint32_t e = edge_lists.chained() ? edge_lists.findOrAdd(lo, hi, id) : edge_lists.findOrAddInBlock(lo, hi, id);
-      entry[0] = lo;
-      entry[1] = hi;
-      entry[2] = kNone;
-      edge_total += e == edge_total;
-      if (input_edges) input_thickness.resize(edge_total, 0.0f);
-      return e;
-    }
-    uint32_t e = edge_lists.find(lo, hi);
-    if (e == kNone) {
-      uint32_t* entry = edgeEntry();
-      e = static_cast<uint32_t>(edge_total++);
-      entry[0] = lo;
-      entry[1] = hi;
-      entry[2] = kNone;
-      edge_lists.add(lo, hi, e);
-      if (input_edges) input_thickness.push_back(0.0f);
-    }
+    uint32_t* entry = edgeEntry();
+    const uint32_t id = static_cast<uint32_t>(edge_total);
+    const uint32_t e = edge_lists.findOrAdd(lo, hi, id);
+    entry[0] = lo;
+    entry[1] = hi;
+    entry[2] = kNone;
+    edge_total += e == edge_total;
+    if (input_edges) input_thickness.resize(edge_total, 0.0f);
     return e;
   };
 
@@ -843,8 +288,8 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       cap <<= 1;
       mask = cap - 1;
       ++index_bits;
-      table.assign(cap + kProbeWindow, kNone);
-      slots = slotsOf();
+      table.assign(cap, kNone);
+      slots = table.data();
       for (size_t k = 0; k < out.triangles.size(); k += 3) {
         const size_t hk = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]);
         size_t j = home(hk);
@@ -868,35 +313,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
     const size_t h = triangleHash(c0, c1, c2);
     size_t i = home(h);
-#if defined(__SSE2__)
-    // A group of kProbeWindow slots at once: its first empty slot, and the occupants before it whose
-    // tag bits match (rare where few triangles repeat), by two compares; the next group only where
-    // the group is full. (A branch on each slot's emptiness mispredicted: bunny 50 %, 18.5 k of the
-    // level's 35 k, as about a third of the first probes find an occupant. A window of 8 from the
-    // hash's own slot crossed a cache line 7 times in 16: 1 M sphere 10 %, whose table of 1 MB
-    // does not stay in cache, eliminate 12.2-17.6 -> 13.5-20.0 ms.)
-    if (windowed)
-      for (;; i = (i + kProbeWindow) & mask) {
-        const __m128i* w = reinterpret_cast<const __m128i*>(slots + i);
-        const __m128i lo = _mm_load_si128(w), hi = _mm_load_si128(w + 1);
-        const __m128i none = _mm_set1_epi32(-1), tag = _mm_set1_epi32(static_cast<int>(slotOf(h, 0)));
-        const __m128i shift = _mm_cvtsi32_si128(static_cast<int>(index_bits)), zero = _mm_setzero_si128();
-        const uint32_t empty = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(lo, none)))) |
-                               uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(hi, none)))) << 4;
-        const __m128i tag_lo = _mm_cmpeq_epi32(_mm_srl_epi32(_mm_xor_si128(lo, tag), shift), zero);
-        const __m128i tag_hi = _mm_cmpeq_epi32(_mm_srl_epi32(_mm_xor_si128(hi, tag), shift), zero);
-        const uint32_t first_empty = uint32_t(__builtin_ctz(empty | (1u << kProbeWindow)));
-        uint32_t same = (uint32_t(_mm_movemask_ps(_mm_castsi128_ps(tag_lo))) |
-                         uint32_t(_mm_movemask_ps(_mm_castsi128_ps(tag_hi))) << 4) &
-                        ((1u << first_empty) - 1);
-        for (; same; same &= same - 1)
-          if (sameTriangle(slots[i + size_t(__builtin_ctz(same))], c0, c1, c2)) return;
-        if (empty) {
-          insertTriangle(i + first_empty, h, c0, c1, c2);
-          return;
-        }
-      }
-#endif
     for (;; i = nextSlot(i)) {
       const uint32_t o = slots[i];
       if (o == kNone) {
@@ -915,39 +331,20 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   BlockLists lists;
   const uint32_t* tri = m.triangles.data();
   // where over 3/4 of the triangles of the last block collapsed to a point, the next block tests for that
-  // first (a branch that is then predicted) and skips the rest of the classification (the scalar
-  // classification only: the AVX2 one costs the same for every class)
+  // first (a branch that is then predicted) and skips the rest of the classification
   bool points_dominate = false;
-  // where over 1/16 of the last block's triangles were kept, the next block's are rotated in lanes
-  // (the AVX2 classification only; at the 1 M sphere's 1 % level, 1 % kept, the lanes took 1.0 M
-  // instructions more than they saved, 22.22 -> 23.19 M)
-  bool rotate_in_lanes = true;
-  bool branchless_edges = g_windowed_probes;  // (blocks: see edgeSlot)
   // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
   // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
   // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
-  // scalar, 10 % level, eliminate about 42 -> 36 ms; AVX2, 1 % level, 12.2-12.9 -> 10.1-11.6 ms,
-  // 10 % within noise). In a coherent order, where nearby triangles share cache lines of the ids,
-  // the 24 prefetches per 8 triangles only cost: the 1 M sphere in its generator's ring order, AVX2,
-  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3; scalar, 10 %
-  // 16.2-19.2 -> 15.0-15.3, 1 % within noise. Smaller meshes skip them (a test per block,
+  // 10 % level, eliminate about 42 -> 36 ms). In a coherent order, where nearby triangles share
+  // cache lines of the ids, the prefetches only cost (the 1 M sphere in its generator's ring order,
+  // 10 % level 16.2-19.2 -> 15.0-15.3 ms without them). Smaller meshes skip them (a test per block,
   // unswitched out of the loop).
   const bool prefetch = a.cluster_of.size() > (size_t(1) << 18) && !coherentOrder(tri, tn);
-  // (the gathers take the vertex ids as signed 32-bit offsets)
-  const bool avx2 = avx2Paths() && a.cluster_of.size() <= size_t(INT32_MAX);
   // the classification of one block [t0, t1)
   auto classifyBlock = [&](size_t t0, size_t t1, bool prefetch_block) {
     lists.kept_count = lists.edge_count = lists.point_count = 0;
-    lists.rotated = avx2 && rotate_in_lanes;
-    if (avx2) {
-      if (prefetch_block) {
-        if (rotate_in_lanes) classifyAvx2<true, true>(tri, co, t0, t1, lists);
-        else classifyAvx2<true, false>(tri, co, t0, t1, lists);
-      } else {
-        if (rotate_in_lanes) classifyAvx2<false, true>(tri, co, t0, t1, lists);
-        else classifyAvx2<false, false>(tri, co, t0, t1, lists);
-      }
-    } else if (prefetch_block) {
+    if (prefetch_block) {
       if (points_dominate) classifyScalar<true, true>(tri, co, t0, t1, lists);
       else classifyScalar<true, false>(tri, co, t0, t1, lists);
     } else {
@@ -965,77 +362,43 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
     // 120 k; at 2/3 the bunny 2 % level (69 % points) mispredicted 3 x as often, 0.38 -> 0.46 ms
     points_dominate = lists.point_count * 4 > (t1 - t0) * 3;
-    rotate_in_lanes = kept_count * 16 > t1 - t0;
-    // where the table is past the cache (the windowed probes' bound), the home slots of the kept
+    // where the table is past the cache (kPrefetchTableBytes), the home slots of the kept
     // triangles kPrefetchKept ahead are prefetched: each kept triangle's first probe was otherwise
     // a miss, one at a time (the 1 M sphere's 50 % level, a table of 4 MB: 43 % of its elimination's
     // samples on that load)
-    const bool prefetch_slots = cap * sizeof(uint32_t) > kWindowedTableBytes;
+    const bool prefetch_slots = cap * sizeof(uint32_t) > kPrefetchTableBytes;
     auto prefetchKept = [&](size_t j) __attribute__((always_inline)) {
       uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
-      if (!lists.rotated) rotateSmallestFirst(c0, c1, c2);
+      rotateSmallestFirst(c0, c1, c2);
       __builtin_prefetch(slots + home(triangleHash(c0, c1, c2)));
     };
     if (prefetch_slots)
       for (size_t j = 0; j < std::min(kept_count, kPrefetchKept); ++j) prefetchKept(j);
-    if (lists.rotated)
-      for (size_t j = 0; j < kept_count; ++j) {
-        if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
-        addTriangle(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
-      }
-    else
-      for (size_t j = 0; j < kept_count; ++j) {
-        if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
-        uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
-        rotateSmallestFirst(c0, c1, c2);
-        addTriangle(c0, c1, c2);
-      }
-    if (keep_points) {
-      size_t point_count = lists.point_count;
-      if (g_drop_repeated_edges)
-        point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
-                           : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
-      for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
+    for (size_t j = 0; j < kept_count; ++j) {
+      if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
+      uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
+      rotateSmallestFirst(c0, c1, c2);
+      addTriangle(c0, c1, c2);
     }
+    if (keep_points)
+      for (size_t j = 0; j < lists.point_count; ++j) addPoint(lists.point[j]);
     if (!keep_edges) continue;
-    const size_t edges_before = edge_total;
     if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
       collapsed_dropped = true;
       std::vector<CollapsedTriangle>().swap(collapsed_list);
     }
-    // the collapsed triangles whose pair repeats the one before are not looked up where nothing
-    // lists them one by one (the list of collapsed triangles)
-    size_t edge_count = lists.edge_count;
-    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
-      edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
-                        : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
+    const size_t edge_count = lists.edge_count;
     if (!track_collapsed) {
-      if (branchless_edges)
-        for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], true);
-      else
-        for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], false);
+      for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j]);
     } else {
       const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
       block_first_edge.push_back(static_cast<uint32_t>(edge_total));
-      auto slots = [&](bool branchless) __attribute__((always_inline)) {
-        for (size_t j = 0; j < edge_count; ++j) {
-          const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j], branchless);
-          edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-          if (!collapsed_dropped) collapsed_list.push_back({lists.edge[2][j], e});
-        }
-      };
-      if (branchless_edges) slots(true);
-      else slots(false);
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j]);
+        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
+        if (!collapsed_dropped) collapsed_list.push_back({lists.edge[2][j], e});
+      }
     }
-    // for the next block: over 1/4 of the lookups made (the repeats dropped) made an edge. Before
-    // the repeats were dropped: 3/8 (bunny: 50 % level 51 %, 10 % 25 %, 2 % 9 %; at over 1/8, the
-    // 10 % level took the branchless path and eliminated in 0.58-0.62 ms against 0.53-0.57). With
-    // them dropped the found edges are fewer: 50 % 58 %, chain level 2 39 %, 10 % 32 %, level 3
-    // 20 %, 2 % 12 %; at 3/8 level 2's blocks alternated between the paths, and the branch on a new
-    // edge mispredicted 5.7 k times of its 15.2 k (at 1/4: 11.6 k -> 6.6 k mispredicts, 5.89 ->
-    // 6.28 M instructions, eliminate 0.536-0.569 -> 0.496-0.545 ms; 10 % 0.440-0.463 ->
-    // 0.434-0.448; level 3 and 2 % unchanged)
-    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 4 > edge_count;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
@@ -1043,7 +406,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       addPoint(x);
       continue;
     }
-    const uint32_t s = edgeSlot(x, y, false);
+    const uint32_t s = edgeSlot(x, y);
     input_thickness[s] = std::max(input_thickness[s], m.edgeThickness(e));
   }
   for (uint32_t v : m.points) addPoint(co[v]);
@@ -1052,9 +415,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // coverage: an edge of a kept triangle removes the candidate edge (a used cluster removes points)
   const size_t en = edge_total;
   std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
-  if (en > 0 && g_windowed_probes) {
-    edge_lists.markCovered(out.triangles.data(), out.triangles.size() / 3, covered.data(), uint32_t(en), avx2);
-  } else if (en > 0) {  // the reference (useWindowedProbes(false))
+  if (en > 0)
     for (size_t t = 0; t < out.triangles.size(); t += 3) {
       const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
       const uint32_t a = branchlessMin(c0, c1), b = branchlessMin(c1, c2), c = branchlessMin(c2, c0);
@@ -1062,7 +423,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       covered[branchlessMin(edge_lists.find(b, c1 ^ c2 ^ b), uint32_t(en))] = 1;
       covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
     }
-  }
   // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
   // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
   std::vector<int32_t> rescan;
@@ -1077,7 +437,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       ++rescan[first];
       --rescan[last + 1];
     }
-  if (rescan.empty()) { EdgeLists released(0, false); std::swap(released, edge_lists); }
+  if (rescan.empty()) { EdgeLists released(0); std::swap(released, edge_lists); }
   std::vector<uint32_t> remap(en, kNone);
   for (size_t e = 0; e < en; ++e) {
     if (covered[e]) continue;
@@ -1144,7 +504,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
       const size_t ends = one_test ? rescanBlock(t0, t1, true) : rescanBlock(t0, t1, false);
       one_test = ends * 32 > t1 - t0;
     }
-    EdgeLists released(0, false);
+    EdgeLists released(0);
     std::swap(released, edge_lists);
   }
   computeThickness(p, a, collapsed, out);

@@ -291,7 +291,7 @@ using test::sameBits;
 }  // namespace
 
 // The AVX2 variants (where the CPU has them) give the baseline's bits: every array of the output and
-// the level's maximum displacement, for each synthesis, fine levels (the grouped synthesis) and coarse ones (the single pass), with
+// the level's maximum displacement, for each synthesis, fine and coarse levels, with
 // colours, crease splits and a sphere cell; on a CPU without AVX2 both runs take the baseline.
 TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
   Mesh bumpy = test::makeBumpySphere(90, 120);

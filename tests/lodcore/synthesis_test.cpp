@@ -1,27 +1,22 @@
-// synthesize's quadric solve: its eigenvalue lanes against the one-cluster form; the grouped pass of
-// fine levels against the single pass.
+// synthesize's quadric solve: its eigenvalue lanes against the one-cluster form.
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
-#include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/obj_io.h"
 #include "test_support.h"
 
 using namespace scenelod;
 
 // private test hooks of lodcore (lodcore/src/synthesis.cpp): the eigenvalue lanes of the quadric
-// solve, the AVX2 variants and the grouped pass, on or off for every later call; each returns the
-// previous choice
+// solve and the AVX2 variants, on or off for every later call; each returns the previous choice
 namespace scenelod::detail {
 bool useEigenvalueLanes(bool on);
 bool useAvx2Paths(bool on);
-bool useGroupedSynthesis(bool on);
 }  // namespace scenelod::detail
 
 namespace {
@@ -35,7 +30,7 @@ using test::sameBits;
 // lanes off; a clamp's bounds computed as -w/2 and w/2 instead of cellBox's (c -+ w/2) - c fail 12 checks): flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
 // bumpy (spheres: mostly rank 1 and 2 at fine cells), sharp (the CAD part, the box: full rank and
 // degenerate mixes) and scanned (the bunny, where it is installed), both cell shapes, coarse and
-// fine levels (the single and the grouped synthesis), baseline and AVX2 variants.
+// fine levels, baseline and AVX2 variants.
 TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   meshes.emplace_back("bumpy", test::makeBumpySphere(90, 120));
@@ -75,60 +70,4 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
   detail::useEigenvalueLanes(was_lanes);
   detail::useAvx2Paths(was_avx2);
   EXPECT_GE(levels, 6u * 16u);
-}
-
-// The grouped pass of fine levels (clusters of one vertex summed and finished apart, the others four
-// at a time from a list of their vertices) gives the single pass's bits: every synthesis, both cell
-// shapes, floating and uniform cells, coloured (the CAD part) and plain meshes, baseline and AVX2
-// variants, at widths where the grouped pass is taken (more than 16 bytes of single-pass sums, 92 a
-// cluster, per vertex: from about one cluster per 5.75 vertices) and one where it is not.
-TEST(Synthesis, GroupedPassGivesTheSinglePassBits) {
-  std::vector<std::pair<std::string, Mesh>> meshes;
-  meshes.emplace_back("bumpy", test::makeBumpySphere(90, 120));
-  meshes.emplace_back("grid", test::makeGrid(60, 1.0f));
-  meshes.emplace_back("cylinder", test::makeCylinder(-0.5f, 0.5f, 0.3f, 40, 60));
-  meshes.emplace_back("cad", test::makeCadPart());
-  {
-    Mesh bunny;
-    if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
-      meshes.emplace_back("bunny", std::move(bunny));
-  }
-  const bool was_grouped = detail::useGroupedSynthesis(true);
-  const bool was_avx2 = detail::useAvx2Paths(true);
-  size_t grouped_levels = 0;
-  for (const auto& [name, m] : meshes)
-    for (LodMethod method : {LodMethod::kFloatingNearest, LodMethod::kFloatingHeaviest, LodMethod::kUniform})
-      for (Synthesis synthesis : {Synthesis::kQuadric, Synthesis::kMean, Synthesis::kHeaviest}) {
-        ClusterParams p;
-        p.method = method;
-        p.synthesis = synthesis;
-        PreparedMesh prepared;
-        ASSERT_TRUE(prepareMesh(m, p, prepared).ok());
-        const float extent = glm::length(prepared.bounds.max - prepared.bounds.min);
-        for (bool avx2 : {false, true})
-          for (CellShape shape : {CellShape::kCube, CellShape::kSphere})
-            for (float f : {0.004f, 0.008f, 0.015f, 0.03f}) {
-              p.cell_shape = shape;
-              p.cell_width = f * extent;
-              detail::useAvx2Paths(avx2);
-              Mesh grouped, single;
-              ClusterStats stats;
-              detail::useGroupedSynthesis(true);
-              ASSERT_TRUE(clusterPrepared(prepared, p, grouped, &stats).ok());
-              detail::useGroupedSynthesis(false);
-              ASSERT_TRUE(clusterPrepared(prepared, p, single).ok());
-              SCOPED_TRACE(name + (avx2 ? " avx2 " : " sse2 ") + lodMethodName(method) + " " +
-                           synthesisName(synthesis) + " " + cellShapeName(shape) + " f=" + std::to_string(f));
-              EXPECT_TRUE(sameBits(grouped.positions, single.positions));
-              EXPECT_TRUE(sameBits(grouped.normals, single.normals));
-              EXPECT_TRUE(sameBits(grouped.colors, single.colors));
-              EXPECT_TRUE(sameBits(grouped.triangles, single.triangles));
-              EXPECT_TRUE(sameBits(grouped.edges, single.edges));
-              EXPECT_TRUE(sameBits(grouped.points, single.points));
-              grouped_levels += stats.cluster_count * 92 > 16 * m.vertexCount();
-            }
-      }
-  detail::useGroupedSynthesis(was_grouped);
-  detail::useAvx2Paths(was_avx2);
-  EXPECT_GE(grouped_levels, 4u * 3u * 3u * 2u * 2u);
 }
