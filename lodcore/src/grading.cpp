@@ -921,46 +921,8 @@ SCENELOD_AVX2_TARGET __attribute__((flatten)) bool gradeTwoRowsAvx2(const glm::v
                                                                     LaneRow out[2], VertexFaceSums* sums) {
   return gradeTwoRowsBody(pos, v0, row0, r0, r1, want_normals, s, out, sums);
 }
-
-// The same pass built for AVX-512VL where the CPU has it: the same 256-bit operations, now with 32
-// vector registers (the AVX2 build spills: 129 of its 764 instructions a pair touch the stack, 235
-// static stack references against 96 here). fp-contract=off because the AVX-512F target would
-// otherwise fuse the intrinsics' multiplies and adds into FMAs (73 of them), which round once
-// and change the bits (Avx2PathsGiveTheBaselineBits fails without it). Bunny prepare, one thread,
-// alternated with the AVX2 build, best / mean of 500: 2.463 / 2.664 -> 2.344 / 2.519, 2.370 / 2.657
-// -> 2.336 / 2.520, 2.480 / 2.675 -> 2.341 / 2.526 ms. Valgrind 3.19 hides AVX-512, so callgrind
-// counts the AVX2 build.
-__attribute__((target("avx2,avx512f,avx512vl"), optimize("fp-contract=off"), flatten)) bool gradeTwoRowsAvx512(
-    const glm::vec3* pos, uint32_t v0, const Incidence* row0, size_t r0, size_t r1, bool want_normals,
-    LaneScratch s[2], LaneRow out[2], VertexFaceSums* sums) {
-  return gradeTwoRowsBody(pos, v0, row0, r0, r1, want_normals, s, out, sums);
-}
-
-bool cpuHasAvx512vl() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-}
-bool g_avx512_pairs = cpuHasAvx512vl();
 #endif
 
-}  // namespace
-
-namespace detail {
-// test hook (declared by the test, as useAvx2Paths is): the pair pass's AVX-512VL build where the
-// CPU has it (and the AVX2 paths are on), else its AVX2 build, for every later call; returns the
-// previous choice
-bool useAvx512Pairs(bool on) {
-#if defined(__SSE2__)
-  const bool was = g_avx512_pairs;
-  g_avx512_pairs = on && cpuHasAvx512vl();
-  return was;
-#else
-  return false;
-#endif
-}
-}  // namespace detail
-
-namespace {
 
 // Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
 // of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
@@ -1001,7 +963,6 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 #if defined(__SSE2__)
   const bool avx2 = detail::avx2Paths() && vn < (size_t(1) << 31) / 3;
   const auto lanes_fn = avx2 ? gradeRowLanesAvx2 : gradeRowLanes;
-  const auto pair_fn = g_avx512_pairs ? gradeTwoRowsAvx512 : gradeTwoRowsAvx2;
 #endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
@@ -1078,7 +1039,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
 #if defined(__SSE2__)
       // two rows of two blocks each (most of a closed mesh's), v and v + 1, in one 8-lane pass
       if (avx2 && !colors && row - 5 < 4 && v + 1 != range.end() && offsets[v + 2] - e - 5 < 4) {
-        if (pair_fn(pos, static_cast<uint32_t>(v), incidence + b, row, offsets[v + 2] - e, want_normals, two_lanes,
+        if (gradeTwoRowsAvx2(pos, static_cast<uint32_t>(v), incidence + b, row, offsets[v + 2] - e, want_normals, two_lanes,
                     two_lr, out.sums ? out.sums + v : nullptr)) {
           pairDone(v, two_lr);
           ++v;

@@ -209,7 +209,6 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
 // for every later call; returns the previous choice
 namespace scenelod::detail {
 bool useAvx2Paths(bool on);
-bool useAvx512Pairs(bool on);  // lodcore/src/grading.cpp: the pair pass's AVX-512VL build where the CPU has it
 }
 
 namespace {
@@ -234,39 +233,34 @@ Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
   return m;
 }
 
-// prepareMesh with the AVX2 paths (the pair pass built for AVX2, and for AVX-512VL where the CPU
-// has it) and with the baseline give the same weights, face sums, order, sorted positions and
+// prepareMesh with the AVX2 paths and with the baseline give the same weights, face sums, order, sorted positions and
 // longest edge, under both gradings, with and without the boost
 void expectAvx2GivesTheBaselineBits(const Mesh& mesh, const std::string& label) {
-  const bool was512 = detail::useAvx512Pairs(true);
   for (Grading g : {Grading::kLowTan, Grading::kRossignac})
-    for (bool boost : {true, false})
-      for (bool avx512 : {false, true}) {
-        ClusterParams params;
-        params.grading = g;
-        params.boost_features = boost;
-        PreparedMesh wide, base;
-        detail::useAvx2Paths(true);
-        detail::useAvx512Pairs(avx512);
-        ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
-        detail::useAvx2Paths(false);
-        ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
-        SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : "") + (avx512 ? " avx512" : ""));
-        ASSERT_EQ(wide.weights.size(), base.weights.size());
-        ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
-        EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
-        for (size_t v = 0; v < base.face_sums.size(); ++v) {
-          ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
-          for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
-        }
-        EXPECT_EQ(wide.order, base.order);
-        ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
-        EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
-                              base.sorted_positions.size() * sizeof(glm::vec3)), 0);
-        EXPECT_EQ(wide.longest_edge, base.longest_edge);
-        EXPECT_GT(base.longest_edge, 0.0f);
+    for (bool boost : {true, false}) {
+      ClusterParams params;
+      params.grading = g;
+      params.boost_features = boost;
+      PreparedMesh wide, base;
+      detail::useAvx2Paths(true);
+      ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
+      detail::useAvx2Paths(false);
+      ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
+      SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : ""));
+      ASSERT_EQ(wide.weights.size(), base.weights.size());
+      ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
+      EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
+      for (size_t v = 0; v < base.face_sums.size(); ++v) {
+        ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
+        for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
       }
-  detail::useAvx512Pairs(was512);
+      EXPECT_EQ(wide.order, base.order);
+      ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
+      EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
+                            base.sorted_positions.size() * sizeof(glm::vec3)), 0);
+      EXPECT_EQ(wide.longest_edge, base.longest_edge);
+      EXPECT_GT(base.longest_edge, 0.0f);
+    }
 }
 
 }  // namespace
