@@ -288,25 +288,11 @@ inline __attribute__((always_inline)) float minPairDotBlocks(const float* x, con
   return _mm_cvtss_f32(best);
 }
 
-// the coordinates of the four points pos[idx[0..3]] as columns, by three AVX2 gathers (the same
-// floats as loading the points one by one). Called only from gradeRowLanesAvx2, whose flatten
-// attribute inlines it (an always-inline AVX2 function cannot go into the baseline body's template). Indices below 2^31 / 3
-// (gradeAndSum checks the vertex count), so that 3 x index fits the gather's int32 offsets.
-SCENELOD_AVX2_TARGET inline void gatherColumns(const glm::vec3* pos, const uint32_t* idx, __m128& x, __m128& y,
-                                               __m128& z) {
-  const __m128i i = _mm_load_si128(reinterpret_cast<const __m128i*>(idx));
-  const __m128i i3 = _mm_add_epi32(i, _mm_add_epi32(i, i));
-  const float* base = &pos[0].x;
-  x = _mm_i32gather_ps(base, i3, 4);
-  y = _mm_i32gather_ps(base + 1, i3, 4);
-  z = _mm_i32gather_ps(base + 2, i3, 4);
-}
-
 // minPairDotBlocks over two blocks (8 lanes, every lane a vector or NaN; x[0] lanes 0..3) in 256-bit registers:
 // lane i against lane (i + k) % 8 for k = 1..4 meets every pair; each dot product is the same
 // expression as minDot's (and symmetric in its two vectors), the minimum independent of the order,
 // so the same result. 4 dot products of 8 lanes and 12 permutes, where the blocks took 8 of 4 lanes
-// and 21 shuffles. Like gatherColumns, inlined only into gradeRowLanesAvx2.
+// and 21 shuffles. Inlined only into gradeTwoRowsAvx2.
 SCENELOD_AVX2_TARGET inline float minPairDot8v(__m256 px, __m256 py, __m256 pz) {
   __m256 best = _mm256_set1_ps(1.0f);
   #pragma GCC unroll 4
@@ -323,9 +309,6 @@ SCENELOD_AVX2_TARGET inline float minPairDot8v(__m256 px, __m256 py, __m256 pz) 
   b = _mm_min_ps(b, SCENELOD_ROT_PS(b, 1));
   return _mm_cvtss_f32(b);
 }
-SCENELOD_AVX2_TARGET inline float minPairDot8(const __m128 (&x)[2], const __m128 (&y)[2], const __m128 (&z)[2]) {
-  return minPairDot8v(_mm256_set_m128(x[1], x[0]), _mm256_set_m128(y[1], y[0]), _mm256_set_m128(z[1], z[0]));
-}
 
 struct LaneRow {
   float sums[12];      // quadric xx..zz, normal x, y, z, then the summed area (10, 11 unused); not
@@ -341,7 +324,7 @@ struct LaneRow {
 // row holds an input edge. `row` may be read up to the next multiple of 4.
 // NB = (r + 3) / 4 blocks of incidences, a constant so that the block loops unroll into registers;
 // candidate block c < NB: the a of incidence block c, else the b of block c - NB.
-template <size_t NB, bool kGather>
+template <size_t NB>
 inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
                               LaneScratch& s, LaneRow& out) {
   constexpr size_t nb = NB;
@@ -433,28 +416,18 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
   __m128 q0 = zero, q1 = zero, q2 = zero;  // quadric xx xy xz yy; yz zz, normal x y; normal z, area
   __m128 longest = zero;
   uint32_t normal_blocks = 0, dir_blocks = 0;  // the blocks holding some normal, some direction
-  uint32_t dir_stored = 0;                      // the candidate blocks whose directions were stored
   int any_dir = 0;
-  // the directions of candidate blocks 0, 1 and the normals of blocks 0, 1 again, kept in registers
-  // for minPairDot8: its 256-bit loads of two 128-bit stores could not be forwarded from the store
-  // buffer (they waited for the stores to reach the cache, on each row's dependency chain)
-  __m128 ra[3][2] = {{zero, zero}, {zero, zero}, {zero, zero}}, rn[3][2];
   #pragma GCC unroll 8
   for (size_t k = 0; k < nb; ++k) {
     __m128 ax, ay, az, bx, by, bz;  // the corners a and b, one incidence per lane
-    if constexpr (kGather) {
-      gatherColumns(pos, s.ia + 4 * k, ax, ay, az);
-      gatherColumns(pos, s.ib + 4 * k, bx, by, bz);
-    } else {
-      glm::vec3 pa[4], pb[4];
-      #pragma GCC unroll 8
-      for (int l = 0; l < 4; ++l) {
-        pa[l] = pos[s.ia[4 * k + l]];
-        pb[l] = pos[s.ib[4 * k + l]];
-      }
-      ax = column(pa, 0), ay = column(pa, 1), az = column(pa, 2);
-      bx = column(pb, 0), by = column(pb, 1), bz = column(pb, 2);
+    glm::vec3 pa[4], pb[4];
+    #pragma GCC unroll 8
+    for (int l = 0; l < 4; ++l) {
+      pa[l] = pos[s.ia[4 * k + l]];
+      pb[l] = pos[s.ib[4 * k + l]];
     }
+    ax = column(pa, 0), ay = column(pa, 1), az = column(pa, 2);
+    bx = column(pb, 0), by = column(pb, 1), bz = column(pb, 2);
     const __m128 ux = _mm_sub_ps(ax, vx), uy = _mm_sub_ps(ay, vy), uz = _mm_sub_ps(az, vz);
     const __m128 wx = _mm_sub_ps(bx, vx), wy = _mm_sub_ps(by, vy), wz = _mm_sub_ps(bz, vz);
     // glm::cross(u, w), glm::length, / as in the scalar pass
@@ -488,7 +461,6 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
       _mm_store_ps(s.nrm[0] + 4 * k, fx);
       _mm_store_ps(s.nrm[1] + 4 * k, fy);
       _mm_store_ps(s.nrm[2] + 4 * k, fz);
-      if (k < 2) rn[0][k] = fx, rn[1][k] = fy, rn[2][k] = fz;
       normal_blocks |= static_cast<uint32_t>(_mm_movemask_ps(face) != 0) << k;
     }
     // directions to the distinct neighbours: the a of block k (candidate block k), the b (nb + k)
@@ -506,11 +478,9 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
       _mm_store_ps(s.dir[0] + 4 * c, ex);
       _mm_store_ps(s.dir[1] + 4 * c, ey);
       _mm_store_ps(s.dir[2] + 4 * c, ez);
-      if (c < 2) ra[0][c] = ex, ra[1][c] = ey, ra[2][c] = ez;
       const int used = _mm_movemask_ps(use);
       any_dir |= used;
       dir_blocks |= static_cast<uint32_t>(used != 0) << c;
-      dir_stored |= 1u << c;
     }
   }
   _mm_storeu_ps(out.sums, q0);
@@ -520,41 +490,24 @@ inline bool gradeRowLanesBody(const glm::vec3* pos, uint32_t v, const Incidence*
   longest = _mm_max_ps(longest, _mm_shuffle_ps(longest, longest, _MM_SHUFFLE(2, 3, 0, 1)));
   out.longest = _mm_cvtss_f32(longest);
   out.any_dir = any_dir != 0;
-  // rows of 5 to 8 corners (most): in the AVX2 build the two blocks as one 8-lane vector, when
-  // every direction is in the first two candidate blocks (the a of a closed fan) and both were stored
-  if constexpr (kGather && NB == 2) {
-    out.cos_dirs = (dir_blocks >> 2) == 0 && (dir_stored & 2u)
-                       ? minPairDot8(ra[0], ra[1], ra[2])
-                       : minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
-    out.cos_normals = want_normals ? minPairDot8(rn[0], rn[1], rn[2]) : 1.0f;  // both blocks stored
-  } else {
-    out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
-    out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
-  }
+  out.cos_dirs = minPairDotBlocks(s.dir[0], s.dir[1], s.dir[2], dir_blocks);
+  out.cos_normals = want_normals ? minPairDotBlocks(s.nrm[0], s.nrm[1], s.nrm[2], normal_blocks) : 1.0f;
   return true;
 }
 
-// one instance per block count, in the baseline and (where the CPU has AVX2, detail::avx2Paths)
-// in an AVX2 build of the same source with gathers and 8-lane pair searches: VEX encoding, no FMA,
-// so the same bits with fewer instructions (bunny, the grading pass: 48.8 M instructions, 40.1 M
-// built for AVX2, 37.5 M with the gathers, 32.7 M with minPairDot8). Its time did not follow: about
-// 90 ns per lane row on either build, also on a 2 k-vertex mesh in cache and with the divisions
-// replaced by reciprocals (probes, not kept), so the count is not what bounds it: each row is one
-// long dependency chain, which gradeTwoRowsAvx2 below overlaps with the next row's.
-#define SCENELOD_GRADE_ROW_LANES(name, attributes, gather)                                         \
-  attributes bool name(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals, \
-                       LaneScratch& s, LaneRow& out) {                                                \
-    static_assert(kLaneRow == 16, "one instance per block count");                                   \
-    switch ((r + 3) / 4) {                                                                            \
-      case 1: return gradeRowLanesBody<1, gather>(pos, v, row, r, want_normals, s, out);              \
-      case 2: return gradeRowLanesBody<2, gather>(pos, v, row, r, want_normals, s, out);              \
-      case 3: return gradeRowLanesBody<3, gather>(pos, v, row, r, want_normals, s, out);              \
-      default: return gradeRowLanesBody<4, gather>(pos, v, row, r, want_normals, s, out);             \
-    }                                                                                                 \
+// one instance per block count. (An AVX2 build of it, with gathers and 8-lane pair searches, took
+// 32.7 M instructions of the bunny's grading pass against 48.8 M, but no less time: each row is one
+// long dependency chain, which gradeTwoRowsAvx2 below overlaps with the next row's.)
+bool gradeRowLanes(const glm::vec3* pos, uint32_t v, const Incidence* row, size_t r, bool want_normals,
+                   LaneScratch& s, LaneRow& out) {
+  static_assert(kLaneRow == 16, "one instance per block count");
+  switch ((r + 3) / 4) {
+    case 1: return gradeRowLanesBody<1>(pos, v, row, r, want_normals, s, out);
+    case 2: return gradeRowLanesBody<2>(pos, v, row, r, want_normals, s, out);
+    case 3: return gradeRowLanesBody<3>(pos, v, row, r, want_normals, s, out);
+    default: return gradeRowLanesBody<4>(pos, v, row, r, want_normals, s, out);
   }
-SCENELOD_GRADE_ROW_LANES(gradeRowLanes, , false)
-SCENELOD_GRADE_ROW_LANES(gradeRowLanesAvx2, SCENELOD_AVX2_TARGET __attribute__((flatten)), true)
-#undef SCENELOD_GRADE_ROW_LANES
+}
 
 // helpers of gradeTwoRowsAvx2 (lambdas would not carry its target attribute)
 // lane l of each half holds lane (l + k) % 4 of that half of x
@@ -727,7 +680,7 @@ SCENELOD_AVX2_TARGET inline void encodeTwo(__m256 q0, __m256 q1, __m256 q2, Vert
 // Two rows of 5 to 8 triangle corners (two blocks each) in one pass of 8-lane AVX2 operations:
 // lanes 0..3 hold row 0's block, lanes 4..7 row 1's. Every operation the body above does on four
 // lanes is here in-lane (the 256-bit unpacks, shuffles and compares work on each 128-bit half
-// alone), so each half computes exactly what gradeRowLanesBody<2, true> computes for its row.
+// alone), so each half computes exactly what gradeRowLanesBody<2> computes for its row.
 // The point is time: one row's work is a dependency chain (gathers -> cross products -> sqrt ->
 // divisions -> pair minima -> reductions) that the reorder window hardly overlaps with the next
 // row's (lane pass alone, bunny: ~80 ns per row at 700 or 1,155 instructions; a chain of 20
@@ -962,7 +915,6 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   glm::vec3 box_lo(std::numeric_limits<float>::max()), box_hi(-std::numeric_limits<float>::max());
 #if defined(__SSE2__)
   const bool avx2 = detail::avx2Paths() && vn < (size_t(1) << 31) / 3;
-  const auto lanes_fn = avx2 ? gradeRowLanesAvx2 : gradeRowLanes;
 #endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
     // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
@@ -1049,7 +1001,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         }
       }
       if (!colors && row <= kLaneRow &&
-          lanes_fn(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
+          gradeRowLanes(pos, static_cast<uint32_t>(v), incidence + b, row, want_normals, lanes, lr)) {
         laneDone(v, lr, false);
         continue;
       }

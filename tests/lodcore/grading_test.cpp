@@ -265,8 +265,8 @@ void expectAvx2GivesTheBaselineBits(const Mesh& mesh, const std::string& label) 
 
 }  // namespace
 
-// The grading pass built for AVX2 (where the CPU has it: four lanes per row, or two rows of 5 to 8
-// corners side by side in eight lanes) gives the baseline build's bits: weights, order, sorted
+// The grading pass's AVX2 pair pass (where the CPU has it: two rows of 5 to 8 corners side by side
+// in eight lanes) gives the baseline's bits (SSE2 lanes per row, scalar rows): weights, order, sorted
 // positions and face sums, with and without the boost, on the bunny, a bumpy sphere, a CAD part
 // (creases) and an open grid (boundaries), and on copies with their vertices renumbered (so that
 // rows of any kind meet in a pair) and partly collapsed (degenerate edges and faces); on a CPU
