@@ -72,18 +72,6 @@ constexpr size_t kBlocksAhead = 16;
 // 5 % (14: 1.18-1.20 ms, 9 % fewer instructions), a loss at 10 % (9.4: 1.35 -> 1.72 ms, an entry
 // made for every ~4 vertices)
 constexpr double kCacheVerticesPerCell = 12.0;
-// CandidateCache keeps its entries' centres (96 bytes an entry) where those take at most this many
-// bytes per vertex (about 3 entries per expected cell are reserved)
-constexpr double kCacheCentresBytesPerVertex = 4.0;
-// CandidateCache keeps its cubes' entry numbers in one flat array (2 bytes a cube) where that takes
-// at most this many bytes per vertex and kCacheFlatMaxBytes: the bunny's chain levels 4-8 (29.7 KB
-// down to 1 KB, 0.85 B a vertex at level 4) and its 2 % level (43 KB, 1.24 B), whose assignments
-// took 9-12 % less time. Not at the bunny's chain level 3 (139 KB, 4 B a vertex: 0.84-0.90 ->
-// 0.72-0.73 ms, but about 92 KB over the bricks at the chain's memory peak) nor the 1 M sphere's 1 %
-// level (345 KB, far past L1: 12 % fewer instructions, no faster, 8.51-8.62 ->
-// 8.66-8.73 ms)
-constexpr double kCacheFlatBytesPerVertex = 2.0;
-constexpr size_t kCacheFlatMaxBytes = 64 << 10;
 
 // One grid cube in the hash: its key and the first cells listed in it, inline, so that testing a
 // cube costs one cache line. A grid cube lists at most 8 cube cells (64 sphere cells); those past
@@ -254,9 +242,6 @@ inline void testCellT(const JoinRule& r, const glm::vec3& pv, float cx, float cy
 // may also take up to 8 bytes per referenced vertex (twice the level's cluster_of array): the 1 M
 // sphere's 10 % level then takes the flat grid of side w (3 MB, the hash 2.2 MB), 115 -> 86 ms.
 constexpr double kDenseBaseBytes = 1 << 20;
-// a flat array of short heads above this many bytes per referenced vertex is kept in bricks
-// (BrickHeads): the bunny's 50 % level, its chain's level 1, would take 24.7 (0.86 MB)
-constexpr double kFlatHeadBytesPerVertex = 16.0;
 constexpr double kDenseBytesPerCell = 32.0;
 constexpr double kDenseBytesPerVertex = 8.0;
 // assignBlocksT's blocks of 4 cell ids and their links: reserved for 0.55 per expected cell (the
@@ -361,8 +346,8 @@ constexpr bool kAvx2Built = true;
 #else
 constexpr bool kAvx2Built = false;
 #endif
-// cleared by setFloatingPathsForTest, so that a test can compare the paths on one CPU
-std::atomic<bool> g_avx2_allowed{true}, g_short_heads_allowed{true}, g_bricks_allowed{true}, g_cache_allowed{true};
+// cleared by setFloatingAvx2ForTest, so that a test can compare the paths on one CPU
+std::atomic<bool> g_avx2_allowed{true}, g_cache_allowed{true};
 // the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 with a
 // limit of k bricks in place of kBrickBytesPerCell's (setFloatingBlockBricksForTest)
 std::atomic<int> g_block_bricks{-1};
@@ -376,21 +361,13 @@ std::atomic<int> g_last_grid{-1};
 
 #if defined(SCENELOD_FLOATING_AVX2)
 // The packing of the non-empty heads among 8 lanes (two rows: lanes 0-2 and 4-6 of a pair of
-// 4-head loads; the 2 x 2 x 2 bricked heads: all 8) takes kLaneCompaction's row of their mask.
-
-// four list heads as 32-bit lanes
-SCENELOD_FLOATING_AVX2_TARGET inline __m128i loadHeads4(const uint32_t* r) {
-  return _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
-}
-SCENELOD_FLOATING_AVX2_TARGET inline __m128i loadHeads4(const uint16_t* r) {
-  return _mm_cvtepu16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(r)));
-}
+// 4-head loads) takes kLaneCompaction's row of their mask.
 
 // the non-zero heads of rows r0 and r1 (three each) appended to found[count ..); writes 8 entries
-template <typename Head>
-SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Head* r1, uint32_t valid, uint32_t* found,
-                                              uint32_t count) {
-  const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(loadHeads4(r0)), loadHeads4(r1), 1);
+SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const uint32_t* r0, const uint32_t* r1, uint32_t valid,
+                                                       uint32_t* found, uint32_t count) {
+  const __m256i v = _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(r0))),
+                                            _mm_loadu_si128(reinterpret_cast<const __m128i*>(r1)), 1);
   const uint32_t zero = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
   const uint32_t m = ~zero & valid;
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[m])));
@@ -401,8 +378,7 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t packRows(const Head* r0, const Hea
 // the non-empty heads of the 3 x 3 x 3 cubes from base (rows at base + row_offset[0 .. 9)) into
 // found; their count. Each load takes a fourth head (inside the grid: a row spans dims[0] >= 7 cubes
 // and lo + 3 is at most dims[0] - 1), masked off; the rows go in pairs, the last alone.
-template <typename Head>
-SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherRows27(const Head* base, const size_t row_offset[9], uint32_t* found) {
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherRows27(const uint32_t* base, const size_t row_offset[9], uint32_t* found) {
   const size_t* r = row_offset;
   uint32_t count = packRows(base + r[0], base + r[1], 0x77u, found, 0);
   count = packRows(base + r[2], base + r[3], 0x77u, found, count);
@@ -495,13 +471,12 @@ SCENELOD_FLOATING_AVX2_TARGET inline uint32_t laneBest8(__m256 bd2, __m256i bid)
 // The AVX2 flat-grid loops' shared steps (inlined into each). The non-empty heads of the cubes
 // lo..hi along each axis, any span (the uncommon case: a vertex within the slack of a cube face),
 // appended to `found` without a branch per head.
-template <typename Stored>
-SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherHeadsAnySpan(const Stored* head, size_t sy, size_t sz,
+SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t gatherHeadsAnySpan(const uint32_t* head, size_t sy, size_t sz,
                                                                                  const int32_t lo[3], const int32_t hi[3],
                                                                                  uint32_t* found, uint32_t found_count) {
   for (int32_t z = lo[2]; z <= hi[2]; ++z)
     for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-      const Stored* row = head + size_t(z) * sz + size_t(y) * sy;
+      const uint32_t* row = head + size_t(z) * sz + size_t(y) * sy;
       for (int32_t x = lo[0]; x <= hi[0]; ++x) {
         found[found_count] = row[x];
         found_count += row[x] != 0;
@@ -532,27 +507,6 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t bestListedCell8(co
   return laneBest8<kNearest>(bd2, bid);
 }
 
-// bestListedCell8 where the lists are those of 2 x 2 x 2 cubes (the bricked grid of side w): at most
-// 8 lists, so each round is one set of 8 lanes, list[k] the k-th cube's current cell (0, the
-// sentinel, where its list is empty or ended). A round's successors are the `next` fields its own
-// loads hold (testCellLanes8's fourth component, lane k that of list[k]), stored back in place;
-// bestListedCell8 loads each cell's `next` again and compacts them in a loop of data-dependent
-// length, and compacts the heads behind a running count. The bunny's 50 % level (~2 cells an
-// occupied cube, 2-3 rounds) went 14.39 -> 11.82 M instructions. Which lane holds a cell does not
-// matter: the least (d^2, id) over the lanes is the same.
-template <bool kCube, bool kNearest, typename CellRecord>
-SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t bestOfEightLists(const CellRecord* cells, uint32_t* list,
-                                                                               const glm::vec3& pv, const JoinRule& rule) {
-  const __m256 px = _mm256_set1_ps(pv.x), py = _mm256_set1_ps(pv.y), pz = _mm256_set1_ps(pv.z);
-  __m256 bd2 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-  __m256i bid = _mm256_set1_epi32(0x7fffffff);
-  for (;;) {
-    const __m256i next = testCellLanes8<kCube, kNearest>(cells, list, 8, px, py, pz, rule, bd2, bid);
-    if (_mm256_testz_si256(next, next)) break;
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(list), next);
-  }
-  return laneBest8<kNearest>(bd2, bid);
-}
 #endif
 
 #if defined(SCENELOD_FLOATING_AVX2)
@@ -602,322 +556,33 @@ SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t testEntry8(const u
 }
 #endif
 
-#if defined(SCENELOD_FLOATING_AVX2)
-// BrickHeads::plan27's rows of 3 x 3 x 3 cubes for each lo & 3 along y and z (index z << 2 | y):
-// row r, (y, z) = (lo + r % 3, lo + r / 3), lies in brick `brick` among the 8 (2 for the y of
-// lo + 3, 4 for its z; its x adds 1) at head `row` of it. A table read instead of ~20 vector
-// operations a vertex.
-struct RowPlan {
-  uint8_t brick[16], row[16];  // rows 0-8, then padding (loaded 8 at a time)
-};
-struct RowPlans {
-  RowPlan plan[16];
-};
-constexpr RowPlans makeRowPlans() {
-  RowPlans t{};
-  for (int k = 0; k < 16; ++k)
-    for (int r = 0; r < 9; ++r) {
-      const int y = (k & 3) + r % 3, z = (k >> 2) + r / 3;
-      t.plan[k].brick[r] = uint8_t((z >> 2) * 4 + (y >> 2) * 2);
-      t.plan[k].row[r] = uint8_t((z & 3) << 4 | (y & 3) << 2);
-    }
-  return t;
-}
-constexpr RowPlans kRowPlans = makeRowPlans();
-#endif
-
-// List heads of 16 bits in bricks of 4 x 4 x 4 grid cubes (128 bytes), a brick allocated when a cell
-// is first listed in it; bricks listing no cell are all brick 0 (empty), so a sparse grid (a fine
-// level's surface in its box) takes the bricks its cells touch, not its whole box: the bunny's 50 %
-// level 1,124 bricks (144 KB, 217 KB reserved) and 27 KB of brick indices where a flat array of
-// short heads takes 0.86 MB. A head costs two dependent loads instead of one.
-struct Bricked {};  // the head type of assignDenseT over BrickHeads
-class BrickHeads {
- public:
-  // `expected` cells (0: no grid); bricks reserved for one per 16 of them (15.4 and 16.3 cells per
-  // brick were measured on the bunny's 50 % level and at w = 0.02; more only regrows the array), or
-  // per 5.5 for cubes of side w/2 (`half_width`: 6.3-6.8 expected cells per brick on the bunny at
-  // w = 0.05-0.06 and the sphere at 0.055-0.065; one per 16 regrew twice, the bunny's chain level 2
-  // to 1,744 bricks for 990 used)
-  BrickHeads(const size_t dims[3], size_t expected, bool half_width)
-      : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4), bz_((dims[2] + 3) / 4) {
-    if (expected == 0) return;
-    top_.assign(bx_ * by_ * bz_, 0);
-    heads_.reserve(((half_width ? expected * 2 / 11 : expected / 16) + 16) * 64);
-    heads_.assign(64, 0);
-  }
-  uint32_t get(int32_t x, int32_t y, int32_t z) const {
-    return heads_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
-  }
-  void set(int32_t x, int32_t y, int32_t z, uint32_t v) { exchange(x, y, z, v); }
-  // set, returning the head it replaces (get and set with one brick lookup)
-  uint32_t exchange(int32_t x, int32_t y, int32_t z, uint32_t v) {
-    uint32_t& b = top_[brick(x, y, z)];
-    if (b == 0) {
-      b = uint32_t(heads_.size() >> 6);
-      heads_.resize(heads_.size() + 64, 0);
-    }
-    uint16_t& h = heads_[size_t(b) << 6 | inBrick(x, y, z)];
-    const uint32_t old = h;
-    h = uint16_t(v);
-    return old;
-  }
-  // the non-empty heads of the cubes lo .. hi into found (without a branch per head); their count
-  uint32_t gather(const int32_t lo[3], const int32_t hi[3], uint32_t* found) const {
-    if (hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1) {
-      // 2 x 2 x 2 cubes (the grid of side w): the brick and in-brick parts of each axis once, and
-      // loops of fixed counts (the general loops below mispredicted about once per vertex)
-      size_t bx[2], ix[2], row[4], in[4];
-      for (int k = 0; k < 2; ++k) bx[k] = size_t((lo[0] + k) >> 2), ix[k] = size_t((lo[0] + k) & 3);
-      for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 2; ++y) {
-          const int32_t cy = lo[1] + y, cz = lo[2] + z;
-          row[2 * z + y] = (size_t(cz >> 2) * by_ + size_t(cy >> 2)) * bx_;
-          in[2 * z + y] = size_t((cz & 3) << 4 | (cy & 3) << 2);
-        }
-      uint32_t count = 0;
-      for (int r = 0; r < 4; ++r)
-        for (int k = 0; k < 2; ++k) {
-          const uint32_t h = heads_[size_t(top_[row[r] + bx[k]]) << 6 | in[r] | ix[k]];
-          found[count] = h;
-          count += h != 0;
-        }
-      return count;
-    }
-#if defined(__SSE2__)
-    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
-      // 3 x 3 x 3 cubes (the grid of side w/2): rows27's 9 rows of 3 heads
-      uint64_t rows[9];
-      rows27(lo, rows);
-      uint32_t count = 0;
-      for (int r = 0; r < 9; ++r)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t h = uint32_t(rows[r] >> (16 * k)) & 0xffffu;
-          found[count] = h;
-          count += h != 0;
-        }
-      return count;
-    }
-#endif
-    uint32_t count = 0;
-    for (int32_t z = lo[2]; z <= hi[2]; ++z)
-      for (int32_t y = lo[1]; y <= hi[1]; ++y)
-        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
-          const uint32_t h = get(x, y, z);
-          found[count] = h;
-          count += h != 0;
-        }
-    return count;
-  }
-#if defined(__SSE2__)
-  // the heads of the 3 x 3 x 3 cubes from lo as 9 rows (y fastest, then z) of 3 heads along x, 16
-  // bits each in the row's low 48 bits (x86: little-endian). The cubes lie in at most 2 x 2 x 2
-  // bricks, those of lo and lo + 3 along each axis (inside the grid: lo + 2 is at most dims - 2),
-  // looked up once; a brick's rows of 4 heads are aligned 8-byte words, so a row is two words
-  // (its part in each brick along x) funnel-shifted by lo & 3. The triple loop of get took ~1,000
-  // instructions a vertex at the bunny's chain level 2 (w = 0.0535).
-  SCENELOD_ALWAYS_INLINE void rows27(const int32_t lo[3], uint64_t rows[9]) const {
-    const size_t x[2] = {size_t(lo[0] >> 2), size_t((lo[0] + 3) >> 2)};
-    const size_t y[2] = {size_t(lo[1] >> 2) * bx_, size_t((lo[1] + 3) >> 2) * bx_};
-    const size_t z[2] = {size_t(lo[2] >> 2) * bx_ * by_, size_t((lo[2] + 3) >> 2) * bx_ * by_};
-    const uint32_t* top = top_.data();
-    const uint16_t* heads = heads_.data();
-    const uint16_t* brick[8];  // z, then y, then x: the brick of lo or of lo + 3
-    for (int k = 0; k < 8; ++k) brick[k] = heads + (size_t(top[z[k >> 2] + y[k >> 1 & 1] + x[k & 1]]) << 6);
-    // per y (and z) of the three: its brick among brick[] (0 or 2; 0 or 4) and its row in the brick
-    size_t yk[3], yi[3], zk[3], zi[3];
-    for (int k = 0; k < 3; ++k) {
-      yk[k] = size_t(((lo[1] & 3) + k) >> 2) * 2, yi[k] = size_t((lo[1] + k) & 3) << 2;
-      zk[k] = size_t(((lo[2] & 3) + k) >> 2) * 4, zi[k] = size_t((lo[2] + k) & 3) << 4;
-    }
-    const unsigned s = unsigned(lo[0] & 3) * 16;
-    for (int zz = 0; zz < 3; ++zz)
-      for (int yy = 0; yy < 3; ++yy) {
-        const uint16_t* const* pair = brick + zk[zz] + yk[yy];
-        const size_t in = zi[zz] | yi[yy];
-        uint64_t a, b;
-        std::memcpy(&a, pair[0] + in, sizeof a);
-        std::memcpy(&b, pair[1] + in, sizeof b);
-        // (b << 1) << (63 - s): no shift by 64 where s = 0 (b is then lo's brick again, unused); an
-        // unsigned __int128 funnel shift took 1.4 M more instructions (GCC tests the shift for 64)
-        rows[3 * zz + yy] = (a >> s) | ((b << 1) << (63 - s));
-      }
-  }
-#endif
-#if defined(SCENELOD_FLOATING_AVX2)
-  // gather's 3 x 3 x 3 case on AVX2 (the grid of side w/2), in two steps as locate8 and heads8.
-  // plan27: rows27's two head indices per row (the row's part in the brick of lo and of lo + 3 along
-  // x), from the 8 bricks' numbers looked up once and spread to the rows by permutations. It may
-  // run a vertex ahead: the bricks' numbers change only where a brick is allocated, which
-  // heads27 sees (the heads' size) and then plans again.
-  struct Plan27 {
-    alignas(32) uint32_t a[8];  // rows 0-7 (y fastest, then z): index of the row's 4-head word in lo's brick
-    alignas(32) uint32_t b[8];  // the same in the brick of lo + 3 along x
-    uint32_t a8, b8;            // row 8
-    __m128i lo4;                // the cubes planned for
-    __m128i shift;              // 16 (lo & 3) and 64 - 16 (lo & 3) bits, per 64-bit lane
-    size_t brick_count;         // the heads' size when planned
-  };
-  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void plan27(__m128i lo4, __m256i strides, Plan27& p) const {
-    // lanes 0-2 the bricks of lo, 4-6 those of lo + 3 (inside the grid: lo + 2 is at most dims - 2)
-    const __m256i c = _mm256_add_epi32(_mm256_broadcastsi128_si256(lo4), _mm256_setr_epi32(0, 0, 0, 0, 3, 3, 3, 3));
-    const __m256i b = _mm256_mullo_epi32(_mm256_srai_epi32(c, 2), strides);
-    const __m256i px = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4), py = _mm256_setr_epi32(1, 1, 5, 5, 1, 1, 5, 5),
-                  pz = _mm256_setr_epi32(2, 2, 2, 2, 6, 6, 6, 6);
-    alignas(32) uint32_t pos[8];  // brick k takes x of lo or lo + 3 by k & 1, y by k >> 1 & 1, z by k >> 2
-    _mm256_store_si256(reinterpret_cast<__m256i*>(pos),
-                       _mm256_add_epi32(_mm256_add_epi32(_mm256_permutevar8x32_epi32(b, px), _mm256_permutevar8x32_epi32(b, py)),
-                                        _mm256_permutevar8x32_epi32(b, pz)));
-    const uint32_t* top = top_.data();
-    alignas(32) uint32_t first[8];  // the bricks' first head indices
-    for (int k = 0; k < 8; ++k) first[k] = top[pos[k]] << 6;
-    const __m256i base = _mm256_load_si256(reinterpret_cast<const __m256i*>(first));
-    const RowPlan& rows = kRowPlans.plan[(_mm_extract_epi32(lo4, 2) & 3) << 2 | (_mm_extract_epi32(lo4, 1) & 3)];
-    const __m256i sel = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows.brick)));
-    const __m256i in = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows.row)));
-    _mm256_store_si256(reinterpret_cast<__m256i*>(p.a), _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, sel), in));
-    _mm256_store_si256(reinterpret_cast<__m256i*>(p.b),
-                       _mm256_add_epi32(_mm256_permutevar8x32_epi32(base, _mm256_add_epi32(sel, _mm256_set1_epi32(1))), in));
-    p.a8 = first[rows.brick[8]] + rows.row[8];
-    p.b8 = first[rows.brick[8] + 1] + rows.row[8];
-    const int64_t s = int64_t(_mm_cvtsi128_si32(lo4) & 3) * 16;
-    p.shift = _mm_set_epi64x(64 - s, s);
-    p.lo4 = lo4;
-    p.brick_count = heads_.size();
-  }
-  // heads27: the non-empty heads of the cubes plan27 gave into found (8 entries written past the
-  // count), their count; each pair of rows packed as packRows packs the flat grid's
-  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE uint32_t heads27(Plan27& p, __m256i strides, uint32_t* found) const {
-    if (p.brick_count != heads_.size()) plan27(p.lo4, strides, p);  // a brick was allocated since
-    const uint16_t* h = heads_.data();
-    const __m128i sa = _mm_unpacklo_epi64(p.shift, p.shift), sb = _mm_unpackhi_epi64(p.shift, p.shift);
-    auto row = [&](uint32_t a, uint32_t b) SCENELOD_FLOATING_AVX2_TARGET {
-      uint64_t wa, wb;
-      std::memcpy(&wa, h + a, sizeof wa);
-      std::memcpy(&wb, h + b, sizeof wb);
-      return std::pair<uint64_t, uint64_t>(wa, wb);
-    };
-    uint32_t count = 0;
-    for (int r = 0; r < 9; r += 2) {
-      const auto r0 = r < 8 ? row(p.a[r], p.b[r]) : row(p.a8, p.b8);
-      const auto r1 = r < 8 ? row(p.a[r + 1], p.b[r + 1]) : r0;
-      const __m128i wa = _mm_set_epi64x(int64_t(r1.first), int64_t(r0.first));
-      const __m128i wb = _mm_set_epi64x(int64_t(r1.second), int64_t(r0.second));
-      // the funnel shift: a shift by 64 gives 0, so b drops out where lo & 3 = 0
-      const __m256i v = _mm256_cvtepu16_epi32(_mm_or_si128(_mm_srlv_epi64(wa, sa), _mm_sllv_epi64(wb, sb)));
-      const uint32_t zero =
-          uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))));
-      const uint32_t m = ~zero & (r < 8 ? 0x77u : 0x07u);
-      const __m256i perm =
-          _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[m])));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(found + count), _mm256_permutevar8x32_epi32(v, perm));
-      count += uint32_t(_mm_popcnt_u32(m));
-    }
-    return count;
-  }
-#endif
-#if defined(SCENELOD_FLOATING_AVX2)
-  // gather's 2 x 2 x 2 case on AVX2 from lo4 (lanes x, y, z), in two steps. locate8: the 8 cubes'
-  // brick positions and in-brick indices, from the brick and in-brick parts of both cubes of each
-  // axis in one vector, summed by permutations (the scalar form took ~90 instructions a vertex at the
-  // bunny's 50 % level); `strides` from brickStrides(). It depends on the vertex alone, so the caller
-  // runs it a vertex ahead: its ~25 cycles of latency (vpmulld, vpermd, the stores' forwarding) in
-  // front of the heads' loads made the level slower (2.29 -> 2.38 ms) with 2.4 M fewer instructions.
-  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void locate8(__m128i lo4, __m256i strides, __m256i& bricks,
-                                                                    __m256i& in_brick) const {
-    const __m256i c = _mm256_add_epi32(_mm256_broadcastsi128_si256(lo4), _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
-    const __m256i b = _mm256_mullo_epi32(_mm256_srai_epi32(c, 2), strides);
-    const __m256i in =
-        _mm256_sllv_epi32(_mm256_and_si256(c, _mm256_set1_epi32(3)), _mm256_setr_epi32(0, 2, 4, 0, 0, 2, 4, 0));
-    // lane k takes x + (k & 1), y + (k >> 1 & 1), z + (k >> 2)
-    const __m256i px = _mm256_setr_epi32(0, 4, 0, 4, 0, 4, 0, 4), py = _mm256_setr_epi32(1, 1, 5, 5, 1, 1, 5, 5),
-                  pz = _mm256_setr_epi32(2, 2, 2, 2, 6, 6, 6, 6);
-    bricks = _mm256_add_epi32(_mm256_add_epi32(_mm256_permutevar8x32_epi32(b, px), _mm256_permutevar8x32_epi32(b, py)),
-                              _mm256_permutevar8x32_epi32(b, pz));
-    in_brick = _mm256_or_si256(_mm256_or_si256(_mm256_permutevar8x32_epi32(in, px), _mm256_permutevar8x32_epi32(in, py)),
-                               _mm256_permutevar8x32_epi32(in, pz));
-  }
-  // heads8All: the heads of the cubes locate8 gave into found[0 .. 8) (32-byte aligned), empty ones
-  // (0) in place, for bestOfEightLists: the stores' addresses do not wait on the loaded heads, as a
-  // running count of the non-empty ones makes them. Two gathers: the bricks' numbers, then the
-  // 4-byte words holding the heads, each head shifted out of its word (so nothing past the heads is
-  // read). The 8 scalar steps (the vectors stored, 8 brick numbers, 8 heads) took 71 instructions a
-  // vertex at the bunny's 50 % level, 19 % of its assignment: 12.72 -> 11.04 M instructions,
-  // 1.36-1.42 -> 1.26-1.30 ms. The gathers' latency is hidden: the heads are read a vertex ahead.
-  SCENELOD_FLOATING_AVX2_TARGET SCENELOD_ALWAYS_INLINE void heads8All(__m256i bricks, __m256i in_brick,
-                                                                      uint32_t* found) const {
-    const __m256i first = _mm256_i32gather_epi32(reinterpret_cast<const int*>(top_.data()), bricks, 4);
-    const __m256i at = _mm256_or_si256(_mm256_slli_epi32(first, 6), in_brick);
-    const __m256i words = _mm256_i32gather_epi32(reinterpret_cast<const int*>(heads_.data()),
-                                                 _mm256_andnot_si256(_mm256_set1_epi32(1), at), 2);
-    const __m256i shift = _mm256_slli_epi32(_mm256_and_si256(at, _mm256_set1_epi32(1)), 4);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(found),
-                       _mm256_and_si256(_mm256_srlv_epi32(words, shift), _mm256_set1_epi32(0xffff)));
-  }
-  // locate8's strides of the bricks along x, y, z for the cubes lo and lo + 1
-  SCENELOD_FLOATING_AVX2_TARGET __m256i brickStrides() const {
-    const int32_t sy = int32_t(bx_), sz = int32_t(bx_ * by_);
-    return _mm256_setr_epi32(1, sy, sz, 0, 1, sy, sz, 0);
-  }
-#endif
-
- private:
-  size_t brick(int32_t x, int32_t y, int32_t z) const {
-    return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
-  }
-  static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
-  size_t bx_, by_, bz_;
-  std::vector<uint32_t> top_;     // per brick position: its brick, 0 for the shared empty one
-  std::vector<uint16_t> heads_;   // 64 per brick, x fastest
-};
-
-// the positions in weight order for assignDenseT: read through the order for short heads (a small
-// mesh, whose sorted copy a chain may have dropped), the sorted copy streamed for 4-byte heads
-template <typename Head>
-auto positionsInOrder(const PreparedMesh& p, std::vector<glm::vec3>& local) {
-  if constexpr (std::is_same_v<Head, uint32_t>) return sortedPositions(p, local);
-  else return PositionsByWeight(p);
-}
-
 // §4's grid as a flat array of list heads over the mesh's box in grid cubes (still anchored at the
 // origin, so the cells do not depend on the box): finding a cube is one load at a computed index,
-// with no hashing, probing or key test. Shared by assignDenseT and its AVX2 variant: the cells,
-// chained through `next` newest first per grid cube, and the heads, flat or in bricks (Bricked).
+// with no hashing, probing or key test. Shared by assignDenseT and its AVX2 variants: the cells,
+// chained through `next` newest first per grid cube, and the heads.
 // cells[k + 1] is cluster k's cell; cells[0] is a sentinel at NaN, which contains no vertex: empty
 // heads (0) point to it, so that the cells found can be tested four (or eight) at a time, padded
 // with it.
-template <typename Head>
 struct DenseGrid {
   struct Cell {
     float x, y, z;
     uint32_t next;  // index of the next cell listed in the same grid cube; 0 ends the list
   };
-  static constexpr bool kBricks = std::is_same_v<Head, Bricked>;
-  using Stored = std::conditional_t<kBricks, uint16_t, Head>;
-
-  // half_width: cubes of side w/2 (the bricks' reservation)
-  DenseGrid(const size_t dims[3], size_t expected, bool half_width = false)
-      : sy(dims[0]), sz(dims[0] * dims[1]), head(kBricks ? 0 : sz * dims[2], 0),
-        bricks(dims, kBricks ? expected : 0, half_width) {
+  DenseGrid(const size_t dims[3], size_t expected) : sy(dims[0]), sz(dims[0] * dims[1]), head(sz * dims[2], 0) {
     cells.reserve(expected + 1);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     cells.push_back({nan, nan, nan, 0});
   }
   // a new cell (cluster `id`) at pv, listed first in grid cube (cx, cy, cz) (inlined into each variant)
   SCENELOD_ALWAYS_INLINE void list(int32_t cx, int32_t cy, int32_t cz, const glm::vec3& pv, uint32_t id) {
-    if constexpr (kBricks) {
-      cells.push_back({pv.x, pv.y, pv.z, bricks.exchange(cx, cy, cz, id + 1)});
-    } else {
-      const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
-      cells.push_back({pv.x, pv.y, pv.z, head[k]});
-      head[k] = Stored(id + 1);
-    }
+    const size_t k = size_t(cz) * sz + size_t(cy) * sy + size_t(cx);
+    cells.push_back({pv.x, pv.y, pv.z, head[k]});
+    head[k] = id + 1;
   }
 
   const size_t sy, sz;  // strides of y and z in the flat array
   std::vector<Cell> cells;
-  std::vector<Stored> head;
-  BrickHeads bricks;
+  std::vector<uint32_t> head;
 };
 
 #if defined(SCENELOD_FLOATING_AVX2)
@@ -932,65 +597,34 @@ struct DenseGrid {
 // level 5 k cells among 519 k vertices).
 // Small, for the chain's memory peak (reached in its width search's coarse probes): entries of
 // 16 bytes, and the cubes' entry numbers in bricks of 4 x 4 x 4 cubes allocated where a cube has
-// an entry (as BrickHeads): about 55 KB at the 2 % level. Entries of 8 centres (128 bytes, tested
-// without the gather from the cells: 6.3 M instructions there instead of 6.8) and a flat array of
-// entry numbers took the bunny's chain peak to 4.2-4.5 MB (budget 3.34). The centres are kept
-// beside the entries (Centres, 96 bytes) only where they are few (kCacheCentresBytesPerVertex):
-// kept at every level, the bunny's chain level 3 (1,681 expected cells, 4,265 entries) took its
-// peak from 2.96 to 3.57 MB; from level 4 on (1,144 entries, 124 KB reserved) they cut the
-// assignment by 0.9-1.0 M instructions a level.
+// an entry: about 55 KB at the 2 % level. (Entries that kept their cells' centres, and the entry
+// numbers in one flat array, were no faster here: tried and not kept.)
 class CandidateCache {
  public:
   static constexpr uint16_t kOverflow = 0xffff;
   struct Entry {
     uint16_t cell[8];  // the cells' indices (cluster + 1), ascending, 0 (the sentinel) in free places
   };
-  // an entry's cells' centres (SoA), so that a vertex loads three vectors instead of 8 cells by index
-  // and their transpose (31 instructions at the bunny's chain level 4)
-  struct Centres {
-    float x[8], y[8], z[8];  // NaN in free places (the sentinel's centre: contains no vertex)
-  };
-  // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated);
-  // `centres`: keep each entry's Centres too; `flat`: the cubes' entry numbers in one flat array
-  // (2 bytes a cube) instead of bricks, which takes the brick's load out of a vertex's way to its entry
-  CandidateCache(const size_t dims[3], size_t reserve_entries, bool centres, bool flat)
-      : bx_(flat ? dims[0] : (dims[0] + 3) / 4), by_(flat ? dims[1] : (dims[1] + 3) / 4), with_centres_(centres),
-        flat_(flat) {
+  // `reserve_entries`: about the cubes the vertices fall in (0: no cache, nothing allocated)
+  CandidateCache(const size_t dims[3], size_t reserve_entries) : bx_((dims[0] + 3) / 4), by_((dims[1] + 3) / 4) {
     if (reserve_entries == 0) return;
-    if (flat) {
-      slots_.assign(dims[0] * dims[1] * dims[2], 0);
-    } else {
-      top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
-      slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
-      slots_.assign(64, 0);  // brick 0: no entries
-    }
+    top_.assign(bx_ * by_ * ((dims[2] + 3) / 4), 0);
+    slots_.reserve((reserve_entries / 16 + 16) * 64);  // 15.6 to 16 entries per brick used (bunny 2-5 %)
+    slots_.assign(64, 0);  // brick 0: no entries
     entries_.reserve(reserve_entries + 1);
     entries_.push_back(Entry{});
-    if (centres) {
-      centres_.reserve(reserve_entries + 1);
-      centres_.push_back(Centres{});
-    }
-  }
-  // the entry number of cube (x, y, z): 0 none yet, kOverflow for the general path
-  uint16_t find(int32_t x, int32_t y, int32_t z) const {
-    return flat_ ? slots_[flatPlace(x, y, z)] : slots_[size_t(top_[brick(x, y, z)]) << 6 | inBrick(x, y, z)];
   }
   const Entry& entry(uint16_t e) const { return entries_[e]; }
   const Entry* entries() const { return entries_.data(); }  // moves when make adds an entry
-  bool hasCentres() const { return with_centres_; }
-  const Centres& centres(uint16_t e) const { return centres_[e]; }
-  const Centres* centres() const { return centres_.data(); }  // null without centres; moves as entries()
-  // for find in a caller's SIMD loop: the strides of the bricks' y and z (flat: of the cubes' y and
-  // z), the bricks (which never move; null where flat) and the slots (which move when make
-  // allocates a brick)
+  // for the caller's SIMD loop: the strides of the bricks' y and z, the bricks (which never move) and
+  // the slots (which move when make allocates a brick)
   size_t brickStrideY() const { return bx_; }
   size_t brickStrideZ() const { return bx_ * by_; }
   const uint32_t* bricks() const { return top_.data(); }
   const uint16_t* slots() const { return slots_.data(); }
   // a new entry for cube (x, y, z) holding the cells list[0 .. count), ascending: its number, or
   // kOverflow (the cube marked so) where they are more than 8 or the entry numbers are used up
-  template <typename CellRecord>
-  uint16_t make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count, const CellRecord* cells) {
+  uint16_t make(int32_t x, int32_t y, int32_t z, const uint32_t* list, uint32_t count) {
     uint16_t& slot = slotFor(x, y, z);
     if (count > 8 || entries_.size() >= kOverflow || (count > 0 && list[count - 1] > 0xffff)) {
       slot = kOverflow;
@@ -1001,19 +635,11 @@ class CandidateCache {
     Entry e{};
     for (uint32_t k = 0; k < count; ++k) e.cell[k] = uint16_t(list[k]);
     entries_.push_back(e);
-    if (with_centres_) {
-      Centres m;
-      for (uint32_t k = 0; k < 8; ++k) {
-        const CellRecord& c = cells[k < count ? list[k] : 0];  // the sentinel's NaN in free places
-        m.x[k] = c.x, m.y[k] = c.y, m.z[k] = c.z;
-      }
-      centres_.push_back(m);
-    }
     return number;
   }
-  // cell index c (the newest: entries stay ascending), centred at `centre` in cube (cx, cy, cz), into the built
-  // entries of the 27 cubes whose 3 x 3 x 3 hold that cube
-  void add(int32_t cx, int32_t cy, int32_t cz, uint32_t c, const glm::vec3& centre) {
+  // cell index c (the newest: entries stay ascending) in cube (cx, cy, cz), into the built entries of
+  // the 27 cubes whose 3 x 3 x 3 hold that cube
+  void add(int32_t cx, int32_t cy, int32_t cz, uint32_t c) {
     // the brick and in-brick parts of the three coordinates on each axis once
     size_t xb[3], xi[3], yb[3], yi[3], zb[3], zi[3];
     for (int k = 0; k < 3; ++k) {
@@ -1026,25 +652,14 @@ class CandidateCache {
     // chain level 3, with 1,681 cells), then those entries
     uint16_t* built[27];
     uint32_t built_count = 0;
-    if (flat_) {
-      uint16_t* first = &slots_[flatPlace(cx - 2, cy - 2, cz - 2)];
-      for (int z = 0; z < 3; ++z)
-        for (int y = 0; y < 3; ++y)
-          for (int x = 0; x < 3; ++x) {
-            uint16_t* slot = first + (size_t(z) * by_ + size_t(y)) * bx_ + size_t(x);
-            built[built_count] = slot;
-            built_count += uint16_t(*slot - 1) < kOverflow - 1;
-          }
-    } else {
-      for (int z = 0; z < 3; ++z)
-        for (int y = 0; y < 3; ++y)
-          for (int x = 0; x < 3; ++x) {
-            // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
-            uint16_t* slot = &slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
-            built[built_count] = slot;
-            built_count += uint16_t(*slot - 1) < kOverflow - 1;
-          }
-    }
+    for (int z = 0; z < 3; ++z)
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 3; ++x) {
+          // brick 0's slots are all 0 (none built): one test for no brick, no entry or overflow
+          uint16_t* slot = &slots_[size_t(top_[zb[z] + yb[y] + xb[x]]) << 6 | zi[z] | yi[y] | xi[x]];
+          built[built_count] = slot;
+          built_count += uint16_t(*slot - 1) < kOverflow - 1;
+        }
     for (uint32_t b = 0; b < built_count; ++b) {
       uint16_t& slot = *built[b];
       Entry& e = entries_[slot];
@@ -1058,10 +673,6 @@ class CandidateCache {
       }
       const int k = __builtin_ctz(free_places) >> 1;
       e.cell[k] = uint16_t(c);
-      if (with_centres_) {
-        Centres& m = centres_[slot];
-        m.x[k] = centre.x, m.y[k] = centre.y, m.z[k] = centre.z;
-      }
     }
   }
 
@@ -1070,9 +681,7 @@ class CandidateCache {
     return (size_t(z >> 2) * by_ + size_t(y >> 2)) * bx_ + size_t(x >> 2);
   }
   static size_t inBrick(int32_t x, int32_t y, int32_t z) { return size_t((z & 3) << 4 | (y & 3) << 2 | (x & 3)); }
-  size_t flatPlace(int32_t x, int32_t y, int32_t z) const { return (size_t(z) * by_ + size_t(y)) * bx_ + size_t(x); }
   uint16_t& slotFor(int32_t x, int32_t y, int32_t z) {
-    if (flat_) return slots_[flatPlace(x, y, z)];
     uint32_t& b = top_[brick(x, y, z)];
     if (b == 0) {
       b = uint32_t(slots_.size() >> 6);
@@ -1080,32 +689,25 @@ class CandidateCache {
     }
     return slots_[size_t(b) << 6 | inBrick(x, y, z)];
   }
-  size_t bx_, by_;                 // bricks (flat: cubes) along x and y
-  bool with_centres_, flat_;
-  std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one (empty where flat)
-  std::vector<uint16_t> slots_;    // 64 per brick (flat: one per cube): the cubes' entry numbers
+  size_t bx_, by_;                 // bricks along x and y
+  std::vector<uint32_t> top_;      // per brick position: its brick, 0 for the shared empty one
+  std::vector<uint16_t> slots_;    // 64 per brick: the cubes' entry numbers
   std::vector<Entry> entries_;     // entries_[0] unused
-  std::vector<Centres> centres_;   // with_centres_: centres_[e] for entries_[e]
 };
 #endif
 
-template <bool kCube, bool kNearest, typename Head>
+template <bool kCube, bool kNearest>
 void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
                   const size_t dims[3], JoinRule rule, size_t expected, Assignment& out) {
-  DenseGrid<Head> grid(dims, expected, reach == 1.0f);
+  DenseGrid grid(dims, expected);
   auto& cells = grid.cells;
   auto& head = grid.head;
-  auto& bricks = grid.bricks;
   const size_t sy = grid.sy, sz = grid.sz;
-  constexpr bool kBricks = DenseGrid<Head>::kBricks;
-  using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
-  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
-  // heads (larger meshes) stream the copy
-  std::vector<glm::vec3> local;
-  const auto sorted = positionsInOrder<Head>(p, local);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
@@ -1118,14 +720,12 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     // random, so testing each head would mispredict about once per vertex and cube
     uint32_t found[64 + 3];  // at most 4 cubes per axis (a vertex within the slack of a cube face)
     uint32_t found_count = 0;
-    if (kBricks) {
-      found_count = bricks.gather(lo, hi, found);
-    } else if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
+    if (hi[0] - lo[0] == 2 && hi[1] - lo[1] == 2 && hi[2] - lo[2] == 2) {
       // the common case of cubes of side w/2 (3 per axis), unrolled
-      const Stored* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
+      const uint32_t* base = head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]);
       for (int z = 0; z < 3; ++z)
         for (int y = 0; y < 3; ++y) {
-          const Stored* row = base + size_t(z) * sz + size_t(y) * sy;
+          const uint32_t* row = base + size_t(z) * sz + size_t(y) * sy;
           for (int x = 0; x < 3; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -1134,7 +734,7 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
     } else {
       for (int32_t z = lo[2]; z <= hi[2]; ++z)
         for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-          const Stored* row = head.data() + size_t(z) * sz + size_t(y) * sy;
+          const uint32_t* row = head.data() + size_t(z) * sz + size_t(y) * sy;
           for (int32_t x = lo[0]; x <= hi[0]; ++x) {
             found[found_count] = row[x];
             found_count += row[x] != 0;
@@ -1187,20 +787,15 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
 #if defined(SCENELOD_FLOATING_AVX2)
 // assignDenseT on AVX2 (see there): the same grid, cells and order of creation; the gather of the
 // 3 x 3 x 3 heads packs pairs of rows (packRows) instead of 27 scalar steps, and the cells found
-// are tested 8 at a time. kBricks27: bricked cubes of side w/2 (3 x 3 x 3 searched, bricks.plan27;
-// those of side w take assignBrickedAvx2T); a compile-time choice, as the run-time one cost the
-// bunny's 50 % level 0.2 M instructions
-template <bool kCube, bool kNearest, typename Head, bool kBricks27>
-SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
-                                                       const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
-                                                       size_t expected, Assignment& out) {
-  DenseGrid<Head> grid(dims, expected, reach == 1.0f);  // as in assignDenseT
+// are tested 8 at a time
+template <bool kCube, bool kNearest>
+SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
+                                                    const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
+                                                    size_t expected, Assignment& out) {
+  DenseGrid grid(dims, expected);  // as in assignDenseT
   auto& cells = grid.cells;
   auto& head = grid.head;
-  auto& bricks = grid.bricks;
   const size_t sy = grid.sy, sz = grid.sz;
-  constexpr bool kBricks = DenseGrid<Head>::kBricks;
-  using Stored = typename DenseGrid<Head>::Stored;
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;
   const __m128 inv4 = _mm_set1_ps(inv), reach4 = _mm_set1_ps(reach), slack4 = _mm_set1_ps(slack);
@@ -1210,10 +805,8 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
   for (int z = 0; z < 3; ++z)
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   const size_t n = p.order.size();
-  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
-  // heads (larger meshes) stream the copy
-  std::vector<glm::vec3> local;
-  const auto sorted = positionsInOrder<Head>(p, local);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   // the range of cubes along the three axes at once, with the scalar path's operations per lane
   // ((q - reach) - slack and floorToInt's truncation and correction)
   auto locate = [&](const glm::vec3& pv) SCENELOD_FLOATING_AVX2_TARGET {
@@ -1223,24 +816,16 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
     l.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(l.q4, reach4), slack4)), lo_cube4);
     return l;
   };
-  static_assert(kBricks27 == kBricks, "bricked cubes of side w take assignBrickedAvx2T");
-  // the next vertex's range and where its heads are (bricks.plan27, or the offset of its first cube
-  // in the flat array), a vertex ahead
-  const __m256i brick_strides = kBricks ? bricks.brickStrides() : _mm256_setzero_si256();
+  // the next vertex's range and the offset of its first cube in the flat array, a vertex ahead
   Located ahead{};
-  BrickHeads::Plan27 plans[2];  // the current vertex's and the next one's
   size_t ahead_offset = 0;
-  glm::vec3 ahead_pv{0.0f};  // read once (through the order, for short heads)
+  glm::vec3 ahead_pv{0.0f};
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     ahead_pv = sorted[k];
     ahead = locate(ahead_pv);
-    if (kBricks27) {
-      bricks.plan27(ahead.lo4, brick_strides, plans[k & 1]);
-    } else {
-      // lo >= 0: lo_cube is 3 cubes below the box
-      ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
-                     size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
-    }
+    // lo >= 0: lo_cube is 3 cubes below the box
+    ahead_offset = size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 2))) * sz +
+                   size_t(uint32_t(_mm_extract_epi32(ahead.lo4, 1))) * sy + size_t(uint32_t(_mm_cvtsi128_si32(ahead.lo4)));
   };
   // the order and cluster_of as plain pointers (through the vectors, each vertex reloaded their data
   // pointers: heaviest's push_back may, for the compiler, change them)
@@ -1258,17 +843,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
     uint32_t found[64 + 8];  // 8 spare: packRows and testCellLanes8 write 8 entries
     uint32_t found_count = 0;
     const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
-    if (kBricks) {
-      if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
-        found_count = bricks.heads27(plans[i & 1], brick_strides, found);
-      } else {
-        const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-        found_count = bricks.gather(lo, hi, found);
-      }
-    } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
+    if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(2)))) & 7) == 7) {
       // 9 rows of 3 heads; each load takes a fourth head (inside the grid: a row spans dims[0] >= 7
       // cubes and lo + 3 is at most dims[0] - 1), masked off. The rows go in pairs, the last alone.
-      const Stored* base = head.data() + offset;
+      const uint32_t* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x77u, found, found_count);
       found_count = packRows(base + r[2], base + r[3], 0x77u, found, found_count);
@@ -1277,7 +855,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
       found_count = packRows(base + r[8], base + r[8], 0x07u, found, found_count);
     } else if ((_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(span, _mm_set1_epi32(1)))) & 7) == 7) {
       // 2 x 2 x 2 cubes (the grid of side w): 4 rows of 2 heads, in two pairs
-      const Stored* base = head.data() + offset;
+      const uint32_t* base = head.data() + offset;
       const size_t* r = row_offset;
       found_count = packRows(base + r[0], base + r[1], 0x33u, found, found_count);
       found_count = packRows(base + r[3], base + r[4], 0x33u, found, found_count);
@@ -1297,103 +875,11 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2Impl(const PreparedMesh& p, fl
   }
 }
 
-// assignDenseAvx2Impl's bricked grid of side w (2 x 2 x 2 cubes searched, bestOfEightLists), in a
-// loop of its own whose state between vertices is the next vertex's position, its lo cube, where its
-// 8 heads are and the heads themselves; inside assignDenseAvx2Impl (the other grids' state, the
-// range kept as Located) GCC kept much of it on the stack, reloaded and stored each vertex. The
-// cube a new cell goes in comes from the position again (the same product and floor).
-// The next vertex's 8 heads are read a vertex ahead (bestOfEightLists works in place, so 8 + 8
-// entries each), where its span is 1 along each axis. They are loaded before the current vertex's
-// unpredictable branches (its rounds, whether it makes a cell: half the vertices at the bunny's
-// 50 % level), so a mispredict does not put them back in front of the next vertex's cell loads. A
-// cell made in between changes one cube's head (a brick it allocates is otherwise empty, as the
-// shared empty brick read before), so they are read again only where that cube is one of the 8.
-template <bool kCube, bool kNearest>
-SCENELOD_FLOATING_AVX2_TARGET void assignBrickedAvx2T(const PreparedMesh& p, float cube_width, const int32_t lo_cube[3],
-                                                      const size_t dims[3], JoinRule rule, size_t expected,
-                                                      Assignment& out) {
-  DenseGrid<Bricked> grid(dims, expected, false);
-  auto& cells = grid.cells;
-  auto& bricks = grid.bricks;
-  const __m128 inv4 = _mm_set1_ps(1.0f / cube_width), half4 = _mm_set1_ps(0.5f), slack4 = _mm_set1_ps(kSearchSlack);
-  const __m128i lo_cube4 = _mm_setr_epi32(lo_cube[0], lo_cube[1], lo_cube[2], 0);
-  const size_t n = p.order.size();
-  const PositionsByWeight sorted(p);  // short heads: at most 65,535 vertices (positionsInOrder)
-  const uint32_t* const order = p.order.data();
-  uint32_t* const cluster_of = out.cluster_of.data();
-  const __m256i brick_strides = bricks.brickStrides();
-  // the next vertex's
-  glm::vec3 ahead_pv{0.0f};
-  __m128i ahead_lo4 = _mm_setzero_si128();
-  __m256i ahead_bricks = _mm256_setzero_si256(), ahead_in_brick = _mm256_setzero_si256();
-  alignas(32) uint32_t ahead_heads[2][16];
-  bool ahead_eight = false;
-  auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
-    ahead_pv = sorted[k];
-    const __m128 q4 = _mm_mul_ps(_mm_setr_ps(ahead_pv.x, ahead_pv.y, ahead_pv.z, 0.0f), inv4);
-    ahead_lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(q4, half4), slack4)), lo_cube4);
-    const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
-    bricks.locate8(ahead_lo4, brick_strides, ahead_bricks, ahead_in_brick);
-    const __m128i one = _mm_cmpeq_epi32(_mm_sub_epi32(hi4, ahead_lo4), _mm_set1_epi32(1));
-    ahead_eight = (_mm_movemask_ps(_mm_castsi128_ps(one)) & 7) == 7;
-    if (ahead_eight) bricks.heads8All(ahead_bricks, ahead_in_brick, ahead_heads[k & 1]);
-  };
-  if (n > 0) plan(0);
-  for (size_t i = 0; i < n; ++i) {
-    const glm::vec3 pv = ahead_pv;
-    const __m128i lo4 = ahead_lo4;
-    const bool eight = ahead_eight;
-    if (i + 1 < n) plan(i + 1);
-    uint32_t best;
-    if (eight) {
-      best = bestOfEightLists<kCube, kNearest>(cells.data(), ahead_heads[i & 1], pv, rule);
-    } else {  // a vertex within the slack of a cube face (3 cubes along an axis)
-      const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-      const __m128i hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(q4, half4), slack4)), lo_cube4);
-      const int32_t lo[3] = {_mm_cvtsi128_si32(lo4), _mm_extract_epi32(lo4, 1), _mm_extract_epi32(lo4, 2)};
-      const int32_t hi[3] = {_mm_cvtsi128_si32(hi4), _mm_extract_epi32(hi4, 1), _mm_extract_epi32(hi4, 2)};
-      uint32_t found[64 + 8];  // 8 spare: testCellLanes8 writes 8 entries
-      const uint32_t found_count = bricks.gather(lo, hi, found);
-      best = bestListedCell8<kCube, kNearest>(cells.data(), found, found_count, pv, rule);
-    }
-    if (best == kNone) {
-      best = out.cluster_count++;
-      out.heaviest.push_back(order[i]);
-      const __m128 q4 = _mm_mul_ps(_mm_setr_ps(pv.x, pv.y, pv.z, 0.0f), inv4);
-      const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
-      grid.list(_mm_cvtsi128_si32(c4), _mm_extract_epi32(c4, 1), _mm_extract_epi32(c4, 2), pv, best);
-      if (ahead_eight && i + 1 < n) {
-        // the new cell's cube among the next vertex's 8 (c - lo in {0, 1} along each axis)?
-        const __m128i d = _mm_sub_epi32(c4, ahead_lo4);
-        const __m128i in = _mm_cmpeq_epi32(_mm_andnot_si128(_mm_set1_epi32(1), d), _mm_setzero_si128());
-        if ((_mm_movemask_ps(_mm_castsi128_ps(in)) & 7) == 7)
-          bricks.heads8All(ahead_bricks, ahead_in_brick, ahead_heads[(i + 1) & 1]);
-      }
-    }
-    cluster_of[order[i]] = best;
-  }
-}
-template <bool kCube, bool kNearest, typename Head>
-SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float cube_width, float reach,
-                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
-                                           size_t expected, Assignment& out) {
-  if constexpr (DenseGrid<Head>::kBricks) {
-    if (reach == 0.5f)
-      assignBrickedAvx2T<kCube, kNearest>(p, cube_width, lo_cube, dims, rule, expected, out);
-    else
-      assignDenseAvx2Impl<kCube, kNearest, Head, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  } else {
-    assignDenseAvx2Impl<kCube, kNearest, Head, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  }
-}
 #endif
 
-// setFloatingCacheRunsForTest's choice: -1 by kCacheCentresBytesPerVertex, 0 no runs, 1 runs with
-// the entries' centres, 2 runs on entries of indices
+// setFloatingCacheRunsForTest's choice: -1 the default (runs where the bricks' strides allow them),
+// 0 no runs, 1 runs
 std::atomic<int> g_cache_runs{-1};
-// setFloatingCacheFlatForTest's choice: -1 by kCacheFlatBytesPerVertex, 0 bricked slots, 1 flat
-// slots wherever the runs' 16-bit products allow them
-std::atomic<int> g_cache_flat{-1};
 
 #if defined(SCENELOD_FLOATING_AVX2)
 // An entry's cells where at most 8 heads were found and each lists one cell (cube cells: a cube of
@@ -1431,10 +917,9 @@ template <typename CellRecord>
 struct CachedRunInputs {
   const CellRecord* cells;
   const CandidateCache::Entry* entries;
-  const CandidateCache::Centres* centres;  // kCentres: the entries' centres
   const uint32_t* cache_bricks;
   const uint16_t* slots;
-  const glm::vec3* positions;  // sorted (kSorted) or indexed by the order
+  const glm::vec3* positions;  // sorted
   const uint32_t* order;
   uint32_t* cluster_of;
   __m128 inv4, reach4, slack4;
@@ -1452,11 +937,10 @@ struct CachedRunInputs {
 // to its cell (~100 cycles: the range, the brick, the slot, the centres, d^2, the reduction) over
 // the reorder window, not by its ~100 instructions; one vertex ahead, levels 4, 6 and 8 took
 // 0.51, 0.39 and 0.34 ms instead of 0.42-0.47, 0.32-0.34 and 0.28-0.29 (three ahead: no better).
-template <bool kCube, bool kNearest, bool kSorted, bool kCentres, bool kFlat, typename CellRecord>
+template <bool kCube, bool kNearest, typename CellRecord>
 SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs<CellRecord>& in, size_t i,
                                                                           size_t n) {
   const CellRecord* const cells = in.cells;
-  const CandidateCache::Centres* const centres = in.centres;
   const CandidateCache::Entry* const entries = in.entries;
   const uint32_t* const cache_bricks = in.cache_bricks;
   const uint16_t* const slots = in.slots;
@@ -1476,7 +960,7 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     Planned pl;
     pl.v = order[k];
-    pl.pv = &positions[kSorted ? k : pl.v].x;
+    pl.pv = &positions[k].x;
     // x, y from one 8-byte load (movq, unaligned-safe: _mm_load_sd would dereference a double* at a
     // float's alignment), z inserted (a 16-byte load could read past the positions)
     const __m128 pk = _mm_insert_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(pl.pv))),
@@ -1492,18 +976,11 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
     // the products by 16-bit halves (vpmaddwd, 5 cycles of latency on the way to the entry, against
     // vpmulld's 10): the bricks' coordinates and strides fit 15 bits (assignDenseCachedAvx2T)
     // lo is inside the grid even where the span is not 2 (lo_cube is 3 cubes below the box)
-    uint32_t e;
-    if constexpr (kFlat) {
-      // the cube's place itself (its coordinates and strides fit 15 bits too), no brick loaded
-      const __m128i pm = _mm_madd_epi16(lo4, brick_stride4);
-      const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(pm, pm), pm);
-      e = slots[uint32_t(_mm_cvtsi128_si32(sums))];
-    } else {
-      const __m128i bm = _mm_madd_epi16(_mm_srai_epi32(lo4, 2), brick_stride4);
-      const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), _mm_setr_epi32(0, 2, 4, 32));
-      const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(bm, im), _mm_setzero_si128());
-      e = slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(sums))]) << 6 | uint32_t(_mm_extract_epi32(sums, 1))];
-    }
+    const __m128i bm = _mm_madd_epi16(_mm_srai_epi32(lo4, 2), brick_stride4);
+    const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), _mm_setr_epi32(0, 2, 4, 32));
+    const __m128i sums = _mm_hadd_epi32(_mm_hadd_epi32(bm, im), _mm_setzero_si128());
+    const uint32_t e =
+        slots[size_t(cache_bricks[uint32_t(_mm_cvtsi128_si32(sums))]) << 6 | uint32_t(_mm_extract_epi32(sums, 1))];
     pl.e = span2 ? e : 0;
     return pl;
   };
@@ -1514,12 +991,7 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
     // 0 (no entry) and kOverflow: the caller's paths
     if (uint16_t(here.e - 1) >= CandidateCache::kOverflow - 1) break;
     __m256 cx, cy, cz;
-    if constexpr (kCentres) {
-      const CandidateCache::Centres& m = centres[here.e];
-      cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
-    } else {
-      loadCentres8(cells, entries[here.e].cell, cx, cy, cz);
-    }
+    loadCentres8(cells, entries[here.e].cell, cx, cy, cz);
     const uint32_t best =
         testEntry8<kCube, kNearest>(entries[here.e].cell, cx, cy, cz, _mm256_broadcast_ss(here.pv),
                                     _mm256_broadcast_ss(here.pv + 1), _mm256_broadcast_ss(here.pv + 2), rule);
@@ -1533,15 +1005,13 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
 
 // assignDenseAvx2T with a CandidateCache (see there): the vertices whose 3 x 3 x 3 cubes' cells are
 // in an entry test those; the others (wide ranges, overflowing entries) take assignDenseAvx2T's path.
-// kRuns: the common vertices go through cachedRun (see there); kCentres: the cache keeps its
-// entries' centres
-template <bool kCube, bool kNearest, typename Head, bool kRuns, bool kCentres, bool kFlat>
+// kRuns: the common vertices go through cachedRun (see there)
+template <bool kCube, bool kNearest, bool kRuns>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh& p, float cube_width, float reach,
                                                              const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                                              size_t expected, Assignment& out) {
-  static_assert(!DenseGrid<Head>::kBricks, "flat heads only");
   const size_t n = p.order.size();
-  DenseGrid<Head> grid(dims, expected);  // as in assignDenseT
+  DenseGrid grid(dims, expected);  // as in assignDenseT
   auto& cells = grid.cells;
   auto& head = grid.head;
   const size_t sy = grid.sy, sz = grid.sz;
@@ -1555,16 +1025,14 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     for (int y = 0; y < 3; ++y) row_offset[3 * z + y] = size_t(z) * sz + size_t(y) * sy;
   // entries for the cubes the vertices fall in: 2.6 and 2.4 per expected cell at the bunny's 2 % and
   // 10 % levels
-  CandidateCache cache(dims, expected * 3, kCentres, kFlat);
+  CandidateCache cache(dims, expected * 3);
   const uint32_t* const cache_bricks = cache.bricks();
   const uint16_t* slots = cache.slots();
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
   const __m128i brick_stride4 = _mm_setr_epi32(1, int32_t(cache.brickStrideY()), int32_t(cache.brickStrideZ()), 0);
   const __m128i in_brick_shift4 = _mm_setr_epi32(0, 2, 4, 32);
-  // short heads mean at most 65,535 vertices, whose sorted copy a chain may have dropped; 4-byte
-  // heads (larger meshes) stream the copy
-  std::vector<glm::vec3> local;
-  const auto sorted = positionsInOrder<Head>(p, local);
+  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
+  const glm::vec3* sorted = sortedPositions(p, local);
   // vertex k's range and the place of its cube in the cache (cache.find with the three axes at once:
   // the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T; the
   // bricks themselves may be allocated meanwhile), or for the vertices cachedRun leaves. The first
@@ -1579,12 +1047,6 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     ahead.lo4 = _mm_sub_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(ahead.q4, reach4), slack4)), lo_cube4);
     ahead.hi4 = _mm_sub_epi32(floorToInt4(_mm_add_ps(_mm_add_ps(ahead.q4, reach4), slack4)), lo_cube4);
     const __m128i lo4 = ahead.lo4;
-    if constexpr (kFlat) {  // the cube's place in ahead_brick
-      const __m128i pm = _mm_mullo_epi32(lo4, brick_stride4);
-      const __m128i ps = _mm_add_epi32(pm, _mm_shuffle_epi32(pm, _MM_SHUFFLE(1, 0, 3, 2)));
-      ahead_brick = uint32_t(_mm_cvtsi128_si32(_mm_add_epi32(ps, _mm_shuffle_epi32(ps, _MM_SHUFFLE(2, 3, 0, 1)))));
-      return;
-    }
     const __m128i bm = _mm_mullo_epi32(_mm_srai_epi32(lo4, 2), brick_stride4);
     const __m128i im = _mm_sllv_epi32(_mm_and_si128(lo4, _mm_set1_epi32(3)), in_brick_shift4);
     __m128i bs = _mm_add_epi32(bm, _mm_shuffle_epi32(bm, _MM_SHUFFLE(1, 0, 3, 2)));
@@ -1599,23 +1061,14 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
   // them), 6 of the ~190 instructions a vertex at the 1 M sphere's 1 % level
   const uint32_t* const order = p.order.data();
   uint32_t* const cluster_of = out.cluster_of.data();
-  CachedRunInputs<typename DenseGrid<Head>::Cell> run_in{nullptr, nullptr, nullptr, cache_bricks, nullptr, nullptr, order, cluster_of,
-                         inv4, reach4, slack4, lo_cube4, brick_stride4, rule};
+  CachedRunInputs<DenseGrid::Cell> run_in{nullptr, nullptr, cache_bricks, nullptr, sorted, order, cluster_of,
+                                          inv4, reach4, slack4, lo_cube4, brick_stride4, rule};
   // the vertices from k on that their entries settle; the first that needs more
   auto runFrom = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     run_in.entries = cache.entries();
     run_in.cells = cells.data();
-    run_in.centres = cache.centres();
     run_in.slots = cache.slots();
-    bool by_order = false;
-    if constexpr (std::is_same_v<Head, uint32_t>) {
-      run_in.positions = sorted;
-    } else {
-      by_order = sorted.sorted == nullptr;
-      run_in.positions = by_order ? sorted.positions : sorted.sorted;
-    }
-    return by_order ? cachedRun<kCube, kNearest, false, kCentres, kFlat>(run_in, k, n)
-                    : cachedRun<kCube, kNearest, true, kCentres, kFlat>(run_in, k, n);
+    return cachedRun<kCube, kNearest>(run_in, k, n);
   };
   // without runs (grids whose bricks' strides pass 15 bits, and a test's choice) as before them
   if (n > 0 && !kRuns) plan(0);
@@ -1639,7 +1092,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
     uint32_t best = kNone;
     bool tested = false;
     if (span2) {
-      uint16_t e = kFlat ? slots[brick_at] : slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
+      uint16_t e = slots[size_t(cache_bricks[brick_at]) << 6 | in_brick];
       if (e == 0) {  // the cube's first vertex: its cells from the heads and lists, by index
         const uint32_t heads =
             gatherRows27(head.data() + size_t(lo[2]) * sz + size_t(lo[1]) * sy + size_t(lo[0]), row_offset, found);
@@ -1655,18 +1108,13 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
         } else {
           count = heads;
         }
-        e = cache.make(lo[0], lo[1], lo[2], listed, count, cells.data());
+        e = cache.make(lo[0], lo[1], lo[2], listed, count);
         slots = cache.slots();
       }
       if (e != CandidateCache::kOverflow) {
         const CandidateCache::Entry& entry = cache.entry(e);
         __m256 cx, cy, cz;
-        if constexpr (kCentres) {
-          const CandidateCache::Centres& m = cache.centres(e);
-          cx = _mm256_loadu_ps(m.x), cy = _mm256_loadu_ps(m.y), cz = _mm256_loadu_ps(m.z);
-        } else {
-          loadCentres8(cells.data(), entry.cell, cx, cy, cz);
-        }
+        loadCentres8(cells.data(), entry.cell, cx, cy, cz);
         best = testEntry8<kCube, kNearest>(entry.cell, cx, cy, cz, _mm256_set1_ps(pv.x), _mm256_set1_ps(pv.y),
                                            _mm256_set1_ps(pv.z), rule);
         tested = true;
@@ -1687,20 +1135,16 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
       const __m128i c4 = _mm_sub_epi32(floorToInt4(q4), lo_cube4);
       const int32_t cx = _mm_cvtsi128_si32(c4), cy = _mm_extract_epi32(c4, 1), cz = _mm_extract_epi32(c4, 2);
       grid.list(cx, cy, cz, pv, best);
-      cache.add(cx, cy, cz, best + 1, pv);
+      cache.add(cx, cy, cz, best + 1);
     }
     cluster_of[order[i]] = best;
   }
 }
 
-// the runs wherever the bricks' strides fit 15 bits, with the entries' centres where these take at
-// most kCacheCentresBytesPerVertex (about 3 entries reserved per expected cell). Runs on entries of
-// indices (the cells' centres gathered and transposed) where the centres do not fit: at the bunny's
-// chain level 3 and 2 % level, where 1 vertex in 6-8 leaves a run, 0.84-0.89 -> 0.79-0.86 ms and
-// 0.64 -> 0.54 (with centres 0.77-0.82 and 0.52, but level 3's took the chain's peak to 3.57 MB);
-// before the runs planned two vertices ahead they made both levels slower (0.66 -> 0.68-0.70 ms and
-// 0.93 -> 1.00-1.03)
-template <bool kCube, bool kNearest, typename Head>
+// the runs wherever the bricks' strides fit 15 bits (on entries of indices, the cells' centres
+// gathered and transposed: at the bunny's chain level 3 and 2 % level, where 1 vertex in 6-8 leaves
+// a run, 0.84-0.89 -> 0.79-0.86 ms and 0.64 -> 0.54)
+template <bool kCube, bool kNearest>
 SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p, float cube_width, float reach,
                                                           const int32_t lo_cube[3], const size_t dims[3], JoinRule rule,
                                                           size_t expected, Assignment& out) {
@@ -1708,28 +1152,10 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2T(const PreparedMesh& p,
   // cachedRun's brick places as products of 16-bit halves: the strides of the bricks below 2^15
   const size_t bx = (dims[0] + 3) / 4, by = (dims[1] + 3) / 4, bz = (dims[2] + 3) / 4;
   const bool small_bricks = bx * by < 32768 && bz < 32768;
-  const bool centres_fit = double(expected * 3) * sizeof(CandidateCache::Centres) <=
-                           kCacheCentresBytesPerVertex * double(p.order.size());
-  const int runs = !small_bricks ? 0 : forced >= 0 ? forced : centres_fit ? 1 : 2;
-  // flat slots: the cubes' places as products of 16-bit halves too
-  const int forced_flat = g_cache_flat.load(std::memory_order_relaxed);
-  const size_t cubes = dims[0] * dims[1] * dims[2];
-  const bool flat = dims[0] * dims[1] < 32768 && dims[2] < 32768 &&
-                    (forced_flat >= 0 ? forced_flat == 1
-                                      : cubes * sizeof(uint16_t) <= kCacheFlatMaxBytes &&
-                                            double(cubes) * sizeof(uint16_t) <= kCacheFlatBytesPerVertex * double(p.order.size()));
-  // the variant of (runs, centres, flat slots), each a loop compiled apart
-  auto run = [&](auto flat_slots) {
-    constexpr bool kFlat = decltype(flat_slots)::value;
-    if (runs == 1)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, true, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-    else if (runs == 2)
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, true, false, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-    else
-      assignDenseCachedAvx2Impl<kCube, kNearest, Head, false, false, kFlat>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
-  };
-  if (flat) run(std::true_type{});
-  else run(std::false_type{});
+  if (small_bricks && forced != 0)
+    assignDenseCachedAvx2Impl<kCube, kNearest, true>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  else
+    assignDenseCachedAvx2Impl<kCube, kNearest, false>(p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 #endif
 
@@ -2122,8 +1548,7 @@ void assignBlocks(const PreparedMesh& p, float cube_width, const int32_t lo_cube
 }
 
 void assignDense(const PreparedMesh& p, float cube_width, float reach, const int32_t lo_cube[3],
-                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, int heads,
-                 Assignment& out) {
+                 const size_t dims[3], JoinRule rule, size_t expected, bool blocks, Assignment& out) {
   using Fn = void (*)(const PreparedMesh&, float, float, const int32_t*, const size_t*, JoinRule, size_t,
                       Assignment&);
   // cubes of side w (a reach of half a cube) in blocks where the caller found room for them, while
@@ -2132,39 +1557,25 @@ void assignDense(const PreparedMesh& p, float cube_width, float reach, const int
     assignBlocks(p, cube_width, lo_cube, dims, rule, expected, false, 0, out);
     return;
   }
-  // heads of 32 bits, of 16 (the caller checked that every cell's index + 1 fits) or of 16 in bricks
 #if defined(SCENELOD_FLOATING_AVX2)
-  // flat heads of cubes of side w/2 with the candidate cache where cells are rare among the vertices
-  if (useAvx2() && heads != 2 && reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
+  // cubes of side w/2 with the candidate cache where cells are rare among the vertices
+  if (useAvx2() && reach == 1.0f && g_cache_allowed.load(std::memory_order_relaxed) &&
       double(p.order.size()) >= kCacheVerticesPerCell * double(expected)) {
-    static constexpr Fn kCachedFns[2][2][2] = {
-        {{assignDenseCachedAvx2T<false, false, uint32_t>, assignDenseCachedAvx2T<false, true, uint32_t>},
-         {assignDenseCachedAvx2T<true, false, uint32_t>, assignDenseCachedAvx2T<true, true, uint32_t>}},
-        {{assignDenseCachedAvx2T<false, false, uint16_t>, assignDenseCachedAvx2T<false, true, uint16_t>},
-         {assignDenseCachedAvx2T<true, false, uint16_t>, assignDenseCachedAvx2T<true, true, uint16_t>}}};
-    kCachedFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    static constexpr Fn kCachedFns[2][2] = {{assignDenseCachedAvx2T<false, false>, assignDenseCachedAvx2T<false, true>},
+                                            {assignDenseCachedAvx2T<true, false>, assignDenseCachedAvx2T<true, true>}};
+    kCachedFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
   if (useAvx2()) {
-    static constexpr Fn kAvx2Fns[3][2][2] = {
-        {{assignDenseAvx2T<false, false, uint32_t>, assignDenseAvx2T<false, true, uint32_t>},
-         {assignDenseAvx2T<true, false, uint32_t>, assignDenseAvx2T<true, true, uint32_t>}},
-        {{assignDenseAvx2T<false, false, uint16_t>, assignDenseAvx2T<false, true, uint16_t>},
-         {assignDenseAvx2T<true, false, uint16_t>, assignDenseAvx2T<true, true, uint16_t>}},
-        {{assignDenseAvx2T<false, false, Bricked>, assignDenseAvx2T<false, true, Bricked>},
-         {assignDenseAvx2T<true, false, Bricked>, assignDenseAvx2T<true, true, Bricked>}}};
-    kAvx2Fns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+    static constexpr Fn kAvx2Fns[2][2] = {{assignDenseAvx2T<false, false>, assignDenseAvx2T<false, true>},
+                                          {assignDenseAvx2T<true, false>, assignDenseAvx2T<true, true>}};
+    kAvx2Fns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
     return;
   }
 #endif
-  static constexpr Fn kFns[3][2][2] = {
-      {{assignDenseT<false, false, uint32_t>, assignDenseT<false, true, uint32_t>},
-       {assignDenseT<true, false, uint32_t>, assignDenseT<true, true, uint32_t>}},
-      {{assignDenseT<false, false, uint16_t>, assignDenseT<false, true, uint16_t>},
-       {assignDenseT<true, false, uint16_t>, assignDenseT<true, true, uint16_t>}},
-      {{assignDenseT<false, false, Bricked>, assignDenseT<false, true, Bricked>},
-       {assignDenseT<true, false, Bricked>, assignDenseT<true, true, Bricked>}}};
-  kFns[heads][rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
+  static constexpr Fn kFns[2][2] = {{assignDenseT<false, false>, assignDenseT<false, true>},
+                                    {assignDenseT<true, false>, assignDenseT<true, true>}};
+  kFns[rule.cube][rule.nearest](p, cube_width, reach, lo_cube, dims, rule, expected, out);
 }
 
 }  // namespace
@@ -2206,23 +1617,14 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
     size_t dims[3];
     gridBox(p.bounds, cube_inv, lo_cube, dims);
     const double volume = double(dims[0]) * double(dims[1]) * double(dims[2]);
-    // a listed grid's heads hold a cell's index + 1, at most the referenced vertices: 16 bits where
-    // these fit (the bunny: its 50 % level's flat heads 1.72 -> 0.86 MB; see the bricks below)
-    const bool short_heads = p.order.size() <= 0xffff && g_short_heads_allowed.load(std::memory_order_relaxed);
-    const double head_bytes = short_heads ? sizeof(uint16_t) : sizeof(uint32_t);
-    if (volume * head_bytes <= dense_budget) {
-      // cubes of side w keep their cells in blocks (heads of 32 bits) where these fit the budget too
-      // and the heads could not be short (the 1 M sphere's 10 % level): blocks take 4 bytes per cube
-      // and 11 per expected cell where short heads take 2 per cube (the bunny's width search probed
-      // finer than its 50 % level with 1.5 MB of heads and 0.7 MB of blocks, its chain's peak)
-      const bool blocks = sub == 1 && !short_heads &&
-                          volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
-      // short heads in bricks where a flat array of them would take more than
-      // kFlatHeadBytesPerVertex per referenced vertex (the bunny's 50 % level, 24.7)
-      const bool bricked = short_heads && g_bricks_allowed.load(std::memory_order_relaxed) &&
-                           volume * head_bytes > kFlatHeadBytesPerVertex * double(p.order.size());
-      const int heads = bricked ? 2 : short_heads ? 1 : 0;
-      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, heads, out);
+    // a listed grid's heads hold a cell's index + 1 in 32 bits (heads of 16 bits, flat or in
+    // bricks, were no faster here: tried and not kept)
+    if (volume * sizeof(uint32_t) <= dense_budget) {
+      // cubes of side w keep their cells in blocks where these fit the budget too (the 1 M sphere's
+      // 10 % level): blocks take 11 bytes per expected cell beside the heads
+      const bool blocks =
+          sub == 1 && volume * sizeof(uint32_t) + kBlockBytes * double(expectedBlocks(expected)) <= dense_budget;
+      assignDense(p, cube_width, 0.5f * float(sub), lo_cube, dims, rule, expected, blocks, out);
       g_last_grid.store(kGridFlat, std::memory_order_relaxed);
       return;
     }
@@ -2341,27 +1743,12 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-// the hidden switches the tests flip: avx2 false keeps the assignment on its SSE2 (or scalar) paths,
-// short_heads false gives every listed grid heads of 32 bits, bricks false keeps short heads flat
-void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks) {
-  g_avx2_allowed.store(avx2, std::memory_order_relaxed);
-  g_short_heads_allowed.store(short_heads, std::memory_order_relaxed);
-  g_bricks_allowed.store(bricks, std::memory_order_relaxed);
-}
-// the bricked grid of side w in blocks: -1 the default, 0 never (the hash instead), k > 0 the hash
-// where the vertices' bricks are more than k; returns the mode it replaces
+// test hooks (declared by tests/lodcore/floating_cell_test.cpp), each returning the choice it replaces
+bool setFloatingAvx2ForTest(bool on) { return g_avx2_allowed.exchange(on, std::memory_order_relaxed); }
 int setFloatingBlockBricksForTest(int mode) { return g_block_bricks.exchange(mode < 0 ? -1 : mode); }
-// the grid the last assignFloating call searched: 0 a flat one, 1 the bricked grid of side w, 2 the
-// hash, 3 the hash where the bricked grid would have taken too many bricks
 int lastFloatingGridForTest() { return g_last_grid.load(std::memory_order_relaxed); }
-// false keeps the AVX2 flat grid of side w/2 off its candidate cache (CandidateCache)
-void setFloatingCacheForTest(bool cache) { g_cache_allowed.store(cache, std::memory_order_relaxed); }
-// the candidate cache's runs (cachedRun) at every cached width: 0 none, 1 with the entries' centres,
-// 2 on entries of indices; -1 the default (centres where they are few, else indices)
-void setFloatingCacheRunsForTest(int runs) { g_cache_runs.store(runs, std::memory_order_relaxed); }
-// the candidate cache's slots: 0 bricked, 1 flat (wherever the runs' 16-bit products allow them), -1
-// the default (flat where they are few)
-void setFloatingCacheFlatForTest(int flat) { g_cache_flat.store(flat, std::memory_order_relaxed); }
+bool setFloatingCacheForTest(bool on) { return g_cache_allowed.exchange(on, std::memory_order_relaxed); }
+int setFloatingCacheRunsForTest(int runs) { return g_cache_runs.exchange(runs < 0 ? -1 : runs > 0 ? 1 : 0); }
 
 Error checkCellWidth(const PreparedMesh& p, float cell_width) {
   if (!std::isfinite(cell_width) || !(cell_width > 0.0f))
