@@ -20,12 +20,7 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/lodcore/obj_io.h"
-
-namespace scenelod::detail {
-// private test hooks (lodcore/src/synthesis.cpp): each returns the previous choice
-bool useEigenvalueLanes(bool on);
-int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
-}  // namespace scenelod::detail
+#include "test_hooks.h"
 
 using namespace scenelod;
 using Clock = std::chrono::steady_clock;

@@ -189,12 +189,10 @@ struct Representatives {
 };
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out);
 
-// synthesis.cpp: whether synthesize and buildOutputMesh run their AVX2 variants (the same source
-// compiled for AVX2 without FMA, so the same bits): where the CPU has AVX2. useAvx2Paths picks them
-// (on, where the CPU has AVX2) or the baseline ones for every later call and returns the previous
-// choice: for tests comparing the two (tests/lodcore/cluster_test.cpp declares it); not thread-safe.
+// synthesis.cpp: whether synthesize, buildOutputMesh and the grading run their AVX2 variants (the
+// same source compiled for AVX2 without FMA, so the same bits): where the CPU has AVX2, unless the
+// test hook useAvx2Paths (test_hooks.h) turned them off.
 bool avx2Paths();
-bool useAvx2Paths(bool on);
 
 // x86: the attribute of the AVX2 variants (elsewhere they compile as plain copies, never chosen)
 #if defined(__x86_64__) || defined(__i386__)

@@ -49,6 +49,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
 
@@ -1743,7 +1744,7 @@ void assignFloating(const PreparedMesh& p, float cell_width, CellShape shape, bo
   }
 }
 
-// test hooks (declared by tests/lodcore/floating_cell_test.cpp), each returning the choice it replaces
+// (test_hooks.h)
 bool setFloatingAvx2ForTest(bool on) { return g_avx2_allowed.exchange(on, std::memory_order_relaxed); }
 int setFloatingBlockBricksForTest(int mode) { return g_block_bricks.exchange(mode < 0 ? -1 : mode); }
 int lastFloatingGridForTest() { return g_last_grid.load(std::memory_order_relaxed); }

@@ -15,6 +15,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
 
@@ -680,8 +681,7 @@ bool g_output_reference = false;
 
 }  // namespace
 
-// test hook (declared by the test, as useAvx2Paths is): the reference output pass for every later
-// call; returns the previous choice
+// (test_hooks.h)
 bool useOutputReference(bool on) {
   return std::exchange(g_output_reference, on);
 }

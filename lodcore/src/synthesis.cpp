@@ -18,6 +18,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod {
 
@@ -73,6 +74,7 @@ bool g_avx2_paths = cpuHasAvx2();
 
 bool avx2Paths() { return g_avx2_paths; }
 
+// (test_hooks.h)
 bool useAvx2Paths(bool on) {
   const bool was = g_avx2_paths;
   g_avx2_paths = on && cpuHasAvx2();
@@ -87,8 +89,7 @@ bool g_eigen_lanes = true;
 
 }  // namespace
 
-// private test hook (declared by tests/lodcore/synthesis_test.cpp): the lanes on or off for every
-// later call; returns the previous choice; not thread-safe
+// (test_hooks.h)
 bool useEigenvalueLanes(bool on) {
   return std::exchange(g_eigen_lanes, on);
 }

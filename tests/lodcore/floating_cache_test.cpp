@@ -7,16 +7,10 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
-
-namespace scenelod::detail {
-// floating_cell_cluster.cpp's hidden switches (see floating_cell_test.cpp)
-bool setFloatingAvx2ForTest(bool on);
-bool setFloatingCacheForTest(bool on);
-int setFloatingCacheRunsForTest(int runs);
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -44,21 +38,20 @@ void expectSameCells(const Mesh& m, std::initializer_list<float> widths) {
       params.cell_shape = c.shape;
       params.cell_width = w;
       ClusterAssignment plain, uncached, cached;
-      detail::setFloatingAvx2ForTest(false);
-      const bool plain_ok = assignClusters(p, params, plain).ok();
-      detail::setFloatingAvx2ForTest(true);
-      detail::setFloatingCacheForTest(false);
-      const bool uncached_ok = assignClusters(p, params, uncached).ok();
-      detail::setFloatingCacheForTest(true);
-      const bool cached_ok = assignClusters(p, params, cached).ok();
       ClusterAssignment forced[2];  // no runs, runs
-      bool forced_ok = true;
-      for (int runs = 0; runs < 2; ++runs) {
-        detail::setFloatingCacheRunsForTest(runs);
-        forced_ok = assignClusters(p, params, forced[runs]).ok() && forced_ok;
+      {
+        detail::HookGuard avx2(detail::setFloatingAvx2ForTest, false);
+        ASSERT_TRUE(assignClusters(p, params, plain).ok());
+        avx2.set(true);
+        detail::HookGuard cache(detail::setFloatingCacheForTest, false);
+        ASSERT_TRUE(assignClusters(p, params, uncached).ok());
+        cache.set(true);
+        ASSERT_TRUE(assignClusters(p, params, cached).ok());
+        detail::HookGuard runs(detail::setFloatingCacheRunsForTest, 0);
+        ASSERT_TRUE(assignClusters(p, params, forced[0]).ok());
+        runs.set(1);
+        ASSERT_TRUE(assignClusters(p, params, forced[1]).ok());
       }
-      detail::setFloatingCacheRunsForTest(-1);
-      ASSERT_TRUE(plain_ok && uncached_ok && cached_ok && forced_ok);
       EXPECT_GT(plain.heaviest.size(), 1u);
       EXPECT_EQ(uncached.heaviest, plain.heaviest);
       EXPECT_EQ(uncached.cluster_of, plain.cluster_of);

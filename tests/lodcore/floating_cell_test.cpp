@@ -11,18 +11,9 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
+#include "test_hooks.h"
 
 using namespace scenelod;
-
-namespace scenelod::detail {
-// floating_cell_cluster.cpp's hidden switches: false keeps the assignment off its AVX2 paths
-bool setFloatingAvx2ForTest(bool on);
-// the bricked grid of side w in blocks: -1 the default, 0 never (the hash), k > 0 the hash only where
-// the vertices' bricks are more than k (and its table past the dense budget); and the grid the last
-// assignment searched (0 flat, 1 bricked, 2 the hash, 3 the hash where the bricks were too many)
-int setFloatingBlockBricksForTest(int mode);
-int lastFloatingGridForTest();
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -163,11 +154,12 @@ TEST(FloatingCell, SimdPathsChooseTheSameCells) {
         params.cell_shape = c.shape;
         params.cell_width = w;
         ClusterAssignment plain, wide;  // SSE2, AVX2
-        detail::setFloatingAvx2ForTest(false);
-        const bool ok = assignClusters(p, params, plain).ok();
-        detail::setFloatingAvx2ForTest(true);
-        const bool wide_ok = assignClusters(p, params, wide).ok();
-        ASSERT_TRUE(ok && wide_ok);
+        {
+          detail::HookGuard avx2(detail::setFloatingAvx2ForTest, false);
+          ASSERT_TRUE(assignClusters(p, params, plain).ok());
+          avx2.set(true);
+          ASSERT_TRUE(assignClusters(p, params, wide).ok());
+        }
         EXPECT_GT(plain.heaviest.size(), 1u);
         EXPECT_EQ(wide.heaviest, plain.heaviest);
         EXPECT_EQ(wide.cluster_of, plain.cluster_of);
@@ -238,11 +230,12 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
       params.cell_shape = c.shape;
       params.cell_width = run.w;
       ClusterAssignment hash;
-      detail::setFloatingBlockBricksForTest(0);
-      const bool hash_ok = assignClusters(p, params, hash).ok();
-      const int hash_grid = detail::lastFloatingGridForTest();
-      detail::setFloatingBlockBricksForTest(-1);
-      ASSERT_TRUE(hash_ok);
+      int hash_grid = -1;
+      {
+        detail::HookGuard bricks(detail::setFloatingBlockBricksForTest, 0);
+        ASSERT_TRUE(assignClusters(p, params, hash).ok());
+        hash_grid = detail::lastFloatingGridForTest();
+      }
       EXPECT_EQ(hash_grid, 2);
       EXPECT_GT(hash.heaviest.size(), 1u);
       if (run.mesh == &lattice && c.shape == CellShape::kSphere) {
@@ -258,13 +251,13 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
         for (int mode : {-1, 2, 1 << 20}) {
           SCOPED_TRACE(std::string(avx2 ? "avx2" : "sse2") + " bricks " + std::to_string(mode));
           ClusterAssignment other;
-          detail::setFloatingAvx2ForTest(avx2);
-          detail::setFloatingBlockBricksForTest(mode);
-          const bool ok = assignClusters(p, params, other).ok();
-          const int grid = detail::lastFloatingGridForTest();
-          detail::setFloatingBlockBricksForTest(-1);
-          detail::setFloatingAvx2ForTest(true);
-          ASSERT_TRUE(ok);
+          int grid = -1;
+          {
+            detail::HookGuard avx2_paths(detail::setFloatingAvx2ForTest, avx2);
+            detail::HookGuard bricks(detail::setFloatingBlockBricksForTest, mode);
+            ASSERT_TRUE(assignClusters(p, params, other).ok());
+            grid = detail::lastFloatingGridForTest();
+          }
           EXPECT_EQ(grid, mode < 0 ? run.grid : mode == 2 ? 3 : 1);
           EXPECT_EQ(other.heaviest, hash.heaviest);
           EXPECT_EQ(other.cluster_of, hash.cluster_of);

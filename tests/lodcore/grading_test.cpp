@@ -10,6 +10,7 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 #include "scenelod/lodcore/cluster.h"
 
@@ -205,12 +206,6 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
   }
 }
 
-// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
-// for every later call; returns the previous choice
-namespace scenelod::detail {
-bool useAvx2Paths(bool on);
-}
-
 namespace {
 
 // the vertices renumbered at random (triangles, edges and points remapped), and with `collapse`,
@@ -236,15 +231,16 @@ Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
 // prepareMesh with the AVX2 paths and with the baseline give the same weights, face sums, order, sorted positions and
 // longest edge, under both gradings, with and without the boost
 void expectAvx2GivesTheBaselineBits(const Mesh& mesh, const std::string& label) {
+  detail::HookGuard avx2(detail::useAvx2Paths, true);
   for (Grading g : {Grading::kLowTan, Grading::kRossignac})
     for (bool boost : {true, false}) {
       ClusterParams params;
       params.grading = g;
       params.boost_features = boost;
       PreparedMesh wide, base;
-      detail::useAvx2Paths(true);
+      avx2.set(true);
       ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
-      detail::useAvx2Paths(false);
+      avx2.set(false);
       ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
       SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : ""));
       ASSERT_EQ(wide.weights.size(), base.weights.size());
@@ -281,9 +277,7 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
     meshes.push_back(shuffledVertices(meshes[i], 7u + static_cast<uint32_t>(i), 0));
     meshes.push_back(shuffledVertices(meshes[i], 11u + static_cast<uint32_t>(i), 7));
   }
-  const bool was = detail::useAvx2Paths(true);
   for (size_t i = 0; i < meshes.size(); ++i) expectAvx2GivesTheBaselineBits(meshes[i], "mesh " + std::to_string(i));
-  detail::useAvx2Paths(was);
 }
 
 // The same on triangle soups whose fans are anything but closed: each triangle joins a vertex to
@@ -293,7 +287,6 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
 // flat (z within 1e-3) with the triangles wound one way, so the crease term stays low and the
 // boundary flag decides the boosted weights.
 TEST(Grading, Avx2PathsGiveTheBaselineBitsOnNonManifoldFans) {
-  const bool was = detail::useAvx2Paths(true);
   for (uint32_t seed = 1; seed <= 6; ++seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -371,7 +364,6 @@ TEST(Grading, Avx2PathsGiveTheBaselineBitsOnNonManifoldFans) {
     for (const auto& t : tris) m.triangles.insert(m.triangles.end(), t.begin(), t.end());
     expectAvx2GivesTheBaselineBits(m, "fans " + std::to_string(seed));
   }
-  detail::useAvx2Paths(was);
 }
 
 // The order is the stable sort of the referenced vertices by descending raw weight (ties by vertex

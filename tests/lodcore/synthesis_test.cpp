@@ -8,16 +8,10 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
-
-// private test hooks of lodcore (lodcore/src/synthesis.cpp): the eigenvalue lanes of the quadric
-// solve and the AVX2 variants, on or off for every later call; each returns the previous choice
-namespace scenelod::detail {
-bool useEigenvalueLanes(bool on);
-bool useAvx2Paths(bool on);
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -44,8 +38,8 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
     if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
       meshes.emplace_back("bunny", std::move(bunny));
   }
-  const bool was_lanes = detail::useEigenvalueLanes(true);
-  const bool was_avx2 = detail::useAvx2Paths(true);
+  detail::HookGuard eigen_lanes(detail::useEigenvalueLanes, true);
+  detail::HookGuard avx2_paths(detail::useAvx2Paths, true);
   size_t levels = 0;
   for (const auto& [name, m] : meshes)
     for (bool avx2 : {false, true})
@@ -55,11 +49,11 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
           p.synthesis = Synthesis::kQuadric;
           p.cell_shape = shape;
           p.cell_width = w;
-          detail::useAvx2Paths(avx2);
+          avx2_paths.set(avx2);
           Mesh lanes, one;
-          detail::useEigenvalueLanes(true);
+          eigen_lanes.set(true);
           ASSERT_TRUE(clusterMesh(m, p, lanes).ok());
-          detail::useEigenvalueLanes(false);
+          eigen_lanes.set(false);
           ASSERT_TRUE(clusterMesh(m, p, one).ok());
           SCOPED_TRACE(name + (avx2 ? " avx2 " : " sse2 ") + cellShapeName(shape) + " w=" + std::to_string(w));
           EXPECT_TRUE(sameBits(lanes.positions, one.positions));
@@ -67,7 +61,5 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
           EXPECT_TRUE(sameBits(lanes.triangles, one.triangles));
           levels += one.triangleCount() > 0;
         }
-  detail::useEigenvalueLanes(was_lanes);
-  detail::useAvx2Paths(was_avx2);
   EXPECT_GE(levels, 6u * 16u);
 }
