@@ -94,6 +94,7 @@ int main(int argc, char** argv) {
       {"AVX2 variants: output pass", detail::useAvx2Paths, output},
       {"AVX2 variants: prepare", detail::useAvx2Paths, prepare},
       {"AVX2 variants: whole level", detail::useAvx2Paths, level},
+      {"repeated edge drop: elimination", detail::useRepeatedEdgeDrop, elimination},
       {"eigenvalue lanes: synthesis", detail::useEigenvalueLanes, synthesis},
       // last: the hook(true) after each pair leaves it on always, not by size as by default
       {"renumbering: whole level", [](bool on) { return detail::setRenumberingForTest(on ? 1 : 0) != 0; }, level},

@@ -10,9 +10,21 @@
 #include <memory>
 #include <utility>
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
+
+// x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts
+#if defined(__x86_64__) || defined(__i386__)
+#define SCENELOD_ELIMINATION_AVX2_TARGET __attribute__((target("avx2,popcnt")))
+#else
+#define SCENELOD_ELIMINATION_AVX2_TARGET
+#endif
 
 namespace {
 inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
@@ -95,12 +107,17 @@ class EdgeLists {
 constexpr size_t kBlock = 512;             // triangles classified at once
 constexpr size_t kPrefetchTriangles = 16;  // how far ahead the cluster ids are prefetched (large meshes)
 
-// One block's triangles by class, each list in input order, in columns
+// One block's triangles by class, each list in input order; columns, so that the AVX2 classification
+// stores eight lanes of each at once (a store starts at most at kBlock - 8, since a list holds at
+// most the triangles before the group; the 8 entries past kBlock are a margin)
 struct BlockLists {
-  uint32_t kept[3][kBlock];  // the corners' clusters of kept triangles (rotated when added)
-  uint32_t edge[3][kBlock];  // collapsed to an edge: first corner's cluster, the other, the triangle
-  uint32_t point[kBlock];    // collapsed to a point: its cluster
+  // the corners' clusters of kept triangles, rotated (keeping the orientation) so that the smallest
+  // id comes first where `rotated`, else rotated when added
+  uint32_t kept[3][kBlock + 8];
+  uint32_t edge[3][kBlock + 8];  // collapsed to an edge: first corner's cluster, the other, the triangle
+  uint32_t point[kBlock + 8];    // collapsed to a point: its cluster
   size_t kept_count, edge_count, point_count;
+  bool rotated;
 };
 
 // rotation (keeping orientation) that puts the smallest id first, by index rather than by selects
@@ -115,8 +132,9 @@ SCENELOD_ALWAYS_INLINE void rotateSmallestFirst(uint32_t& c0, uint32_t& c1, uint
 }
 
 // Classifies triangles [t, t1) onto the lists' ends. Compiled for each set of constants (a test of
-// a flag in memory per triangle otherwise).
-template <bool kPrefetch, bool kPointsFirst>
+// a flag in memory per triangle otherwise); kRotate: kept triangles rotated (rotateSmallestFirst),
+// for the tail of the AVX2 classification.
+template <bool kPrefetch, bool kPointsFirst, bool kRotate = false>
 SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
   size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
   for (const uint32_t* v = tri + 3 * t; t < t1; ++t, v += 3) {
@@ -132,9 +150,17 @@ SCENELOD_ALWAYS_INLINE void classifyScalar(const uint32_t* tri, const uint32_t* 
     }
     const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
     const bool kept = !(e01 | e12 | e02), point = e01 & e12;
-    l.kept[0][nk] = c0;
-    l.kept[1][nk] = c1;
-    l.kept[2][nk] = c2;
+    if (kRotate && kept) {
+      uint32_t r0 = c0, r1 = c1, r2 = c2;
+      rotateSmallestFirst(r0, r1, r2);
+      l.kept[0][nk] = r0;
+      l.kept[1][nk] = r1;
+      l.kept[2][nk] = r2;
+    } else {
+      l.kept[0][nk] = c0;
+      l.kept[1][nk] = c1;
+      l.kept[2][nk] = c2;
+    }
     nk += kept;
     l.edge[0][ne] = c0;
     l.edge[1][ne] = c1 ^ ((c1 ^ c2) & (0u - uint32_t(e01)));
@@ -164,11 +190,185 @@ bool coherentOrder(const uint32_t* tri, size_t tn) {
   return 2 * near > n;
 }
 
+#if defined(__x86_64__) || defined(__i386__)
+// stores the lanes of `v` that `perm` (a row of kLaneCompaction) selects at dst[0, its count), in lane
+// order; all 8 lanes are written
+SCENELOD_ELIMINATION_AVX2_TARGET inline void storeCompacted(uint32_t* dst, __m256i v, __m256i perm) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, perm));
+}
+
+// The classification eight triangles at a time (the tail of a block scalar): the three corners'
+// vertex ids split into columns, their clusters gathered, the classes compared per lane and each
+// list's lanes compacted through a permutation table; the same lists as classifyScalar, with kRotate
+// the kept triangles rotated in lanes (rotateSmallestFirst, about 25 instructions a kept triangle
+// where it is added, against 8 per eight triangles here).
+template <bool kPrefetch, bool kRotate>
+SCENELOD_ELIMINATION_AVX2_TARGET void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1,
+                                                   BlockLists& l) {
+  size_t nk = l.kept_count, ne = l.edge_count, np = l.point_count;
+  const int* ids = reinterpret_cast<const int*>(co);
+  // the triangles whose corner k the blends below put in lanes 0-7 are 0 3 6 1 4 7 2 5 (k = 0),
+  // 5 0 3 6 1 4 7 2 (k = 1), 2 5 0 3 6 1 4 7 (k = 2); these permutations put triangle j in lane j
+  const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+  const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
+  const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (; t + 8 <= t1; t += 8) {
+    const uint32_t* v = tri + 3 * t;
+    if (kPrefetch) {
+      // (unrolled: as a loop, 15.8 M of the 1 M sphere 10 % level's 87 M instructions)
+#pragma GCC unroll 24
+      for (int k = 0; k < 24; ++k) __builtin_prefetch(co + v[3 * kPrefetchTriangles + k]);
+    }
+    // a = v0 v1 v2 | v0 v1 v2 | v0 v1, b = v2 | v0 v1 v2 | v0 v1 v2 | v0, c = v1 v2 | v0 v1 v2 | v0 v1 v2
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v));
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 8));
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 16));
+    // corner k of triangle j sits in a at 3j + k, in b at 3j + k - 8, in c at 3j + k - 16
+    const __m256i x0 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x92), c, 0x24);  // lanes 1 4 7 of b, 2 5 of c
+    const __m256i x1 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x24), c, 0x49);  // lanes 2 5 of b, 0 3 6 of c
+    const __m256i x2 = _mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x49), c, 0x92);  // lanes 0 3 6 of b, 1 4 7 of c
+    const __m256i c0 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x0, order0), 4);
+    const __m256i c1 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x1, order1), 4);
+    const __m256i c2 = _mm256_i32gather_epi32(ids, _mm256_permutevar8x32_epi32(x2, order2), 4);
+    const __m256i e01 = _mm256_cmpeq_epi32(c0, c1), e12 = _mm256_cmpeq_epi32(c1, c2), e02 = _mm256_cmpeq_epi32(c0, c2);
+    const uint32_t any = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(e01, e12), e02))));
+    const uint32_t point = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(e01, e12))));
+    const uint32_t kept = ~any & 0xFFu, edge = any & ~point;
+    const __m256i pk = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[kept])));
+    const __m256i pe = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[edge])));
+    const __m256i pp = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[point])));
+    if (kRotate) {
+      // as rotateSmallestFirst: exactly one corner of a kept triangle holds the smallest id
+      const __m256i lo = _mm256_min_epu32(_mm256_min_epu32(c0, c1), c2);
+      const __m256i at1 = _mm256_cmpeq_epi32(c1, lo), at2 = _mm256_cmpeq_epi32(c2, lo);
+      storeCompacted(l.kept[0] + nk, lo, pk);
+      storeCompacted(l.kept[1] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c1, c2, at1), c0, at2), pk);
+      storeCompacted(l.kept[2] + nk, _mm256_blendv_epi8(_mm256_blendv_epi8(c2, c0, at1), c1, at2), pk);
+    } else {
+      storeCompacted(l.kept[0] + nk, c0, pk);
+      storeCompacted(l.kept[1] + nk, c1, pk);
+      storeCompacted(l.kept[2] + nk, c2, pk);
+    }
+    nk += size_t(__builtin_popcount(kept));
+    storeCompacted(l.edge[0] + ne, c0, pe);
+    storeCompacted(l.edge[1] + ne, _mm256_blendv_epi8(c1, c2, e01), pe);  // the corner not in c0's cluster
+    storeCompacted(l.edge[2] + ne, _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(t)), lane), pe);
+    ne += size_t(__builtin_popcount(edge));
+    storeCompacted(l.point + np, c0, pp);
+    np += size_t(__builtin_popcount(point));
+  }
+  l.kept_count = nk;
+  l.edge_count = ne;
+  l.point_count = np;
+  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
+}
+#else
+template <bool kPrefetch, bool kRotate>
+void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, BlockLists& l) {
+  classifyScalar<false, false, kRotate>(tri, co, t, t1, l);
+}
+#endif
+
+// Drops the entries of a block's edge list (x[j], y[j]) that are the same cluster pair as the
+// entry before them, in place, and leaves each kept pair as (lower id, higher id); returns the count
+// kept. A dropped entry equals the last kept one, so comparing with that is comparing with the
+// entry before. The lookup of a repeated pair finds the edge its predecessor found or made and
+// changes nothing (findOrAdd writes a spare node), so only the lookups made differ.
+// (The 1 M sphere's 10 % level in its generator's ring order: 268.9 k of its 522.5 k collapsed
+// triangles repeat the pair before, about 90 instructions a lookup on the chained lists; the
+// bunny's 50 % level 4.2 k of 34.0 k, chain level 2 6.8 k of 35.8 k.)
+size_t dropRepeatedEdgesScalar(uint32_t* x, uint32_t* y, size_t j, size_t n, size_t kept) {
+  uint32_t last_lo = kept ? x[kept - 1] : kNone, last_hi = kept ? y[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t lo = branchlessMin(x[j], y[j]), hi = x[j] ^ y[j] ^ lo;
+    x[kept] = lo;  // (kept <= j: an entry already read)
+    y[kept] = hi;
+    kept += uint32_t(lo != last_lo) | uint32_t(hi != last_hi);
+    last_lo = lo;
+    last_hi = hi;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedEdgesScalar eight entries at a time (the tail scalar): each lane compared with the
+// lane before (lane 0 with the last of the previous eight), the kept lanes compacted through
+// kLaneCompaction. In place: a store at `kept` <= j reaches at most the eight entries just read.
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev_lo = _mm256_set1_epi32(-1), prev_hi = prev_lo;  // (kNone: no pair's lower id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + j));
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(y + j));
+    const __m256i lo = _mm256_min_epu32(a, b), hi = _mm256_max_epu32(a, b);
+    const __m256i lo1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(lo, before),
+                                           _mm256_permutevar8x32_epi32(prev_lo, before), 0x01);
+    const __m256i hi1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(hi, before),
+                                           _mm256_permutevar8x32_epi32(prev_hi, before), 0x01);
+    const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(lo, lo1), _mm256_cmpeq_epi32(hi, hi1));
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(same))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(x + kept, lo, perm);
+    storeCompacted(y + kept, hi, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev_lo = lo;
+    prev_hi = hi;
+  }
+  return dropRepeatedEdgesScalar(x, y, j, n, kept);
+}
+#else
+size_t dropRepeatedEdgesAvx2(uint32_t* x, uint32_t* y, size_t n) { return dropRepeatedEdgesScalar(x, y, 0, n, 0); }
+#endif
+
+// Drops the entries of a block's point list that repeat the entry before them, in place; returns
+// the count kept (addPoint of a repeat finds its cluster listed and does nothing). (The 1 M
+// sphere's 1 % level: 798 k of its 1.04 M triangles collapse to a point, about 10 instructions
+// each in addPoint.)
+size_t dropRepeatedPointsScalar(uint32_t* c, size_t j, size_t n, size_t kept) {
+  uint32_t last = kept ? c[kept - 1] : kNone;
+  for (; j < n; ++j) {
+    const uint32_t x = c[j];
+    c[kept] = x;
+    kept += x != last;
+    last = x;
+  }
+  return kept;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// dropRepeatedPointsScalar eight entries at a time, as dropRepeatedEdgesAvx2
+SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) {
+  const __m256i before = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
+  __m256i prev = _mm256_set1_epi32(-1);  // (kNone: no cluster id)
+  size_t j = 0, kept = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c + j));
+    const __m256i x1 = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(x, before),
+                                          _mm256_permutevar8x32_epi32(prev, before), 0x01);
+    const uint32_t keep = ~uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, x1)))) & 0xFFu;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kLaneCompaction.lanes[keep])));
+    storeCompacted(c + kept, x, perm);
+    kept += size_t(__builtin_popcount(keep));
+    prev = x;
+  }
+  return dropRepeatedPointsScalar(c, j, n, kept);
+}
+#else
+size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) { return dropRepeatedPointsScalar(c, 0, n, 0); }
+#endif
+
+// false: every collapsed triangle's pair and point looked up (useRepeatedEdgeDrop, a test hook)
+bool g_drop_repeated_edges = true;
 // how far ahead, in kept triangles, a large table's home slots are prefetched (eliminate), and the
 // table size from which they are (the bunny's 50 % level: 256 KB)
 constexpr size_t kPrefetchKept = 32;
 constexpr size_t kPrefetchTableBytes = size_t(1) << 19;
 }  // namespace
+
+// (test_hooks.h)
+bool useRepeatedEdgeDrop(bool on) { return std::exchange(g_drop_repeated_edges, on); }
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
@@ -331,20 +531,38 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   BlockLists lists;
   const uint32_t* tri = m.triangles.data();
   // where over 3/4 of the triangles of the last block collapsed to a point, the next block tests for that
-  // first (a branch that is then predicted) and skips the rest of the classification
+  // first (a branch that is then predicted) and skips the rest of the classification (the scalar
+  // classification only: the AVX2 one costs the same for every class)
   bool points_dominate = false;
+  // where over 1/16 of the last block's triangles were kept, the next block's are rotated in lanes
+  // (the AVX2 classification only; at the 1 M sphere's 1 % level, 1 % kept, the lanes took 1.0 M
+  // instructions more than they saved, 22.22 -> 23.19 M)
+  bool rotate_in_lanes = true;
   // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
   // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
   // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
-  // 10 % level, eliminate about 42 -> 36 ms). In a coherent order, where nearby triangles share
-  // cache lines of the ids, the prefetches only cost (the 1 M sphere in its generator's ring order,
-  // 10 % level 16.2-19.2 -> 15.0-15.3 ms without them). Smaller meshes skip them (a test per block,
+  // scalar, 10 % level, eliminate about 42 -> 36 ms; AVX2, 1 % level, 12.2-12.9 -> 10.1-11.6 ms,
+  // 10 % within noise). In a coherent order, where nearby triangles share cache lines of the ids,
+  // the 24 prefetches per 8 triangles only cost: the 1 M sphere in its generator's ring order, AVX2,
+  // 1 % level 6.6-7.2 -> 4.9-5.1 ms without them, 10 % 14.6-15.5 -> 14.1-15.3; scalar, 10 %
+  // 16.2-19.2 -> 15.0-15.3, 1 % within noise. Smaller meshes skip them (a test per block,
   // unswitched out of the loop).
   const bool prefetch = a.cluster_of.size() > (size_t(1) << 18) && !coherentOrder(tri, tn);
+  // (the gathers take the vertex ids as signed 32-bit offsets)
+  const bool avx2 = avx2Paths() && a.cluster_of.size() <= size_t(INT32_MAX);
   // the classification of one block [t0, t1)
   auto classifyBlock = [&](size_t t0, size_t t1, bool prefetch_block) {
     lists.kept_count = lists.edge_count = lists.point_count = 0;
-    if (prefetch_block) {
+    lists.rotated = avx2 && rotate_in_lanes;
+    if (avx2) {
+      if (prefetch_block) {
+        if (rotate_in_lanes) classifyAvx2<true, true>(tri, co, t0, t1, lists);
+        else classifyAvx2<true, false>(tri, co, t0, t1, lists);
+      } else {
+        if (rotate_in_lanes) classifyAvx2<false, true>(tri, co, t0, t1, lists);
+        else classifyAvx2<false, false>(tri, co, t0, t1, lists);
+      }
+    } else if (prefetch_block) {
       if (points_dominate) classifyScalar<true, true>(tri, co, t0, t1, lists);
       else classifyScalar<true, false>(tri, co, t0, t1, lists);
     } else {
@@ -362,6 +580,7 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     // of the triangles points, eliminate 82.3 -> 70.5 M instructions, 7.2 -> 5.9 ms, mispredicts 59 k ->
     // 120 k; at 2/3 the bunny 2 % level (69 % points) mispredicted 3 x as often, 0.38 -> 0.46 ms
     points_dominate = lists.point_count * 4 > (t1 - t0) * 3;
+    rotate_in_lanes = kept_count * 16 > t1 - t0;
     // where the table is past the cache (kPrefetchTableBytes), the home slots of the kept
     // triangles kPrefetchKept ahead are prefetched: each kept triangle's first probe was otherwise
     // a miss, one at a time (the 1 M sphere's 50 % level, a table of 4 MB: 43 % of its elimination's
@@ -369,25 +588,41 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     const bool prefetch_slots = cap * sizeof(uint32_t) > kPrefetchTableBytes;
     auto prefetchKept = [&](size_t j) __attribute__((always_inline)) {
       uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
-      rotateSmallestFirst(c0, c1, c2);
+      if (!lists.rotated) rotateSmallestFirst(c0, c1, c2);
       __builtin_prefetch(slots + home(triangleHash(c0, c1, c2)));
     };
     if (prefetch_slots)
       for (size_t j = 0; j < std::min(kept_count, kPrefetchKept); ++j) prefetchKept(j);
-    for (size_t j = 0; j < kept_count; ++j) {
-      if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
-      uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
-      rotateSmallestFirst(c0, c1, c2);
-      addTriangle(c0, c1, c2);
+    if (lists.rotated)
+      for (size_t j = 0; j < kept_count; ++j) {
+        if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
+        addTriangle(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
+      }
+    else
+      for (size_t j = 0; j < kept_count; ++j) {
+        if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
+        uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
+        rotateSmallestFirst(c0, c1, c2);
+        addTriangle(c0, c1, c2);
+      }
+    if (keep_points) {
+      size_t point_count = lists.point_count;
+      if (g_drop_repeated_edges)
+        point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
+                           : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
+      for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
     }
-    if (keep_points)
-      for (size_t j = 0; j < lists.point_count; ++j) addPoint(lists.point[j]);
     if (!keep_edges) continue;
     if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
       collapsed_dropped = true;
       std::vector<CollapsedTriangle>().swap(collapsed_list);
     }
-    const size_t edge_count = lists.edge_count;
+    // the collapsed triangles whose pair repeats the one before are not looked up where nothing
+    // lists them one by one (the list of collapsed triangles)
+    size_t edge_count = lists.edge_count;
+    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
+      edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
+                        : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
     if (!track_collapsed) {
       for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j]);
     } else {

@@ -16,12 +16,16 @@
 
 namespace scenelod::detail {
 
-// synthesis.cpp: the AVX2 variants of synthesis, of the output pass and of the grading pair pass
-// (on, the default where the CPU has AVX2) or their baseline builds (off)
+// synthesis.cpp: the AVX2 variants of the elimination's classification, of synthesis, of the
+// output pass and of the grading pair pass (on, the default where the CPU has AVX2) or their
+// baseline builds (off)
 bool useAvx2Paths(bool on);
 // synthesis.cpp: the quadric solve's eigenvalue cases four clusters at a time in lanes (on, the
 // default) or one at a time (off, the reference)
 bool useEigenvalueLanes(bool on);
+// elimination.cpp: dropping the collapsed triangles whose cluster pair or point repeats the one
+// before (on, the default) or looking every one up (off, the reference)
+bool useRepeatedEdgeDrop(bool on);
 // normals.cpp: the output pass without its shortcuts (on; off is the default)
 bool useOutputReference(bool on);
 // cluster_mesh.cpp: the renumbering of a level's clusters in space: -1 by size (the default), 0

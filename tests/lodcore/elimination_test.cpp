@@ -12,6 +12,7 @@
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
 #include "scenelod/lodcore/thick_edge.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
@@ -232,4 +233,187 @@ TEST(ThickEdge, DynamicNormalIsPerpendicularAndFacesTheCamera) {
   EXPECT_EQ(dynamicNormal(v1, v2, 0.5f * v2), glm::vec3(0.0f));           // camera on the edge's line
   EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.5f, 0.1f), 5.0f);
   EXPECT_FLOAT_EQ(thickEdgePixelWidth(0.01f, 0.1f), 1.0f);
+}
+
+namespace {
+
+using test::sameBits;
+
+// the mesh with its vertex ids and its triangles in a scrambled order (a fixed LCG), so that
+// neighbouring triangles no longer share cache lines of the cluster ids
+Mesh scrambled(const Mesh& in) {
+  const size_t n = in.positions.size(), t = in.triangleCount();
+  uint64_t state = 12345;
+  auto next = [&](size_t bound) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return size_t(state >> 33) % bound;
+  };
+  std::vector<uint32_t> to(n), order(t);
+  for (size_t i = 0; i < n; ++i) to[i] = uint32_t(i);
+  for (size_t i = n; i > 1; --i) std::swap(to[i - 1], to[next(i)]);
+  for (size_t i = 0; i < t; ++i) order[i] = uint32_t(i);
+  for (size_t i = t; i > 1; --i) std::swap(order[i - 1], order[next(i)]);
+  Mesh m;
+  m.positions.resize(n);
+  for (size_t i = 0; i < n; ++i) m.positions[to[i]] = in.positions[i];
+  for (size_t i = 0; i < t; ++i)
+    for (int k = 0; k < 3; ++k) m.triangles.push_back(to[in.triangles[3 * order[i] + k]]);
+  return m;
+}
+
+// the diagonal of the box of every position
+float positionsDiagonal(const Mesh& m) {
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (const glm::vec3& q : m.positions) {
+    lo = glm::min(lo, q);
+    hi = glm::max(hi, q);
+  }
+  return glm::length(hi - lo);
+}
+
+// every array of two clusterings bit for bit
+void expectSameBits(const Mesh& a, const Mesh& b) {
+  EXPECT_TRUE(sameBits(a.positions, b.positions));
+  EXPECT_TRUE(sameBits(a.normals, b.normals));
+  EXPECT_TRUE(sameBits(a.triangles, b.triangles));
+  EXPECT_TRUE(sameBits(a.edges, b.edges));
+  EXPECT_TRUE(sameBits(a.edge_thickness, b.edge_thickness));
+  EXPECT_TRUE(sameBits(a.points, b.points));
+}
+
+// the bunny (where installed) and thin cylinders beside a box (uncovered edges: thickness), the
+// first meshes of the tests comparing two elimination paths
+void addBunnyAndSheet(std::vector<std::pair<std::string, Mesh>>& meshes) {
+  if (test::fileExists(test::bunnyPath())) {
+    Mesh bunny;
+    ASSERT_TRUE(readObj(test::bunnyPath(), bunny).ok());
+    meshes.emplace_back("bunny", std::move(bunny));
+  }
+  Mesh sheet;
+  test::appendMesh(sheet, test::makeBox({20, 20, 20}, {28, 28, 28}, 30));
+  for (int k = 0; k < 5; ++k)
+    test::appendMesh(sheet, test::makeCylinder(0.0f, 6.0f, 0.05f, 24, 16 + k, glm::vec3(0.0f, 0.5f * k, 0.0f)));
+  meshes.emplace_back("box and cylinders", std::move(sheet));
+}
+
+}  // namespace
+
+// The AVX2 classification (eight triangles at once, where the CPU has AVX2) gives the baseline's
+// bits: every output array, at fine and coarse widths (kept triangles, edges or points dominating),
+// with edges or points not kept, on the bunny (69,666 triangles: a block tail not a multiple of 8),
+// thin cylinders beside a box (uncovered edges: thickness), and a scrambled sphere over 2^18
+// vertices (the prefetching variant). On a CPU without AVX2 both runs take the baseline.
+TEST(Elimination, Avx2ClassificationGivesTheBaselineBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  addBunnyAndSheet(meshes);
+  ASSERT_FALSE(HasFatalFailure());
+  meshes.emplace_back("bumpy sphere", test::makeBumpySphere(90, 121));
+  meshes.emplace_back("scrambled sphere", scrambled(test::makeBumpySphere(400, 700)));
+  ASSERT_GT(meshes.back().second.positions.size(), size_t(1) << 18);
+  detail::HookGuard avx2(detail::useAvx2Paths, true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    const float diagonal = positionsDiagonal(m);
+    for (float f : {0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 3; ++keep) {
+        if (m.positions.size() > (size_t(1) << 18) && keep != 0) continue;  // (the test's time)
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        Mesh wide, base;
+        avx2.set(true);
+        ASSERT_TRUE(clusterMesh(m, p, wide).ok());
+        avx2.set(false);
+        ASSERT_TRUE(clusterMesh(m, p, base).ok());
+        SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep));
+        ASSERT_GT(base.triangleCount(), 0u);
+        expectSameBits(wide, base);
+        ++levels;
+      }
+  }
+  EXPECT_GE(levels, 28u);
+}
+
+namespace {
+
+// a bumpy sphere with input edges across its surface (input thicknesses), 40 hubs of 24 spokes and
+// a finer bumpy sphere (edge lists longer than three nodes)
+void addEdgeMeshes(std::vector<std::pair<std::string, Mesh>>& meshes) {
+  Mesh sphere = test::makeBumpySphere(90, 121);
+  for (uint32_t v = 0; v + 7 < sphere.positions.size(); v += 7) {  // input edges across the surface
+    sphere.edges.insert(sphere.edges.end(), {v, v + 7});
+    sphere.edge_thickness.push_back(0.001f * float(v % 13));
+  }
+  meshes.emplace_back("bumpy sphere with edges", std::move(sphere));
+  Mesh hubs;  // 40 hubs of 24 spokes, each spoke two slivers collapsing onto one edge
+  for (int h = 0; h < 40; ++h) {
+    const glm::vec3 c(30.0f * float(h % 8), 30.0f * float(h / 8), 0.0f);
+    const uint32_t hub = static_cast<uint32_t>(hubs.positions.size());
+    hubs.positions.insert(hubs.positions.end(), {c, c + glm::vec3(0.01f, 0, 0)});
+    for (int i = 0; i < 24; ++i) {
+      const float a = 6.2831853f * float(i) / 24.0f;
+      const glm::vec3 tip = c + glm::vec3(10.0f * std::cos(a), 10.0f * std::sin(a), 0.0f);
+      const uint32_t v = static_cast<uint32_t>(hubs.positions.size());
+      hubs.positions.insert(hubs.positions.end(), {tip, tip + glm::vec3(0, 0, 0.01f), tip + glm::vec3(0, 0, 0.02f)});
+      hubs.triangles.insert(hubs.triangles.end(), {hub, v, v + 1, hub + 1, v + 2, v});
+    }
+  }
+  meshes.emplace_back("hubs", std::move(hubs));
+  meshes.emplace_back("finer bumpy sphere", test::makeBumpySphere(300, 400));
+}
+
+}  // namespace
+
+// Dropping the collapsed triangles whose cluster pair or point repeats the one before (in lanes
+// and scalar) gives the bits of looking every one up: every output array, with edges or points not kept, at
+// fine and coarse widths, on the meshes above (the generator's ring order, where about half the
+// pairs repeat; the hubs, whose pairs alternate in direction), the scrambled sphere (few repeats,
+// the prefetching classification), with the AVX2 paths and without.
+TEST(Elimination, DroppedRepeatedEdgesGiveTheReferenceBits) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  addBunnyAndSheet(meshes);
+  ASSERT_FALSE(HasFatalFailure());
+  addEdgeMeshes(meshes);
+  // 48 thin cylinders, half of them along x and half along y, crossing (over 4,096 collapsed
+  // triangles, so that their list is dropped, and most edges uncovered: output edges)
+  Mesh hair;
+  for (int k = 0; k < 48; ++k) {
+    Mesh c = test::makeCylinder(0.0f, 6.0f, 0.02f, 40, 12, glm::vec3(0.0f, 0.37f * float(k % 12), 0.23f * float(k / 24)));
+    if (k % 2)
+      for (glm::vec3& q : c.positions) q = glm::vec3(q.y, q.x, q.z + 0.01f);
+    test::appendMesh(hair, c);
+  }
+  meshes.emplace_back("hair", std::move(hair));
+  meshes.emplace_back("scrambled sphere", scrambled(test::makeBumpySphere(400, 700)));
+  detail::HookGuard drop(detail::useRepeatedEdgeDrop, true);
+  detail::HookGuard avx2_paths(detail::useAvx2Paths, true);
+  size_t levels = 0;
+  for (const auto& [name, m] : meshes) {
+    const float diagonal = positionsDiagonal(m);
+    const bool large = m.positions.size() > (size_t(1) << 18);
+    for (float f : {0.002f, 0.004f, 0.015f, 0.05f, 0.15f})
+      for (int keep = 0; keep < 3; ++keep) {
+        if (large && (keep != 0 || f < 0.004f)) continue;  // (the test's time)
+        ClusterParams p;
+        p.cell_width = f * diagonal;
+        p.keep_edges = keep != 1;
+        p.keep_points = keep != 2;
+        Mesh reference;
+        drop.set(false);
+        ASSERT_TRUE(clusterMesh(m, p, reference).ok());
+        drop.set(true);
+        for (bool avx2 : {true, false}) {
+          avx2_paths.set(avx2);
+          Mesh dropped;
+          ASSERT_TRUE(clusterMesh(m, p, dropped).ok());
+          SCOPED_TRACE(name + " w=" + std::to_string(p.cell_width) + " keep " + std::to_string(keep) +
+                       (avx2 ? " avx2" : " scalar"));
+          expectSameBits(dropped, reference);
+        }
+        avx2_paths.set(true);
+        levels += reference.edgeCount() > 0;
+      }
+  }
+  EXPECT_GE(levels, 30u);
 }
