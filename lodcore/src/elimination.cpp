@@ -370,6 +370,274 @@ constexpr size_t kPrefetchTableBytes = size_t(1) << 19;
 // (test_hooks.h)
 bool useRepeatedEdgeDrop(bool on) { return std::exchange(g_drop_repeated_edges, on); }
 
+namespace {
+
+// a cluster's point state (Candidates::point_state): 1 once listed as a point, 2 once a corner of an
+// output triangle or edge, which covers its point
+constexpr uint8_t kListed = 1, kUsed = 2;
+
+// The kept triangles, each once: a table of output triangle indices keyed by the rotation starting
+// at the smallest id, sized for the expected output (a closed surface has about 2 triangles per
+// cluster, capped by the input count) rather than the input, so that it stays in cache; grows at 2/3
+// load (a power of two at least 1.5 x expected, so about half full at the end: at 1/2 the power of
+// two was about 4 x the output, the largest array of the main pass at fine levels). A slot holds the
+// triangle's index in its low log2(cap) bits and, above them, bits of its hash that do not pick its
+// home: an occupant whose bits differ is passed over without reading its triangle, a random read of
+// the output (bunny 50 %: 19 k of its 255 k D1 read misses; 1 M sphere 10 %: 36 k). An index is
+// below 2/3 cap, so no slot is kNone. A new triangle marks its corners' clusters kUsed.
+class TriangleTable {
+ public:
+  TriangleTable(size_t expected, std::vector<uint32_t>& triangles, uint8_t* point_state)
+      : triangles_(triangles), point_state_(point_state) {
+    while (cap_ * 2 < expected * 3) cap_ <<= 1;
+    mask_ = cap_ - 1;
+    index_bits_ = size_t(__builtin_ctzll(cap_));
+    table_.assign(cap_, kNone);
+  }
+  static size_t hash(uint32_t c0, uint32_t c1, uint32_t c2) {
+    const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
+                       (uint64_t(c2) * 0x165667B19E3779F9ull);
+    return static_cast<size_t>(h ^ (h >> 31));
+  }
+  size_t bytes() const { return cap_ * sizeof(uint32_t); }
+  void prefetch(uint32_t c0, uint32_t c1, uint32_t c2) const { __builtin_prefetch(table_.data() + home(hash(c0, c1, c2))); }
+  // the triangle (c0, c1, c2), rotated smallest first, unless it is listed already
+  SCENELOD_ALWAYS_INLINE void add(uint32_t c0, uint32_t c1, uint32_t c2) {
+    const size_t h = hash(c0, c1, c2);
+    const uint32_t* slots = table_.data();
+    for (size_t i = home(h);; i = nextSlot(i)) {
+      const uint32_t o = slots[i];
+      if (o == kNone) {
+        insert(i, h, c0, c1, c2);
+        return;
+      }
+      if ((o ^ slotOf(h, 0)) >> index_bits_) continue;  // another triangle's bits
+      const uint32_t* occupant = triangles_.data() + 3 * size_t(o & mask_);
+      if (occupant[0] == c0 && occupant[1] == c1 && occupant[2] == c2) return;
+    }
+  }
+  void release() { std::vector<uint32_t>().swap(table_); }
+
+ private:
+  size_t home(size_t h) const { return h & mask_; }
+  size_t nextSlot(size_t i) const { return (i + 1) & mask_; }
+  uint32_t slotOf(size_t h, size_t index) const {
+    return static_cast<uint32_t>(index) | (static_cast<uint32_t>(uint64_t(h) >> 32) << index_bits_);
+  }
+  // the new triangle (c0, c1, c2) with hash h into empty slot i
+  void insert(size_t i, size_t h, uint32_t c0, uint32_t c1, uint32_t c2) {
+    table_[i] = slotOf(h, triangles_.size() / 3);
+    if ((triangles_.size() / 3 + 1) * 3 > cap_ * 2) {  // keep the load at most 2/3
+      cap_ <<= 1;
+      mask_ = cap_ - 1;
+      ++index_bits_;
+      table_.assign(cap_, kNone);
+      for (size_t k = 0; k < triangles_.size(); k += 3) {
+        const size_t hk = hash(triangles_[k], triangles_[k + 1], triangles_[k + 2]);
+        size_t j = home(hk);
+        while (table_[j] != kNone) j = nextSlot(j);
+        table_[j] = slotOf(hk, k / 3);
+      }
+      size_t j = home(h);
+      while (table_[j] != kNone) j = nextSlot(j);
+      table_[j] = slotOf(h, triangles_.size() / 3);
+    }
+    triangles_.push_back(c0);
+    triangles_.push_back(c1);
+    triangles_.push_back(c2);
+    point_state_[c0] = point_state_[c1] = point_state_[c2] = kUsed;
+  }
+  std::vector<uint32_t>& triangles_;
+  uint8_t* point_state_;
+  size_t cap_ = 64, mask_ = 63, index_bits_ = 6;
+  std::vector<uint32_t> table_;
+};
+
+// The candidate edges and points of one level and what the thickness needs of them.
+struct Candidates {
+  Candidates(size_t clusters, size_t listed, bool input_edges)
+      : input_edges(input_edges), lists(listed), point_state(clusters, 0) {}
+  // the entry of edge e: its cluster pair, low id first, then the block of the last triangle
+  // collapsed onto it (kNone for none)
+  uint32_t* entry(size_t e) { return edges[e / kEdgeChunk].get() + 3 * (e % kEdgeChunk); }
+  // the entry of the next edge (allocated whole, uninitialised, when the first edge could go in it)
+  uint32_t* nextEntry() {
+    if (edge_total == edge_room) {
+      edges.emplace_back(new uint32_t[3 * kEdgeChunk]);
+      edge_room += kEdgeChunk;
+    }
+    return edges.back().get() + 3 * (edge_total % kEdgeChunk);
+  }
+  // The id of candidate edge (x, y), listed if new: the new edge's entry is written whatever (past
+  // the last edge) and counted only when made. (inlined: called out of line, its saves and restores
+  // were about a quarter of its cost)
+  SCENELOD_ALWAYS_INLINE uint32_t edge(uint32_t x, uint32_t y) {
+    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
+    uint32_t* e_entry = nextEntry();
+    const uint32_t id = static_cast<uint32_t>(edge_total);
+    const uint32_t e = lists.findOrAdd(lo, hi, id);
+    e_entry[0] = lo;
+    e_entry[1] = hi;
+    e_entry[2] = kNone;
+    edge_total += e == edge_total;
+    if (input_edges) input_thickness.resize(edge_total, 0.0f);
+    return e;
+  }
+  void addPoint(uint32_t c) {
+    if (point_state[c]) return;
+    point_state[c] = kListed;
+    point_candidates.push_back(c);
+  }
+
+  // candidate edges in chunks of kEdgeChunk: a growing vector's copy (old and new buffers at once)
+  // came at the peak of a level (1024: the unused part of the last chunk, 6 KB on average, was part
+  // of the bunny chain's peak)
+  static constexpr size_t kEdgeChunk = 1024;
+  std::vector<std::unique_ptr<uint32_t[]>> edges;
+  size_t edge_total = 0;
+  size_t edge_room = 0;  // edges the chunks hold
+  const bool input_edges;
+  std::vector<float> input_thickness;  // per candidate edge: its input edges' largest thickness
+  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
+  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
+  // pass's lookups went to random slots of it.
+  EdgeLists lists;
+  // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
+  // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
+  // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
+  // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
+  // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
+  // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
+  // last triangle for this, beside its cluster pair (its first block follows from its id).
+  static constexpr size_t kCollapsedList = 4096;
+  std::vector<CollapsedTriangle> collapsed_list;
+  bool collapsed_dropped = false;
+  std::vector<uint32_t> block_first_edge;  // per block: the id of the first edge it created
+  // clusters of collapsed primitives, each listed once in order of first appearance (the order
+  // points are output in); coarse levels collapse most triangles onto a few clusters. Per cluster:
+  // 1 once listed, 2 once a corner of an output triangle or edge, which covers its point (it is then
+  // not listed, or dropped at the end: a separate pass over the output triangles did that before)
+  std::vector<uint32_t> point_candidates;
+  std::vector<uint8_t> point_state;
+};
+
+// The triangles collapsed onto uncovered edges (remap[e] != kNone) in the blocks that `rescan`
+// opens (+1 at an edge's first block, -1 past its last), with the edges' output ids, appended to
+// `collapsed`, where the list of collapsed triangles was dropped.
+void rescanCollapsed(const Mesh& m, const uint32_t* co, const std::vector<int32_t>& rescan, const std::vector<uint32_t>& remap,
+                     const std::vector<uint32_t>& out_edges, Candidates& c, std::vector<CollapsedTriangle>& collapsed) {
+  const uint32_t* tri = m.triangles.data();
+  const size_t tn = m.triangleCount();
+  std::vector<uint8_t>& point_state = c.point_state;
+  const EdgeLists& edge_lists = c.lists;
+  // A triangle collapsed onto an uncovered edge has its corners in the edge's two clusters: with
+  // those marked (the point states are no longer read), a triangle whose first corner is not is
+  // passed over after one test that is rarely taken (at 2 % of the bunny, one uncovered edge of
+  // four triangles spread over most blocks: the full classification of them cost 0.9 M
+  // instructions, 11 % of the level's elimination).
+  constexpr uint8_t kEdgeEnd = 4;
+  for (uint32_t k : out_edges) point_state[k] = kEdgeEnd;
+  // A block's triangles whose first corner is at an edge's end (counted): where they were over
+  // 1/32 of the last block read, the next one tests the class and the corner in one test (at the
+  // bunny chain's level 6, w = 0.856, the ends' clusters hold much of the blocks, and the test of
+  // the corner first mispredicted 9.7 k times of the elimination's 16.6 k: 0.31-0.34 -> 0.26-0.28
+  // ms, 2.96 -> 4.13 M instructions); else the corner first, a branch rarely taken (at 2 %, where
+  // the one test cost 0.2 M instructions more and no time back; at 1/8 level 6 kept 9.3 k
+  // mispredicts, 0.28-0.29 ms).
+  auto rescanBlock = [&](size_t t0, size_t t1, bool one_test) __attribute__((always_inline)) {
+    size_t ends = 0;
+    for (size_t t = t0; t < t1; ++t) {
+      const uint32_t* v = tri + 3 * t;
+      const uint32_t c0 = co[v[0]];
+      const bool end = point_state[c0] == kEdgeEnd;
+      if (!one_test && !end) continue;
+      const uint32_t c1 = co[v[1]], c2 = co[v[2]];
+      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+      ends += end;
+      // collapsed to an edge: not kept, not a point
+      if (!(uint32_t(e01 | e12 | e02) & ~uint32_t(e01 & e12) & uint32_t(end))) continue;
+      const uint32_t y = e01 ? c2 : c1, lo = branchlessMin(c0, y);
+      const uint32_t r = remap[edge_lists.find(lo, c0 ^ y ^ lo)];
+      if (r != kNone) collapsed.push_back({static_cast<uint32_t>(t), r});
+    }
+    return ends;
+  };
+  int32_t open = 0;
+  bool one_test = false;
+  for (size_t b = 0; b + 1 < rescan.size(); ++b) {
+    open += rescan[b];
+    if (open == 0) continue;
+    const size_t t0 = b * kBlock, t1 = std::min(tn, (b + 1) * kBlock);
+    const size_t ends = one_test ? rescanBlock(t0, t1, true) : rescanBlock(t0, t1, false);
+    one_test = ends * 32 > t1 - t0;
+  }
+}
+
+// After the main pass: the candidate edges no kept triangle covers go out (edges of kept triangles
+// remove candidate edges, used clusters remove points), then the points, then the thickness.
+void finishEdges(const PreparedMesh& p, const Assignment& a, bool compute_thickness, Candidates& c, Eliminated& out) {
+  const size_t en = c.edge_total;
+  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
+  if (en > 0)
+    for (size_t t = 0; t < out.triangles.size(); t += 3) {
+      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
+      const uint32_t x = branchlessMin(c0, c1), y = branchlessMin(c1, c2), z = branchlessMin(c2, c0);
+      covered[branchlessMin(c.lists.find(x, c0 ^ c1 ^ x), uint32_t(en))] = 1;
+      covered[branchlessMin(c.lists.find(y, c1 ^ c2 ^ y), uint32_t(en))] = 1;
+      covered[branchlessMin(c.lists.find(z, c2 ^ c0 ^ z), uint32_t(en))] = 1;
+    }
+  // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
+  // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
+  std::vector<int32_t> rescan;
+  if (c.collapsed_dropped)
+    for (size_t e = 0; e < en; ++e) {
+      const uint32_t last = c.entry(e)[2];
+      if (covered[e] || last == kNone) continue;
+      if (rescan.empty()) rescan.assign(c.block_first_edge.size() + 1, 0);
+      // the block whose triangle created the edge (edges from triangles come first, in block order)
+      const size_t first = static_cast<size_t>(
+          std::upper_bound(c.block_first_edge.begin(), c.block_first_edge.end(), uint32_t(e)) - c.block_first_edge.begin() - 1);
+      ++rescan[first];
+      --rescan[last + 1];
+    }
+  if (rescan.empty()) { EdgeLists released(0); std::swap(released, c.lists); }
+  std::vector<uint32_t> remap(en, kNone);
+  for (size_t e = 0; e < en; ++e) {
+    if (covered[e]) continue;
+    const uint32_t* pair = c.entry(e);
+    remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
+    out.edges.push_back(pair[0]);
+    out.edges.push_back(pair[1]);
+    c.point_state[pair[0]] = c.point_state[pair[1]] = kUsed;
+  }
+  std::vector<std::unique_ptr<uint32_t[]>>().swap(c.edges);
+  for (uint32_t k : c.point_candidates)
+    if (c.point_state[k] == kListed) out.points.push_back(k);
+
+  if (!compute_thickness) return;
+  out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
+  // the triangles collapsed onto uncovered edges, in input order, with the edges' output ids
+  std::vector<CollapsedTriangle> collapsed;
+  if (!c.collapsed_dropped) {
+    size_t kept = 0;
+    for (const CollapsedTriangle& ct : c.collapsed_list) kept += remap[ct.edge] != kNone;
+    collapsed.reserve(kept);
+    for (const CollapsedTriangle& ct : c.collapsed_list)
+      if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
+    std::vector<CollapsedTriangle>().swap(c.collapsed_list);
+  } else if (!rescan.empty()) {
+    rescanCollapsed(*p.mesh, a.cluster_of.data(), rescan, remap, out.edges, c, collapsed);
+    EdgeLists released(0);
+    std::swap(released, c.lists);
+  }
+  computeThickness(p, a, collapsed, out);
+  if (c.input_edges)
+    for (size_t e = 0; e < en; ++e)
+      if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], c.input_thickness[e]);
+}
+
+}  // namespace
+
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
   const Mesh& m = *p.mesh;
@@ -382,147 +650,20 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
 
   const size_t tn = m.triangleCount();
   const size_t nc = a.cluster_count;
-  // Triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
-  // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
-  // input count) rather than the input, so that it stays in cache; grows at 2/3 load.
-  // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output:
-  // the extra is about constant, not proportional: the 1 M sphere's chain keeps 2C + 1.9 k / 2.9 k /
-  // 2.8 k / 1.7 k triangles at levels 1-4, the bunny's 2C + 6 / 191 / 377 / 112; a regrowth, old and
-  // new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
+  // (a little over 2 triangles per cluster, so that a closed surface's 2C - 4 + a few never regrows
+  // the output: the extra is about constant, not proportional: the 1 M sphere's chain keeps 2C + 1.9 k
+  // / 2.9 k / 2.8 k / 1.7 k triangles at levels 1-4, the bunny's 2C + 6 / 191 / 377 / 112; a regrowth,
+  // old and new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
   const size_t expected = std::min(tn, size_t(2) * nc + nc / 32 + std::min<size_t>(4096, nc / 8));
   out.triangles.reserve(3 * expected);
-  // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
-  // the power of two was about 4 x the output, the largest array of the main pass at fine levels
-  size_t cap = 64;
-  while (cap * 2 < expected * 3) cap <<= 1;
-  std::vector<uint32_t> table(cap, kNone);
-  uint32_t* slots = table.data();
-  size_t mask = cap - 1;
-  auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
-    const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
-                       (uint64_t(c2) * 0x165667B19E3779F9ull);
-    return static_cast<size_t>(h ^ (h >> 31));
-  };
-  auto home = [&](size_t h) { return h & mask; };
-  auto nextSlot = [&](size_t i) { return (i + 1) & mask; };
-  // A slot holds the triangle's index in its low log2(cap) bits and, above them, bits of its hash
-  // that do not pick its home: an occupant whose bits differ is passed over without reading its
-  // triangle, a random read of the output (bunny 50 %: 19 k of its 255 k D1 read misses; 1 M sphere
-  // 10 %: 36 k). An index is below 2/3 cap, so no slot is kNone.
-  size_t index_bits = size_t(__builtin_ctzll(cap));
-  auto slotOf = [&](size_t h, size_t index) {
-    return static_cast<uint32_t>(index) | (static_cast<uint32_t>(uint64_t(h) >> 32) << index_bits);
-  };
-  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
-  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
-  // pass's lookups went to random slots of it.
-  // candidate edges (cluster pairs, low id first, then the block of the last triangle collapsed onto
-  // the edge, kNone for none), in chunks of kEdgeChunk edges: a growing vector's copy (old and new
-  // buffers at once) came at the peak of a level
-  // (1024: the unused part of the last chunk, 6 KB on average, was part of the bunny chain's peak)
-  constexpr size_t kEdgeChunk = 1024;
-  std::vector<std::unique_ptr<uint32_t[]>> edges;
-  size_t edge_total = 0;
-  size_t edge_room = 0;  // edges the chunks hold
-  // the entry of the next edge (allocated whole, uninitialised, when the first edge could go in it)
-  auto edgeEntry = [&]() {
-    if (edge_total == edge_room) {
-      edges.emplace_back(new uint32_t[3 * kEdgeChunk]);
-      edge_room += kEdgeChunk;
-    }
-    return edges.back().get() + 3 * (edge_total % kEdgeChunk);
-  };
-  // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
-  std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
-  const size_t listed = keep_edges || input_edges ? nc : 0;
-  EdgeLists edge_lists(listed);
-  // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
-  // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
-  // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
-  // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
-  // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
-  // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
-  // last triangle for this, beside its cluster pair (its first block follows from its id).
-  constexpr size_t kCollapsedList = 4096;
+  Candidates c(nc, keep_edges || input_edges ? nc : 0, input_edges);
+  TriangleTable table(expected, out.triangles, c.point_state.data());
   const bool track_collapsed = compute_thickness && keep_edges;
-  std::vector<CollapsedTriangle> collapsed_list;
-  bool collapsed_dropped = false;
-  std::vector<uint32_t> block_first_edge;  // per block: the id of the first edge it created
   if (track_collapsed) {
-    collapsed_list.reserve(std::min(kCollapsedList, tn));
-    block_first_edge.reserve((tn + kBlock - 1) / kBlock);
+    c.collapsed_list.reserve(std::min(c.kCollapsedList, tn));
+    c.block_first_edge.reserve((tn + kBlock - 1) / kBlock);
   }
-  // clusters of collapsed primitives, each listed once in order of first appearance (the order
-  // points are output in); coarse levels collapse most triangles onto a few clusters. Per cluster:
-  // 1 once listed, 2 once a corner of an output triangle or edge, which covers its point (it is then
-  // not listed, or dropped at the end: a separate pass over the output triangles did that before)
-  constexpr uint8_t kListed = 1, kUsed = 2;
-  std::vector<uint32_t> point_candidates;
-  std::vector<uint8_t> point_state(nc, 0);
-  auto addPoint = [&](uint32_t c) {
-    if (point_state[c]) return;
-    point_state[c] = kListed;
-    point_candidates.push_back(c);
-  };
-  // The id of candidate edge (x, y), listed if new: the new edge's entry is written whatever (past
-  // the last edge) and counted only when made; chunks are allocated whole when the first edge could
-  // go in them. (inlined: called out of line, its saves and restores were about a quarter of its cost)
-  auto edgeSlot = [&](uint32_t x, uint32_t y) __attribute__((always_inline)) {
-    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
-    uint32_t* entry = edgeEntry();
-    const uint32_t id = static_cast<uint32_t>(edge_total);
-    const uint32_t e = edge_lists.findOrAdd(lo, hi, id);
-    entry[0] = lo;
-    entry[1] = hi;
-    entry[2] = kNone;
-    edge_total += e == edge_total;
-    if (input_edges) input_thickness.resize(edge_total, 0.0f);
-    return e;
-  };
-
-  // the new triangle (c0, c1, c2) with hash h into empty slot i
-  auto insertTriangle = [&](size_t i, size_t h, uint32_t c0, uint32_t c1, uint32_t c2) {
-    slots[i] = slotOf(h, out.triangles.size() / 3);
-    if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
-      cap <<= 1;
-      mask = cap - 1;
-      ++index_bits;
-      table.assign(cap, kNone);
-      slots = table.data();
-      for (size_t k = 0; k < out.triangles.size(); k += 3) {
-        const size_t hk = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]);
-        size_t j = home(hk);
-        while (slots[j] != kNone) j = nextSlot(j);
-        slots[j] = slotOf(hk, k / 3);
-      }
-      size_t j = home(h);
-      while (slots[j] != kNone) j = nextSlot(j);
-      slots[j] = slotOf(h, out.triangles.size() / 3);
-    }
-    out.triangles.push_back(c0);
-    out.triangles.push_back(c1);
-    out.triangles.push_back(c2);
-    point_state[c0] = point_state[c1] = point_state[c2] = kUsed;
-  };
-  // whether an occupant (its tag bits matching) is the triangle (c0, c1, c2)
-  auto sameTriangle = [&](uint32_t o, uint32_t c0, uint32_t c1, uint32_t c2) {
-    const uint32_t* occupant = out.triangles.data() + 3 * size_t(o & mask);
-    return occupant[0] == c0 && occupant[1] == c1 && occupant[2] == c2;
-  };
-  auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
-    const size_t h = triangleHash(c0, c1, c2);
-    size_t i = home(h);
-    for (;; i = nextSlot(i)) {
-      const uint32_t o = slots[i];
-      if (o == kNone) {
-        insertTriangle(i, h, c0, c1, c2);
-        return;
-      }
-      if ((o ^ slotOf(h, 0)) >> index_bits) continue;  // another triangle's bits
-      if (sameTriangle(o, c0, c1, c2)) return;
-    }
-  };
 
   // The triangles are classified in blocks without a branch (kept, collapsed to an edge, collapsed
   // to a point: at coarse levels the three are mixed at random, so a branch on the class
@@ -585,167 +726,68 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     // triangles kPrefetchKept ahead are prefetched: each kept triangle's first probe was otherwise
     // a miss, one at a time (the 1 M sphere's 50 % level, a table of 4 MB: 43 % of its elimination's
     // samples on that load)
-    const bool prefetch_slots = cap * sizeof(uint32_t) > kPrefetchTableBytes;
+    const bool prefetch_slots = table.bytes() > kPrefetchTableBytes;
     auto prefetchKept = [&](size_t j) __attribute__((always_inline)) {
       uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
       if (!lists.rotated) rotateSmallestFirst(c0, c1, c2);
-      __builtin_prefetch(slots + home(triangleHash(c0, c1, c2)));
+      table.prefetch(c0, c1, c2);
     };
     if (prefetch_slots)
       for (size_t j = 0; j < std::min(kept_count, kPrefetchKept); ++j) prefetchKept(j);
     if (lists.rotated)
       for (size_t j = 0; j < kept_count; ++j) {
         if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
-        addTriangle(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
+        table.add(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
       }
     else
       for (size_t j = 0; j < kept_count; ++j) {
         if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
         uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
         rotateSmallestFirst(c0, c1, c2);
-        addTriangle(c0, c1, c2);
+        table.add(c0, c1, c2);
       }
     if (keep_points) {
       size_t point_count = lists.point_count;
       if (g_drop_repeated_edges)
         point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
                            : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
-      for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
+      for (size_t j = 0; j < point_count; ++j) c.addPoint(lists.point[j]);
     }
     if (!keep_edges) continue;
-    if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
-      collapsed_dropped = true;
-      std::vector<CollapsedTriangle>().swap(collapsed_list);
+    if (track_collapsed && !c.collapsed_dropped && c.collapsed_list.size() + lists.edge_count > c.kCollapsedList) {
+      c.collapsed_dropped = true;
+      std::vector<CollapsedTriangle>().swap(c.collapsed_list);
     }
     // the collapsed triangles whose pair repeats the one before are not looked up where nothing
     // lists them one by one (the list of collapsed triangles)
     size_t edge_count = lists.edge_count;
-    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
+    if (g_drop_repeated_edges && (!track_collapsed || c.collapsed_dropped))
       edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
                         : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
     if (!track_collapsed) {
-      for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j]);
+      for (size_t j = 0; j < edge_count; ++j) c.edge(lists.edge[0][j], lists.edge[1][j]);
     } else {
       const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
-      block_first_edge.push_back(static_cast<uint32_t>(edge_total));
+      c.block_first_edge.push_back(static_cast<uint32_t>(c.edge_total));
       for (size_t j = 0; j < edge_count; ++j) {
-        const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j]);
-        edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-        if (!collapsed_dropped) collapsed_list.push_back({lists.edge[2][j], e});
+        const uint32_t e = c.edge(lists.edge[0][j], lists.edge[1][j]);
+        c.entry(e)[2] = block;
+        if (!c.collapsed_dropped) c.collapsed_list.push_back({lists.edge[2][j], e});
       }
     }
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
     if (x == y) {
-      addPoint(x);
+      c.addPoint(x);
       continue;
     }
-    const uint32_t s = edgeSlot(x, y);
-    input_thickness[s] = std::max(input_thickness[s], m.edgeThickness(e));
+    const uint32_t s = c.edge(x, y);
+    c.input_thickness[s] = std::max(c.input_thickness[s], m.edgeThickness(e));
   }
-  for (uint32_t v : m.points) addPoint(co[v]);
-  std::vector<uint32_t>().swap(table);
-
-  // coverage: an edge of a kept triangle removes the candidate edge (a used cluster removes points)
-  const size_t en = edge_total;
-  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
-  if (en > 0)
-    for (size_t t = 0; t < out.triangles.size(); t += 3) {
-      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
-      const uint32_t a = branchlessMin(c0, c1), b = branchlessMin(c1, c2), c = branchlessMin(c2, c0);
-      covered[branchlessMin(edge_lists.find(a, c0 ^ c1 ^ a), uint32_t(en))] = 1;
-      covered[branchlessMin(edge_lists.find(b, c1 ^ c2 ^ b), uint32_t(en))] = 1;
-      covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
-    }
-  // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
-  // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
-  std::vector<int32_t> rescan;
-  if (collapsed_dropped)
-    for (size_t e = 0; e < en; ++e) {
-      const uint32_t last = edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2];
-      if (covered[e] || last == kNone) continue;
-      if (rescan.empty()) rescan.assign(block_first_edge.size() + 1, 0);
-      // the block whose triangle created the edge (edges from triangles come first, in block order)
-      const size_t first = static_cast<size_t>(
-          std::upper_bound(block_first_edge.begin(), block_first_edge.end(), uint32_t(e)) - block_first_edge.begin() - 1);
-      ++rescan[first];
-      --rescan[last + 1];
-    }
-  if (rescan.empty()) { EdgeLists released(0); std::swap(released, edge_lists); }
-  std::vector<uint32_t> remap(en, kNone);
-  for (size_t e = 0; e < en; ++e) {
-    if (covered[e]) continue;
-    const uint32_t* pair = edges[e / kEdgeChunk].get() + 3 * (e % kEdgeChunk);
-    remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
-    out.edges.push_back(pair[0]);
-    out.edges.push_back(pair[1]);
-    point_state[pair[0]] = point_state[pair[1]] = kUsed;
-  }
-  std::vector<std::unique_ptr<uint32_t[]>>().swap(edges);
-  for (uint32_t c : point_candidates)
-    if (point_state[c] == kListed) out.points.push_back(c);
-
-  if (!compute_thickness) return;
-  out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
-  // the triangles collapsed onto uncovered edges, in input order, with the edges' output ids
-  std::vector<CollapsedTriangle> collapsed;
-  if (!collapsed_dropped) {
-    size_t kept = 0;
-    for (const CollapsedTriangle& ct : collapsed_list) kept += remap[ct.edge] != kNone;
-    collapsed.reserve(kept);
-    for (const CollapsedTriangle& ct : collapsed_list)
-      if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
-    std::vector<CollapsedTriangle>().swap(collapsed_list);
-  } else if (!rescan.empty()) {
-    // A triangle collapsed onto an uncovered edge has its corners in the edge's two clusters: with
-    // those marked (the point states are no longer read), a triangle whose first corner is not is
-    // passed over after one test that is rarely taken (at 2 % of the bunny, one uncovered edge of
-    // four triangles spread over most blocks: the full classification of them cost 0.9 M
-    // instructions, 11 % of the level's elimination).
-    constexpr uint8_t kEdgeEnd = 4;
-    for (uint32_t c : out.edges) point_state[c] = kEdgeEnd;
-    // A block's triangles whose first corner is at an edge's end (counted): where they were over
-    // 1/32 of the last block read, the next one tests the class and the corner in one test (at the
-    // bunny chain's level 6, w = 0.856, the ends' clusters hold much of the blocks, and the test of
-    // the corner first mispredicted 9.7 k times of the elimination's 16.6 k: 0.31-0.34 -> 0.26-0.28
-    // ms, 2.96 -> 4.13 M instructions); else the corner first, a branch rarely taken (at 2 %, where
-    // the one test cost 0.2 M instructions more and no time back; at 1/8 level 6 kept 9.3 k
-    // mispredicts, 0.28-0.29 ms).
-    auto rescanBlock = [&](size_t t0, size_t t1, bool one_test) __attribute__((always_inline)) {
-      size_t ends = 0;
-      for (size_t t = t0; t < t1; ++t) {
-        const uint32_t* v = tri + 3 * t;
-        const uint32_t c0 = co[v[0]];
-        const bool end = point_state[c0] == kEdgeEnd;
-        if (!one_test && !end) continue;
-        const uint32_t c1 = co[v[1]], c2 = co[v[2]];
-        const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
-        ends += end;
-        // collapsed to an edge: not kept, not a point
-        if (!(uint32_t(e01 | e12 | e02) & ~uint32_t(e01 & e12) & uint32_t(end))) continue;
-        const uint32_t y = e01 ? c2 : c1, lo = branchlessMin(c0, y);
-        const uint32_t r = remap[edge_lists.find(lo, c0 ^ y ^ lo)];
-        if (r != kNone) collapsed.push_back({static_cast<uint32_t>(t), r});
-      }
-      return ends;
-    };
-    int32_t open = 0;
-    bool one_test = false;
-    for (size_t b = 0; b + 1 < rescan.size(); ++b) {
-      open += rescan[b];
-      if (open == 0) continue;
-      const size_t t0 = b * kBlock, t1 = std::min(tn, (b + 1) * kBlock);
-      const size_t ends = one_test ? rescanBlock(t0, t1, true) : rescanBlock(t0, t1, false);
-      one_test = ends * 32 > t1 - t0;
-    }
-    EdgeLists released(0);
-    std::swap(released, edge_lists);
-  }
-  computeThickness(p, a, collapsed, out);
-  if (input_edges)
-    for (size_t e = 0; e < en; ++e)
-      if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], input_thickness[e]);
+  for (uint32_t v : m.points) c.addPoint(co[v]);
+  table.release();
+  finishEdges(p, a, compute_thickness, c, out);
 }
 
 }  // namespace scenelod::detail
