@@ -206,6 +206,102 @@ void fillIncidence(const Mesh& mesh, IncidenceTable& table, std::unique_ptr<uint
 }
 
 
+// per-row scratch of the scalar pass, grown to the longest row seen: plain arrays written by index,
+// no push_back
+struct RowScratch {
+  std::vector<glm::vec3> dirs, normals;
+  std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+};
+// what the grade of one row needs: its longest edge, whether some edge has a direction, the widest
+// pair of directions, the boundary flag, and the count of face normals in the scratch
+struct ScalarRow {
+  float longest;
+  bool any_dir;
+  float cos_dirs;
+  bool boundary;
+  size_t normals;
+};
+
+// The scalar pass over vertex v's row incidence[b .. e) (rows the lanes do not take: longer than
+// kLaneRow, with input edges or on coloured meshes; every row without SSE2): its face sums (and
+// colour sums) into out, and the inputs of its grade
+ScalarRow gradeRowScalar(const Mesh& mesh, const Incidence* incidence, uint32_t b, uint32_t e, size_t v, bool colors,
+                         const GradeOutput& out, RowScratch& s) {
+  const glm::vec3* pos = mesh.positions.data();
+  const glm::vec3 pv = pos[v];
+  const size_t row = e - b;
+  if (s.nb.size() < 2 * row) {
+    s.nb.resize(2 * row);
+    s.nb_tris.resize(2 * row);
+    s.dirs.resize(2 * row);
+    s.normals.resize(row);
+  }
+  uint32_t* nbp = s.nb.data();
+  uint32_t* trip = s.nb_tris.data();
+  size_t nn = 0, nnormals = 0;
+  // distinct neighbours by a linear scan without early exit (rows are short; cheaper than sorting);
+  // `tri` is 1 for a triangle's corner, 0 for an input edge's end. Long rows collect repeats and
+  // sort them (mergeNeighbours), O(d log d).
+  const bool scan = row <= kScanLimit;
+  auto addNeighbour = [&](uint32_t u, uint32_t tri) {
+    uint32_t found = 0;
+    if (scan)
+      for (size_t j = 0; j < nn; ++j) {
+        const uint32_t same = nbp[j] == u;
+        trip[j] += same & tri;
+        found |= same;
+      }
+    nbp[nn] = u;
+    trip[nn] = tri;
+    nn += !found;
+  };
+  float qs[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, area_sum = 0.0f;  // quadric xx..zz, normal x, y, z
+  glm::vec4 cs(0.0f);
+  for (uint32_t i = b; i < e; ++i) {
+    const Incidence inc = incidence[i];
+    if (inc.b == detail::kNone) {
+      addNeighbour(inc.a, 0);
+      continue;
+    }
+    addNeighbour(inc.a, 1);
+    addNeighbour(inc.b, 1);
+    const glm::vec3 cr = glm::cross(pos[inc.a] - pv, pos[inc.b] - pv);
+    const float nl = glm::length(cr);
+    if (!(nl > 0.0f)) continue;
+    const glm::vec3 n = cr / nl;
+    s.normals[nnormals++] = n;
+    const float area = 0.5f * nl;
+    qs[0] += area * n.x * n.x; qs[1] += area * n.x * n.y; qs[2] += area * n.x * n.z;
+    qs[3] += area * n.y * n.y; qs[4] += area * n.y * n.z; qs[5] += area * n.z * n.z;
+    qs[6] += area * n.x; qs[7] += area * n.y; qs[8] += area * n.z;
+    area_sum += area;
+    if (colors) {
+      const glm::vec3 fc = (mesh.colors[v] + mesh.colors[inc.a] + mesh.colors[inc.b]) * (1.0f / 3.0f);
+      cs += glm::vec4(fc * area, area);
+    }
+  }
+  if (out.sums) out.sums[v].encode(area_sum, qs);
+  if (colors) out.color_sums[v] = cs;
+  if (!scan) nn = mergeNeighbours(nbp, trip, nn, s.pairs);
+  // boundary: some neighbour is shared by only one incident triangle
+  bool boundary = false;
+  for (size_t j = 0; j < nn; ++j) boundary |= trip[j] == 1;
+  // the widest pair and the longest edge do not depend on the neighbours' order, except for the
+  // estimate of minPairDot on long lists, whose neighbours mergeNeighbours left in index order
+  size_t ndirs = 0;
+  float longest_v = 0.0f;
+  for (size_t j = 0; j < nn; ++j) {
+    const glm::vec3 d = pos[nbp[j]] - pv;
+    const float len = glm::length(d);
+    if (len > 0.0f) {
+      s.dirs[ndirs++] = d / len;
+      longest_v = std::max(longest_v, len);
+    }
+  }
+  return {longest_v, ndirs > 0, ndirs > 0 ? minPairDot(s.dirs.data(), ndirs) : 1.0f, boundary, nnormals};
+}
+
 // Grades every vertex and, when asked, sums its incident faces. The per-vertex pass reads its rows
 // of `table` contiguously, recomputes the face normal from the corner positions it reads anyway,
 // and writes only its own vertex: no scattered writes, parallel over vertices.
@@ -246,10 +342,7 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
   const bool avx2 = detail::avx2Paths() && vn < (size_t(1) << 31) / 3;
 #endif
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vn, 1024), [&](const tbb::blocked_range<size_t>& range) {
-    // per-vertex scratch, grown to the longest row seen: plain arrays written by index, no push_back
-    std::vector<glm::vec3> dirs, normals;
-    std::vector<uint32_t> nb, nb_tris;  // distinct neighbours, and how many incident triangles hold each
-    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    RowScratch scratch;
     float range_longest = 0.0f;
 #if defined(__SSE2__)
     // the box of the rows' vertices in lanes 0..2: minps(p, lo) and maxps(p, hi) are glm::min(lo, p)
@@ -335,77 +428,9 @@ void gradeAndSum(const Mesh& mesh, const IncidenceTable& table, Grading grading,
         continue;
       }
 #endif
-      if (nb.size() < 2 * row) {
-        nb.resize(2 * row);
-        nb_tris.resize(2 * row);
-        dirs.resize(2 * row);
-        normals.resize(row);
-      }
-      uint32_t* nbp = nb.data();
-      uint32_t* trip = nb_tris.data();
-      size_t nn = 0, nnormals = 0;
-      // distinct neighbours by a linear scan without early exit (rows are short; cheaper than sorting);
-      // `tri` is 1 for a triangle's corner, 0 for an input edge's end. Long rows collect repeats and
-      // sort them (mergeNeighbours), O(d log d).
-      const bool scan = row <= kScanLimit;
-      auto addNeighbour = [&](uint32_t u, uint32_t tri) {
-        uint32_t found = 0;
-        if (scan)
-          for (size_t j = 0; j < nn; ++j) {
-            const uint32_t same = nbp[j] == u;
-            trip[j] += same & tri;
-            found |= same;
-          }
-        nbp[nn] = u;
-        trip[nn] = tri;
-        nn += !found;
-      };
-      float qs[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, area_sum = 0.0f;  // quadric xx..zz, normal x, y, z
-      glm::vec4 cs(0.0f);
-      for (uint32_t i = b; i < e; ++i) {
-        const Incidence inc = incidence[i];
-        if (inc.b == detail::kNone) {
-          addNeighbour(inc.a, 0);
-          continue;
-        }
-        addNeighbour(inc.a, 1);
-        addNeighbour(inc.b, 1);
-        const glm::vec3 cr = glm::cross(pos[inc.a] - pv, pos[inc.b] - pv);
-        const float nl = glm::length(cr);
-        if (!(nl > 0.0f)) continue;
-        const glm::vec3 n = cr / nl;
-        normals[nnormals++] = n;
-        const float area = 0.5f * nl;
-        qs[0] += area * n.x * n.x; qs[1] += area * n.x * n.y; qs[2] += area * n.x * n.z;
-        qs[3] += area * n.y * n.y; qs[4] += area * n.y * n.z; qs[5] += area * n.z * n.z;
-        qs[6] += area * n.x; qs[7] += area * n.y; qs[8] += area * n.z;
-        area_sum += area;
-        if (colors) {
-          const glm::vec3 fc = (mesh.colors[v] + mesh.colors[inc.a] + mesh.colors[inc.b]) * (1.0f / 3.0f);
-          cs += glm::vec4(fc * area, area);
-        }
-      }
-      if (out.sums) out.sums[v].encode(area_sum, qs);
-      if (colors) out.color_sums[v] = cs;
-      if (!scan) nn = mergeNeighbours(nbp, trip, nn, pairs);
-      // boundary: some neighbour is shared by only one incident triangle
-      bool boundary = false;
-      for (size_t j = 0; j < nn; ++j) boundary |= trip[j] == 1;
-      // the widest pair and the longest edge do not depend on the neighbours' order, except for the
-      // estimate of minPairDot on long lists, whose neighbours mergeNeighbours left in index order
-      size_t ndirs = 0;
-      float longest_v = 0.0f;
-      for (size_t j = 0; j < nn; ++j) {
-        const glm::vec3 d = pos[nbp[j]] - pv;
-        const float len = glm::length(d);
-        if (len > 0.0f) {
-          dirs[ndirs++] = d / len;
-          longest_v = std::max(longest_v, len);
-        }
-      }
-      range_longest = std::max(range_longest, longest_v);
-      finish(v, longest_v, ndirs > 0, ndirs > 0 ? minPairDot(dirs.data(), ndirs) : 1.0f, boundary,
-             [&] { return minPairDot(normals.data(), nnormals); });
+      const ScalarRow g = gradeRowScalar(mesh, incidence, b, e, v, colors, out, scratch);
+      range_longest = std::max(range_longest, g.longest);
+      finish(v, g.longest, g.any_dir, g.cos_dirs, g.boundary, [&] { return minPairDot(scratch.normals.data(), g.normals); });
     }
     // maxima and minima: the same whatever the split between threads
     std::lock_guard<std::mutex> lock(longest_mutex);
