@@ -151,9 +151,9 @@ constexpr double kMaxGridCoordinate = 1073741824.0;  // 2^30
 // The referenced positions in weight order: PreparedMesh::sorted_positions where it is kept, else
 // read through the order. A chain drops the sorted copy of a small mesh (kSortedCopyMinBytes), whose
 // positions a level's random reads find in cache: on the bunny it was 0.42 MB of its chain's peak,
-// which comes while the last levels assign. Read so by the uniform grid and the flat grids of short
-// heads (at most 65,535 vertices: every small mesh); the paths of large meshes keep streaming the
-// copy (a test per vertex there cost 3 % of the 1 M sphere's assignment instructions).
+// which comes while the last levels assign. Read so by the uniform grid and the floating cells'
+// flat grids of side w/2 (a test per vertex, always taken the same way); the grid of side w in
+// blocks and the hash, the paths of large meshes, stream the copy.
 struct PositionsByWeight {
   explicit PositionsByWeight(const PreparedMesh& p)
       : sorted(p.sorted_positions.empty() ? nullptr : p.sorted_positions.data()),

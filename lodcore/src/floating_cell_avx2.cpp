@@ -368,8 +368,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseAvx2T(const PreparedMesh& p, float
   const Locator loc(grid, cube_width, reach, lo_cube);
   const size_t* row_offset = loc.row_offset;
   const size_t n = p.order.size();
-  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
-  const glm::vec3* sorted = sortedPositions(p, local);
+  const PositionsByWeight sorted(p);  // (as in assignDenseT)
   // the next vertex's range and the offset of its first cube in the flat array, a vertex ahead
   Located ahead{};
   size_t ahead_offset = 0;
@@ -468,7 +467,7 @@ struct CachedRunInputs {
   const CandidateCache::Entry* entries;
   const uint32_t* cache_bricks;
   const uint16_t* slots;
-  const glm::vec3* positions;  // sorted
+  const glm::vec3* positions;  // sorted (kSorted) or indexed by the order
   const uint32_t* order;
   uint32_t* cluster_of;
   __m128 inv4, reach4, slack4;
@@ -486,7 +485,7 @@ struct CachedRunInputs {
 // to its cell (~100 cycles: the range, the brick, the slot, the centres, d^2, the reduction) over
 // the reorder window, not by its ~100 instructions; one vertex ahead, levels 4, 6 and 8 took
 // 0.51, 0.39 and 0.34 ms instead of 0.42-0.47, 0.32-0.34 and 0.28-0.29 (three ahead: no better).
-template <bool kCube, bool kNearest, typename CellRecord>
+template <bool kCube, bool kNearest, bool kSorted, typename CellRecord>
 SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const CachedRunInputs<CellRecord>& in, size_t i,
                                                                           size_t n) {
   const CellRecord* const cells = in.cells;
@@ -509,7 +508,7 @@ SCENELOD_FLOATING_AVX2_TARGET __attribute__((noinline)) size_t cachedRun(const C
   auto plan = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     Planned pl;
     pl.v = order[k];
-    pl.pv = &positions[k].x;
+    pl.pv = &positions[kSorted ? k : pl.v].x;
     // x, y from one 8-byte load (movq, unaligned-safe: _mm_load_sd would dereference a double* at a
     // float's alignment), z inserted (a 16-byte load could read past the positions)
     const __m128 pk = _mm_insert_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(pl.pv))),
@@ -576,8 +575,7 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
   // lane 3 of lo4 is not a coordinate: a stride of 0, a shift of 32 (0)
   const __m128i brick_stride4 = _mm_setr_epi32(1, int32_t(cache.brickStrideY()), int32_t(cache.brickStrideZ()), 0);
   const __m128i in_brick_shift4 = _mm_setr_epi32(0, 2, 4, 32);
-  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
-  const glm::vec3* sorted = sortedPositions(p, local);
+  const PositionsByWeight sorted(p);  // (as in assignDenseT)
   // vertex k's range and the place of its cube in the cache (cache.find with the three axes at once:
   // the scalar form took 30 instructions a vertex), a vertex ahead (as in assignDenseAvx2T; the
   // bricks themselves may be allocated meanwhile), or for the vertices cachedRun leaves. The first
@@ -601,14 +599,16 @@ SCENELOD_FLOATING_AVX2_TARGET void assignDenseCachedAvx2Impl(const PreparedMesh&
   // them), 6 of the ~190 instructions a vertex at the 1 M sphere's 1 % level
   const uint32_t* const order = p.order.data();
   uint32_t* const cluster_of = out.cluster_of.data();
-  CachedRunInputs<DenseGrid::Cell> run_in{nullptr, nullptr, cache_bricks, nullptr, sorted, order, cluster_of,
+  const bool by_order = sorted.sorted == nullptr;
+  CachedRunInputs<DenseGrid::Cell> run_in{nullptr, nullptr, cache_bricks, nullptr,
+                                          by_order ? sorted.positions : sorted.sorted, order, cluster_of,
                                           inv4, reach4, slack4, lo_cube4, brick_stride4, rule};
   // the vertices from k on that their entries settle; the first that needs more
   auto runFrom = [&](size_t k) SCENELOD_FLOATING_AVX2_TARGET {
     run_in.entries = cache.entries();
     run_in.cells = cells.data();
     run_in.slots = cache.slots();
-    return cachedRun<kCube, kNearest>(run_in, k, n);
+    return by_order ? cachedRun<kCube, kNearest, false>(run_in, k, n) : cachedRun<kCube, kNearest, true>(run_in, k, n);
   };
   // without runs (grids whose bricks' strides pass 15 bits, and a test's choice) as before them
   if (n > 0 && !kRuns) plan(0);

@@ -213,8 +213,8 @@ void assignDenseT(const PreparedMesh& p, float cube_width, float reach, const in
   const float inv = 1.0f / cube_width;
   const float slack = kSearchSlack * 2.0f * reach;  // the same fraction of a cell width
   const size_t n = p.order.size();
-  std::vector<glm::vec3> local;  // (the sorted copy, where a chain dropped it)
-  const glm::vec3* sorted = sortedPositions(p, local);
+  // through the order where a chain dropped a small mesh's sorted copy (no copy made per level)
+  const PositionsByWeight sorted(p);
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 pv = sorted[i];
     const glm::vec3 q = pv * inv;
