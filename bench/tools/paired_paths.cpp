@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
       {"AVX2 variants: whole level", detail::useAvx2Paths, level},
       {"repeated edge drop: elimination", detail::useRepeatedEdgeDrop, elimination},
       {"eigenvalue lanes: synthesis", detail::useEigenvalueLanes, synthesis},
+      {"grouped synthesis: synthesis", detail::useGroupedSynthesis, synthesis},
       {"floating AVX2: assignment", [](bool on) { return detail::setFloatingAvx2ForTest(on); }, assignment,
        detail::setFloatingAvx2ForTest != nullptr},
       {"candidate cache: assignment", [](bool on) { return detail::setFloatingCacheForTest(on); }, assignment,

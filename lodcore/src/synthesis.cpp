@@ -96,6 +96,19 @@ bool useEigenvalueLanes(bool on) {
 
 namespace {
 
+// whether synthesize takes the grouped pass at fine levels (off: the single pass at every level, the
+// reference the grouped pass is compared with)
+bool g_grouped = true;
+
+}  // namespace
+
+// (test_hooks.h)
+bool useGroupedSynthesis(bool on) {
+  return std::exchange(g_grouped, on);
+}
+
+namespace {
+
 // mean weights: the vertex weight plus this fraction of the heaviest weight, so that clusters of
 // flat vertices (weight 0, Low & Tan) still average instead of dividing by zero
 constexpr float kMeanWeightFloor = 0.05f;
@@ -333,7 +346,8 @@ SCENELOD_ALWAYS_INLINE Terms vertexTerms(const VertexArrays& in, size_t v, __m12
 }
 #endif
 
-// adds vertex v to its cluster's sums
+// adds vertex v to its cluster's sums (the single pass and the grouped one make the same
+// operations in the same order)
 SCENELOD_ALWAYS_INLINE void addVertex(const VertexArrays& in, size_t v, bool have_face_sums, bool quadric, Sums& s) {
 #if defined(__SSE2__)
   // the centre is loaded as 8 + 4 bytes: a 16-byte load would take in ws[0], which the previous
@@ -724,7 +738,7 @@ SCENELOD_ALWAYS_INLINE void solveQuadric4Body(const Sums* s, const glm::vec3* x0
     }
   }
 }
-// the baseline and the AVX2 variant (see synthesizeSingle); avx2 picks the latter
+// the baseline and the AVX2 variant (see synthesizeGrouped); avx2 picks the latter
 void solveQuadric4Sse2(const Sums* s, const glm::vec3* x0, glm::vec3* x) { solveQuadric4Body(s, x0, x); }
 SCENELOD_AVX2_TARGET void solveQuadric4Avx2(const Sums* s, const glm::vec3* x0, glm::vec3* x) {
   solveQuadric4Body(s, x0, x);
@@ -783,6 +797,184 @@ inline void finishColor(const glm::vec4& face_color, const glm::vec4& vertex_col
   else if (vertex_color.w > 0.0f) out = glm::vec3(vertex_color) / vertex_color.w;
 }
 
+// the clusters are summed one at a time, from a list of their vertices, where the per-cluster sums
+// of synthesize's single pass would take more than this per vertex (fine levels)
+constexpr size_t kGroupedSumsBytesPerVertex = 16;
+constexpr size_t kGroupedPrefetch = 8;
+
+#if defined(__SSE2__)
+// whether solveQuadric4 would find a zero residual in all four lanes, tested in floats without its
+// widening and transposes (about 150 instructions a group): a mean x0 of zeros (+-0), a linear part
+// b of zeros and a finite quadric A make every product a_ij x0_j +-0 in doubles, so r = -(+-0) == 0,
+// and the solve returns x0 (an infinite or NaN entry makes a_ij x 0 NaN: false, and the solve
+// decides). A one-vertex cluster has all three (its vertex is the centre); the normal sums in
+// lanes 6-8 are tested with A (finite for any face sums of finite area).
+SCENELOD_ALWAYS_INLINE bool zeroResiduals(const Sums* s, const glm::vec3* x0) {
+  const __m128 zero = _mm_setzero_ps();
+  __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  for (int k = 0; k < 4; ++k) {
+    const __m128 a03 = _mm_mul_ps(_mm_loadu_ps(s[k].q), zero), a47 = _mm_mul_ps(_mm_loadu_ps(s[k].q + 4), zero);
+    // (normal z, b0, b1, b2) with the normal's lane made 0
+    const __m128 b = _mm_move_ss(_mm_loadu_ps(s[k].q + 8), zero);
+    const __m128 x = _mm_movelh_ps(_mm_loadl_pi(zero, reinterpret_cast<const __m64*>(&x0[k].x)), _mm_load_ss(&x0[k].z));
+    all = _mm_and_ps(all, _mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(a03, zero), _mm_cmpeq_ps(a47, zero)),
+                                     _mm_and_ps(_mm_cmpeq_ps(b, zero), _mm_cmpeq_ps(x, zero))));
+  }
+  return _mm_movemask_ps(all) == 15;
+}
+#endif
+
+// the representatives, normals and colours of the four clusters ids[0..3] (heaviest vertices
+// h[0..3]) from their sums, stored for the first k_n (a short group's other lanes repeat its last
+// cluster): meanAndNormal4, the solve in lanes and the clamp, as the single pass finishes them
+template <bool avx2, bool colors, bool quadric, bool single>
+SCENELOD_ALWAYS_INLINE void finishGroup(const Sums* s, const float* weights, const uint32_t* h, const uint32_t* ids,
+                                        uint32_t k_n, const glm::vec4* face_color, const glm::vec4* vertex_color,
+                                        const Assignment& a, float half, bool mean, Representatives& out) {
+  glm::vec3 position[4], normal[4];
+#if defined(__SSE2__)
+  meanAndNormal4(s, weights, h, mean, quadric, position, normal);
+#else
+  for (uint32_t k = 0; k < 4; ++k) meanAndNormal(s[k], weights[h[k]], mean, quadric, position[k], normal[k]);
+#endif
+  if (quadric) {
+#if defined(__SSE2__)
+    glm::vec3 x[4];  // solved, then clamped below; a short group's unused lanes are solved too (as x0)
+    if (!single || !zeroResiduals(s, position)) solveQuadric4<avx2>(s, position, x);
+    else std::copy(position, position + 4, x);
+    clampToCell4(s, x, a, half, position);
+#else
+    for (uint32_t k = 0; k < 4; ++k) position[k] = quadricRepresentative(s[k], position[k], a, half);
+#endif
+  }
+  // a fixed count, each cluster under a test that only the last group fails (a loop to k_n
+  // mispredicted its exit once per group)
+#pragma GCC unroll 4
+  for (uint32_t k = 0; k < 4; ++k) {
+    if (k >= k_n) break;
+    const uint32_t c = ids[k];
+    out.positions[c] = position[k];
+    out.normals[c] = normal[k];
+    if (colors) finishColor(face_color[k], vertex_color[k], out.colors[c]);
+  }
+}
+
+// synthesize at fine levels, where its per-cluster sums (92 bytes each: 46 per vertex at a level of
+// half the triangles) were the largest array of a level: the vertices are listed by cluster (a
+// stable counting sort, 4 bytes per vertex and per cluster) and clusters are summed four at a time
+// in locals and finished with the single pass's functions (meanAndNormal4 included), each cluster's
+// vertices in index order, so the results are bit-identical. At coarse levels the single pass is
+// faster (its sums stay in cache while this reads the vertex arrays out of order).
+// Clusters of one vertex (the bunny's 50 % level: 5,604 of 17,342) are summed apart, four at a
+// time, from their heaviest vertex (every cluster is made by its heaviest vertex, so it is the one):
+// they are not listed, and a group of four has a zero residual in every lane, which the solve
+// returns before its full-rank test and eigenvalues (about 580 instructions a group). The same
+// sums and the same functions per cluster, only grouped differently, and the lanes are
+// independent: the same bits.
+// The flags (colours, quadric synthesis, face sums present) are template arguments: tested per
+// vertex, they were a few instructions of a vertex's 90 or so.
+template <bool avx2, bool colors, bool quadric, bool have_face_sums>
+SCENELOD_ALWAYS_INLINE void synthesizeGroupedBody(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                  Representatives& out) {
+  const Mesh& m = *p.mesh;
+  const uint32_t nc = a.cluster_count;
+  const VertexArrays in = vertexArrays(p);
+  const glm::vec3* pos = in.pos;
+  const size_t vn = m.vertexCount();
+  const uint32_t* cluster_of = a.cluster_of.data();
+  // first[c + 1]: cluster c's vertex count; then first[c]: where c's vertices start in `members`
+  std::vector<uint32_t> first(size_t(nc) + 1, 0);
+  // counted without a test: an unreferenced vertex (kNone + 1 wraps to 0) counts in first[0], unread
+#pragma GCC unroll 4
+  for (size_t v = 0; v < vn; ++v) ++first[uint32_t(cluster_of[v] + 1)];
+  // the clusters in the order they are summed: those of two or more vertices in id order, then
+  // those of one from the back (in reverse id order); the one-vertex clusters' cursor is members[0],
+  // a spare entry each writes once, and the others' lists start at 1. No branch: a third of the
+  // clusters have one vertex, spread out.
+  std::unique_ptr<uint32_t[]> order(new uint32_t[nc]);  // every entry is written: not zeroed
+  uint32_t listed = 1, multi_count = 0, back = nc;
+  for (uint32_t c = 0; c < nc; ++c) {
+    const uint32_t n = first[c + 1];
+    const uint32_t multi = n != 1, keep = 0u - multi;  // all ones for a listed cluster
+    first[c] = listed & keep;
+    listed += n & keep;
+    back -= 1 - multi;
+    order[multi ? multi_count : back] = c;
+    multi_count += multi;
+  }
+  const size_t member_count = listed;
+  std::unique_ptr<uint32_t[]> members(new uint32_t[member_count]);  // every entry is written below: not zeroed
+  for (size_t v = 0; v < vn; ++v)
+    if (cluster_of[v] != kNone) members[first[cluster_of[v]]++] = static_cast<uint32_t>(v);
+  // now first[c] is where a listed cluster c's vertices end
+  const float half = 0.5f * a.cell_width;
+  const uint32_t* heaviest = a.heaviest.data();
+  Sums s[4] = {Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f)), Sums(glm::vec3(0.0f))};
+  glm::vec4 face_color[4], vertex_color[4];
+  // Four listed clusters at a time: their vertices are one run of `members`, each added to its
+  // cluster's sums (the slot from the four ends, no branch on a cluster's end, which a short,
+  // varying list mispredicts), then the four are finished in lanes as the single pass does.
+  uint32_t begin = 1;
+  for (uint32_t g = 0; g < multi_count; g += 4) {
+    const uint32_t k_n = std::min<uint32_t>(4, multi_count - g);  // fewer in the last group
+    // the centres are read out of order too: fetch those of the group after next
+    if (g + 12 <= multi_count)
+      for (uint32_t k = 8; k < 12; ++k) __builtin_prefetch(&pos[heaviest[order[g + k]]]);
+    uint32_t ids[4], h[4], e[4];
+    for (uint32_t k = 0; k < 4; ++k) {
+      ids[k] = order[g + std::min(k, k_n - 1)];  // a short group repeats its last cluster (unused lanes)
+      e[k] = first[ids[k]];
+      h[k] = heaviest[ids[k]];
+      s[k].reset(pos[h[k]]);
+      face_color[k] = vertex_color[k] = glm::vec4(0.0f);
+    }
+    const uint32_t end = e[3];
+    // the slot steps on at each end (a listed cluster has at least two vertices: never two steps at
+    // once): one compare and add a vertex, where three compares against the ends took six instructions
+    uint32_t k = 0;
+    for (uint32_t j = begin; j < end; ++j) {
+      // the vertex arrays are read out of order here: fetch those of a vertex a few ahead
+      const uint32_t ahead = members[std::min<size_t>(j + kGroupedPrefetch, member_count - 1)];
+      if (have_face_sums) __builtin_prefetch(&in.face_sums[ahead]);
+      __builtin_prefetch(&pos[ahead]);
+      __builtin_prefetch(&in.weights[ahead]);
+      const uint32_t v = members[j];
+      k += uint32_t(j >= e[k]);
+      addVertex(in, v, have_face_sums, quadric, s[k]);
+      if (colors) {
+        face_color[k] += in.face_colors[v];
+        vertex_color[k] += glm::vec4(in.colors[v], 1.0f);
+      }
+    }
+    begin = end;
+    finishGroup<avx2, colors, quadric, false>(s, in.weights, h, ids, k_n, face_color, vertex_color, a, half, mean, out);
+  }
+  // the one-vertex clusters, four at a time: each its heaviest vertex
+  for (uint32_t g = multi_count; g < nc; g += 4) {
+    const uint32_t k_n = std::min<uint32_t>(4, nc - g);
+    if (g + 12 <= nc)
+      for (uint32_t k = 8; k < 12; ++k) {
+        const uint32_t v = heaviest[order[g + k]];
+        if (have_face_sums) __builtin_prefetch(&in.face_sums[v]);
+        __builtin_prefetch(&pos[v]);
+        __builtin_prefetch(&in.weights[v]);
+      }
+    uint32_t ids[4], h[4];
+    for (uint32_t k = 0; k < 4; ++k) {
+      ids[k] = order[g + std::min(k, k_n - 1)];
+      h[k] = heaviest[ids[k]];
+      s[k].reset(pos[h[k]]);
+      addVertex(in, h[k], have_face_sums, quadric, s[k]);  // (a repeated lane's sums are not stored)
+      if (colors) {
+        // added to zeros as the listed clusters' are (+0 + x is x but for x = -0)
+        face_color[k] = glm::vec4(0.0f) + in.face_colors[h[k]];
+        vertex_color[k] = glm::vec4(0.0f) + glm::vec4(in.colors[h[k]], 1.0f);
+      }
+    }
+    finishGroup<avx2, colors, quadric, true>(s, in.weights, h, ids, k_n, face_color, vertex_color, a, half, mean, out);
+  }
+}
+
 // The clusters are numbered in the assignment's order (by weight), not in space, so the single
 // pass reads its sums at random: where they outgrow the caches (the 1 M sphere's 10 % level: 50 k
 // clusters, 4.7 MB) that was most of its time. There the first two lines (of two or three) of the
@@ -814,8 +1006,7 @@ SCENELOD_ALWAYS_INLINE void prefetchStreams(const VertexArrays& in, size_t v, bo
   __builtin_prefetch(reinterpret_cast<const void*>(reinterpret_cast<uintptr_t>(in.pos) + ahead * sizeof(glm::vec3)));
 }
 
-// synthesize's single pass over the vertices, with its flags (colours, quadric synthesis, face sums
-// present) as template arguments: tested per vertex, they were a few instructions of a vertex's 90
+// synthesize's single pass over the vertices, with its flags as template arguments (as above)
 template <bool colors, bool quadric, bool have_face_sums>
 SCENELOD_ALWAYS_INLINE void sumVerticesBody(const VertexArrays& arrays, const uint32_t* cluster_of, size_t vn,
                                             size_t nc, Sums* sums, glm::vec4* face_color, glm::vec4* vertex_color) {
@@ -840,10 +1031,19 @@ SCENELOD_ALWAYS_INLINE void sumVerticesBody(const VertexArrays& arrays, const ui
   }
 }
 
-// synthesize's single pass and its finish, twice: as the baseline (SSE2) and, chosen at run time, the
-// same source compiled for AVX2 (its three-operand forms spare the register copies of the
-// two-operand SSE2 code: about a fifth of the pass's instructions); without FMA, so the same
-// operations and the same bits
+// each pass twice: as the baseline (SSE2) and, chosen at run time, the same source compiled for AVX2
+// (its three-operand forms spare the register copies of the two-operand SSE2 code: about a fifth of
+// the single pass's instructions); without FMA, so the same operations and the same bits
+template <bool colors, bool quadric, bool have_face_sums>
+void synthesizeGrouped(const PreparedMesh& p, const Assignment& a, bool mean, Representatives& out) {
+  synthesizeGroupedBody<false, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+template <bool colors, bool quadric, bool have_face_sums>
+SCENELOD_AVX2_TARGET void synthesizeGroupedAvx2(const PreparedMesh& p, const Assignment& a, bool mean,
+                                                Representatives& out) {
+  synthesizeGroupedBody<true, colors, quadric, have_face_sums>(p, a, mean, out);
+}
+// synthesize's single pass (below the grouped test) and its finish
 template <bool avx2, bool colors, bool quadric, bool have_face_sums>
 SCENELOD_ALWAYS_INLINE void synthesizeSingleBody(const PreparedMesh& p, const Assignment& a, bool mean,
                                                  Representatives& out) {
@@ -928,6 +1128,11 @@ void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis,
   const bool quadric = synthesis == Synthesis::kQuadric;
   const bool mean = synthesis != Synthesis::kHeaviest;
   const bool have_face_sums = p.face_sums.size() == m.vertexCount();
+  if (g_grouped && size_t(nc) * sizeof(Sums) > kGroupedSumsBytesPerVertex * m.vertexCount()) {
+    if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeGroupedAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
+    else SCENELOD_SYNTHESIS_INSTANCE(synthesizeGrouped, colors, quadric, have_face_sums)(p, a, mean, out);
+    return;
+  }
   if (avx2Paths()) SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingleAvx2, colors, quadric, have_face_sums)(p, a, mean, out);
   else SCENELOD_SYNTHESIS_INSTANCE(synthesizeSingle, colors, quadric, have_face_sums)(p, a, mean, out);
 }

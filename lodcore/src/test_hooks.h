@@ -26,6 +26,9 @@ bool useEigenvalueLanes(bool on);
 // elimination.cpp: dropping the collapsed triangles whose cluster pair or point repeats the one
 // before (on, the default) or looking every one up (off, the reference)
 bool useRepeatedEdgeDrop(bool on);
+// synthesis.cpp: the grouped pass of fine levels, whose sums take less memory than the single
+// pass's (on, the default), or the single pass at every level (off, the reference)
+bool useGroupedSynthesis(bool on);
 // normals.cpp: the output pass without its shortcuts (on; off is the default)
 bool useOutputReference(bool on);
 // cluster_mesh.cpp: the renumbering of a level's clusters in space: -1 by size (the default), 0
