@@ -29,12 +29,13 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 
 using namespace scenelod;
 using Clock = std::chrono::steady_clock;
 
 namespace scenelod::detail {
-// floating_cell_cluster.cpp's switches (see tests/lodcore/floating_cell_test.cpp), weak so that the
+// floating_cell_cluster.cpp's switches (test_hooks.h), declared again weak so that the
 // tool still links against the libraries of builds older than them (scripts/level-phases OTHER_BUILD)
 __attribute__((weak)) int setFloatingBlockBricksForTest(int mode);
 __attribute__((weak)) int lastFloatingGridForTest();

@@ -3,8 +3,9 @@
 // machine fall on both sides alike; prints per path the minima and the median and quartiles of the
 // per-pair ratios time off / time on (above 1: the path helps on this machine). The paths are the
 // library's private test hooks, each of which gives the same bits on and off (tests compare them), so
-// this only asks which is faster where. Built and run by scripts/paired-paths against a build's
-// libscenelod_core.a. Not a unit test: it times.
+// this only asks which is faster where; a path the level does not take (the candidate cache at
+// fine levels, the bricked grid where flat heads fit) measures about 1. Built and run by
+// scripts/paired-paths against a build's libscenelod_core.a. Not a unit test: it times.
 // Usage: paired_paths bunny|sphere1M FRACTION PAIRS [NAME]   (FRACTION of the triangles kept, e.g.
 // 0.5; NAME: only the paths whose name contains it)
 #include <algorithm>
@@ -20,15 +21,15 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
-// private test hooks (lodcore/src/elimination.cpp, synthesis.cpp): each returns the previous choice
-bool useEdgeBlocks(bool on);
-bool useWindowedProbes(bool on);
-bool useRepeatedEdgeDrop(bool on);
-bool useEigenvalueLanes(bool on);
-bool useGroupedSynthesis(bool on);
-int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
+// the floating cells' switches (test_hooks.h), declared again weak so that the tool still links
+// against the libraries of builds older than them (their rows are then skipped)
+__attribute__((weak)) bool setFloatingAvx2ForTest(bool on);
+__attribute__((weak)) bool setFloatingCacheForTest(bool on);
+__attribute__((weak)) int setFloatingCacheRunsForTest(int runs);
+__attribute__((weak)) int setFloatingBlockBricksForTest(int mode);
 }  // namespace scenelod::detail
 
 using namespace scenelod;
@@ -45,6 +46,7 @@ struct Path {
   const char* name;
   bool (*hook)(bool);
   std::function<void()> run;
+  bool built = true;  // false: this build's library has no such switch
 };
 
 }  // namespace
@@ -93,6 +95,10 @@ int main(int argc, char** argv) {
     Mesh out;
     clusterPrepared(p, params, out);
   };
+  auto assignment = [&] {
+    detail::Assignment as;
+    detail::assignFloating(p, params.cell_width, params.cell_shape, params.method == LodMethod::kFloatingNearest, as);
+  };
   auto prepare = [&] {
     PreparedMesh q;
     prepareMesh(m, params, q);
@@ -103,18 +109,25 @@ int main(int argc, char** argv) {
       {"AVX2 variants: output pass", detail::useAvx2Paths, output},
       {"AVX2 variants: prepare", detail::useAvx2Paths, prepare},
       {"AVX2 variants: whole level", detail::useAvx2Paths, level},
-      {"edge blocks: elimination", detail::useEdgeBlocks, elimination},
-      {"windowed probes: elimination", detail::useWindowedProbes, elimination},
       {"repeated edge drop: elimination", detail::useRepeatedEdgeDrop, elimination},
       {"eigenvalue lanes: synthesis", detail::useEigenvalueLanes, synthesis},
       {"grouped synthesis: synthesis", detail::useGroupedSynthesis, synthesis},
+      {"floating AVX2: assignment", [](bool on) { return detail::setFloatingAvx2ForTest(on); }, assignment,
+       detail::setFloatingAvx2ForTest != nullptr},
+      {"candidate cache: assignment", [](bool on) { return detail::setFloatingCacheForTest(on); }, assignment,
+       detail::setFloatingCacheForTest != nullptr},
+      {"cache runs: assignment", [](bool on) { return detail::setFloatingCacheRunsForTest(on ? -1 : 0) != 0; },
+       assignment, detail::setFloatingCacheRunsForTest != nullptr},
+      // on: the default (the bricked grid of side w where it fits), off: the hash
+      {"bricked grid: assignment", [](bool on) { return detail::setFloatingBlockBricksForTest(on ? -1 : 0) != 0; },
+       assignment, detail::setFloatingBlockBricksForTest != nullptr},
       // last: the hook(true) after each pair leaves it on always, not by size as by default
       {"renumbering: whole level", [](bool on) { return detail::setRenumberingForTest(on ? 1 : 0) != 0; }, level},
   };
   std::printf("%s, %zu of %zu triangles' width (%.9g), %d pairs; ratio = time off / time on\n", argv[1], target,
               m.triangleCount(), params.cell_width, pairs);
   for (const Path& path : paths) {
-    if (argc == 5 && !std::strstr(path.name, argv[4])) continue;
+    if (!path.built || (argc == 5 && !std::strstr(path.name, argv[4]))) continue;
     std::vector<double> ratio, on_ms, off_ms;
     for (int i = 0; i < pairs; ++i) {
       double t[2] = {0.0, 0.0};  // on, off

@@ -22,6 +22,7 @@
 #include <tbb/task_group.h>
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 #include "scenelod/lodcore/scrooge.h"
 #include "scenelod/lodcore/zhang.h"
 
@@ -47,8 +48,7 @@ namespace {
 std::atomic<int> g_speculation{1};
 }  // namespace
 
-// private test hook (declared by tests/lodcore/chain_test.cpp): the speculation's mode for every
-// later chain; returns the previous mode
+// (test_hooks.h)
 int setChainSpeculationForTest(int mode) { return g_speculation.exchange(mode); }
 }  // namespace detail
 

@@ -151,9 +151,9 @@ constexpr double kMaxGridCoordinate = 1073741824.0;  // 2^30
 // The referenced positions in weight order: PreparedMesh::sorted_positions where it is kept, else
 // read through the order. A chain drops the sorted copy of a small mesh (kSortedCopyMinBytes), whose
 // positions a level's random reads find in cache: on the bunny it was 0.42 MB of its chain's peak,
-// which comes while the last levels assign. Read so by the uniform grid and the flat grids of short
-// heads (at most 65,535 vertices: every small mesh); the paths of large meshes keep streaming the
-// copy (a test per vertex there cost 3 % of the 1 M sphere's assignment instructions).
+// which comes while the last levels assign. Read so by the uniform grid and the floating cells'
+// flat grids of side w/2 (a test per vertex, always taken the same way); the grid of side w in
+// blocks and the hash, the paths of large meshes, stream the copy.
 struct PositionsByWeight {
   explicit PositionsByWeight(const PreparedMesh& p)
       : sorted(p.sorted_positions.empty() ? nullptr : p.sorted_positions.data()),
@@ -189,12 +189,10 @@ struct Representatives {
 };
 void synthesize(const PreparedMesh& p, const Assignment& a, Synthesis synthesis, Representatives& out);
 
-// synthesis.cpp: whether synthesize and buildOutputMesh run their AVX2 variants (the same source
-// compiled for AVX2 without FMA, so the same bits): where the CPU has AVX2. useAvx2Paths picks them
-// (on, where the CPU has AVX2) or the baseline ones for every later call and returns the previous
-// choice: for tests comparing the two (tests/lodcore/cluster_test.cpp declares it); not thread-safe.
+// synthesis.cpp: whether synthesize, buildOutputMesh and the grading run their AVX2 variants (the
+// same source compiled for AVX2 without FMA, so the same bits): where the CPU has AVX2, unless the
+// test hook useAvx2Paths (test_hooks.h) turned them off.
 bool avx2Paths();
-bool useAvx2Paths(bool on);
 
 // x86: the attribute of the AVX2 variants (elsewhere they compile as plain copies, never chosen)
 #if defined(__x86_64__) || defined(__i386__)

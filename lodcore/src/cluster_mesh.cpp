@@ -11,6 +11,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod {
 
@@ -115,7 +116,7 @@ void renumberByFirstVertex(Assignment& a) {
   a.heaviest.swap(heaviest);
 }
 
-// the test hook: mode -1 renumbers by size (the default), 0 never, 1 always; returns the previous mode
+// (test_hooks.h)
 int setRenumberingForTest(int mode) { return g_renumber.exchange(mode < 0 ? -1 : mode > 0 ? 1 : 0); }
 
 Error assign(const PreparedMesh& p, const ClusterParams& params, Assignment& a) {

@@ -8,22 +8,18 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <type_traits>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
 
-// x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts and the
-// coverage pass's lookups in lanes
+// x86: AVX2 with POPCNT (cpuHasAvx2 checks both), for the lists' counts
 #if defined(__x86_64__) || defined(__i386__)
 #define SCENELOD_ELIMINATION_AVX2_TARGET __attribute__((target("avx2,popcnt")))
 #else
@@ -33,77 +29,23 @@ namespace scenelod::detail {
 namespace {
 inline uint32_t branchlessMin(uint32_t a, uint32_t b) { return b ^ ((a ^ b) & (0u - uint32_t(a < b))); }
 
-// Candidate edges listed under their lower cluster id. Where the clusters are few enough (below),
-// a cluster's first four edges are kept inline in a 16-byte block (16-bit ids: blocks are used only
-// below 2^15 clusters), their other ids compared at once, so that a lookup is one block read and a
-// branch that is taken only for a new edge (the walk of a list mispredicted about once per lookup
-// at coarse levels, where a low id heads several edges); later edges, edges whose id does not fit
-// 16 bits, and all edges where the blocks would be too large, are chained through flat arrays
-// under a 4-byte head per cluster (a walk of a node or two that a nearby input triangle wrote
-// recently: the input order is spatially coherent, the cluster ids are not). With blocks the heads
-// are made when the first edge is chained (each of the bunny's levels chains a few). The blocks, 32
-// bytes per cluster with 32-bit ids, were the largest part of the bunny chain's memory peak (its 50 %
-// level's elimination: 0.54 MB of 3.53).
+// Candidate edges listed under their lower cluster id, chained through flat arrays under a 4-byte
+// head per cluster (a walk of a node or two that a nearby input triangle wrote recently: the input
+// order is spatially coherent, the cluster ids are not).
 class EdgeLists {
  public:
-  EdgeLists(size_t clusters, bool use_blocks) : clusters_(clusters) {
-    if (use_blocks) blocks_.assign(clusters, Block{{kFree, kFree, kFree, kFree}, {kFree, kFree, kFree, kFree}});
-    else head_.assign(clusters, kNoNode);
+  explicit EdgeLists(size_t clusters) : head_(clusters, kNoNode) {
     node_hi_.reset(new uint32_t[1]);
     node_next_.reset(new uint32_t[1]);
     node_hi_[0] = kNone;  // node 0: the end of every list (its hi matches no cluster)
     node_next_[0] = kNoNode;
-    if (use_blocks) {
-      node_id_.reset(new uint32_t[1]);
-      node_id_[0] = kNone;
-    }
   }
-  // the id of edge (lo, hi), lo < hi, or kNone
-  SCENELOD_ALWAYS_INLINE uint32_t find(uint32_t lo, uint32_t hi) const {
-    if (blocks_.empty()) return walkNodes(lo, hi) - 1;  // (every edge chained, the heads made; node 0: kNone)
-    swapOwner(lo, hi);
-    const Block& b = blocks_[lo];
-#if defined(__SSE2__)
-    const __m128i eq = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                       _mm_set1_epi16(static_cast<short>(hi)));
-    const uint32_t found = uint32_t(_mm_movemask_epi8(eq)) & 0x55u;  // bit 2k: entry k
-#else
-    uint32_t found = 0;
-    for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << (2 * k);
-#endif
-    // without a branch: the id when found inline, else kNone
-    const uint32_t id = uint32_t(b.id[__builtin_ctz(found | 0x40u) >> 1]) | (0u - uint32_t(found == 0));
-    // not found in a full block (or once some edge's id went past 16 bits): the rest are chained
-    // (one test, rarely taken)
-    if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(long_ids_)))
-      return head_.empty() ? kNone : walkBeyondBlock(lo, hi);  // (none chained yet)
-    return id;
-  }
-  // covered[min(find(edge), en)] = 1 for the three edges of each of the n triangles (each listed
-  // with its lowest id first: the min of a pair is then one select). find's work with the members
-  // read once: as find in a loop, each byte store may alias them, and the block array, the flags and
-  // the triangles' pointer were read again for every lookup.
-  // With avx2 (blocks only), eight triangles at a time in lanes (markCoveredInBlocksAvx2), the rest
-  // as below.
-  void markCovered(const uint32_t* tri, size_t n, uint8_t* __restrict covered, uint32_t en, bool avx2) const {
-    if (blocks_.empty()) {
-      for (size_t t = 0; t < 3 * n; t += 3) {
-        const uint32_t c0 = tri[t], c1 = tri[t + 1], c2 = tri[t + 2];
-        const uint32_t b = branchlessMin(c1, c2);
-        covered[branchlessMin(walkNodes(c0, c1) - 1, en)] = 1;
-        covered[branchlessMin(walkNodes(b, c1 ^ c2 ^ b) - 1, en)] = 1;
-        covered[branchlessMin(walkNodes(c0, c2) - 1, en)] = 1;
-      }
-      return;
-    }
-    markCoveredWithBlocks(tri, n, covered, en, avx2);
-  }
-  // whether every edge is chained (no blocks): findOrAdd's case
-  bool chained() const { return blocks_.empty(); }
-  // Without blocks: the id of edge (lo, hi), lo < hi; an edge not listed yet is listed as `id` (the
-  // count of edges so far), which is returned. Without a branch on which: the new node is written
-  // whatever and linked only for a new edge (a branch on it mispredicted: 1 M sphere 10 %, 135 k
-  // times, a quarter of the collapsed triangles' lookups making an edge).
+  // the id of edge (lo, hi), lo < hi, or kNone (kNoNode - 1)
+  SCENELOD_ALWAYS_INLINE uint32_t find(uint32_t lo, uint32_t hi) const { return walkNodes(lo, hi) - 1; }
+  // The id of edge (lo, hi), lo < hi; an edge not listed yet is listed as `id` (the count of edges
+  // so far), which is returned. Without a branch on which: the new node is written whatever and
+  // linked only for a new edge (a branch on it mispredicted: 1 M sphere 10 %, 135 k times, a quarter
+  // of the collapsed triangles' lookups making an edge).
   SCENELOD_ALWAYS_INLINE uint32_t findOrAdd(uint32_t lo, uint32_t hi, uint32_t id) {
     const uint32_t node = id + 1;
     if (node >= node_room_) growNodes();
@@ -116,235 +58,8 @@ class EdgeLists {
     head_[lo] = head ^ ((node ^ head) & made);
     return (found ^ ((node ^ found) & made)) - 1;
   }
-  // With blocks: findOrAdd's contract. The block's entry is written whatever, a found edge's over
-  // itself, a new one's into the first free entry; only a lookup that must go past the block (not
-  // found in a full block, ids past 16 bits) takes a branch, rarely taken. (find, then add where not
-  // found: that branch mispredicted at bunny 50 %, 15 k times for 34 k lookups, half of which make an
-  // edge.)
-  SCENELOD_ALWAYS_INLINE uint32_t findOrAddInBlock(uint32_t lo, uint32_t hi, uint32_t id) {
-    uint32_t owner = lo, other = hi;
-    swapOwner(owner, other);
-    Block& b = blocks_[owner];
-#if defined(__SSE2__)
-    const __m128i his = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi));
-    const uint32_t eq = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(his, _mm_set1_epi16(static_cast<short>(other)))));
-    const uint32_t free = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi16(his, _mm_set1_epi16(static_cast<short>(kFree)))));
-    const uint32_t found = eq & 0x55u, room = free & 0x55u;  // bit 2k: entry k
-#else
-    uint32_t found = 0, room = 0;
-    for (int k = 0; k < 4; ++k) {
-      found |= uint32_t(b.hi[k] == other) << (2 * k);
-      room |= uint32_t(b.hi[k] == kFree) << (2 * k);
-    }
-#endif
-    if ((0u - uint32_t(found == 0)) & (uint32_t(room == 0) | uint32_t(long_ids_) | uint32_t(id >= kFree)))
-      return findOrAddBeyondBlock(lo, hi, id);
-    const int k = __builtin_ctz(found | room) >> 1;  // found, or the first free entry
-    // (by index: as a select or masks, the compiler made it a branch, mispredicted as often as before)
-    const uint32_t pick[2] = {id, b.id[k]};
-    const uint32_t e = pick[found != 0];
-    // a found edge's entry is written to a spare block instead: written over itself, the block's next
-    // lookup (the next triangle's, at coarse levels, where most lookups find their edge) waited on
-    // the narrow stores (bunny 2 %, eliminate 0.31 -> 0.42 ms)
-    Block* const dst[2] = {&b, &spare_};
-    dst[found != 0]->hi[k] = static_cast<uint16_t>(other);
-    dst[found != 0]->id[k] = static_cast<uint16_t>(e);
-    return e;
-  }
-  // lists edge `id` = (lo, hi), not listed yet (with blocks)
-  void add(uint32_t lo, uint32_t hi, uint32_t id) {
-    if (!blocks_.empty()) {  // (else findOrAdd)
-      swapOwner(lo, hi);
-      Block& b = blocks_[lo];
-      if (id < kFree) {
-        // the first free entry without a branch per entry (the loop's exit mispredicted: bunny 50 %,
-        // 8.5 k of the level's 44.8 k mispredicts)
-#if defined(__SSE2__)
-        const __m128i free = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                             _mm_set1_epi16(static_cast<short>(kFree)));
-        const uint32_t room = uint32_t(_mm_movemask_epi8(free)) & 0x55u;  // bit 2k: entry k free
-#else
-        uint32_t room = 0;
-        for (int k = 0; k < 4; ++k) room |= uint32_t(b.hi[k] == kFree) << (2 * k);
-#endif
-        if (room) {
-          const int k = __builtin_ctz(room) >> 1;
-          b.hi[k] = static_cast<uint16_t>(hi);
-          b.id[k] = static_cast<uint16_t>(id);
-          return;
-        }
-      } else {
-        long_ids_ = true;
-      }
-      if (head_.empty()) head_.assign(clusters_, kNoNode);
-    }
-    const uint32_t node = node_count_++;
-    if (node >= node_room_) growNodes();
-    node_hi_[node] = hi;
-    node_id_[node] = id;
-    node_next_[node] = head_[lo];
-    head_[lo] = node;
-  }
 
  private:
-  // with blocks, an edge is listed under its lower id when the ids' sum is odd, else under the
-  // higher one: the lowest ids (the heaviest clusters) would otherwise head all their edges,
-  // overfilling blocks. Without blocks the lower id is kept (on the 1 M sphere's 10 % level the
-  // parity made the walks slower: 14.5 -> 18 ms)
-  static void swapOwner(uint32_t& lo, uint32_t& hi) {
-    const uint32_t flip = (((lo ^ hi) & 1u) - 1u) & (lo ^ hi);  // lo ^ hi when the sum is even
-    lo ^= flip;
-    hi ^= flip;
-  }
-  // markCovered with blocks (out of line: inlined, the chained loop above took 0.2 M instructions
-  // more on the 1 M sphere's 10 % level, 8.59 -> 8.80 M)
-  __attribute__((noinline)) void markCoveredWithBlocks(const uint32_t* tri, size_t n, uint8_t* __restrict covered,
-                                                       uint32_t en, bool avx2) const {
-    size_t done = 0;
-    if (avx2) done = long_ids_ ? markCoveredInBlocksAvx2<true>(tri, n, covered, en)
-                               : markCoveredInBlocksAvx2<false>(tri, n, covered, en);
-    if (long_ids_) markCoveredInBlocks<true>(tri + 3 * done, n - done, covered, en);
-    else markCoveredInBlocks<false>(tri + 3 * done, n - done, covered, en);
-  }
-  // markCovered with blocks; kLongIds: long_ids_ (a test per lookup otherwise, though it is nearly
-  // always false)
-  template <bool kLongIds>
-  void markCoveredInBlocks(const uint32_t* tri, size_t n, uint8_t* __restrict covered, uint32_t en) const {
-    const Block* const blocks = blocks_.data();
-    const bool chained_any = !head_.empty();
-    // find's result where it is an edge id, else en (not kNone: then no clamp on the common path)
-    auto lookup = [&](uint32_t lo, uint32_t hi) __attribute__((always_inline)) {
-      swapOwner(lo, hi);
-      const Block& b = blocks[lo];
-#if defined(__SSE2__)
-      const __m128i eq = _mm_cmpeq_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b.hi)),
-                                         _mm_set1_epi16(static_cast<short>(hi)));
-      const uint32_t found = uint32_t(_mm_movemask_epi8(eq)) & 0x55u;
-#else
-      uint32_t found = 0;
-      for (int k = 0; k < 4; ++k) found |= uint32_t(b.hi[k] == hi) << (2 * k);
-#endif
-      const uint32_t id = b.id[__builtin_ctz(found | 0x40u) >> 1];
-      // one test, as in find (as two, the block's fill mispredicted: chain level 2, 14.5 k -> 23.1 k
-      // simulated mispredicts)
-      if ((0u - uint32_t(found == 0)) & (uint32_t(b.hi[3] != kFree) | uint32_t(kLongIds)))
-        return chained_any ? branchlessMin(walkBeyondBlock(lo, hi), en) : en;
-      return found ? id : en;
-    };
-    for (size_t t = 0; t < 3 * n; t += 3) {
-      const uint32_t c0 = tri[t], c1 = tri[t + 1], c2 = tri[t + 2];
-      const uint32_t b = branchlessMin(c1, c2);
-      covered[lookup(c0, c1)] = 1;
-      covered[lookup(b, c1 ^ c2 ^ b)] = 1;
-      covered[lookup(c0, c2)] = 1;
-    }
-  }
-#if defined(__x86_64__) || defined(__i386__)
-  // markCoveredInBlocks for the first multiple of 8 of the n triangles, whose count it returns.
-  // Eight triangles' corners go into columns (as in classifyAvx2), then each of the three edges'
-  // eight lookups: the owner swapped in lanes, and for four lookups at a time the blocks' hi and id
-  // halves gathered as 64-bit words (index 2 x owner, signed 32 bits: blocks are used below 2^15
-  // clusters), the other id compared in each 16-bit entry, the id found picked with the compare's
-  // mask and shifts (a block's other ids are distinct: at most one entry matches).
-  // A lookup that must go past its block (not found in a full block, or any not found with kLongIds)
-  // is done as in find, one test per four lookups. The stores are scalar; each writes a 1, so their
-  // order is free. (The scalar pass: about 40 instructions a lookup, 4.18 M of the bunny 50 % level's
-  // 14.45 M.)
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET size_t markCoveredInBlocksAvx2(const uint32_t* tri, size_t n,
-                                                                  uint8_t* __restrict covered, uint32_t en) const {
-    static_assert(offsetof(Block, hi) == 0 && offsetof(Block, id) == 8, "a block's two 64-bit halves");
-    const long long* const words = reinterpret_cast<const long long*>(blocks_.data());  // block c: 2c hi, 2c + 1 id
-    const bool chained_any = !head_.empty();
-    const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
-    const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
-    const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
-    size_t t = 0;
-    for (; t + 8 <= n; t += 8) {
-      const uint32_t* v = tri + 3 * t;
-      const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v));
-      const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 8));
-      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(v + 16));
-      const __m256i c0 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x92), c, 0x24), order0);
-      const __m256i c1 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x24), c, 0x49), order1);
-      const __m256i c2 = _mm256_permutevar8x32_epi32(_mm256_blend_epi32(_mm256_blend_epi32(a, b, 0x49), c, 0x92), order2);
-      // c0 is each triangle's lowest id
-      cover8<kLongIds>(words, chained_any, covered, en, c0, c1);
-      cover8<kLongIds>(words, chained_any, covered, en, _mm256_min_epu32(c1, c2), _mm256_max_epu32(c1, c2));
-      cover8<kLongIds>(words, chained_any, covered, en, c0, c2);
-    }
-    return t;
-  }
-  // markCoveredInBlocksAvx2's eight lookups (lo, hi), lo < hi, in lanes
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET SCENELOD_ALWAYS_INLINE void cover8(const long long* words, bool chained_any,
-                                                                      uint8_t* __restrict covered, uint32_t en,
-                                                                      __m256i lo, __m256i hi) const {
-    const __m256i d = _mm256_xor_si256(lo, hi);
-    const __m256i one = _mm256_set1_epi32(1);
-    const __m256i flip = _mm256_and_si256(_mm256_sub_epi32(_mm256_and_si256(d, one), one), d);  // as swapOwner
-    lo = _mm256_xor_si256(lo, flip);
-    hi = _mm256_xor_si256(hi, flip);
-    cover4<kLongIds>(words, chained_any, covered, en, _mm256_castsi256_si128(lo), _mm256_castsi256_si128(hi));
-    cover4<kLongIds>(words, chained_any, covered, en, _mm256_extracti128_si256(lo, 1), _mm256_extracti128_si256(hi, 1));
-  }
-  // four lookups, owner lo and other id hi (swapped already)
-  template <bool kLongIds>
-  SCENELOD_ELIMINATION_AVX2_TARGET SCENELOD_ALWAYS_INLINE void cover4(const long long* words, bool chained_any,
-                                                                      uint8_t* __restrict covered, uint32_t en,
-                                                                      __m128i lo, __m128i hi) const {
-    // a 64-bit lane's low 16 bits into its four 16-bit entries
-    const __m256i spread = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 8, 9, 8, 9, 8, 9, 8, 9,
-                                            0, 1, 0, 1, 0, 1, 0, 1, 8, 9, 8, 9, 8, 9, 8, 9);
-    const __m128i at = _mm_add_epi32(lo, lo);
-    const __m256i his = _mm256_i32gather_epi64(words, at, 8);
-    const __m256i ids = _mm256_i32gather_epi64(words + 1, at, 8);
-    const __m256i eq = _mm256_cmpeq_epi16(his, _mm256_shuffle_epi8(_mm256_cvtepu32_epi64(hi), spread));
-    __m256i id = _mm256_and_si256(eq, ids);
-    id = _mm256_or_si256(id, _mm256_srli_epi64(id, 32));
-    id = _mm256_and_si256(_mm256_or_si256(id, _mm256_srli_epi64(id, 16)), _mm256_set1_epi64x(0xFFFF));
-    const __m256i none = _mm256_cmpeq_epi64(eq, _mm256_setzero_si256());
-    alignas(32) uint64_t res[4];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(res),
-                       _mm256_blendv_epi8(id, _mm256_set1_epi64x(static_cast<long long>(en)), none));
-    uint32_t beyond = uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(none)));
-    if (!kLongIds) {
-      // hi[3] free: all ones once the other three entries are or'd with ones (a block that is not full)
-      const __m256i open = _mm256_cmpeq_epi64(_mm256_or_si256(his, _mm256_set1_epi64x(0x0000FFFFFFFFFFFFll)),
-                                              _mm256_set1_epi32(-1));
-      beyond &= ~uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(open)));
-    }
-    if (beyond) {  // (rarely taken, as find's test)
-      alignas(16) uint32_t l[4], h[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(l), lo);
-      _mm_store_si128(reinterpret_cast<__m128i*>(h), hi);
-      do {
-        const int k = __builtin_ctz(beyond);
-        res[k] = chained_any ? branchlessMin(walkBeyondBlock(l[k], h[k]), en) : en;
-        beyond &= beyond - 1;
-      } while (beyond);
-    }
-    covered[res[0]] = 1;
-    covered[res[1]] = 1;
-    covered[res[2]] = 1;
-    covered[res[3]] = 1;
-  }
-#else
-  template <bool kLongIds>
-  size_t markCoveredInBlocksAvx2(const uint32_t*, size_t, uint8_t*, uint32_t) const { return 0; }
-#endif
-  // findOrAddInBlock past its block: as find, then add where not found (out of line, as below)
-  __attribute__((noinline)) uint32_t findOrAddBeyondBlock(uint32_t lo, uint32_t hi, uint32_t id) {
-    const uint32_t e = find(lo, hi);
-    if (e != kNone) return e;
-    add(lo, hi, id);
-    return id;
-  }
-  // with blocks, the edges chained after a full block (out of line: inlined into find, the walk
-  // took find itself out of line on the bunny's levels, 13.3 -> 15.0 M instructions at 50 %)
-  __attribute__((noinline)) uint32_t walkBeyondBlock(uint32_t lo, uint32_t hi) const {
-    return node_id_[walkNodes(lo, hi)];  // (node 0: kNone)
-  }
   // The node of edge (lo, hi) in lo's list, or kNoNode. The first kWalkDepth nodes are read whatever
   // the list's length (node 0 ends a list and links to itself) and the match picked without a
   // branch; a branch only where the list goes on past them. (The loop's exits mispredicted: 1 M
@@ -370,34 +85,21 @@ class EdgeLists {
   }
   static constexpr int kWalkDepth = 3;
   static constexpr uint32_t kNoNode = 0;
-  static constexpr uint16_t kFree = 0xFFFF;  // a free entry; no cluster id or inline edge id is this
-  struct Block {
-    uint16_t hi[4];  // other cluster ids of the first four edges, kFree where free (filled in order)
-    uint16_t id[4];
-  };
-  static_assert(sizeof(Block) == 16, "a block is 16 bytes");
-  size_t clusters_;
   // the node arrays' size, doubled when full (as a vector's capacity; without the vector's zeroing of
-  // what findOrAdd writes anyway: 1 M sphere 10 %, 1 MB); with blocks, the nodes made
-  uint32_t node_room_ = 1, node_count_ = 1;
-  bool long_ids_ = false;  // some edge id did not fit a block (chained whatever its block's room)
-  std::vector<Block> blocks_;
-  Block spare_{};  // findOrAddInBlock's write where it found the edge (never read)
-  std::vector<uint32_t> head_;  // per cluster: its first chained node, kNoNode for none (with blocks, made when first needed)
-  // per node: the other cluster id, the edge's id (with blocks; without, the node's index - 1), the
-  // next node of its list
-  std::unique_ptr<uint32_t[]> node_hi_, node_id_, node_next_;
+  // what findOrAdd writes anyway: 1 M sphere 10 %, 1 MB)
+  uint32_t node_room_ = 1;
+  std::vector<uint32_t> head_;  // per cluster: its first node, kNoNode for none
+  // per node: the other cluster id (the edge's id is the node's index - 1), the next node of its list
+  std::unique_ptr<uint32_t[]> node_hi_, node_next_;
   void growNodes() {
     const uint32_t n = node_room_;
     node_room_ = 2 * n;
     auto grow = [&](std::unique_ptr<uint32_t[]>& a) {
-      if (!a) return;
       std::unique_ptr<uint32_t[]> b(new uint32_t[node_room_]);
       std::copy(a.get(), a.get() + n, b.get());
       a = std::move(b);
     };
     grow(node_hi_);
-    grow(node_id_);
     grow(node_next_);
   }
 };
@@ -572,7 +274,7 @@ void classifyAvx2(const uint32_t* tri, const uint32_t* co, size_t t, size_t t1, 
 // entry before them, in place, and leaves each kept pair as (lower id, higher id); returns the count
 // kept. A dropped entry equals the last kept one, so comparing with that is comparing with the
 // entry before. The lookup of a repeated pair finds the edge its predecessor found or made and
-// changes nothing (the branchless paths write a spare entry), so only the lookups made differ.
+// changes nothing (findOrAdd writes a spare node), so only the lookups made differ.
 // (The 1 M sphere's 10 % level in its generator's ring order: 268.9 k of its 522.5 k collapsed
 // triangles repeat the pair before, about 90 instructions a lookup on the chained lists; the
 // bunny's 50 % level 4.2 k of 34.0 k, chain level 2 6.8 k of 35.8 k.)
@@ -657,41 +359,284 @@ SCENELOD_ELIMINATION_AVX2_TARGET size_t dropRepeatedPointsAvx2(uint32_t* c, size
 size_t dropRepeatedPointsAvx2(uint32_t* c, size_t n) { return dropRepeatedPointsScalar(c, 0, n, 0); }
 #endif
 
-// the blocks above are used while 32 bytes per cluster take at most this (the bunny's levels; not the
-// 1 M sphere's finer ones, where the heads alone keep the lists in cache), so below 2^15 clusters:
-// their ids fit the blocks' 16 bits
-constexpr size_t kEdgeBlockBytes = size_t(1) << 20;
-
-bool g_edge_blocks = true;  // false: every edge chained (useEdgeBlocks, a test hook)
-bool g_windowed_probes = true;  // false: the dedupe probe one slot at a time (useWindowedProbes, a test hook)
 // false: every collapsed triangle's pair and point looked up (useRepeatedEdgeDrop, a test hook)
 bool g_drop_repeated_edges = true;
-// slots the dedupe probe reads at once (two SSE2 loads, 32 bytes), and the largest table it is used
-// for (the bunny's 50 % level: 256 KB)
-constexpr size_t kProbeWindow = 8;
-constexpr size_t kWindowedTableBytes = size_t(1) << 19;
-// how far ahead, in kept triangles, a large table's home slots are prefetched (eliminate)
+// how far ahead, in kept triangles, a large table's home slots are prefetched (eliminate), and the
+// table size from which they are (the bunny's 50 % level: 256 KB)
 constexpr size_t kPrefetchKept = 32;
+constexpr size_t kPrefetchTableBytes = size_t(1) << 19;
 }  // namespace
 
-// test hook (declared by tests/lodcore/elimination_test.cpp): false lists every candidate edge in the
-// chained lists, whatever the cluster count, for every later call; returns the previous choice
-bool useEdgeBlocks(bool on) {
-  return std::exchange(g_edge_blocks, on);
+// (test_hooks.h)
+bool useRepeatedEdgeDrop(bool on) { return std::exchange(g_drop_repeated_edges, on); }
+
+namespace {
+
+// a cluster's point state (Candidates::point_state): 1 once listed as a point, 2 once a corner of an
+// output triangle or edge, which covers its point
+constexpr uint8_t kListed = 1, kUsed = 2;
+
+// The kept triangles, each once: a table of output triangle indices keyed by the rotation starting
+// at the smallest id, sized for the expected output (a closed surface has about 2 triangles per
+// cluster, capped by the input count) rather than the input, so that it stays in cache; grows at 2/3
+// load (a power of two at least 1.5 x expected, so about half full at the end: at 1/2 the power of
+// two was about 4 x the output, the largest array of the main pass at fine levels). A slot holds the
+// triangle's index in its low log2(cap) bits and, above them, bits of its hash that do not pick its
+// home: an occupant whose bits differ is passed over without reading its triangle, a random read of
+// the output (bunny 50 %: 19 k of its 255 k D1 read misses; 1 M sphere 10 %: 36 k). An index is
+// below 2/3 cap, so no slot is kNone. A new triangle marks its corners' clusters kUsed.
+class TriangleTable {
+ public:
+  TriangleTable(size_t expected, std::vector<uint32_t>& triangles, uint8_t* point_state)
+      : triangles_(triangles), point_state_(point_state) {
+    while (cap_ * 2 < expected * 3) cap_ <<= 1;
+    mask_ = cap_ - 1;
+    index_bits_ = size_t(__builtin_ctzll(cap_));
+    table_.assign(cap_, kNone);
+  }
+  static size_t hash(uint32_t c0, uint32_t c1, uint32_t c2) {
+    const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
+                       (uint64_t(c2) * 0x165667B19E3779F9ull);
+    return static_cast<size_t>(h ^ (h >> 31));
+  }
+  size_t bytes() const { return cap_ * sizeof(uint32_t); }
+  void prefetch(uint32_t c0, uint32_t c1, uint32_t c2) const { __builtin_prefetch(table_.data() + home(hash(c0, c1, c2))); }
+  // the triangle (c0, c1, c2), rotated smallest first, unless it is listed already
+  SCENELOD_ALWAYS_INLINE void add(uint32_t c0, uint32_t c1, uint32_t c2) {
+    const size_t h = hash(c0, c1, c2);
+    const uint32_t* slots = table_.data();
+    for (size_t i = home(h);; i = nextSlot(i)) {
+      const uint32_t o = slots[i];
+      if (o == kNone) {
+        insert(i, h, c0, c1, c2);
+        return;
+      }
+      if ((o ^ slotOf(h, 0)) >> index_bits_) continue;  // another triangle's bits
+      const uint32_t* occupant = triangles_.data() + 3 * size_t(o & mask_);
+      if (occupant[0] == c0 && occupant[1] == c1 && occupant[2] == c2) return;
+    }
+  }
+  void release() { std::vector<uint32_t>().swap(table_); }
+
+ private:
+  size_t home(size_t h) const { return h & mask_; }
+  size_t nextSlot(size_t i) const { return (i + 1) & mask_; }
+  uint32_t slotOf(size_t h, size_t index) const {
+    return static_cast<uint32_t>(index) | (static_cast<uint32_t>(uint64_t(h) >> 32) << index_bits_);
+  }
+  // the new triangle (c0, c1, c2) with hash h into empty slot i
+  void insert(size_t i, size_t h, uint32_t c0, uint32_t c1, uint32_t c2) {
+    table_[i] = slotOf(h, triangles_.size() / 3);
+    if ((triangles_.size() / 3 + 1) * 3 > cap_ * 2) {  // keep the load at most 2/3
+      cap_ <<= 1;
+      mask_ = cap_ - 1;
+      ++index_bits_;
+      table_.assign(cap_, kNone);
+      for (size_t k = 0; k < triangles_.size(); k += 3) {
+        const size_t hk = hash(triangles_[k], triangles_[k + 1], triangles_[k + 2]);
+        size_t j = home(hk);
+        while (table_[j] != kNone) j = nextSlot(j);
+        table_[j] = slotOf(hk, k / 3);
+      }
+      size_t j = home(h);
+      while (table_[j] != kNone) j = nextSlot(j);
+      table_[j] = slotOf(h, triangles_.size() / 3);
+    }
+    triangles_.push_back(c0);
+    triangles_.push_back(c1);
+    triangles_.push_back(c2);
+    point_state_[c0] = point_state_[c1] = point_state_[c2] = kUsed;
+  }
+  std::vector<uint32_t>& triangles_;
+  uint8_t* point_state_;
+  size_t cap_ = 64, mask_ = 63, index_bits_ = 6;
+  std::vector<uint32_t> table_;
+};
+
+// The candidate edges and points of one level and what the thickness needs of them.
+struct Candidates {
+  Candidates(size_t clusters, size_t listed, bool input_edges)
+      : input_edges(input_edges), lists(listed), point_state(clusters, 0) {}
+  // the entry of edge e: its cluster pair, low id first, then the block of the last triangle
+  // collapsed onto it (kNone for none)
+  uint32_t* entry(size_t e) { return edges[e / kEdgeChunk].get() + 3 * (e % kEdgeChunk); }
+  // the entry of the next edge (allocated whole, uninitialised, when the first edge could go in it)
+  uint32_t* nextEntry() {
+    if (edge_total == edge_room) {
+      edges.emplace_back(new uint32_t[3 * kEdgeChunk]);
+      edge_room += kEdgeChunk;
+    }
+    return edges.back().get() + 3 * (edge_total % kEdgeChunk);
+  }
+  // The id of candidate edge (x, y), listed if new: the new edge's entry is written whatever (past
+  // the last edge) and counted only when made. (inlined: called out of line, its saves and restores
+  // were about a quarter of its cost)
+  SCENELOD_ALWAYS_INLINE uint32_t edge(uint32_t x, uint32_t y) {
+    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
+    uint32_t* e_entry = nextEntry();
+    const uint32_t id = static_cast<uint32_t>(edge_total);
+    const uint32_t e = lists.findOrAdd(lo, hi, id);
+    e_entry[0] = lo;
+    e_entry[1] = hi;
+    e_entry[2] = kNone;
+    edge_total += e == edge_total;
+    if (input_edges) input_thickness.resize(edge_total, 0.0f);
+    return e;
+  }
+  void addPoint(uint32_t c) {
+    if (point_state[c]) return;
+    point_state[c] = kListed;
+    point_candidates.push_back(c);
+  }
+
+  // candidate edges in chunks of kEdgeChunk: a growing vector's copy (old and new buffers at once)
+  // came at the peak of a level (1024: the unused part of the last chunk, 6 KB on average, was part
+  // of the bunny chain's peak)
+  static constexpr size_t kEdgeChunk = 1024;
+  std::vector<std::unique_ptr<uint32_t[]>> edges;
+  size_t edge_total = 0;
+  size_t edge_room = 0;  // edges the chunks hold
+  const bool input_edges;
+  std::vector<float> input_thickness;  // per candidate edge: its input edges' largest thickness
+  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
+  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
+  // pass's lookups went to random slots of it.
+  EdgeLists lists;
+  // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
+  // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
+  // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
+  // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
+  // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
+  // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
+  // last triangle for this, beside its cluster pair (its first block follows from its id).
+  static constexpr size_t kCollapsedList = 4096;
+  std::vector<CollapsedTriangle> collapsed_list;
+  bool collapsed_dropped = false;
+  std::vector<uint32_t> block_first_edge;  // per block: the id of the first edge it created
+  // clusters of collapsed primitives, each listed once in order of first appearance (the order
+  // points are output in); coarse levels collapse most triangles onto a few clusters. Per cluster:
+  // 1 once listed, 2 once a corner of an output triangle or edge, which covers its point (it is then
+  // not listed, or dropped at the end: a separate pass over the output triangles did that before)
+  std::vector<uint32_t> point_candidates;
+  std::vector<uint8_t> point_state;
+};
+
+// The triangles collapsed onto uncovered edges (remap[e] != kNone) in the blocks that `rescan`
+// opens (+1 at an edge's first block, -1 past its last), with the edges' output ids, appended to
+// `collapsed`, where the list of collapsed triangles was dropped.
+void rescanCollapsed(const Mesh& m, const uint32_t* co, const std::vector<int32_t>& rescan, const std::vector<uint32_t>& remap,
+                     const std::vector<uint32_t>& out_edges, Candidates& c, std::vector<CollapsedTriangle>& collapsed) {
+  const uint32_t* tri = m.triangles.data();
+  const size_t tn = m.triangleCount();
+  std::vector<uint8_t>& point_state = c.point_state;
+  const EdgeLists& edge_lists = c.lists;
+  // A triangle collapsed onto an uncovered edge has its corners in the edge's two clusters: with
+  // those marked (the point states are no longer read), a triangle whose first corner is not is
+  // passed over after one test that is rarely taken (at 2 % of the bunny, one uncovered edge of
+  // four triangles spread over most blocks: the full classification of them cost 0.9 M
+  // instructions, 11 % of the level's elimination).
+  constexpr uint8_t kEdgeEnd = 4;
+  for (uint32_t k : out_edges) point_state[k] = kEdgeEnd;
+  // A block's triangles whose first corner is at an edge's end (counted): where they were over
+  // 1/32 of the last block read, the next one tests the class and the corner in one test (at the
+  // bunny chain's level 6, w = 0.856, the ends' clusters hold much of the blocks, and the test of
+  // the corner first mispredicted 9.7 k times of the elimination's 16.6 k: 0.31-0.34 -> 0.26-0.28
+  // ms, 2.96 -> 4.13 M instructions); else the corner first, a branch rarely taken (at 2 %, where
+  // the one test cost 0.2 M instructions more and no time back; at 1/8 level 6 kept 9.3 k
+  // mispredicts, 0.28-0.29 ms).
+  auto rescanBlock = [&](size_t t0, size_t t1, bool one_test) __attribute__((always_inline)) {
+    size_t ends = 0;
+    for (size_t t = t0; t < t1; ++t) {
+      const uint32_t* v = tri + 3 * t;
+      const uint32_t c0 = co[v[0]];
+      const bool end = point_state[c0] == kEdgeEnd;
+      if (!one_test && !end) continue;
+      const uint32_t c1 = co[v[1]], c2 = co[v[2]];
+      const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
+      ends += end;
+      // collapsed to an edge: not kept, not a point
+      if (!(uint32_t(e01 | e12 | e02) & ~uint32_t(e01 & e12) & uint32_t(end))) continue;
+      const uint32_t y = e01 ? c2 : c1, lo = branchlessMin(c0, y);
+      const uint32_t r = remap[edge_lists.find(lo, c0 ^ y ^ lo)];
+      if (r != kNone) collapsed.push_back({static_cast<uint32_t>(t), r});
+    }
+    return ends;
+  };
+  int32_t open = 0;
+  bool one_test = false;
+  for (size_t b = 0; b + 1 < rescan.size(); ++b) {
+    open += rescan[b];
+    if (open == 0) continue;
+    const size_t t0 = b * kBlock, t1 = std::min(tn, (b + 1) * kBlock);
+    const size_t ends = one_test ? rescanBlock(t0, t1, true) : rescanBlock(t0, t1, false);
+    one_test = ends * 32 > t1 - t0;
+  }
 }
 
-// test hook (declared by tests/lodcore/elimination_test.cpp): false probes the dedupe table one slot
-// at a time, the reference for the windowed probe, for every later call; returns the previous choice
-bool useWindowedProbes(bool on) {
-  return std::exchange(g_windowed_probes, on);
+// After the main pass: the candidate edges no kept triangle covers go out (edges of kept triangles
+// remove candidate edges, used clusters remove points), then the points, then the thickness.
+void finishEdges(const PreparedMesh& p, const Assignment& a, bool compute_thickness, Candidates& c, Eliminated& out) {
+  const size_t en = c.edge_total;
+  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
+  if (en > 0)
+    for (size_t t = 0; t < out.triangles.size(); t += 3) {
+      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
+      const uint32_t x = branchlessMin(c0, c1), y = branchlessMin(c1, c2), z = branchlessMin(c2, c0);
+      covered[branchlessMin(c.lists.find(x, c0 ^ c1 ^ x), uint32_t(en))] = 1;
+      covered[branchlessMin(c.lists.find(y, c1 ^ c2 ^ y), uint32_t(en))] = 1;
+      covered[branchlessMin(c.lists.find(z, c2 ^ c0 ^ z), uint32_t(en))] = 1;
+    }
+  // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
+  // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
+  std::vector<int32_t> rescan;
+  if (c.collapsed_dropped)
+    for (size_t e = 0; e < en; ++e) {
+      const uint32_t last = c.entry(e)[2];
+      if (covered[e] || last == kNone) continue;
+      if (rescan.empty()) rescan.assign(c.block_first_edge.size() + 1, 0);
+      // the block whose triangle created the edge (edges from triangles come first, in block order)
+      const size_t first = static_cast<size_t>(
+          std::upper_bound(c.block_first_edge.begin(), c.block_first_edge.end(), uint32_t(e)) - c.block_first_edge.begin() - 1);
+      ++rescan[first];
+      --rescan[last + 1];
+    }
+  if (rescan.empty()) { EdgeLists released(0); std::swap(released, c.lists); }
+  std::vector<uint32_t> remap(en, kNone);
+  for (size_t e = 0; e < en; ++e) {
+    if (covered[e]) continue;
+    const uint32_t* pair = c.entry(e);
+    remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
+    out.edges.push_back(pair[0]);
+    out.edges.push_back(pair[1]);
+    c.point_state[pair[0]] = c.point_state[pair[1]] = kUsed;
+  }
+  std::vector<std::unique_ptr<uint32_t[]>>().swap(c.edges);
+  for (uint32_t k : c.point_candidates)
+    if (c.point_state[k] == kListed) out.points.push_back(k);
+
+  if (!compute_thickness) return;
+  out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
+  // the triangles collapsed onto uncovered edges, in input order, with the edges' output ids
+  std::vector<CollapsedTriangle> collapsed;
+  if (!c.collapsed_dropped) {
+    size_t kept = 0;
+    for (const CollapsedTriangle& ct : c.collapsed_list) kept += remap[ct.edge] != kNone;
+    collapsed.reserve(kept);
+    for (const CollapsedTriangle& ct : c.collapsed_list)
+      if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
+    std::vector<CollapsedTriangle>().swap(c.collapsed_list);
+  } else if (!rescan.empty()) {
+    rescanCollapsed(*p.mesh, a.cluster_of.data(), rescan, remap, out.edges, c, collapsed);
+    EdgeLists released(0);
+    std::swap(released, c.lists);
+  }
+  computeThickness(p, a, collapsed, out);
+  if (c.input_edges)
+    for (size_t e = 0; e < en; ++e)
+      if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], c.input_thickness[e]);
 }
 
-// test hook (declared by tests/lodcore/elimination_test.cpp): false looks up every collapsed
-// triangle's cluster pair and point, the reference for dropping the repeats (dropRepeatedEdges*,
-// dropRepeatedPoints*), for every later call; returns the previous choice
-bool useRepeatedEdgeDrop(bool on) {
-  return std::exchange(g_drop_repeated_edges, on);
-}
+}  // namespace
 
 void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool keep_points, bool compute_thickness,
                Eliminated& out) {
@@ -705,208 +650,20 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
 
   const size_t tn = m.triangleCount();
   const size_t nc = a.cluster_count;
-  // Triangles: a table of output triangle indices keyed by the rotation starting at the smallest id,
-  // sized for the expected output (a closed surface has about 2 triangles per cluster, capped by the
-  // input count) rather than the input, so that it stays in cache; grows at 2/3 load.
-  // (a little over 2 per cluster, so that a closed surface's 2C - 4 + a few never regrows the output:
-  // the extra is about constant, not proportional: the 1 M sphere's chain keeps 2C + 1.9 k / 2.9 k /
-  // 2.8 k / 1.7 k triangles at levels 1-4, the bunny's 2C + 6 / 191 / 377 / 112; a regrowth, old and
-  // new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
+  // (a little over 2 triangles per cluster, so that a closed surface's 2C - 4 + a few never regrows
+  // the output: the extra is about constant, not proportional: the 1 M sphere's chain keeps 2C + 1.9 k
+  // / 2.9 k / 2.8 k / 1.7 k triangles at levels 1-4, the bunny's 2C + 6 / 191 / 377 / 112; a regrowth,
+  // old and new arrays at once, at the sphere's level 3 was part of its chain's peak with 2C + C/16 + 64)
   const size_t expected = std::min(tn, size_t(2) * nc + nc / 32 + std::min<size_t>(4096, nc / 8));
   out.triangles.reserve(3 * expected);
-  // load at most 2/3 (a power of two at least 1.5 x expected, so about half full at the end): at 1/2
-  // the power of two was about 4 x the output, the largest array of the main pass at fine levels
-  size_t cap = 64;
-  while (cap * 2 < expected * 3) cap <<= 1;
-  // (kProbeWindow slots more: room to align the windowed probe's groups, below)
-  std::vector<uint32_t> table(cap + kProbeWindow, kNone);
-  // windowed probes (below) where the table stays in cache; else, and where the test hook asks for
-  // the reference (useWindowedProbes), one slot at a time. (At the 1 M sphere's 10 % level, 1 MB of
-  // slots read at random beside 1.6 MB of chained edge lists, the windows ran slower: eliminate
-  // 11.9-12.5 -> 12.5-13.4 ms, 88.6 -> 94.6 M instructions, mispredicts 103 k -> 62 k.)
-  const bool windowed = g_windowed_probes && cap * sizeof(uint32_t) <= kWindowedTableBytes;
-  // the slots: with windowed probes from the first 32-byte boundary in the table
-  auto slotsOf = [&]() {
-    const uintptr_t at = reinterpret_cast<uintptr_t>(table.data());
-    const uintptr_t align = windowed ? kProbeWindow * sizeof(uint32_t) - 1 : 0;
-    return table.data() + ((((at + align) & ~align) - at) / sizeof(uint32_t));
-  };
-  uint32_t* slots = slotsOf();
-  size_t mask = cap - 1;
-  auto triangleHash = [](uint32_t c0, uint32_t c1, uint32_t c2) {
-    const uint64_t h = (uint64_t(c0) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(c1) * 0xC2B2AE3D27D4EB4Full) ^
-                       (uint64_t(c2) * 0x165667B19E3779F9ull);
-    return static_cast<size_t>(h ^ (h >> 31));
-  };
-  // windowed probes start at the first slot of the aligned group of kProbeWindow that holds the
-  // slot the hash picks (as linear probing from there; every group within one cache line)
-  const size_t home_mask = windowed ? ~(kProbeWindow - 1) : ~size_t(0);
-  auto home = [&](size_t h) { return h & mask & home_mask; };
-  auto nextSlot = [&](size_t i) { return (i + 1) & mask; };
-  // A slot holds the triangle's index in its low log2(cap) bits and, above them, bits of its hash
-  // that do not pick its home: an occupant whose bits differ is passed over without reading its
-  // triangle, a random read of the output (bunny 50 %: 19 k of its 255 k D1 read misses; 1 M sphere
-  // 10 %: 36 k). An index is below 2/3 cap, so no slot is kNone.
-  size_t index_bits = size_t(__builtin_ctzll(cap));
-  auto slotOf = [&](size_t h, size_t index) {
-    return static_cast<uint32_t>(index) | (static_cast<uint32_t>(uint64_t(h) >> 32) << index_bits);
-  };
-  // Candidate edges are found again through per-cluster lists (EdgeLists). The hash this replaces
-  // (16-byte slots, two per cluster) was larger than the cache at fine levels, where the coverage
-  // pass's lookups went to random slots of it.
-  // candidate edges (cluster pairs, low id first, then the block of the last triangle collapsed onto
-  // the edge, kNone for none), in chunks of kEdgeChunk edges: a growing vector's copy (old and new
-  // buffers at once) came at the peak of a level
-  // (1024: the unused part of the last chunk, 6 KB on average, was part of the bunny chain's peak)
-  constexpr size_t kEdgeChunk = 1024;
-  std::vector<std::unique_ptr<uint32_t[]>> edges;
-  size_t edge_total = 0;
-  size_t edge_room = 0;  // edges the chunks hold
-  // the entry of the next edge (allocated whole, uninitialised, when the first edge could go in it)
-  auto edgeEntry = [&]() {
-    if (edge_total == edge_room) {
-      edges.emplace_back(new uint32_t[3 * kEdgeChunk]);
-      edge_room += kEdgeChunk;
-    }
-    return edges.back().get() + 3 * (edge_total % kEdgeChunk);
-  };
-  // per candidate edge: largest thickness of an input edge on it (only when the input has edges)
-  std::vector<float> input_thickness;
   const bool input_edges = m.edgeCount() > 0;
-  const size_t listed = keep_edges || input_edges ? nc : 0;
-  EdgeLists edge_lists(listed, g_edge_blocks && listed * 32 <= kEdgeBlockBytes);
-  // Triangles collapsed onto a candidate edge (for the thickness of the edges left uncovered): listed
-  // while they are at most kCollapsedList; past that the list is dropped and, if some edge stays
-  // uncovered, the blocks of triangles that can hold its triangles are read again at the end.
-  // On closed surfaces nearly every candidate edge is covered, while most triangles of a coarse level
-  // collapse: the list (8 bytes per collapsed triangle, about 4.5 MB at the 1 M sphere's level 2) was
-  // the largest transient of a coarse level's elimination. Each candidate edge keeps the block of its
-  // last triangle for this, beside its cluster pair (its first block follows from its id).
-  constexpr size_t kCollapsedList = 4096;
+  Candidates c(nc, keep_edges || input_edges ? nc : 0, input_edges);
+  TriangleTable table(expected, out.triangles, c.point_state.data());
   const bool track_collapsed = compute_thickness && keep_edges;
-  std::vector<CollapsedTriangle> collapsed_list;
-  bool collapsed_dropped = false;
-  std::vector<uint32_t> block_first_edge;  // per block: the id of the first edge it created
   if (track_collapsed) {
-    collapsed_list.reserve(std::min(kCollapsedList, tn));
-    block_first_edge.reserve((tn + kBlock - 1) / kBlock);
+    c.collapsed_list.reserve(std::min(c.kCollapsedList, tn));
+    c.block_first_edge.reserve((tn + kBlock - 1) / kBlock);
   }
-  // clusters of collapsed primitives, each listed once in order of first appearance (the order
-  // points are output in); coarse levels collapse most triangles onto a few clusters. Per cluster:
-  // 1 once listed, 2 once a corner of an output triangle or edge, which covers its point (it is then
-  // not listed, or dropped at the end: a separate pass over the output triangles did that before)
-  constexpr uint8_t kListed = 1, kUsed = 2;
-  std::vector<uint32_t> point_candidates;
-  std::vector<uint8_t> point_state(nc, 0);
-  auto addPoint = [&](uint32_t c) {
-    if (point_state[c]) return;
-    point_state[c] = kListed;
-    point_candidates.push_back(c);
-  };
-  // The id of candidate edge (x, y), listed if new. `branchless` (the chained lists always are):
-  // without a branch on whether the edge is new (findOrAddInBlock), chosen per block of triangles
-  // (below): where about half the lookups make an edge (fine levels) that branch mispredicts, where
-  // few do (coarse levels) it is cheaper than the writes made whatever.
-  // (inlined: called out of line, its saves and restores were about a quarter of its cost)
-  auto edgeSlot = [&](uint32_t x, uint32_t y, bool branchless) __attribute__((always_inline)) {
-    const uint32_t lo = branchlessMin(x, y), hi = x ^ y ^ lo;
-    if (edge_lists.chained() || branchless) {
-      // the new edge's entry is written whatever (past the last edge) and counted only when made;
-      // chunks are allocated whole when the first edge could go in them
-      uint32_t* entry = edgeEntry();
-      const uint32_t id = static_cast<uint32_t>(edge_total);
-      const uint32_t e = edge_lists.chained() ? edge_lists.findOrAdd(lo, hi, id) : edge_lists.findOrAddInBlock(lo, hi, id);
-      entry[0] = lo;
-      entry[1] = hi;
-      entry[2] = kNone;
-      edge_total += e == edge_total;
-      if (input_edges) input_thickness.resize(edge_total, 0.0f);
-      return e;
-    }
-    uint32_t e = edge_lists.find(lo, hi);
-    if (e == kNone) {
-      uint32_t* entry = edgeEntry();
-      e = static_cast<uint32_t>(edge_total++);
-      entry[0] = lo;
-      entry[1] = hi;
-      entry[2] = kNone;
-      edge_lists.add(lo, hi, e);
-      if (input_edges) input_thickness.push_back(0.0f);
-    }
-    return e;
-  };
-
-  // the new triangle (c0, c1, c2) with hash h into empty slot i
-  auto insertTriangle = [&](size_t i, size_t h, uint32_t c0, uint32_t c1, uint32_t c2) {
-    slots[i] = slotOf(h, out.triangles.size() / 3);
-    if ((out.triangles.size() / 3 + 1) * 3 > cap * 2) {  // keep the load at most 2/3
-      cap <<= 1;
-      mask = cap - 1;
-      ++index_bits;
-      table.assign(cap + kProbeWindow, kNone);
-      slots = slotsOf();
-      for (size_t k = 0; k < out.triangles.size(); k += 3) {
-        const size_t hk = triangleHash(out.triangles[k], out.triangles[k + 1], out.triangles[k + 2]);
-        size_t j = home(hk);
-        while (slots[j] != kNone) j = nextSlot(j);
-        slots[j] = slotOf(hk, k / 3);
-      }
-      size_t j = home(h);
-      while (slots[j] != kNone) j = nextSlot(j);
-      slots[j] = slotOf(h, out.triangles.size() / 3);
-    }
-    out.triangles.push_back(c0);
-    out.triangles.push_back(c1);
-    out.triangles.push_back(c2);
-    point_state[c0] = point_state[c1] = point_state[c2] = kUsed;
-  };
-  // whether an occupant (its tag bits matching) is the triangle (c0, c1, c2)
-  auto sameTriangle = [&](uint32_t o, uint32_t c0, uint32_t c1, uint32_t c2) {
-    const uint32_t* occupant = out.triangles.data() + 3 * size_t(o & mask);
-    return occupant[0] == c0 && occupant[1] == c1 && occupant[2] == c2;
-  };
-  auto addTriangle = [&](uint32_t c0, uint32_t c1, uint32_t c2) {
-    const size_t h = triangleHash(c0, c1, c2);
-    size_t i = home(h);
-#if defined(__SSE2__)
-    // A group of kProbeWindow slots at once: its first empty slot, and the occupants before it whose
-    // tag bits match (rare where few triangles repeat), by two compares; the next group only where
-    // the group is full. (A branch on each slot's emptiness mispredicted: bunny 50 %, 18.5 k of the
-    // level's 35 k, as about a third of the first probes find an occupant. A window of 8 from the
-    // hash's own slot crossed a cache line 7 times in 16: 1 M sphere 10 %, whose table of 1 MB
-    // does not stay in cache, eliminate 12.2-17.6 -> 13.5-20.0 ms.)
-    if (windowed)
-      for (;; i = (i + kProbeWindow) & mask) {
-        const __m128i* w = reinterpret_cast<const __m128i*>(slots + i);
-        const __m128i lo = _mm_load_si128(w), hi = _mm_load_si128(w + 1);
-        const __m128i none = _mm_set1_epi32(-1), tag = _mm_set1_epi32(static_cast<int>(slotOf(h, 0)));
-        const __m128i shift = _mm_cvtsi32_si128(static_cast<int>(index_bits)), zero = _mm_setzero_si128();
-        const uint32_t empty = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(lo, none)))) |
-                               uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(hi, none)))) << 4;
-        const __m128i tag_lo = _mm_cmpeq_epi32(_mm_srl_epi32(_mm_xor_si128(lo, tag), shift), zero);
-        const __m128i tag_hi = _mm_cmpeq_epi32(_mm_srl_epi32(_mm_xor_si128(hi, tag), shift), zero);
-        const uint32_t first_empty = uint32_t(__builtin_ctz(empty | (1u << kProbeWindow)));
-        uint32_t same = (uint32_t(_mm_movemask_ps(_mm_castsi128_ps(tag_lo))) |
-                         uint32_t(_mm_movemask_ps(_mm_castsi128_ps(tag_hi))) << 4) &
-                        ((1u << first_empty) - 1);
-        for (; same; same &= same - 1)
-          if (sameTriangle(slots[i + size_t(__builtin_ctz(same))], c0, c1, c2)) return;
-        if (empty) {
-          insertTriangle(i + first_empty, h, c0, c1, c2);
-          return;
-        }
-      }
-#endif
-    for (;; i = nextSlot(i)) {
-      const uint32_t o = slots[i];
-      if (o == kNone) {
-        insertTriangle(i, h, c0, c1, c2);
-        return;
-      }
-      if ((o ^ slotOf(h, 0)) >> index_bits) continue;  // another triangle's bits
-      if (sameTriangle(o, c0, c1, c2)) return;
-    }
-  };
 
   // The triangles are classified in blocks without a branch (kept, collapsed to an edge, collapsed
   // to a point: at coarse levels the three are mixed at random, so a branch on the class
@@ -922,7 +679,6 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
   // (the AVX2 classification only; at the 1 M sphere's 1 % level, 1 % kept, the lanes took 1.0 M
   // instructions more than they saved, 22.22 -> 23.19 M)
   bool rotate_in_lanes = true;
-  bool branchless_edges = g_windowed_probes;  // (blocks: see edgeSlot)
   // Where the cluster ids (4 bytes per vertex) outgrow the cache and the input order is not
   // spatially coherent, the ids of the triangles a little ahead are prefetched: the loop's three
   // random reads are then no longer misses (the 1 M sphere with shuffled vertices and triangles:
@@ -966,191 +722,72 @@ void eliminate(const PreparedMesh& p, const Assignment& a, bool keep_edges, bool
     // 120 k; at 2/3 the bunny 2 % level (69 % points) mispredicted 3 x as often, 0.38 -> 0.46 ms
     points_dominate = lists.point_count * 4 > (t1 - t0) * 3;
     rotate_in_lanes = kept_count * 16 > t1 - t0;
-    // where the table is past the cache (the windowed probes' bound), the home slots of the kept
+    // where the table is past the cache (kPrefetchTableBytes), the home slots of the kept
     // triangles kPrefetchKept ahead are prefetched: each kept triangle's first probe was otherwise
     // a miss, one at a time (the 1 M sphere's 50 % level, a table of 4 MB: 43 % of its elimination's
     // samples on that load)
-    const bool prefetch_slots = cap * sizeof(uint32_t) > kWindowedTableBytes;
+    const bool prefetch_slots = table.bytes() > kPrefetchTableBytes;
     auto prefetchKept = [&](size_t j) __attribute__((always_inline)) {
       uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
       if (!lists.rotated) rotateSmallestFirst(c0, c1, c2);
-      __builtin_prefetch(slots + home(triangleHash(c0, c1, c2)));
+      table.prefetch(c0, c1, c2);
     };
     if (prefetch_slots)
       for (size_t j = 0; j < std::min(kept_count, kPrefetchKept); ++j) prefetchKept(j);
     if (lists.rotated)
       for (size_t j = 0; j < kept_count; ++j) {
         if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
-        addTriangle(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
+        table.add(lists.kept[0][j], lists.kept[1][j], lists.kept[2][j]);
       }
     else
       for (size_t j = 0; j < kept_count; ++j) {
         if (prefetch_slots && j + kPrefetchKept < kept_count) prefetchKept(j + kPrefetchKept);
         uint32_t c0 = lists.kept[0][j], c1 = lists.kept[1][j], c2 = lists.kept[2][j];
         rotateSmallestFirst(c0, c1, c2);
-        addTriangle(c0, c1, c2);
+        table.add(c0, c1, c2);
       }
     if (keep_points) {
       size_t point_count = lists.point_count;
       if (g_drop_repeated_edges)
         point_count = avx2 ? dropRepeatedPointsAvx2(lists.point, point_count)
                            : dropRepeatedPointsScalar(lists.point, 0, point_count, 0);
-      for (size_t j = 0; j < point_count; ++j) addPoint(lists.point[j]);
+      for (size_t j = 0; j < point_count; ++j) c.addPoint(lists.point[j]);
     }
     if (!keep_edges) continue;
-    const size_t edges_before = edge_total;
-    if (track_collapsed && !collapsed_dropped && collapsed_list.size() + lists.edge_count > kCollapsedList) {
-      collapsed_dropped = true;
-      std::vector<CollapsedTriangle>().swap(collapsed_list);
+    if (track_collapsed && !c.collapsed_dropped && c.collapsed_list.size() + lists.edge_count > c.kCollapsedList) {
+      c.collapsed_dropped = true;
+      std::vector<CollapsedTriangle>().swap(c.collapsed_list);
     }
     // the collapsed triangles whose pair repeats the one before are not looked up where nothing
     // lists them one by one (the list of collapsed triangles)
     size_t edge_count = lists.edge_count;
-    if (g_drop_repeated_edges && (!track_collapsed || collapsed_dropped))
+    if (g_drop_repeated_edges && (!track_collapsed || c.collapsed_dropped))
       edge_count = avx2 ? dropRepeatedEdgesAvx2(lists.edge[0], lists.edge[1], edge_count)
                         : dropRepeatedEdgesScalar(lists.edge[0], lists.edge[1], 0, edge_count, 0);
     if (!track_collapsed) {
-      if (branchless_edges)
-        for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], true);
-      else
-        for (size_t j = 0; j < edge_count; ++j) edgeSlot(lists.edge[0][j], lists.edge[1][j], false);
+      for (size_t j = 0; j < edge_count; ++j) c.edge(lists.edge[0][j], lists.edge[1][j]);
     } else {
       const uint32_t block = static_cast<uint32_t>(t0 / kBlock);
-      block_first_edge.push_back(static_cast<uint32_t>(edge_total));
-      auto slots = [&](bool branchless) __attribute__((always_inline)) {
-        for (size_t j = 0; j < edge_count; ++j) {
-          const uint32_t e = edgeSlot(lists.edge[0][j], lists.edge[1][j], branchless);
-          edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2] = block;
-          if (!collapsed_dropped) collapsed_list.push_back({lists.edge[2][j], e});
-        }
-      };
-      if (branchless_edges) slots(true);
-      else slots(false);
+      c.block_first_edge.push_back(static_cast<uint32_t>(c.edge_total));
+      for (size_t j = 0; j < edge_count; ++j) {
+        const uint32_t e = c.edge(lists.edge[0][j], lists.edge[1][j]);
+        c.entry(e)[2] = block;
+        if (!c.collapsed_dropped) c.collapsed_list.push_back({lists.edge[2][j], e});
+      }
     }
-    // for the next block: over 1/4 of the lookups made (the repeats dropped) made an edge. Before
-    // the repeats were dropped: 3/8 (bunny: 50 % level 51 %, 10 % 25 %, 2 % 9 %; at over 1/8, the
-    // 10 % level took the branchless path and eliminated in 0.58-0.62 ms against 0.53-0.57). With
-    // them dropped the found edges are fewer: 50 % 58 %, chain level 2 39 %, 10 % 32 %, level 3
-    // 20 %, 2 % 12 %; at 3/8 level 2's blocks alternated between the paths, and the branch on a new
-    // edge mispredicted 5.7 k times of its 15.2 k (at 1/4: 11.6 k -> 6.6 k mispredicts, 5.89 ->
-    // 6.28 M instructions, eliminate 0.536-0.569 -> 0.496-0.545 ms; 10 % 0.440-0.463 ->
-    // 0.434-0.448; level 3 and 2 % unchanged)
-    branchless_edges = g_windowed_probes && (edge_total - edges_before) * 4 > edge_count;
   }
   for (size_t e = 0; e < m.edgeCount(); ++e) {
     const uint32_t x = co[m.edges[2 * e]], y = co[m.edges[2 * e + 1]];
     if (x == y) {
-      addPoint(x);
+      c.addPoint(x);
       continue;
     }
-    const uint32_t s = edgeSlot(x, y, false);
-    input_thickness[s] = std::max(input_thickness[s], m.edgeThickness(e));
+    const uint32_t s = c.edge(x, y);
+    c.input_thickness[s] = std::max(c.input_thickness[s], m.edgeThickness(e));
   }
-  for (uint32_t v : m.points) addPoint(co[v]);
-  std::vector<uint32_t>().swap(table);
-
-  // coverage: an edge of a kept triangle removes the candidate edge (a used cluster removes points)
-  const size_t en = edge_total;
-  std::vector<uint8_t> covered(en + 1, 0);  // the last entry takes the edges of kept triangles that are not candidates
-  if (en > 0 && g_windowed_probes) {
-    edge_lists.markCovered(out.triangles.data(), out.triangles.size() / 3, covered.data(), uint32_t(en), avx2);
-  } else if (en > 0) {  // the reference (useWindowedProbes(false))
-    for (size_t t = 0; t < out.triangles.size(); t += 3) {
-      const uint32_t c0 = out.triangles[t], c1 = out.triangles[t + 1], c2 = out.triangles[t + 2];
-      const uint32_t a = branchlessMin(c0, c1), b = branchlessMin(c1, c2), c = branchlessMin(c2, c0);
-      covered[branchlessMin(edge_lists.find(a, c0 ^ c1 ^ a), uint32_t(en))] = 1;
-      covered[branchlessMin(edge_lists.find(b, c1 ^ c2 ^ b), uint32_t(en))] = 1;
-      covered[branchlessMin(edge_lists.find(c, c2 ^ c0 ^ c), uint32_t(en))] = 1;
-    }
-  }
-  // where the list of collapsed triangles was dropped: the blocks from the first to the last of each
-  // uncovered edge's triangles (+1 at its first block, -1 past its last) are read again below
-  std::vector<int32_t> rescan;
-  if (collapsed_dropped)
-    for (size_t e = 0; e < en; ++e) {
-      const uint32_t last = edges[e / kEdgeChunk][3 * (e % kEdgeChunk) + 2];
-      if (covered[e] || last == kNone) continue;
-      if (rescan.empty()) rescan.assign(block_first_edge.size() + 1, 0);
-      // the block whose triangle created the edge (edges from triangles come first, in block order)
-      const size_t first = static_cast<size_t>(
-          std::upper_bound(block_first_edge.begin(), block_first_edge.end(), uint32_t(e)) - block_first_edge.begin() - 1);
-      ++rescan[first];
-      --rescan[last + 1];
-    }
-  if (rescan.empty()) { EdgeLists released(0, false); std::swap(released, edge_lists); }
-  std::vector<uint32_t> remap(en, kNone);
-  for (size_t e = 0; e < en; ++e) {
-    if (covered[e]) continue;
-    const uint32_t* pair = edges[e / kEdgeChunk].get() + 3 * (e % kEdgeChunk);
-    remap[e] = static_cast<uint32_t>(out.edges.size() / 2);
-    out.edges.push_back(pair[0]);
-    out.edges.push_back(pair[1]);
-    point_state[pair[0]] = point_state[pair[1]] = kUsed;
-  }
-  std::vector<std::unique_ptr<uint32_t[]>>().swap(edges);
-  for (uint32_t c : point_candidates)
-    if (point_state[c] == kListed) out.points.push_back(c);
-
-  if (!compute_thickness) return;
-  out.edge_thickness.assign(out.edges.size() / 2, 0.0f);
-  // the triangles collapsed onto uncovered edges, in input order, with the edges' output ids
-  std::vector<CollapsedTriangle> collapsed;
-  if (!collapsed_dropped) {
-    size_t kept = 0;
-    for (const CollapsedTriangle& ct : collapsed_list) kept += remap[ct.edge] != kNone;
-    collapsed.reserve(kept);
-    for (const CollapsedTriangle& ct : collapsed_list)
-      if (remap[ct.edge] != kNone) collapsed.push_back({ct.triangle, remap[ct.edge]});
-    std::vector<CollapsedTriangle>().swap(collapsed_list);
-  } else if (!rescan.empty()) {
-    // A triangle collapsed onto an uncovered edge has its corners in the edge's two clusters: with
-    // those marked (the point states are no longer read), a triangle whose first corner is not is
-    // passed over after one test that is rarely taken (at 2 % of the bunny, one uncovered edge of
-    // four triangles spread over most blocks: the full classification of them cost 0.9 M
-    // instructions, 11 % of the level's elimination).
-    constexpr uint8_t kEdgeEnd = 4;
-    for (uint32_t c : out.edges) point_state[c] = kEdgeEnd;
-    // A block's triangles whose first corner is at an edge's end (counted): where they were over
-    // 1/32 of the last block read, the next one tests the class and the corner in one test (at the
-    // bunny chain's level 6, w = 0.856, the ends' clusters hold much of the blocks, and the test of
-    // the corner first mispredicted 9.7 k times of the elimination's 16.6 k: 0.31-0.34 -> 0.26-0.28
-    // ms, 2.96 -> 4.13 M instructions); else the corner first, a branch rarely taken (at 2 %, where
-    // the one test cost 0.2 M instructions more and no time back; at 1/8 level 6 kept 9.3 k
-    // mispredicts, 0.28-0.29 ms).
-    auto rescanBlock = [&](size_t t0, size_t t1, bool one_test) __attribute__((always_inline)) {
-      size_t ends = 0;
-      for (size_t t = t0; t < t1; ++t) {
-        const uint32_t* v = tri + 3 * t;
-        const uint32_t c0 = co[v[0]];
-        const bool end = point_state[c0] == kEdgeEnd;
-        if (!one_test && !end) continue;
-        const uint32_t c1 = co[v[1]], c2 = co[v[2]];
-        const bool e01 = c0 == c1, e12 = c1 == c2, e02 = c0 == c2;
-        ends += end;
-        // collapsed to an edge: not kept, not a point
-        if (!(uint32_t(e01 | e12 | e02) & ~uint32_t(e01 & e12) & uint32_t(end))) continue;
-        const uint32_t y = e01 ? c2 : c1, lo = branchlessMin(c0, y);
-        const uint32_t r = remap[edge_lists.find(lo, c0 ^ y ^ lo)];
-        if (r != kNone) collapsed.push_back({static_cast<uint32_t>(t), r});
-      }
-      return ends;
-    };
-    int32_t open = 0;
-    bool one_test = false;
-    for (size_t b = 0; b + 1 < rescan.size(); ++b) {
-      open += rescan[b];
-      if (open == 0) continue;
-      const size_t t0 = b * kBlock, t1 = std::min(tn, (b + 1) * kBlock);
-      const size_t ends = one_test ? rescanBlock(t0, t1, true) : rescanBlock(t0, t1, false);
-      one_test = ends * 32 > t1 - t0;
-    }
-    EdgeLists released(0, false);
-    std::swap(released, edge_lists);
-  }
-  computeThickness(p, a, collapsed, out);
-  if (input_edges)
-    for (size_t e = 0; e < en; ++e)
-      if (remap[e] != kNone) out.edge_thickness[remap[e]] = std::max(out.edge_thickness[remap[e]], input_thickness[e]);
+  for (uint32_t v : m.points) c.addPoint(co[v]);
+  table.release();
+  finishEdges(p, a, compute_thickness, c, out);
 }
 
 }  // namespace scenelod::detail

@@ -15,6 +15,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod::detail {
 
@@ -311,7 +312,178 @@ SCENELOD_AVX2_TARGET size_t cornerTest8(const uint32_t* tri, size_t tn, const Fa
   }
   return t;
 }
+
+// facePass8's baseline from face t0 on (the faces it leaves; returns where it stops): four faces at
+// a time, one per lane, with the scalar loop's operations (glm::cross, glm::length, the division,
+// the products by the area): bit-identical, and the divider does a quarter of the divisions and roots
+SCENELOD_ALWAYS_INLINE size_t facePass4(const uint32_t* tri, size_t t0, size_t tn, const glm::vec3* rp,
+                                        FaceBlock* face, glm::vec4* mean) {
+  auto load = [&](uint32_t i) {  // (x, y, z, 0) without reading past the array
+    return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&rp[i].x)),
+                         _mm_load_ss(&rp[i].z));
+  };
+  for (; t0 + 4 <= tn; t0 += 4) {
+    const uint32_t* c = tri + 3 * t0;
+    __m128 ax = load(c[0]), ay = load(c[3]), az = load(c[6]), aw = load(c[9]);
+    __m128 bx = load(c[1]), by = load(c[4]), bz = load(c[7]), bw = load(c[10]);
+    __m128 cx = load(c[2]), cy = load(c[5]), cz = load(c[8]), cw = load(c[11]);
+    _MM_TRANSPOSE4_PS(ax, ay, az, aw);
+    _MM_TRANSPOSE4_PS(bx, by, bz, bw);
+    _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
+    const __m128 ux = _mm_sub_ps(bx, ax), uy = _mm_sub_ps(by, ay), uz = _mm_sub_ps(bz, az);
+    const __m128 vx = _mm_sub_ps(cx, ax), vy = _mm_sub_ps(cy, ay), vz = _mm_sub_ps(cz, az);
+    const __m128 nx = _mm_sub_ps(_mm_mul_ps(uy, vz), _mm_mul_ps(vy, uz));
+    const __m128 ny = _mm_sub_ps(_mm_mul_ps(uz, vx), _mm_mul_ps(vz, ux));
+    const __m128 nz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(vx, uy));
+    const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
+    const __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
+    const __m128 fx = _mm_and_ps(pos, _mm_div_ps(nx, l)), fy = _mm_and_ps(pos, _mm_div_ps(ny, l));
+    const __m128 fz = _mm_and_ps(pos, _mm_div_ps(nz, l)), fw = _mm_and_ps(pos, l);
+    __m128 sx = _mm_mul_ps(fx, fw), sy = _mm_mul_ps(fy, fw), sz = _mm_mul_ps(fz, fw), sw = _mm_set1_ps(1.0f);
+    _MM_TRANSPOSE4_PS(sx, sy, sz, sw);
+    FaceBlock& fb = face[t0 >> 3];
+    const size_t h = t0 & 4;  // the block's first or second half
+    _mm_storeu_ps(fb.x + h, fx), _mm_storeu_ps(fb.y + h, fy), _mm_storeu_ps(fb.z + h, fz), _mm_storeu_ps(fb.w + h, fw);
+    const __m128 add[4] = {sx, sy, sz, sw};
+    for (int i = 0; i < 12; ++i) {  // in corner order: a cluster's sum as its corner list would give it
+      float* m = &mean[c[i]].x;
+      _mm_storeu_ps(m, _mm_add_ps(_mm_loadu_ps(m), add[i / 3]));
+    }
+  }
+  return t0;
+}
+
+// cornerTest8's baseline from face t1 on (returns where it stops): four faces at a time, one per
+// lane, and their corners k = 0, 1, 2 in turn: the scalar loop's products and sums in its order, its
+// two tests; the lanes' verdicts cleared in smooth one byte at a time (scalar: 19 instructions a
+// corner, 2.0 M of the bunny's 50 % level)
+SCENELOD_ALWAYS_INLINE size_t cornerTest4(const uint32_t* tri, size_t t1, size_t tn, const FaceBlock* face,
+                                          const glm::vec4* mean, float cos_ref, uint8_t* smooth) {
+  const __m128 ref = _mm_set1_ps(cos_ref), min_w = _mm_set1_ps(1e-18f);
+  for (; t1 + 4 <= tn; t1 += 4) {
+    const FaceBlock& fb = face[t1 >> 3];
+    const size_t h = t1 & 4;
+    const __m128 ux = _mm_loadu_ps(fb.x + h), uy = _mm_loadu_ps(fb.y + h), uz = _mm_loadu_ps(fb.z + h);
+    const __m128 long_enough = _mm_cmpge_ps(_mm_loadu_ps(fb.w + h), min_w);
+    const uint32_t* c = tri + 3 * t1;
+    for (int k = 0; k < 3; ++k) {
+      __m128 mx = _mm_loadu_ps(&mean[c[k]].x), my = _mm_loadu_ps(&mean[c[3 + k]].x);
+      __m128 mz = _mm_loadu_ps(&mean[c[6 + k]].x), mw = _mm_loadu_ps(&mean[c[9 + k]].x);
+      _MM_TRANSPOSE4_PS(mx, my, mz, mw);
+      const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ux, mx), _mm_mul_ps(uy, my)), _mm_mul_ps(uz, mz));
+      const uint32_t pass = uint32_t(_mm_movemask_ps(_mm_and_ps(long_enough, _mm_cmpge_ps(d, ref))));
+      for (int q = 0; q < 4; ++q) smooth[c[3 * q + k]] &= uint8_t((pass >> q) & 1u);
+    }
+  }
+  return t1;
+}
 #endif
+
+// The vertex normals of the clusters whose corners are listed (offsets[c] .. offsets[c + 1] of
+// corners, a cluster's corners in order): per listed corner its vertex among its cluster's
+// (local_vertex), the clusters' distinct normals in cluster order into split_normals (their count
+// returned), each listed cluster's vertex count in base_vertex[c]. Inlined into each build of
+// buildOutputMeshBody.
+SCENELOD_ALWAYS_INLINE size_t splitClusters(const std::vector<uint32_t>& offsets, const uint32_t* corners,
+                                            const FaceBlock* face, const Representatives& r, float cos_crease,
+                                            uint32_t* local_vertex, glm::vec3* split_normals,
+                                            std::vector<uint32_t>& base_vertex) {
+  const size_t nc = r.positions.size();
+  size_t split_count = 0;
+  ClusterFaces cf;
+  std::vector<glm::vec3> sums;  // per corner of the current cluster
+  const uint32_t* end_of = offsets.data() + 1;
+  for (uint32_t c = 0; c < nc; ++c) {
+    // the next listed cluster by a tight scan (3 % of the clusters at the bunny's 50 % level: the
+    // loop's full test took 13 instructions a cluster, 0.22 M)
+    while (c < nc && end_of[c] == offsets[c]) ++c;
+    if (c == nc) break;
+    const uint32_t b = offsets[c], en = end_of[c];
+    const size_t k = en - b;
+    const size_t first = split_count;
+#if defined(__SSE2__)
+    if (k <= kSmall) {
+      // fixed trip counts: the loop exits of a varying k were about four mispredicted branches per
+      // cluster. Rows past k repeat the last corner and are zeroed, where a zero face adds +0.
+      __m128 row[kSmall];
+      // row j's mask, all ones for j < k: entry j of a window onto kSmall ones, then kSmall zeros
+      static const int32_t kRowValid[2 * kSmall] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+      const int32_t* valid = kRowValid + kSmall - k;
+      for (uint32_t j = 0; j < kSmall; ++j) {
+        const uint32_t corner = corners[b + std::min<uint32_t>(j, uint32_t(k) - 1)];
+        const glm::vec4 fj = faceAt(face, corner / 3);
+        row[j] = _mm_and_ps(_mm_setr_ps(fj.x, fj.y, fj.z, fj.w), _mm_castsi128_ps(_mm_set1_epi32(valid[j])));
+      }
+      __m128 x0 = row[0], y0 = row[1], z0 = row[2], w0 = row[3];
+      __m128 x1 = row[4], y1 = row[5], z1 = row[6], w1 = row[7];
+      _MM_TRANSPOSE4_PS(x0, y0, z0, w0);
+      _MM_TRANSPOSE4_PS(x1, y1, z1, w1);
+      cf.resize(kSmall);
+      _mm_storeu_ps(&cf.x[0], x0), _mm_storeu_ps(&cf.y[0], y0), _mm_storeu_ps(&cf.z[0], z0), _mm_storeu_ps(&cf.w[0], w0);
+      _mm_storeu_ps(&cf.x[4], x1), _mm_storeu_ps(&cf.y[4], y1), _mm_storeu_ps(&cf.z[4], z1), _mm_storeu_ps(&cf.w[4], w1);
+      uint32_t local[kSmall];
+      const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, &split_normals[first]);
+      split_count += fresh;
+      for (uint32_t j = 0; j < kSmall; ++j) local_vertex[b + std::min<uint32_t>(j, uint32_t(k) - 1)] = local[j];
+      base_vertex[c] = fresh;
+      continue;
+    }
+#endif
+    cf.resize(k);
+    for (size_t j = 0; j < k; ++j) {
+      const glm::vec4 fj = faceAt(face, corners[b + j] / 3);
+      cf.x[j] = fj.x, cf.y[j] = fj.y, cf.z[j] = fj.z, cf.w[j] = fj.w;
+    }
+    if (sums.size() < k) sums.resize(k);
+    cornerNormals(cf, k, cos_crease, sums.data());
+    for (uint32_t i = b; i < en; ++i) {
+      glm::vec3 n = sums[i - b];
+      const float l = glm::length(n);
+      n = l > 0.0f ? n / l : r.normals[c];
+      size_t v = first;
+      while (v < split_count && !(split_normals[v] == n)) ++v;
+      if (v == split_count) split_normals[split_count++] = n;
+      local_vertex[i] = static_cast<uint32_t>(v - first);
+    }
+    base_vertex[c] = static_cast<uint32_t>(split_count - first);
+  }
+  return split_count;
+}
+
+// The output vertices, cluster by cluster: one for a smooth cluster (its mean normal) or for one
+// only used by edges and points (its synthesized normal), a split cluster's copies in order (its
+// normals from split_normals, base_vertex[c] of them); base_vertex[c] becomes c's first vertex
+SCENELOD_ALWAYS_INLINE void writeVertices(const Representatives& r, const uint8_t* smooth, const uint8_t* needs_vertex,
+                                          const uint32_t* offsets, const glm::vec4* mean, const glm::vec3* split,
+                                          size_t vertex_count, uint32_t* base_vertex, Mesh& out) {
+  const size_t nc = r.positions.size();
+  const bool colors = !r.colors.empty();
+  out.normals.resize(vertex_count);
+  out.positions.resize(vertex_count);
+  if (colors) out.colors.resize(vertex_count);
+  glm::vec3* normals = out.normals.data();
+  glm::vec3* positions = out.positions.data();
+  glm::vec3* out_colors = out.colors.data();
+  uint32_t v = 0;
+  for (uint32_t c = 0; c < nc; ++c) {
+    uint32_t n;
+    if (smooth[c]) {  // (97 % of the clusters at the bunny's 50 % level) one vertex, without the copy loops
+      normals[v] = glm::vec3(mean[c]), positions[v] = r.positions[c];
+      if (colors) out_colors[v] = r.colors[c];
+      base_vertex[c] = v++;
+      continue;
+    } else if (offsets[c + 1] != offsets[c]) {
+      n = base_vertex[c];
+      for (uint32_t q = 0; q < n; ++q) normals[v + q] = *split++;
+    } else if (needs_vertex[c]) n = 1, normals[v] = r.normals[c];
+    else continue;
+    base_vertex[c] = v;
+    for (uint32_t q = 0; q < n; ++q) positions[v + q] = r.positions[c];
+    if (colors)
+      for (uint32_t q = 0; q < n; ++q) out_colors[v + q] = r.colors[c];
+    v += n;
+  }
+}
 
 // buildOutputMesh, compiled into a baseline function and an AVX2 one (as synthesize's loops; see
 // synthesis.cpp), chosen at run time.
@@ -333,7 +505,6 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   const size_t nc = r.positions.size();
   const size_t tn = e.triangles.size() / 3;
   const size_t corner_count = e.triangles.size();
-  const bool colors = !r.colors.empty();
   const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
   // the sufficient test (see above): faces within alpha of their mean direction are within 2 alpha
   // of each other; 2 alpha is the crease angle less a margin that covers the rounding of the float
@@ -358,44 +529,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   size_t t0 = 0;
 #if defined(__SSE2__)
   if constexpr (avx2) t0 = facePass8(tri, tn, r.positions.data(), face.get(), mean.get());
-  // four faces at a time, one per lane, with the scalar loop's operations (glm::cross, glm::length,
-  // the division, the products by the area): bit-identical, and the divider does a quarter of the
-  // divisions and roots
-  {
-    const glm::vec3* rp = r.positions.data();
-    auto load = [&](uint32_t i) {  // (x, y, z, 0) without reading past the array
-      return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(&rp[i].x)),
-                           _mm_load_ss(&rp[i].z));
-    };
-    for (; t0 + 4 <= tn; t0 += 4) {
-      const uint32_t* c = tri + 3 * t0;
-      __m128 ax = load(c[0]), ay = load(c[3]), az = load(c[6]), aw = load(c[9]);
-      __m128 bx = load(c[1]), by = load(c[4]), bz = load(c[7]), bw = load(c[10]);
-      __m128 cx = load(c[2]), cy = load(c[5]), cz = load(c[8]), cw = load(c[11]);
-      _MM_TRANSPOSE4_PS(ax, ay, az, aw);
-      _MM_TRANSPOSE4_PS(bx, by, bz, bw);
-      _MM_TRANSPOSE4_PS(cx, cy, cz, cw);
-      const __m128 ux = _mm_sub_ps(bx, ax), uy = _mm_sub_ps(by, ay), uz = _mm_sub_ps(bz, az);
-      const __m128 vx = _mm_sub_ps(cx, ax), vy = _mm_sub_ps(cy, ay), vz = _mm_sub_ps(cz, az);
-      const __m128 nx = _mm_sub_ps(_mm_mul_ps(uy, vz), _mm_mul_ps(vy, uz));
-      const __m128 ny = _mm_sub_ps(_mm_mul_ps(uz, vx), _mm_mul_ps(vz, ux));
-      const __m128 nz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(vx, uy));
-      const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz)));
-      const __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
-      const __m128 fx = _mm_and_ps(pos, _mm_div_ps(nx, l)), fy = _mm_and_ps(pos, _mm_div_ps(ny, l));
-      const __m128 fz = _mm_and_ps(pos, _mm_div_ps(nz, l)), fw = _mm_and_ps(pos, l);
-      __m128 sx = _mm_mul_ps(fx, fw), sy = _mm_mul_ps(fy, fw), sz = _mm_mul_ps(fz, fw), sw = _mm_set1_ps(1.0f);
-      _MM_TRANSPOSE4_PS(sx, sy, sz, sw);
-      FaceBlock& fb = face[t0 >> 3];
-      const size_t h = t0 & 4;  // the block's first or second half
-      _mm_storeu_ps(fb.x + h, fx), _mm_storeu_ps(fb.y + h, fy), _mm_storeu_ps(fb.z + h, fz), _mm_storeu_ps(fb.w + h, fw);
-      const __m128 add[4] = {sx, sy, sz, sw};
-      for (int i = 0; i < 12; ++i) {  // in corner order: a cluster's sum as its corner list would give it
-        float* m = &mean[c[i]].x;
-        _mm_storeu_ps(m, _mm_add_ps(_mm_loadu_ps(m), add[i / 3]));
-      }
-    }
-  }
+  t0 = facePass4(tri, t0, tn, r.positions.data(), face.get(), mean.get());
 #endif
   for (size_t t = t0; t < tn; ++t) {
     const glm::vec3& a = r.positions[tri[3 * t]];
@@ -425,27 +559,7 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   size_t t1 = 0;
 #if defined(__SSE2__)
   if constexpr (avx2) t1 = cornerTest8(tri, tn, face.get(), mean.get(), cos_ref, smooth.data());
-  // four faces at a time, one per lane, and their corners k = 0, 1, 2 in turn: the scalar loop's
-  // products and sums in its order, its two tests; the lanes' verdicts cleared in smooth one byte
-  // at a time (scalar: 19 instructions a corner, 2.0 M of the bunny's 50 % level)
-  {
-    const __m128 ref = _mm_set1_ps(cos_ref), min_w = _mm_set1_ps(1e-18f);
-    for (; t1 + 4 <= tn; t1 += 4) {
-      const FaceBlock& fb = face[t1 >> 3];
-      const size_t h = t1 & 4;
-      const __m128 ux = _mm_loadu_ps(fb.x + h), uy = _mm_loadu_ps(fb.y + h), uz = _mm_loadu_ps(fb.z + h);
-      const __m128 long_enough = _mm_cmpge_ps(_mm_loadu_ps(fb.w + h), min_w);
-      const uint32_t* c = tri + 3 * t1;
-      for (int k = 0; k < 3; ++k) {
-        __m128 mx = _mm_loadu_ps(&mean[c[k]].x), my = _mm_loadu_ps(&mean[c[3 + k]].x);
-        __m128 mz = _mm_loadu_ps(&mean[c[6 + k]].x), mw = _mm_loadu_ps(&mean[c[9 + k]].x);
-        _MM_TRANSPOSE4_PS(mx, my, mz, mw);
-        const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ux, mx), _mm_mul_ps(uy, my)), _mm_mul_ps(uz, mz));
-        const uint32_t pass = uint32_t(_mm_movemask_ps(_mm_and_ps(long_enough, _mm_cmpge_ps(d, ref))));
-        for (int q = 0; q < 4; ++q) smooth[c[3 * q + k]] &= uint8_t((pass >> q) & 1u);
-      }
-    }
-  }
+  t1 = cornerTest4(tri, t1, tn, face.get(), mean.get(), cos_ref, smooth.data());
 #endif
   for (size_t t = t1; t < tn; ++t) {
     const glm::vec4 u = faceAt(face.get(), t);
@@ -499,99 +613,15 @@ SCENELOD_ALWAYS_INLINE void buildOutputMeshBody(Eliminated& e, const Representat
   // at most one per listed corner, plus 8 (kSmall): the small path writes a candidate normal per
   // corner in place, past its count; written, not zeroed (a vector grown by insert took 210 k instructions at the 1 M sphere's 1 % level)
   std::unique_ptr<glm::vec3[]> split_normals(new glm::vec3[listed + 8]);
-  size_t split_count = 0;
-  {
-    ClusterFaces cf;
-    std::vector<glm::vec3> sums;  // per corner of the current cluster
-    const uint32_t* end_of = offsets.data() + 1;
-    for (uint32_t c = 0; c < nc; ++c) {
-      // the next listed cluster by a tight scan (3 % of the clusters at the bunny's 50 % level: the
-      // loop's full test took 13 instructions a cluster, 0.22 M)
-      while (c < nc && end_of[c] == offsets[c]) ++c;
-      if (c == nc) break;
-      const uint32_t b = offsets[c], en = end_of[c];
-      const size_t k = en - b;
-      const size_t first = split_count;
-#if defined(__SSE2__)
-      if (k <= kSmall) {
-        // fixed trip counts: the loop exits of a varying k were about four mispredicted branches per
-        // cluster. Rows past k repeat the last corner and are zeroed, where a zero face adds +0.
-        __m128 row[kSmall];
-        // row j's mask, all ones for j < k: entry j of a window onto kSmall ones, then kSmall zeros
-        static const int32_t kRowValid[2 * kSmall] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
-        const int32_t* valid = kRowValid + kSmall - k;
-        for (uint32_t j = 0; j < kSmall; ++j) {
-          const uint32_t corner = corners[b + std::min<uint32_t>(j, uint32_t(k) - 1)];
-          const glm::vec4 fj = faceAt(face.get(), corner / 3);
-          row[j] = _mm_and_ps(_mm_setr_ps(fj.x, fj.y, fj.z, fj.w), _mm_castsi128_ps(_mm_set1_epi32(valid[j])));
-        }
-        __m128 x0 = row[0], y0 = row[1], z0 = row[2], w0 = row[3];
-        __m128 x1 = row[4], y1 = row[5], z1 = row[6], w1 = row[7];
-        _MM_TRANSPOSE4_PS(x0, y0, z0, w0);
-        _MM_TRANSPOSE4_PS(x1, y1, z1, w1);
-        cf.resize(kSmall);
-        _mm_storeu_ps(&cf.x[0], x0), _mm_storeu_ps(&cf.y[0], y0), _mm_storeu_ps(&cf.z[0], z0), _mm_storeu_ps(&cf.w[0], w0);
-        _mm_storeu_ps(&cf.x[4], x1), _mm_storeu_ps(&cf.y[4], y1), _mm_storeu_ps(&cf.z[4], z1), _mm_storeu_ps(&cf.w[4], w1);
-        uint32_t local[kSmall];
-        const uint32_t fresh = smallCorners(cf, k, cos_crease, r.normals[c], local, &split_normals[first]);
-        split_count += fresh;
-        for (uint32_t j = 0; j < kSmall; ++j) local_vertex[b + std::min<uint32_t>(j, uint32_t(k) - 1)] = local[j];
-        base_vertex[c] = fresh;
-        continue;
-      }
-#endif
-      cf.resize(k);
-      for (size_t j = 0; j < k; ++j) {
-        const glm::vec4 fj = faceAt(face.get(), corners[b + j] / 3);
-        cf.x[j] = fj.x, cf.y[j] = fj.y, cf.z[j] = fj.z, cf.w[j] = fj.w;
-      }
-      if (sums.size() < k) sums.resize(k);
-      cornerNormals(cf, k, cos_crease, sums.data());
-      for (uint32_t i = b; i < en; ++i) {
-        glm::vec3 n = sums[i - b];
-        const float l = glm::length(n);
-        n = l > 0.0f ? n / l : r.normals[c];
-        size_t v = first;
-        while (v < split_count && !(split_normals[v] == n)) ++v;
-        if (v == split_count) split_normals[split_count++] = n;
-        local_vertex[i] = static_cast<uint32_t>(v - first);
-      }
-      base_vertex[c] = static_cast<uint32_t>(split_count - first);
-    }
-  }
+  const size_t split_count =
+      splitClusters(offsets, corners.get(), face.get(), r, cos_crease, local_vertex.get(), split_normals.get(), base_vertex);
   face.reset();
   vertex_count += split_count;
 
   // each cluster's output vertices are base_vertex[c] .. the next used cluster's base_vertex: one
   // for a smooth cluster or one only used by edges and points, the split ones' copies in order
-  out.normals.resize(vertex_count);
-  out.positions.resize(vertex_count);
-  if (colors) out.colors.resize(vertex_count);
-  {
-    glm::vec3* normals = out.normals.data();
-    glm::vec3* positions = out.positions.data();
-    glm::vec3* out_colors = out.colors.data();
-    uint32_t v = 0;
-    const glm::vec3* split = split_normals.get();
-    for (uint32_t c = 0; c < nc; ++c) {
-      uint32_t n;
-      if (smooth[c]) {  // (97 % of the clusters at the bunny's 50 % level) one vertex, without the copy loops
-        normals[v] = glm::vec3(mean[c]), positions[v] = r.positions[c];
-        if (colors) out_colors[v] = r.colors[c];
-        base_vertex[c] = v++;
-        continue;
-      } else if (offsets[c + 1] != offsets[c]) {
-        n = base_vertex[c];
-        for (uint32_t q = 0; q < n; ++q) normals[v + q] = *split++;
-      } else if (needs_vertex[c]) n = 1, normals[v] = r.normals[c];
-      else continue;
-      base_vertex[c] = v;
-      for (uint32_t q = 0; q < n; ++q) positions[v + q] = r.positions[c];
-      if (colors)
-        for (uint32_t q = 0; q < n; ++q) out_colors[v + q] = r.colors[c];
-      v += n;
-    }
-  }
+  writeVertices(r, smooth.data(), needs_vertex.data(), offsets.data(), mean.get(), split_normals.get(), vertex_count,
+                base_vertex.data(), out);
   mean.reset();
   // each corner's cluster id is no longer read: the output vertex takes its place, so the output
   // triangles need no second array
@@ -680,8 +710,7 @@ bool g_output_reference = false;
 
 }  // namespace
 
-// test hook (declared by the test, as useAvx2Paths is): the reference output pass for every later
-// call; returns the previous choice
+// (test_hooks.h)
 bool useOutputReference(bool on) {
   return std::exchange(g_output_reference, on);
 }

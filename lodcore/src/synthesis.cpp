@@ -18,6 +18,7 @@
 #endif
 
 #include "cluster_internal.h"
+#include "test_hooks.h"
 
 namespace scenelod {
 
@@ -73,6 +74,7 @@ bool g_avx2_paths = cpuHasAvx2();
 
 bool avx2Paths() { return g_avx2_paths; }
 
+// (test_hooks.h)
 bool useAvx2Paths(bool on) {
   const bool was = g_avx2_paths;
   g_avx2_paths = on && cpuHasAvx2();
@@ -87,8 +89,7 @@ bool g_eigen_lanes = true;
 
 }  // namespace
 
-// private test hook (declared by tests/lodcore/synthesis_test.cpp): the lanes on or off for every
-// later call; returns the previous choice; not thread-safe
+// (test_hooks.h)
 bool useEigenvalueLanes(bool on) {
   return std::exchange(g_eigen_lanes, on);
 }
@@ -101,8 +102,7 @@ bool g_grouped = true;
 
 }  // namespace
 
-// private test hook (declared by tests/lodcore/synthesis_test.cpp): the grouped pass allowed or not
-// for every later call; returns the previous choice; not thread-safe
+// (test_hooks.h)
 bool useGroupedSynthesis(bool on) {
   return std::exchange(g_grouped, on);
 }
@@ -1031,7 +1031,7 @@ SCENELOD_ALWAYS_INLINE void sumVerticesBody(const VertexArrays& arrays, const ui
   }
 }
 
-// each loop twice: as the baseline (SSE2) and, chosen at run time, the same source compiled for AVX2
+// each pass twice: as the baseline (SSE2) and, chosen at run time, the same source compiled for AVX2
 // (its three-operand forms spare the register copies of the two-operand SSE2 code: about a fifth of
 // the single pass's instructions); without FMA, so the same operations and the same bits
 template <bool colors, bool quadric, bool have_face_sums>

@@ -10,15 +10,9 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/chain.h"
+#include "test_hooks.h"
 
 using namespace scenelod;
-
-namespace scenelod::detail {
-// private test hook (lodcore/src/chain.cpp): how a chain builds its coarse levels during the w_1
-// search's first probe (0 not at all, 1 on another thread meanwhile, 2 all before the probe);
-// returns the previous mode
-int setChainSpeculationForTest(int mode);
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -202,7 +196,7 @@ TEST(Chain, LevelsBuiltDuringTheFirstProbeAreKeptOrDropped) {
     cp.level_count = 6;
     LodChain reference;
     ChainStats reference_stats;
-    const int previous = detail::setChainSpeculationForTest(0);
+    detail::HookGuard speculation(detail::setChainSpeculationForTest, 0);
     ASSERT_TRUE(buildChain(c.mesh, cp, reference, &reference_stats).ok());
     // which of the two paths this mesh takes (if the search's rule changes, pick another mesh)
     if (c.first_probe_ends_search) EXPECT_EQ(reference_stats.first_width_probes, 1u) << c.name;
@@ -210,7 +204,7 @@ TEST(Chain, LevelsBuiltDuringTheFirstProbeAreKeptOrDropped) {
     for (int mode : {1, 2})
       for (int threads : {1, 2, 4}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-        detail::setChainSpeculationForTest(mode);
+        speculation.set(mode);
         Seen seen;
         cp.progress.fn = [](void* u, double f, const char*) {
           Seen* s = static_cast<Seen*>(u);
@@ -237,7 +231,6 @@ TEST(Chain, LevelsBuiltDuringTheFirstProbeAreKeptOrDropped) {
         ASSERT_EQ(stats.level_seconds.size(), 6u);
         for (double seconds : stats.level_seconds) EXPECT_GT(seconds, 0.0) << where;
       }
-    detail::setChainSpeculationForTest(previous);
   }
 }
 

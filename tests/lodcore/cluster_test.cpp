@@ -15,6 +15,7 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/eval/consistency.h"
 #include "scenelod/lodcore/cluster.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
@@ -278,12 +279,6 @@ TEST(ClusterMesh, DegenerateTrianglesAreHandled) {
   EXPECT_TRUE(std::isfinite(out.edge_thickness[0]));
 }
 
-// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
-// of synthesize and buildOutputMesh for every later call; returns the previous choice
-namespace scenelod::detail {
-bool useAvx2Paths(bool on);
-}
-
 namespace {
 
 using test::sameBits;
@@ -291,7 +286,7 @@ using test::sameBits;
 }  // namespace
 
 // The AVX2 variants (where the CPU has them) give the baseline's bits: every array of the output and
-// the level's maximum displacement, for each synthesis, fine levels (the grouped synthesis) and coarse ones (the single pass), with
+// the level's maximum displacement, for each synthesis, fine and coarse levels, with
 // colours, crease splits and a sphere cell; on a CPU without AVX2 both runs take the baseline.
 TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
   Mesh bumpy = test::makeBumpySphere(90, 120);
@@ -299,7 +294,7 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
   cad.colors.resize(cad.positions.size());
   for (size_t i = 0; i < cad.colors.size(); ++i)
     cad.colors[i] = glm::vec3(float(i % 7) / 7.0f, float(i % 5) / 5.0f, float(i % 3) / 3.0f);
-  const bool was = detail::useAvx2Paths(true);
+  detail::HookGuard avx2(detail::useAvx2Paths, true);
   size_t levels = 0, split = 0;
   for (const Mesh* m : {&bumpy, &cad})
     for (Synthesis s : {Synthesis::kQuadric, Synthesis::kMean, Synthesis::kHeaviest})
@@ -312,9 +307,9 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
           p.crease_angle_deg = 40.0f;
           Mesh wide, base;
           float wide_error = -1.0f, base_error = -2.0f;  // the level's maximum vertex displacement
-          detail::useAvx2Paths(true);
+          avx2.set(true);
           ASSERT_TRUE(clusterMesh(*m, p, wide, &wide_error).ok());
-          detail::useAvx2Paths(false);
+          avx2.set(false);
           ASSERT_TRUE(clusterMesh(*m, p, base, &base_error).ok());
           SCOPED_TRACE(std::string(synthesisName(s)) + " " + cellShapeName(shape) + " w=" + std::to_string(w));
           ASSERT_GT(base.triangleCount(), 0u);
@@ -337,22 +332,17 @@ TEST(ClusterMesh, Avx2PathsGiveTheBaselineBits) {
     ClusterParams p;
     p.cell_width = w;
     Mesh wide, base;
-    detail::useAvx2Paths(true);
+    avx2.set(true);
     ASSERT_TRUE(clusterMesh(big, p, wide).ok());
-    detail::useAvx2Paths(false);
+    avx2.set(false);
     ASSERT_TRUE(clusterMesh(big, p, base).ok());
     EXPECT_GT(base.triangleCount(), w > 0.02f ? 30000u : 65536u);
     EXPECT_TRUE(sameBits(wide.positions, base.positions));
     EXPECT_TRUE(sameBits(wide.normals, base.normals));
     EXPECT_TRUE(sameBits(wide.triangles, base.triangles));
   }
-  detail::useAvx2Paths(was);
   EXPECT_EQ(levels, 48u);
   EXPECT_GT(split, 0u);  // the CAD part's sharp edges split vertices in some levels
-}
-
-namespace scenelod::detail {
-int setRenumberingForTest(int mode);  // lodcore/src/cluster_mesh.cpp: 1 always, 0 never, -1 by size
 }
 
 namespace {
@@ -401,9 +391,7 @@ TEST(ClusterMesh, RenumberingClustersKeepsTheLevel) {
   const Mesh m = test::makeBumpySphere(300, 400);  // 120 k vertices
   PreparedMesh p;
   ASSERT_TRUE(prepareMesh(m, ClusterParams(), p).ok());
-  struct RestoreDefault {  // the hook back to its default however the test ends
-    ~RestoreDefault() { detail::setRenumberingForTest(-1); }
-  } restore;
+  detail::HookGuard renumbering(detail::setRenumberingForTest, -1);
   size_t renumbered_by_default = 0, kept_by_default = 0;
   for (LodMethod method : {LodMethod::kFloatingHeaviest, LodMethod::kFloatingNearest, LodMethod::kUniform})
     for (float w : {0.006f, 0.04f}) {
@@ -413,11 +401,11 @@ TEST(ClusterMesh, RenumberingClustersKeepsTheLevel) {
       Mesh on, off, by_default;
       ClusterStats on_stats, off_stats;
       SCOPED_TRACE(std::string(lodMethodName(method)) + " w=" + std::to_string(w));
-      detail::setRenumberingForTest(1);
+      renumbering.set(1);
       ASSERT_TRUE(clusterPrepared(p, params, on, &on_stats).ok());
-      detail::setRenumberingForTest(0);
+      renumbering.set(0);
       ASSERT_TRUE(clusterPrepared(p, params, off, &off_stats).ok());
-      detail::setRenumberingForTest(-1);
+      renumbering.set(-1);
       ASSERT_TRUE(clusterPrepared(p, params, by_default).ok());
       ASSERT_GT(off.triangleCount(), 1000u);
       EXPECT_EQ(on_stats.cluster_count, off_stats.cluster_count);

@@ -11,19 +11,9 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
+#include "test_hooks.h"
 
 using namespace scenelod;
-
-namespace scenelod::detail {
-// floating_cell_cluster.cpp's hidden switches: avx2 false keeps the assignment off its AVX2 paths,
-// short_heads false keeps the flat grids' list heads at 32 bits, bricks false keeps them flat
-void setFloatingPathsForTest(bool avx2, bool short_heads, bool bricks);
-// the bricked grid of side w in blocks: -1 the default, 0 never (the hash), k > 0 the hash only where
-// the vertices' bricks are more than k (and its table past the dense budget); and the grid the last
-// assignment searched (0 flat, 1 bricked, 2 the hash, 3 the hash where the bricks were too many)
-int setFloatingBlockBricksForTest(int mode);
-int lastFloatingGridForTest();
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -137,14 +127,13 @@ TEST(FloatingCell, CellsSatisfyThePaperInvariants) {
   }
 }
 
-// The AVX2 paths (where the CPU has them) and the SSE2 ones, with list heads of 16 bits or 32, flat or
-// in bricks (the sphere at w = 0.03: a flat array of short heads over 16 B per vertex), choose
-// the same cells, for both rules and shapes, on the flat grids of side w/2 and w (listed) at widths
+// The AVX2 paths (where the CPU has them) and the SSE2 ones choose the same cells, for both rules
+// and shapes, on the flat grids of side w/2 and w (listed) at widths
 // from a few vertices per cell to a few cells per mesh; the grid-aligned part puts vertices exactly
 // on cube faces (the wide gathers); a triangle at 20 makes the sphere's box too large for cubes of
 // side w/2 at w = 0.4 and 0.5 (cubes of side w with cells in blocks). On a CPU without AVX2 those
 // runs take the SSE2 paths.
-TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
+TEST(FloatingCell, SimdPathsChooseTheSameCells) {
   Mesh grid_part = test::makeCadPart();
   Mesh sphere = test::makeBumpySphere(60, 80);
   Mesh sphere_far = sphere;
@@ -164,22 +153,16 @@ TEST(FloatingCell, SimdPathsAndHeadWidthsChooseTheSameCells) {
         params.method = c.method;
         params.cell_shape = c.shape;
         params.cell_width = w;
-        ClusterAssignment plain;  // SSE2, flat 32-bit heads
-        detail::setFloatingPathsForTest(false, false, false);
-        const bool ok = assignClusters(p, params, plain).ok();
-        detail::setFloatingPathsForTest(true, true, true);
-        ASSERT_TRUE(ok);
-        EXPECT_GT(plain.heaviest.size(), 1u);
-        for (int k = 1; k < 8; ++k) {
-          SCOPED_TRACE(k);
-          ClusterAssignment other;
-          detail::setFloatingPathsForTest(k & 1, k & 2, k & 4);
-          const bool other_ok = assignClusters(p, params, other).ok();
-          detail::setFloatingPathsForTest(true, true, true);
-          ASSERT_TRUE(other_ok);
-          EXPECT_EQ(other.heaviest, plain.heaviest);
-          EXPECT_EQ(other.cluster_of, plain.cluster_of);
+        ClusterAssignment plain, wide;  // SSE2, AVX2
+        {
+          detail::HookGuard avx2(detail::setFloatingAvx2ForTest, false);
+          ASSERT_TRUE(assignClusters(p, params, plain).ok());
+          avx2.set(true);
+          ASSERT_TRUE(assignClusters(p, params, wide).ok());
         }
+        EXPECT_GT(plain.heaviest.size(), 1u);
+        EXPECT_EQ(wide.heaviest, plain.heaviest);
+        EXPECT_EQ(wide.cluster_of, plain.cluster_of);
       }
     }
   }
@@ -247,11 +230,12 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
       params.cell_shape = c.shape;
       params.cell_width = run.w;
       ClusterAssignment hash;
-      detail::setFloatingBlockBricksForTest(0);
-      const bool hash_ok = assignClusters(p, params, hash).ok();
-      const int hash_grid = detail::lastFloatingGridForTest();
-      detail::setFloatingBlockBricksForTest(-1);
-      ASSERT_TRUE(hash_ok);
+      int hash_grid = -1;
+      {
+        detail::HookGuard bricks(detail::setFloatingBlockBricksForTest, 0);
+        ASSERT_TRUE(assignClusters(p, params, hash).ok());
+        hash_grid = detail::lastFloatingGridForTest();
+      }
       EXPECT_EQ(hash_grid, 2);
       EXPECT_GT(hash.heaviest.size(), 1u);
       if (run.mesh == &lattice && c.shape == CellShape::kSphere) {
@@ -267,13 +251,13 @@ TEST(FloatingCell, BrickedGridOfSideWChoosesTheHashsCells) {
         for (int mode : {-1, 2, 1 << 20}) {
           SCOPED_TRACE(std::string(avx2 ? "avx2" : "sse2") + " bricks " + std::to_string(mode));
           ClusterAssignment other;
-          detail::setFloatingPathsForTest(avx2, true, true);
-          detail::setFloatingBlockBricksForTest(mode);
-          const bool ok = assignClusters(p, params, other).ok();
-          const int grid = detail::lastFloatingGridForTest();
-          detail::setFloatingBlockBricksForTest(-1);
-          detail::setFloatingPathsForTest(true, true, true);
-          ASSERT_TRUE(ok);
+          int grid = -1;
+          {
+            detail::HookGuard avx2_paths(detail::setFloatingAvx2ForTest, avx2);
+            detail::HookGuard bricks(detail::setFloatingBlockBricksForTest, mode);
+            ASSERT_TRUE(assignClusters(p, params, other).ok());
+            grid = detail::lastFloatingGridForTest();
+          }
           EXPECT_EQ(grid, mode < 0 ? run.grid : mode == 2 ? 3 : 1);
           EXPECT_EQ(other.heaviest, hash.heaviest);
           EXPECT_EQ(other.cluster_of, hash.cluster_of);

@@ -10,6 +10,7 @@
 
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 #include "scenelod/lodcore/cluster.h"
 
@@ -205,13 +206,6 @@ TEST(Grading, PreparedMeshDoesNotDependOnColours) {
   }
 }
 
-// private test hook of lodcore (lodcore/src/cluster_internal.h): the AVX2 or the baseline variants
-// for every later call; returns the previous choice
-namespace scenelod::detail {
-bool useAvx2Paths(bool on);
-bool useAvx512Pairs(bool on);  // lodcore/src/grading.cpp: the pair pass's AVX-512VL build where the CPU has it
-}
-
 namespace {
 
 // the vertices renumbered at random (triangles, edges and points remapped), and with `collapse`,
@@ -234,45 +228,41 @@ Mesh shuffledVertices(const Mesh& in, uint32_t seed, size_t collapse) {
   return m;
 }
 
-// prepareMesh with the AVX2 paths (the pair pass built for AVX2, and for AVX-512VL where the CPU
-// has it) and with the baseline give the same weights, face sums, order, sorted positions and
+// prepareMesh with the AVX2 paths and with the baseline give the same weights, face sums, order, sorted positions and
 // longest edge, under both gradings, with and without the boost
 void expectAvx2GivesTheBaselineBits(const Mesh& mesh, const std::string& label) {
-  const bool was512 = detail::useAvx512Pairs(true);
+  detail::HookGuard avx2(detail::useAvx2Paths, true);
   for (Grading g : {Grading::kLowTan, Grading::kRossignac})
-    for (bool boost : {true, false})
-      for (bool avx512 : {false, true}) {
-        ClusterParams params;
-        params.grading = g;
-        params.boost_features = boost;
-        PreparedMesh wide, base;
-        detail::useAvx2Paths(true);
-        detail::useAvx512Pairs(avx512);
-        ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
-        detail::useAvx2Paths(false);
-        ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
-        SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : "") + (avx512 ? " avx512" : ""));
-        ASSERT_EQ(wide.weights.size(), base.weights.size());
-        ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
-        EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
-        for (size_t v = 0; v < base.face_sums.size(); ++v) {
-          ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
-          for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
-        }
-        EXPECT_EQ(wide.order, base.order);
-        ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
-        EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
-                              base.sorted_positions.size() * sizeof(glm::vec3)), 0);
-        EXPECT_EQ(wide.longest_edge, base.longest_edge);
-        EXPECT_GT(base.longest_edge, 0.0f);
+    for (bool boost : {true, false}) {
+      ClusterParams params;
+      params.grading = g;
+      params.boost_features = boost;
+      PreparedMesh wide, base;
+      avx2.set(true);
+      ASSERT_TRUE(prepareMesh(mesh, params, wide).ok());
+      avx2.set(false);
+      ASSERT_TRUE(prepareMesh(mesh, params, base).ok());
+      SCOPED_TRACE(label + " " + gradingName(g) + (boost ? " boost" : ""));
+      ASSERT_EQ(wide.weights.size(), base.weights.size());
+      ASSERT_EQ(wide.face_sums.size(), base.face_sums.size());
+      EXPECT_EQ(std::memcmp(wide.weights.data(), base.weights.data(), base.weights.size() * sizeof(float)), 0);
+      for (size_t v = 0; v < base.face_sums.size(); ++v) {
+        ASSERT_EQ(std::memcmp(&wide.face_sums[v].area, &base.face_sums[v].area, sizeof(float)), 0) << v;
+        for (int k = 0; k < 9; ++k) ASSERT_EQ(wide.face_sums[v].q[k], base.face_sums[v].q[k]) << v << " " << k;
       }
-  detail::useAvx512Pairs(was512);
+      EXPECT_EQ(wide.order, base.order);
+      ASSERT_EQ(wide.sorted_positions.size(), base.sorted_positions.size());
+      EXPECT_EQ(std::memcmp(wide.sorted_positions.data(), base.sorted_positions.data(),
+                            base.sorted_positions.size() * sizeof(glm::vec3)), 0);
+      EXPECT_EQ(wide.longest_edge, base.longest_edge);
+      EXPECT_GT(base.longest_edge, 0.0f);
+    }
 }
 
 }  // namespace
 
-// The grading pass built for AVX2 (where the CPU has it: four lanes per row, or two rows of 5 to 8
-// corners side by side in eight lanes) gives the baseline build's bits: weights, order, sorted
+// The grading pass's AVX2 pair pass (where the CPU has it: two rows of 5 to 8 corners side by side
+// in eight lanes) gives the baseline's bits (SSE2 lanes per row, scalar rows): weights, order, sorted
 // positions and face sums, with and without the boost, on the bunny, a bumpy sphere, a CAD part
 // (creases) and an open grid (boundaries), and on copies with their vertices renumbered (so that
 // rows of any kind meet in a pair) and partly collapsed (degenerate edges and faces); on a CPU
@@ -287,9 +277,7 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
     meshes.push_back(shuffledVertices(meshes[i], 7u + static_cast<uint32_t>(i), 0));
     meshes.push_back(shuffledVertices(meshes[i], 11u + static_cast<uint32_t>(i), 7));
   }
-  const bool was = detail::useAvx2Paths(true);
   for (size_t i = 0; i < meshes.size(); ++i) expectAvx2GivesTheBaselineBits(meshes[i], "mesh " + std::to_string(i));
-  detail::useAvx2Paths(was);
 }
 
 // The same on triangle soups whose fans are anything but closed: each triangle joins a vertex to
@@ -299,7 +287,6 @@ TEST(Grading, Avx2PathsGiveTheBaselineBits) {
 // flat (z within 1e-3) with the triangles wound one way, so the crease term stays low and the
 // boundary flag decides the boosted weights.
 TEST(Grading, Avx2PathsGiveTheBaselineBitsOnNonManifoldFans) {
-  const bool was = detail::useAvx2Paths(true);
   for (uint32_t seed = 1; seed <= 6; ++seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -377,7 +364,6 @@ TEST(Grading, Avx2PathsGiveTheBaselineBitsOnNonManifoldFans) {
     for (const auto& t : tris) m.triangles.insert(m.triangles.end(), t.begin(), t.end());
     expectAvx2GivesTheBaselineBits(m, "fans " + std::to_string(seed));
   }
-  detail::useAvx2Paths(was);
 }
 
 // The order is the stable sort of the referenced vertices by descending raw weight (ties by vertex

@@ -9,16 +9,10 @@
 #include "lodcore/generated_meshes.h"
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
-
-// private test hooks of lodcore: the reference output pass (normals.cpp) and the AVX2 variants
-// (synthesis.cpp), on or off for every later call; each returns the previous choice
-namespace scenelod::detail {
-bool useOutputReference(bool on);
-bool useAvx2Paths(bool on);
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -49,7 +43,8 @@ TEST(OutputPass, ShortcutsGiveTheReferenceBits) {
     if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
       meshes.emplace_back("bunny", std::move(bunny));
   }
-  const bool was_avx2 = detail::useAvx2Paths(true);
+  detail::HookGuard avx2_paths(detail::useAvx2Paths, true);
+  detail::HookGuard reference(detail::useOutputReference, false);
   size_t levels = 0, split = 0;
   for (const auto& [name, m] : meshes)
     for (bool avx2 : {false, true})
@@ -58,13 +53,12 @@ TEST(OutputPass, ShortcutsGiveTheReferenceBits) {
           ClusterParams p;
           p.cell_width = w;
           p.crease_angle_deg = angle;
-          detail::useAvx2Paths(avx2);
+          avx2_paths.set(avx2);
           Mesh fast, ref;
-          detail::useOutputReference(false);
+          reference.set(false);
           ASSERT_TRUE(clusterMesh(m, p, fast).ok());
-          detail::useOutputReference(true);
+          reference.set(true);
           ASSERT_TRUE(clusterMesh(m, p, ref).ok());
-          detail::useOutputReference(false);
           SCOPED_TRACE(name + (avx2 ? " avx2" : " sse2") + " w=" + std::to_string(w) + " crease " + std::to_string(angle));
           EXPECT_TRUE(sameBits(fast.positions, ref.positions));
           EXPECT_TRUE(sameBits(fast.normals, ref.normals));
@@ -76,7 +70,6 @@ TEST(OutputPass, ShortcutsGiveTheReferenceBits) {
           levels += ref.triangleCount() > 0;
           split += ref.vertexCount() > ref.triangleCount() / 2 + 2;  // crease copies (closed meshes: V ~ T / 2)
         }
-  detail::useAvx2Paths(was_avx2);
   EXPECT_GT(levels, 150u);
   EXPECT_GT(split, 20u);
 }

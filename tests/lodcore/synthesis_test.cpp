@@ -11,18 +11,10 @@
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/obj_io.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
-
-// private test hooks of lodcore (lodcore/src/synthesis.cpp): the eigenvalue lanes of the quadric
-// solve, the AVX2 variants and the grouped pass, on or off for every later call; each returns the
-// previous choice
-namespace scenelod::detail {
-bool useEigenvalueLanes(bool on);
-bool useAvx2Paths(bool on);
-bool useGroupedSynthesis(bool on);
-}  // namespace scenelod::detail
 
 namespace {
 
@@ -35,7 +27,7 @@ using test::sameBits;
 // lanes off; a clamp's bounds computed as -w/2 and w/2 instead of cellBox's (c -+ w/2) - c fail 12 checks): flat (the grid: rank 1), curved in one direction (the cylinder: rank 2), smooth and
 // bumpy (spheres: mostly rank 1 and 2 at fine cells), sharp (the CAD part, the box: full rank and
 // degenerate mixes) and scanned (the bunny, where it is installed), both cell shapes, coarse and
-// fine levels (the single and the grouped synthesis), baseline and AVX2 variants.
+// fine levels, baseline and AVX2 variants.
 TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   meshes.emplace_back("bumpy", test::makeBumpySphere(90, 120));
@@ -49,8 +41,8 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
     if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
       meshes.emplace_back("bunny", std::move(bunny));
   }
-  const bool was_lanes = detail::useEigenvalueLanes(true);
-  const bool was_avx2 = detail::useAvx2Paths(true);
+  detail::HookGuard eigen_lanes(detail::useEigenvalueLanes, true);
+  detail::HookGuard avx2_paths(detail::useAvx2Paths, true);
   size_t levels = 0;
   for (const auto& [name, m] : meshes)
     for (bool avx2 : {false, true})
@@ -60,11 +52,11 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
           p.synthesis = Synthesis::kQuadric;
           p.cell_shape = shape;
           p.cell_width = w;
-          detail::useAvx2Paths(avx2);
+          avx2_paths.set(avx2);
           Mesh lanes, one;
-          detail::useEigenvalueLanes(true);
+          eigen_lanes.set(true);
           ASSERT_TRUE(clusterMesh(m, p, lanes).ok());
-          detail::useEigenvalueLanes(false);
+          eigen_lanes.set(false);
           ASSERT_TRUE(clusterMesh(m, p, one).ok());
           SCOPED_TRACE(name + (avx2 ? " avx2 " : " sse2 ") + cellShapeName(shape) + " w=" + std::to_string(w));
           EXPECT_TRUE(sameBits(lanes.positions, one.positions));
@@ -72,8 +64,6 @@ TEST(Synthesis, EigenvalueLanesGiveTheOneClusterBits) {
           EXPECT_TRUE(sameBits(lanes.triangles, one.triangles));
           levels += one.triangleCount() > 0;
         }
-  detail::useEigenvalueLanes(was_lanes);
-  detail::useAvx2Paths(was_avx2);
   EXPECT_GE(levels, 6u * 16u);
 }
 
@@ -93,8 +83,8 @@ TEST(Synthesis, GroupedPassGivesTheSinglePassBits) {
     if (test::fileExists(test::bunnyPath()) && readObj(test::bunnyPath(), bunny).ok())
       meshes.emplace_back("bunny", std::move(bunny));
   }
-  const bool was_grouped = detail::useGroupedSynthesis(true);
-  const bool was_avx2 = detail::useAvx2Paths(true);
+  detail::HookGuard grouped(detail::useGroupedSynthesis, true);
+  detail::HookGuard avx2_paths(detail::useAvx2Paths, true);
   size_t grouped_levels = 0;
   for (const auto& [name, m] : meshes)
     for (LodMethod method : {LodMethod::kFloatingNearest, LodMethod::kFloatingHeaviest, LodMethod::kUniform})
@@ -110,25 +100,23 @@ TEST(Synthesis, GroupedPassGivesTheSinglePassBits) {
             for (float f : {0.004f, 0.008f, 0.015f, 0.03f}) {
               p.cell_shape = shape;
               p.cell_width = f * extent;
-              detail::useAvx2Paths(avx2);
-              Mesh grouped, single;
+              avx2_paths.set(avx2);
+              Mesh grouped_mesh, single;
               ClusterStats stats;
-              detail::useGroupedSynthesis(true);
-              ASSERT_TRUE(clusterPrepared(prepared, p, grouped, &stats).ok());
-              detail::useGroupedSynthesis(false);
+              grouped.set(true);
+              ASSERT_TRUE(clusterPrepared(prepared, p, grouped_mesh, &stats).ok());
+              grouped.set(false);
               ASSERT_TRUE(clusterPrepared(prepared, p, single).ok());
               SCOPED_TRACE(name + (avx2 ? " avx2 " : " sse2 ") + lodMethodName(method) + " " +
                            synthesisName(synthesis) + " " + cellShapeName(shape) + " f=" + std::to_string(f));
-              EXPECT_TRUE(sameBits(grouped.positions, single.positions));
-              EXPECT_TRUE(sameBits(grouped.normals, single.normals));
-              EXPECT_TRUE(sameBits(grouped.colors, single.colors));
-              EXPECT_TRUE(sameBits(grouped.triangles, single.triangles));
-              EXPECT_TRUE(sameBits(grouped.edges, single.edges));
-              EXPECT_TRUE(sameBits(grouped.points, single.points));
+              EXPECT_TRUE(sameBits(grouped_mesh.positions, single.positions));
+              EXPECT_TRUE(sameBits(grouped_mesh.normals, single.normals));
+              EXPECT_TRUE(sameBits(grouped_mesh.colors, single.colors));
+              EXPECT_TRUE(sameBits(grouped_mesh.triangles, single.triangles));
+              EXPECT_TRUE(sameBits(grouped_mesh.edges, single.edges));
+              EXPECT_TRUE(sameBits(grouped_mesh.points, single.points));
               grouped_levels += stats.cluster_count * 92 > 16 * m.vertexCount();
             }
       }
-  detail::useGroupedSynthesis(was_grouped);
-  detail::useAvx2Paths(was_avx2);
   EXPECT_GE(grouped_levels, 4u * 3u * 3u * 2u * 2u);
 }
