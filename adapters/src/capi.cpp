@@ -319,7 +319,7 @@ Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, co
   params.level_count = d.level_count;
   params.first_cell_width = d.first_cell_width;
   LodChain chain;
-  if (Error e = buildChain(mesh, params, chain)) return e;
+  if (Error e = buildChain(mesh, params, chain); !e.ok()) return e;
   if (chain.levels.empty()) return {Status::kInvalidMesh, what + ": the mesh is empty"};
   const Sphere bounds = scene::computeChainBounds(chain);
   ctx->objects.table.addChain(chain);
@@ -458,8 +458,8 @@ slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh_in, c
                                                   mesh.position_stride ? mesh.position_stride : sizeof(float) * 3);
     view.triangles = Span<const uint32_t>(mesh.indices, mesh.index_count);
     Mesh m;
-    if (Error e = meshFromView(view, m, what)) return fail(ctx, e);
-    if (Error e = addChain(ctx, m, desc, what, *out_chain)) return fail(ctx, e);
+    if (Error e = meshFromView(view, m, what); !e.ok()) return fail(ctx, e);
+    if (Error e = addChain(ctx, m, desc, what, *out_chain); !e.ok()) return fail(ctx, e);
     return ok(ctx);
   });
 }
@@ -471,9 +471,9 @@ slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod
     if (slod_status s = readStruct(ctx, "slod_chain_load_file", desc_in, slod_chain_desc_init, desc)) return s;
     if (!path || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_load_file: null argument");
     scene::SceneData data;
-    if (Error e = scene::loadScene(path, data)) return fail(ctx, e);
+    if (Error e = scene::loadScene(path, data); !e.ok()) return fail(ctx, e);
     const Mesh m = scene::flattenScene(data);
-    if (Error e = addChain(ctx, m, desc, path, *out_chain)) return fail(ctx, e);
+    if (Error e = addChain(ctx, m, desc, path, *out_chain); !e.ok()) return fail(ctx, e);
     return ok(ctx);
   });
 }
@@ -559,7 +559,7 @@ slod_status slod_object_add(slod_context* ctx, const slod_object_desc* desc, slo
     s.importance.push_back(d.importance);
     s.must_draw.push_back(d.must_draw ? 1 : 0);
     ctx->move_scratch.assign(1, makeMove(static_cast<uint32_t>(n), d.translation, d.rotation, d.scale));
-    if (Error e = selection::applyMoves(s, ctx->move_scratch, "slod_object_add")) return fail(ctx, e);
+    if (Error e = selection::applyMoves(s, ctx->move_scratch, "slod_object_add"); !e.ok()) return fail(ctx, e);
     ctx->user_data.push_back(d.user_data);
     ctx->centers.resize(n + 1);
     ctx->radii.resize(n + 1);
@@ -609,7 +609,7 @@ slod_status slod_object_set_trs(slod_context* ctx, slod_object h, const float t[
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_object_set_trs: non-finite value or scale <= 0");
     ctx->move_scratch.resize(1);
     ctx->move_scratch[0] = makeMove(dense, t, q, scale);
-    if (Error e = selection::applyMoves(ctx->objects, ctx->move_scratch, "slod_object_set_trs")) return fail(ctx, e);
+    if (Error e = selection::applyMoves(ctx->objects, ctx->move_scratch, "slod_object_set_trs"); !e.ok()) return fail(ctx, e);
     if (ctx->recording) ctx->pending_moves.push_back(ctx->move_scratch[0]);
     ctx->spheres_dirty = true;
     return ok(ctx);
@@ -657,7 +657,7 @@ slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const s
                                                     "(0, 180) degrees or an empty viewport");
     if (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.budget_ms))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: pixels_per_cell must be > 0 and budget_ms finite");
-    if (Error e = ensureSelector(ctx)) return fail(ctx, e);
+    if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
     if (ctx->spheres_dirty) updateSpheres(ctx);
     const selection::Camera cam = toCamera(camera);
     selection::SelectionJob job;
@@ -726,13 +726,13 @@ slod_status slod_pick(slod_context* ctx, const slod_camera* camera_in, float x, 
       ctx->rays = std::make_unique<selection::RayScene>();
       std::vector<const LodChain*> ptrs;
       for (const LodChain& c : ctx->chains) ptrs.push_back(&c);
-      if (Error e = ctx->rays->init(Span<const LodChain* const>(ptrs.data(), ptrs.size()))) return fail(ctx, e);
+      if (Error e = ctx->rays->init(Span<const LodChain* const>(ptrs.data(), ptrs.size())); !e.ok()) return fail(ctx, e);
       ctx->rays_chains_dirty = false;
     }
     std::vector<int32_t> drawn(ctx->levels.begin(), ctx->levels.end());
     if (Error e = ctx->rays->setObjects(Span<const glm::mat4>(ctx->objects.node_local.data(), n),
                                         Span<const uint32_t>(ctx->objects.object_chain.data(), n),
-                                        Span<const int32_t>(drawn.data(), n)))
+                                        Span<const int32_t>(drawn.data(), n)); !e.ok())
       return fail(ctx, e);
     ctx->rays->commit();
     const selection::PickHit hit = ctx->rays->pick(toCamera(camera), glm::vec2(x, y));
@@ -777,9 +777,9 @@ slod_status slod_record_start(slod_context* ctx, const char* replay_path, const 
       opts.must_draw.push_back(s.must_draw[o]);
       opts.user_data.push_back(ctx->user_data[o]);
     }
-    if (Error e = scene::writePack(pack_path, data, ctx->chains, s.chain_bounds, opts)) return fail(ctx, e);
+    if (Error e = scene::writePack(pack_path, data, ctx->chains, s.chain_bounds, opts); !e.ok()) return fail(ctx, e);
     // a replay starts cold: forget last frame's levels and restart the cost model from its prior
-    if (Error e = ensureSelector(ctx)) return fail(ctx, e);
+    if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
     selection::resetSelectorHistory(ctx->selector);
     selection::setSelectorCostModel(ctx->selector, selection::CostCoefficients{});
     ctx->replay = selection::Replay{};
@@ -797,7 +797,7 @@ slod_status slod_record_stop(slod_context* ctx) {
   return guarded(ctx, [&] {
     if (!ctx->recording) return fail(ctx, SLOD_ERROR_UNSUPPORTED, "slod_record_stop: not recording");
     ctx->recording = false;
-    if (Error e = selection::writeReplay(ctx->replay_path, ctx->replay)) return fail(ctx, e);
+    if (Error e = selection::writeReplay(ctx->replay_path, ctx->replay); !e.ok()) return fail(ctx, e);
     return ok(ctx);
   });
 }

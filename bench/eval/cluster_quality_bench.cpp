@@ -75,7 +75,7 @@ std::vector<Model>& models() {
   static std::vector<Model> list = [] {
     std::vector<Model> out;
     Model bunny{"bunny", {}, false};
-    if (!readObj(SCENELOD_BUNNY_PATH, bunny.mesh)) out.push_back(std::move(bunny));
+    if (readObj(SCENELOD_BUNNY_PATH, bunny.mesh).ok()) out.push_back(std::move(bunny));
     if (const char* env = std::getenv("SCENELOD_QUALITY_MODELS")) {
       std::string s = env;
       size_t b = 0;
@@ -83,7 +83,7 @@ std::vector<Model>& models() {
         const size_t e = s.find(':', b) == std::string::npos ? s.size() : s.find(':', b);
         const std::string path = s.substr(b, e - b);
         Model m{path.substr(path.find_last_of('/') + 1), {}, true};
-        if (!path.empty() && !readObj(path, m.mesh)) out.push_back(std::move(m));
+        if (!path.empty() && readObj(path, m.mesh).ok()) out.push_back(std::move(m));
         b = e + 1;
       }
     }

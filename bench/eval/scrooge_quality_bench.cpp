@@ -49,19 +49,19 @@ void runQuality(benchmark::State& state, const std::string& name, int divisions,
   Mesh out;
   ScroogeStats st;
   for (auto _ : state) {
-    if (Error e = cluster ? clusterAtSubvolume(*m, divisions, out) : reduce(*m, divisions, out, &st)) {
+    if (Error e = cluster ? clusterAtSubvolume(*m, divisions, out) : reduce(*m, divisions, out, &st); !e.ok()) {
       state.SkipWithError(e.message.c_str());
       return;
     }
   }
   if (cluster) st.output_polygons = st.output_triangles = out.triangleCount();
   eval::DistanceResult d;
-  if (Error e = eval::measureSurfaceDistance(*m, out, eval::DistanceParams{}, d)) {
+  if (Error e = eval::measureSurfaceDistance(*m, out, eval::DistanceParams{}, d); !e.ok()) {
     state.SkipWithError(e.message.c_str());
     return;
   }
   eval::ImageErrorResult img;
-  if (Error e = eval::measureImageError(*m, out, eval::ImageErrorParams{}, img)) {
+  if (Error e = eval::measureImageError(*m, out, eval::ImageErrorParams{}, img); !e.ok()) {
     state.SkipWithError(e.message.c_str());
     return;
   }
@@ -103,17 +103,17 @@ void BM_ScroogePictureGrid(benchmark::State& state) {
         const Mesh* shown = m;
         if (c > 0) {
           const int divisions = (c - 1) % 3 == 0 ? 4 : (c - 1) % 3 == 1 ? 2 : 1;
-          if (Error e = c <= 3 ? reduce(*m, divisions, level, &st) : clusterAtSubvolume(*m, divisions, level)) continue;
+          if (Error e = c <= 3 ? reduce(*m, divisions, level, &st) : clusterAtSubvolume(*m, divisions, level); !e.ok()) continue;
           shown = &level;
         }
         eval::Image img;
-        if (Error e = eval::renderMesh(*shown, rp, img)) continue;
+        if (Error e = eval::renderMesh(*shown, rp, img); !e.ok()) continue;
         eval::blit(grid, img, int(c) * cell, y + label);
         eval::drawText(grid, int(c) * cell + 4, y + 2,
                        names[r] + " " + std::to_string(shown->triangleCount()) + " tris", eval::Rgb8{0, 0, 0});
       }
     }
-    if (Error e = eval::writePng(path, grid)) state.SkipWithError(e.message.c_str());
+    if (Error e = eval::writePng(path, grid); !e.ok()) state.SkipWithError(e.message.c_str());
   }
 }
 BENCHMARK(BM_ScroogePictureGrid)->Unit(benchmark::kMillisecond)->Iterations(1);

@@ -26,7 +26,7 @@ namespace {
 const Mesh& bunny() {
   static const Mesh m = [] {
     Mesh b;
-    if (readObj(SCENELOD_BUNNY_PATH, b)) b = Mesh{};
+    if (!readObj(SCENELOD_BUNNY_PATH, b).ok()) b = Mesh{};
     b.face_offsets.clear();
     b.face_corners.clear();
     return b;
@@ -77,12 +77,12 @@ void BM_ZhangCompareBunny(benchmark::State& state) {
   Mesh out;
   ZhangStats st;
   for (auto _ : state) {
-    if (Error e = simplifyWith(method, in, target, out, &st)) state.SkipWithError(e.message.c_str());
+    if (Error e = simplifyWith(method, in, target, out, &st); !e.ok()) state.SkipWithError(e.message.c_str());
     benchmark::DoNotOptimize(out.triangles.data());
   }
   state.SetLabel(kMethodNames[method]);
   eval::DistanceResult d;
-  if (Error e = eval::measureSurfaceDistance(in, out, eval::DistanceParams{}, d)) {
+  if (Error e = eval::measureSurfaceDistance(in, out, eval::DistanceParams{}, d); !e.ok()) {
     state.SkipWithError(e.message.c_str());
     return;
   }
@@ -118,9 +118,9 @@ void BM_ZhangPictures(benchmark::State& state) {
       for (int col = 0; col < 4; ++col) {
         Mesh m;
         if (col == 0) m = in;
-        else if (Error e = simplifyWith(col == 3 ? 3 : col - 1, in, target, m)) state.SkipWithError(e.message.c_str());
+        else if (Error e = simplifyWith(col == 3 ? 3 : col - 1, in, target, m); !e.ok()) state.SkipWithError(e.message.c_str());
         eval::Image img;
-        if (Error e = eval::renderMesh(m, rp, img)) {
+        if (Error e = eval::renderMesh(m, rp, img); !e.ok()) {
           state.SkipWithError(e.message.c_str());
           return;
         }
@@ -128,7 +128,7 @@ void BM_ZhangPictures(benchmark::State& state) {
       }
     }
     const std::string path = outDir() + "/zhang_bunny_90_95.png";
-    if (Error e = eval::writePng(path, sheet)) state.SkipWithError(e.message.c_str());
+    if (Error e = eval::writePng(path, sheet); !e.ok()) state.SkipWithError(e.message.c_str());
     state.SetLabel(path);
   }
 }
@@ -179,7 +179,7 @@ void BM_ZhangPlots(benchmark::State& state) {
     pp.title = "bunny (69,666 triangles): CPU time against decimation rate";
     pp.x_label = "decimation rate (%)";
     pp.y_label = "CPU time (ms)";
-    if (Error e = eval::writePlotPng(outDir() + "/zhang_time_vs_rate.png", by_rate, pp)) state.SkipWithError(e.message.c_str());
+    if (Error e = eval::writePlotPng(outDir() + "/zhang_time_vs_rate.png", by_rate, pp); !e.ok()) state.SkipWithError(e.message.c_str());
 
     std::vector<eval::PlotSeries> by_size(2);
     by_size[0].name = "zhang-interpolated";
@@ -199,7 +199,7 @@ void BM_ZhangPlots(benchmark::State& state) {
     pp.title = "bumpy torus to 10 %: CPU time against mesh size";
     pp.x_label = "input triangles";
     pp.log_x = pp.log_y = true;
-    if (Error e = eval::writePlotPng(outDir() + "/zhang_time_vs_size.png", by_size, pp)) state.SkipWithError(e.message.c_str());
+    if (Error e = eval::writePlotPng(outDir() + "/zhang_time_vs_size.png", by_size, pp); !e.ok()) state.SkipWithError(e.message.c_str());
     for (int m = 0; m < 3; ++m)
       for (size_t i = 0; i < by_rate[m].x.size(); ++i)
         state.counters[std::string(by_rate[m].name) + "@" + std::to_string(static_cast<int>(by_rate[m].x[i])) + "_ms"] =

@@ -74,7 +74,7 @@ namespace {
 const Mesh& bunny() {
   static Mesh m = [] {
     Mesh b;
-    if (Error e = readObj(SCENELOD_BUNNY_PATH, b)) {
+    if (Error e = readObj(SCENELOD_BUNNY_PATH, b); !e.ok()) {
       std::fprintf(stderr, "cluster_bench: %s\n", e.message.c_str());
       std::exit(1);
     }

@@ -12,7 +12,7 @@ void BM_ReadObjBunny(benchmark::State& state) {
   scenelod::Mesh mesh;
   for (auto _ : state) {
     const scenelod::Error e = scenelod::readObj(SCENELOD_BUNNY_PATH, mesh);
-    if (e) {
+    if (!e.ok()) {
       state.SkipWithError(e.message.c_str());
       return;
     }
@@ -24,14 +24,14 @@ BENCHMARK(BM_ReadObjBunny)->Unit(benchmark::kMillisecond);
 
 void BM_WriteObjBunny(benchmark::State& state) {
   scenelod::Mesh mesh;
-  if (scenelod::Error e = scenelod::readObj(SCENELOD_BUNNY_PATH, mesh)) {
+  if (scenelod::Error e = scenelod::readObj(SCENELOD_BUNNY_PATH, mesh); !e.ok()) {
     state.SkipWithError(e.message.c_str());
     return;
   }
   const std::string out = "/tmp/scenelod_bench_bunny.obj";
   for (auto _ : state) {
     const scenelod::Error e = scenelod::writeObj(out, mesh);
-    if (e) {
+    if (!e.ok()) {
       state.SkipWithError(e.message.c_str());
       return;
     }

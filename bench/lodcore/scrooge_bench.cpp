@@ -24,7 +24,7 @@ void runScrooge(benchmark::State& state, const Mesh& mesh, int divisions) {
   Mesh out;
   ScroogeStats st;
   for (auto _ : state) {
-    if (Error e = scroogeMesh(mesh, p, out, &st)) {
+    if (Error e = scroogeMesh(mesh, p, out, &st); !e.ok()) {
       state.SkipWithError(e.message.c_str());
       return;
     }
@@ -75,7 +75,7 @@ void runCluster(benchmark::State& state, const Mesh& mesh, int divisions) {
   Mesh out;
   float max_error = 0.0f;
   for (auto _ : state) {
-    if (Error e = clusterMesh(mesh, cp, out, &max_error)) {
+    if (Error e = clusterMesh(mesh, cp, out, &max_error); !e.ok()) {
       state.SkipWithError(e.message.c_str());
       return;
     }

@@ -43,7 +43,7 @@ inline const Mesh* loadModel(const std::string& name, std::string& error) {
   auto it = cache.find(name);
   if (it != cache.end()) return &it->second;
   scene::SceneData sd;
-  if (Error e = scene::loadScene(modelPath(name), sd)) {
+  if (Error e = scene::loadScene(modelPath(name), sd); !e.ok()) {
     error = e.message;
     return nullptr;
   }

@@ -42,11 +42,11 @@ const Model* model(size_t i) {
   m->name = kModels[i][0];
   if (i == 0) {
     Mesh mesh;
-    if (readObj(SCENELOD_BUNNY_PATH, mesh)) return nullptr;
+    if (!readObj(SCENELOD_BUNNY_PATH, mesh).ok()) return nullptr;
     m->meshes.push_back(mesh.positions);
   } else {
     SceneData s;
-    if (loadScene(sharedModels() + "/" + kModels[i][0] + "/" + kModels[i][1], s)) return nullptr;
+    if (!loadScene(sharedModels() + "/" + kModels[i][0] + "/" + kModels[i][1], s).ok()) return nullptr;
     for (auto& md : s.meshes)
       if (!md.mesh.positions.empty()) m->meshes.push_back(md.mesh.positions);
   }

@@ -50,18 +50,18 @@ const Model* model(size_t i, std::string& error) {
   auto m = std::make_unique<Model>();
   m->name = kModels[i][0];
   if (i == 0) {
-    if (Error e = makeDemoScene(m->scene)) { error = e.message; return nullptr; }
-  } else if (Error e = loadScene(sharedModels() + "/" + kModels[i][0] + "/" + kModels[i][1], m->scene)) {
+    if (Error e = makeDemoScene(m->scene); !e.ok()) { error = e.message; return nullptr; }
+  } else if (Error e = loadScene(sharedModels() + "/" + kModels[i][0] + "/" + kModels[i][1], m->scene); !e.ok()) {
     error = e.message;
     return nullptr;
   }
   SceneLods lods;
-  if (Error e = buildLods(m->scene, buildParams(), lods)) { error = e.message; return nullptr; }
+  if (Error e = buildLods(m->scene, buildParams(), lods); !e.ok()) { error = e.message; return nullptr; }
   for (const LodChain& c : lods.chains) m->levels += c.levelCount();
   const char* tmp = std::getenv("TMPDIR");
   m->pack_path = std::string(tmp ? tmp : "/tmp") + "/scenelod_bench_" + m->name + ".slodpack";
   PackWriteStats stats;
-  if (Error e = writePack(m->pack_path, m->scene, lods.chains, lods.chain_spheres, {}, &stats)) {
+  if (Error e = writePack(m->pack_path, m->scene, lods.chains, lods.chain_spheres, {}, &stats); !e.ok()) {
     error = e.message;
     return nullptr;
   }
@@ -84,7 +84,7 @@ void loadPack(benchmark::State& state, size_t i, bool check_indices) {
   const Model& m = *mp;
   for (auto _ : state) {
     Pack p;
-    if (Error e = Pack::load(m.pack_path, p, check_indices)) {
+    if (Error e = Pack::load(m.pack_path, p, check_indices); !e.ok()) {
       state.SkipWithError(e.message.c_str());
       break;
     }
@@ -100,7 +100,7 @@ void recompute(benchmark::State& state, size_t i) {
   const Model& m = *mp;
   for (auto _ : state) {
     SceneLods lods;
-    if (Error e = buildLods(m.scene, buildParams(), lods)) {
+    if (Error e = buildLods(m.scene, buildParams(), lods); !e.ok()) {
       state.SkipWithError(e.message.c_str());
       break;
     }

@@ -102,7 +102,7 @@ std::unique_ptr<RayScene> buildScene(const GridScene& g, const char* device_conf
   const LodChain* chains[] = {&sphereChain()};
   RaySceneParams p;
   p.device_config = device_config;
-  if (rs->init(Span<const LodChain* const>(chains, 1), p) || rs->setObjects(g.world, g.chain_ids, g.levels)) return nullptr;
+  if (!rs->init(Span<const LodChain* const>(chains, 1), p).ok() || !rs->setObjects(g.world, g.chain_ids, g.levels).ok()) return nullptr;
   rs->commit();
   return rs;
 }

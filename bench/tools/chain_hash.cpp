@@ -93,7 +93,7 @@ void hashGeometry(const Mesh& m, Fnv& f) {
 
 int run(const char* name, const Mesh& m, const ChainParams& cp) {
   LodChain chain;
-  if (Error e = buildChain(m, cp, chain)) {
+  if (Error e = buildChain(m, cp, chain); !e.ok()) {
     std::printf("%s error %s\n", name, e.message.c_str());
     return 1;
   }
@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   struct Named { std::string name; Mesh mesh; };
   std::vector<Named> meshes;
   Mesh b;
-  if (!readObj("/usr/share/glmark2/models/bunny.obj", b)) meshes.push_back({"bunny", b});
+  if (readObj("/usr/share/glmark2/models/bunny.obj", b).ok()) meshes.push_back({"bunny", b});
   else std::fprintf(stderr, "chain_hash: no bunny (apt-get install glmark2-data), skipped\n");
   meshes.push_back({"cad", makeCadPart()});
   meshes.push_back({"sphere-col", coloured(makeSphere(glm::vec3(0.0f), 1.0f, 60, 90))});

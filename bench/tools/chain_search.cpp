@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
       names.push_back(path);
     } else if (path.size() > 4 && (path.compare(path.size() - 4, 4, ".glb") == 0 || path.compare(path.size() - 5, 5, ".gltf") == 0)) {
       scene::SceneData sd;
-      if (Error e = scene::importGltf(path, sd)) {
+      if (Error e = scene::importGltf(path, sd); !e.ok()) {
         std::fprintf(stderr, "chain_search: %s\n", e.message.c_str());
         ++bad;
         continue;
@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
         }
     } else {
       Mesh m;
-      if (Error e = readObj(path, m)) {
+      if (Error e = readObj(path, m); !e.ok()) {
         std::fprintf(stderr, "chain_search: %s\n", e.message.c_str());
         ++bad;
         continue;
@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
       ChainStats st;
       double best_search = 1e30, best_total = 1e30;
       for (int r = 0; r < 3; ++r) {
-        if (Error e = buildChain(ms[k], cp, chain, &st)) {
+        if (Error e = buildChain(ms[k], cp, chain, &st); !e.ok()) {
           std::fprintf(stderr, "chain_search: %s: %s\n", names[k].c_str(), e.message.c_str());
           ++bad;
           break;

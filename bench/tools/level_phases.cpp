@@ -80,10 +80,10 @@ int main(int argc, char** argv) {
   if (repetitions < 1) return usage("REPETITIONS must be at least 1");
   Mesh m;
   if (std::strcmp(argv[1], "bunny") == 0) {
-    if (Error e = readObj(SCENELOD_BUNNY_PATH, m)) return usage(e.message.c_str());
+    if (Error e = readObj(SCENELOD_BUNNY_PATH, m); !e.ok()) return usage(e.message.c_str());
   } else if (std::strcmp(argv[1], "sphere1M") == 0) {
     m = test::makeBumpySphere(720, 720);
-  } else if (Error e = readObj(argv[1], m)) {
+  } else if (Error e = readObj(argv[1], m); !e.ok()) {
     return usage(e.message.c_str());
   }
   if (m.triangleCount() == 0) return usage("the mesh has no triangles");
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   double prepare_ms = std::numeric_limits<double>::infinity();
   for (int i = 0; i < repetitions; ++i) {
     const Clock::time_point t0 = Clock::now();
-    if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
+    if (Error e = prepareMesh(m, params, p); !e.ok()) return usage(e.message.c_str());
     prepare_ms = std::min(prepare_ms, msSince(t0));
   }
   std::vector<Row> rows;
@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
     ChainParams cp;
     cp.cluster = params;
     LodChain chain;
-    if (Error e = buildChain(m, cp, chain)) return usage(e.message.c_str());
+    if (Error e = buildChain(m, cp, chain); !e.ok()) return usage(e.message.c_str());
     for (size_t k = 1; k < chain.levels.size(); ++k) {
       Row r;
       r.label = "level " + std::to_string(k);
@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
       Row r;
       r.label = item;
       const size_t target = std::max<size_t>(1, size_t(double(m.triangleCount()) * fraction));
-      if (Error e = findCellWidthForTarget(p, params, target, r.width, 0.01)) return usage(e.message.c_str());
+      if (Error e = findCellWidthForTarget(p, params, target, r.width, 0.01); !e.ok()) return usage(e.message.c_str());
       rows.push_back(r);
     }
   }
@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
       Mesh out;
       double t[5];
       Clock::time_point t0 = Clock::now();
-      if (Error e = detail::assign(p, cp, a)) return usage(e.message.c_str());
+      if (Error e = detail::assign(p, cp, a); !e.ok()) return usage(e.message.c_str());
       t[0] = msSince(t0);
       t0 = Clock::now();
       detail::renumberByFirstVertex(a);  // as clusterLevelParts: only levels of many clusters

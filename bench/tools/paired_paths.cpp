@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   if (argc != 4 && argc != 5) return usage("three or four arguments expected");
   Mesh m;
   if (std::strcmp(argv[1], "bunny") == 0) {
-    if (Error e = readObj(SCENELOD_BUNNY_PATH, m)) return usage(e.message.c_str());
+    if (Error e = readObj(SCENELOD_BUNNY_PATH, m); !e.ok()) return usage(e.message.c_str());
   } else if (std::strcmp(argv[1], "sphere1M") == 0) {
     m = test::makeBumpySphere(720, 720);
   } else {
@@ -68,11 +68,11 @@ int main(int argc, char** argv) {
 
   ClusterParams params;
   PreparedMesh p;
-  if (Error e = prepareMesh(m, params, p)) return usage(e.message.c_str());
+  if (Error e = prepareMesh(m, params, p); !e.ok()) return usage(e.message.c_str());
   const size_t target = size_t(double(m.triangleCount()) * fraction);
-  if (Error e = findCellWidthForTarget(p, params, target, params.cell_width, 0.01)) return usage(e.message.c_str());
+  if (Error e = findCellWidthForTarget(p, params, target, params.cell_width, 0.01); !e.ok()) return usage(e.message.c_str());
   detail::Assignment a;
-  if (Error e = detail::assign(p, params, a)) return usage(e.message.c_str());
+  if (Error e = detail::assign(p, params, a); !e.ok()) return usage(e.message.c_str());
   detail::Eliminated eliminated;
   detail::eliminate(p, a, params.keep_edges, params.keep_points, true, eliminated);
   detail::Representatives representatives;

@@ -113,7 +113,7 @@ Error AtomicFile::commit() {
 
 Error writeFileAtomic(const std::string& path, const void* data, size_t bytes) {
   AtomicFile f;
-  if (Error e = f.open(path)) return e;
+  if (Error e = f.open(path); !e.ok()) return e;
   f.write(data, bytes);
   return f.commit();
 }

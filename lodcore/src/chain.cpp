@@ -148,7 +148,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     cp.cell_width = static_cast<float>(w);
     n = 0;
     as = detail::Assignment();
-    if (Error e = detail::assign(p, cp, as)) return e;
+    if (Error e = detail::assign(p, cp, as); !e.ok()) return e;
     detail::Eliminated el;
     detail::eliminate(p, as, false, false, false, el);
     n = el.triangles.size() / 3;
@@ -194,7 +194,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   // one probe at w: the closest width so far; within the tolerance, `ended` and the assignment kept;
   // otherwise the bracket, and w becomes the next width (the secant with the previous probe)
   auto step = [&](double& w, bool& ended) -> Error {
-    if (Error e = count(w, n)) return e;
+    if (Error e = count(w, n); !e.ok()) return e;
     const size_t diff = distance(n);
     if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
     if (within(diff)) {
@@ -215,8 +215,8 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     if (hooks) hooks->before(static_cast<float>(w));
     bool ended = false;
     const Error e = step(w, ended);
-    if (hooks) hooks->after(!e && ended);
-    if (e) return e;
+    if (hooks) hooks->after(e.ok() && ended);
+    if (!e.ok()) return e;
     if (ended) {
       cell_width = best;
       return {};
@@ -229,8 +229,8 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     Error ea, eb;
     tbb::parallel_invoke([&] { ea = probe(wa, a, na); }, [&] { eb = probe(wb, b, nb); });
     if (probes) *probes += 2;
-    if (ea) return ea;
-    if (eb) return eb;
+    if (!ea.ok()) return ea;
+    if (!eb.ok()) return eb;
     const size_t da = distance(na), db = distance(nb);
     const bool a_closer = da <= db;  // ties: the narrower
     // (after a chain's first probe, which may have been closer)
@@ -257,7 +257,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   for (int it = 0; it < 48; ++it) {
     if (!(w > lo && w < hi)) w = std::sqrt(lo * hi);
     bool ended = false;
-    if (Error e = step(w, ended)) return e;
+    if (Error e = step(w, ended); !e.ok()) return e;
     if (ended || hi / lo < 1.0 + 1e-6) break;
   }
   // the count is not monotone in the width (cells float): when bisection ends outside the tolerance,
@@ -266,7 +266,7 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
     const double centre = best;
     for (int k = -16; k <= 16 && !within(best_diff); ++k) {
       const double w = centre * std::pow(1.25, double(k) / 16.0);
-      if (Error e = count(w, n)) return e;
+      if (Error e = count(w, n); !e.ok()) return e;
       const size_t diff = distance(n);
       if (diff < best_diff) best_diff = diff, best = static_cast<float>(w);
       if (keep_last && within(diff)) *keep = std::move(a);
@@ -288,7 +288,7 @@ Error findCellWidthForTarget(const Mesh& original, const ClusterParams& params, 
   cell_width = 0.0f;
   if (target == 0) return {Status::kInvalidArgument, "target triangle count is 0"};
   PreparedMesh p;
-  if (Error e = prepareMesh(original, params, p)) return e;
+  if (Error e = prepareMesh(original, params, p); !e.ok()) return e;
   return findCellWidthForTarget(p, params, target, cell_width, tolerance);
 }
 
@@ -304,7 +304,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   params.progress(0.0, "grading");
   PreparedMesh p;
   Clock::time_point t0 = Clock::now();
-  if (Error e = prepareMesh(original, params.cluster, p)) return e;
+  if (Error e = prepareMesh(original, params.cluster, p); !e.ok()) return e;
   stats.prepare_seconds = since(t0);
   // a small mesh's levels read its positions through the order (detail::PositionsByWeight)
   if (p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
@@ -475,12 +475,12 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     if (k == 0) {
       held = std::move(parts);
       held_seconds = seconds;
-      first_ready.store(!errors[0]);
+      first_ready.store(errors[0].ok());
       firstSynthesized();  // also after an error: level 2 must not wait for ever
     }
     // (a level's only error is its assignment's, before synthesis: then the callback was not made)
-    if (!synthesis_first || errors[k]) passSynthesis();
-    if (k != 0 && !errors[k]) finishLevel(k, parts, cp, seconds, report);
+    if (!synthesis_first || !errors[k].ok()) passSynthesis();
+    if (k != 0 && errors[k].ok()) finishLevel(k, parts, cp, seconds, report);
   };
 
   // Levels n, n - 1, ..., 3 built at the width of the search's first probe while it runs (small
@@ -541,7 +541,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     params.progress(0.05, "choosing w1");
     const size_t tn = original.triangleCount();
     if (tn >= 2) {
-      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes, &hooks)) {
+      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes, &hooks); !e.ok()) {
         out.levels.clear();
         return e;
       }
@@ -550,7 +550,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     }
   }
   stats.first_width_seconds = since(t0);
-  if (Error e = detail::checkCellWidth(p, w1)) {
+  if (Error e = detail::checkCellWidth(p, w1); !e.ok()) {
     speculation.wait();
     out.levels.clear();
     return e;
@@ -569,7 +569,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   if (!base_bounds) base_bounds = computeBoundingSphere(original);
   finish_group.wait();
   for (const Error& e : errors)
-    if (e) {
+    if (!e.ok()) {
       out.levels.clear();
       return e;
     }
@@ -602,7 +602,7 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
     {
       const Error e = buildZhangChain(original, params, out);
       // these generators copy level 0; a handed-over mesh replaces the copy, as documented
-      if (!e && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
+      if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
       return e;
     }
     case LodMethod::kScrooge:
@@ -610,7 +610,7 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
       const Clock::time_point t0 = Clock::now();
       const Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
       stats.total_seconds = since(t0);
-      if (!e && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
+      if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
       return e;
     }
     case LodMethod::kOriginal:

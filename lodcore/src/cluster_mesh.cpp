@@ -121,7 +121,7 @@ int setRenumberingForTest(int mode) { return g_renumber.exchange(mode < 0 ? -1 :
 
 Error assign(const PreparedMesh& p, const ClusterParams& params, Assignment& a) {
   if (!p.mesh) return {Status::kInvalidArgument, "the prepared mesh holds no mesh (call prepareMesh first)"};
-  if (Error e = detail::checkCellWidth(p, params.cell_width)) return e;
+  if (Error e = detail::checkCellWidth(p, params.cell_width); !e.ok()) return e;
   switch (params.method) {
     case LodMethod::kUniform:
       detail::assignUniform(p, params.cell_width, a);
@@ -142,7 +142,7 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
   Assignment a;
   const Error assign_error = assign(prepared, params, a);
   if (assigned) assigned(context);
-  if (assign_error) {
+  if (!assign_error.ok()) {
     parts = LevelParts();
     if (stats) *stats = ClusterStats();
     return assign_error;
@@ -193,7 +193,7 @@ void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out) {
 Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
   out = Mesh();
   detail::LevelParts parts;
-  if (Error e = detail::clusterLevelParts(prepared, params, parts, stats)) return e;
+  if (Error e = detail::clusterLevelParts(prepared, params, parts, stats); !e.ok()) return e;
   detail::finishLevel(parts, params, out);
   return {};
 }
@@ -201,7 +201,7 @@ Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params,
 Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, ClusterAssignment& out) {
   out = ClusterAssignment();
   detail::Assignment a;
-  if (Error e = detail::assign(prepared, params, a)) return e;
+  if (Error e = detail::assign(prepared, params, a); !e.ok()) return e;
   out.cluster_of = std::move(a.cluster_of);
   out.heaviest = std::move(a.heaviest);
   return {};
@@ -210,7 +210,7 @@ Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, 
 Error countClusteredTriangles(const PreparedMesh& prepared, const ClusterParams& params, size_t& triangle_count) {
   triangle_count = 0;
   detail::Assignment a;
-  if (Error e = detail::assign(prepared, params, a)) return e;
+  if (Error e = detail::assign(prepared, params, a); !e.ok()) return e;
   detail::Eliminated el;
   detail::eliminate(prepared, a, false, false, false, el);
   triangle_count = el.triangles.size() / 3;
@@ -224,10 +224,10 @@ Error clusterMesh(const Mesh& in, const ClusterParams& params, Mesh& out, float*
     return {Status::kInvalidArgument,
             "cell width " + std::to_string(params.cell_width) + " is not a finite positive number"};
   PreparedMesh p;
-  if (Error e = prepareMesh(in, params, p)) return e;
+  if (Error e = prepareMesh(in, params, p); !e.ok()) return e;
   if (p.order.empty()) return {};
   ClusterStats stats;
-  if (Error e = clusterPrepared(p, params, out, &stats)) return e;
+  if (Error e = clusterPrepared(p, params, out, &stats); !e.ok()) return e;
   if (max_error) *max_error = stats.max_error;
   return {};
 }

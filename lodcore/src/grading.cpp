@@ -689,7 +689,7 @@ Error prepareMesh(const Mesh& in, const ClusterParams& params, PreparedMesh& out
   // the same first bad element.
   const size_t vn = in.vertexCount();
   if (vn == 0 || !detail::validateMeshScanned(in, what, true, true).ok()) {
-    if (Error e = validateMesh(in, what)) return e;
+    if (Error e = validateMesh(in, what); !e.ok()) return e;
   }
   // the sort uses the unnormalised product: normalising a factor by a constant cannot change the
   // order, and this way the order does not depend on other parts of the mesh (whose longest edge

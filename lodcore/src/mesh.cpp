@@ -92,11 +92,11 @@ Error checkSkeleton(const std::vector<int32_t>& parents, const std::string& what
 // texture coordinates, tangents and skin: sizes, finite values, tangent signs, weights, joints
 Error checkAttributes(const Mesh& m, const std::string& what) {
   const size_t n = m.positions.size();
-  if (Error e = checkStream(m.uvs, n, "texture coordinates", what)) return e;
+  if (Error e = checkStream(m.uvs, n, "texture coordinates", what); !e.ok()) return e;
   for (size_t s = 0; s < m.extra_uvs.size(); ++s)
-    if (Error e = checkStream(m.extra_uvs[s], n, "texture coordinates (set " + std::to_string(s + 1) + ")", what))
+    if (Error e = checkStream(m.extra_uvs[s], n, "texture coordinates (set " + std::to_string(s + 1) + ")", what); !e.ok())
       return e;
-  if (Error e = checkStream(m.tangents, n, "tangents", what)) return e;
+  if (Error e = checkStream(m.tangents, n, "tangents", what); !e.ok()) return e;
   for (size_t i = 0; i < m.tangents.size(); ++i)
     if (std::fabs(m.tangents[i].w) != 1.0f)
       return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) + " has tangent sign w = " +
@@ -106,14 +106,14 @@ Error checkAttributes(const Mesh& m, const std::string& what) {
   if (!m.joints.empty() && m.joints.size() != n)
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.joints.size()) + " skin joints for " + std::to_string(n) +
                                       " vertices"};
-  if (Error e = checkStream(m.weights, n, "skin weights", what)) return e;
+  if (Error e = checkStream(m.weights, n, "skin weights", what); !e.ok()) return e;
   for (size_t i = 0; i < m.weights.size(); ++i) {
     const glm::vec4& w = m.weights[i];
     if (w.x < 0.0f || w.y < 0.0f || w.z < 0.0f || w.w < 0.0f || !(w.x + w.y + w.z + w.w > 0.0f))
       return {Status::kInvalidMesh, what + ": vertex " + std::to_string(i) +
                                         " has a negative skin weight or weights summing to 0"};
   }
-  if (Error e = checkSkeleton(m.joint_parents, what)) return e;
+  if (Error e = checkSkeleton(m.joint_parents, what); !e.ok()) return e;
   if (!m.joint_parents.empty())
     for (size_t i = 0; i < m.joints.size(); ++i)
       for (int c = 0; c < 4; ++c)
@@ -168,13 +168,13 @@ Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinat
   if (!m.colors.empty() && m.colors.size() != n)
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.colors.size()) + " colours for " +
                                       std::to_string(n) + " vertices"};
-  if (Error e = checkAttributes(m, what)) return e;
-  if (Error e = checkIndices(m.triangles, 3, n, "triangle", what, indices_in_range)) return e;
-  if (Error e = checkIndices(m.edges, 2, n, "edge", what, indices_in_range)) return e;
+  if (Error e = checkAttributes(m, what); !e.ok()) return e;
+  if (Error e = checkIndices(m.triangles, 3, n, "triangle", what, indices_in_range); !e.ok()) return e;
+  if (Error e = checkIndices(m.edges, 2, n, "edge", what, indices_in_range); !e.ok()) return e;
   if (!m.triangle_groups.empty() && m.triangle_groups.size() != m.triangleCount())
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.triangle_groups.size()) + " triangle groups for " +
                                       std::to_string(m.triangleCount()) + " triangles"};
-  if (Error e = checkIndices(m.points, 1, n, "point", what)) return e;
+  if (Error e = checkIndices(m.points, 1, n, "point", what); !e.ok()) return e;
   if (!m.edge_thickness.empty()) {
     if (m.edge_thickness.size() != m.edgeCount())
       return {Status::kInvalidMesh, what + ": " + std::to_string(m.edge_thickness.size()) +
@@ -189,7 +189,7 @@ Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinat
     for (size_t f = 0; f + 1 < m.face_offsets.size(); ++f)
       if (m.face_offsets[f] > m.face_offsets[f + 1])
         return {Status::kInvalidMesh, what + ": face offsets decrease at face " + std::to_string(f)};
-    if (Error e = checkIndices(m.face_corners, 1, n, "face corner", what)) return e;
+    if (Error e = checkIndices(m.face_corners, 1, n, "face corner", what); !e.ok()) return e;
   } else if (!m.face_corners.empty()) {
     return {Status::kInvalidMesh, what + ": face corners without face offsets"};
   }

@@ -119,8 +119,8 @@ class ObjReader {
 
   Error read(Mesh& out) {
     std::string data;
-    if (Error e = readWholeFile(path_, data)) return e;
-    if (Error e = parse(data)) return e;
+    if (Error e = readWholeFile(path_, data); !e.ok()) return e;
+    if (Error e = parse(data); !e.ok()) return e;
     return build(out);
   }
 
@@ -176,16 +176,16 @@ class ObjReader {
       const char* e = b + tok.size();
       const char* s1 = static_cast<const char*>(std::memchr(b, '/', tok.size()));
       const char* vend = s1 ? s1 : e;
-      if (Error err = resolveIndex(b, vend, positions_.size(), line, "vertex", c.v)) return err;
+      if (Error err = resolveIndex(b, vend, positions_.size(), line, "vertex", c.v); !err.ok()) return err;
       if (s1) {
         const char* s2 = static_cast<const char*>(std::memchr(s1 + 1, '/', static_cast<size_t>(e - s1 - 1)));
         const char* tend = s2 ? s2 : e;
         if (tend > s1 + 1)
-          if (Error err = resolveIndex(s1 + 1, tend, uvs_.size(), line, "texture coordinate", c.vt)) return err;
+          if (Error err = resolveIndex(s1 + 1, tend, uvs_.size(), line, "texture coordinate", c.vt); !err.ok()) return err;
         if (s2) {
           if (kind != ElementKind::kFace)
             return fail(Status::kParseError, line, "normal index in a line or point element '" + std::string(tok) + "'");
-          if (Error err = resolveIndex(s2 + 1, e, normals_.size(), line, "normal", c.vn)) return err;
+          if (Error err = resolveIndex(s2 + 1, e, normals_.size(), line, "normal", c.vn); !err.ok()) return err;
         }
       }
       corners_.push_back(c);
@@ -217,7 +217,7 @@ class ObjReader {
   }
 
   Error parse(const std::string& data) {
-    if (Error e = checkText(data)) return e;
+    if (Error e = checkText(data); !e.ok()) return e;
     const char* p = data.data();
     const char* end = p + data.size();
     uint32_t line = 0;
@@ -266,7 +266,7 @@ class ObjReader {
       float v[7];
       size_t n = 0;
       if (kw == "v") {
-        if (Error e = parseVector(lp, line, "v", 3, 7, v, n)) return e;
+        if (Error e = parseVector(lp, line, "v", 3, 7, v, n); !e.ok()) return e;
         if (n == 5) return fail(Status::kParseError, line, "'v' statement with 5 numbers (expected x y z [w] or x y z r g b)");
         positions_.emplace_back(v[0], v[1], v[2]);
         if (n >= 6) {
@@ -275,18 +275,18 @@ class ObjReader {
           colors_.emplace_back(srgbToLinear(v[c]), srgbToLinear(v[c + 1]), srgbToLinear(v[c + 2]));
         }
       } else if (kw == "vn") {
-        if (Error e = parseVector(lp, line, "vn", 3, 3, v, n)) return e;
+        if (Error e = parseVector(lp, line, "vn", 3, 3, v, n); !e.ok()) return e;
         normals_.emplace_back(v[0], v[1], v[2]);
       } else if (kw == "vt") {
-        if (Error e = parseVector(lp, line, "vt", 1, 3, v, n)) return e;
+        if (Error e = parseVector(lp, line, "vt", 1, 3, v, n); !e.ok()) return e;
         uvs_.emplace_back(v[0], n > 1 ? v[1] : 0.0f);
       } else if (kw == "f") {
-        if (Error e = parseCorners(lp, line, ElementKind::kFace, 0.0f)) return e;
+        if (Error e = parseCorners(lp, line, ElementKind::kFace, 0.0f); !e.ok()) return e;
       } else if (kw == "l") {
-        if (Error e = parseCorners(lp, line, ElementKind::kLine, pending_thickness)) return e;
+        if (Error e = parseCorners(lp, line, ElementKind::kLine, pending_thickness); !e.ok()) return e;
         pending_thickness = 0.0f;
       } else if (kw == "p") {
-        if (Error e = parseCorners(lp, line, ElementKind::kPoint, 0.0f)) return e;
+        if (Error e = parseCorners(lp, line, ElementKind::kPoint, 0.0f); !e.ok()) return e;
       }
       // o, g, s, usemtl, mtllib, vp, curves and anything else: skipped
     }
@@ -432,7 +432,7 @@ Error readObj(const std::string& path, Mesh& out) {
 }
 
 Error writeObj(const std::string& path, const Mesh& mesh) {
-  if (Error e = validateMesh(mesh, path)) return e;
+  if (Error e = validateMesh(mesh, path); !e.ok()) return e;
   try {
     std::string s;
     s.reserve(mesh.positions.size() * 40 + mesh.triangles.size() * 8 + 256);

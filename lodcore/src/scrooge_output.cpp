@@ -259,8 +259,8 @@ namespace {
 Error runScrooge(const Mesh& in, const ScroogeParams& params, bool degrade, Mesh& out, ScroogeStats* stats,
                  const char* what) {
   const std::string name = what ? what : "mesh";
-  if (Error e = checkParams(params, degrade, name)) return e;
-  if (Error e = validateMesh(in, name)) return e;
+  if (Error e = checkParams(params, degrade, name); !e.ok()) return e;
+  if (Error e = validateMesh(in, name); !e.ok()) return e;
   ScroogeStats local;
   ScroogeStats& st = stats ? *stats : local;
   st = ScroogeStats{};
@@ -307,8 +307,8 @@ Error buildScroogeChain(const Mesh& original, const ChainParams& params, const S
                         LodChain& out) {
   out = LodChain{};
   const std::string what = "SCROOGE chain";
-  if (Error e = checkParams(scrooge_params, false, what)) return e;
-  if (Error e = validateMesh(original, what)) return e;
+  if (Error e = checkParams(scrooge_params, false, what); !e.ok()) return e;
+  if (Error e = validateMesh(original, what); !e.ok()) return e;
   if (!std::isfinite(params.first_cell_width) || params.first_cell_width < 0.0f)
     return {Status::kInvalidArgument, what + ": first sub-volume width " + std::to_string(params.first_cell_width) +
                                           " must be finite and >= 0 (0 = automatic)"};
@@ -344,7 +344,7 @@ Error buildScroogeChain(const Mesh& original, const ChainParams& params, const S
   });
   size_t done = 0;
   for (size_t k = 0; k < count; ++k) {
-    if (errors[k]) return errors[k];
+    if (!errors[k].ok()) return errors[k];
     params.progress(double(++done) / double(count), "scrooge");
     out.levels.push_back(std::move(levels[k]));
   }

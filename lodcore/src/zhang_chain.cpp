@@ -25,7 +25,7 @@ Sphere boundingSphere(const Mesh& m) {
 
 Error buildZhangChain(const Mesh& original, const ChainParams& params, const ZhangParams& zhang, LodChain& out) {
   out = LodChain{};
-  if (Error e = validateMesh(original, "zhang chain input")) return e;
+  if (Error e = validateMesh(original, "zhang chain input"); !e.ok()) return e;
   LodLevel base;
   base.mesh = original;
   base.method = LodMethod::kOriginal;
@@ -38,7 +38,7 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
 
   std::vector<Mesh> meshes;
   std::vector<ZhangStats> stats;
-  if (Error e = simplifyZhangMulti(original, targets, zhang, meshes, &stats, params.progress)) {
+  if (Error e = simplifyZhangMulti(original, targets, zhang, meshes, &stats, params.progress); !e.ok()) {
     out = LodChain{};
     return e;
   }

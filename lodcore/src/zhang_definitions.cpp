@@ -177,7 +177,7 @@ void measureStar(const glm::vec3& pv, const StarPair* pairs, size_t n, const glm
 Error computeZhangMeasures(const Mesh& mesh, const ZhangParams& params, std::vector<ZhangVertexMeasures>& out) {
   using namespace zhang_detail;
   out.clear();
-  if (Error e = validateMesh(mesh, "zhang measures")) return e;
+  if (Error e = validateMesh(mesh, "zhang measures"); !e.ok()) return e;
   const size_t vn = mesh.vertexCount(), tn = mesh.triangleCount();
   out.assign(vn, ZhangVertexMeasures{});
   // vertex -> triangle adjacency (definition 3), skipping triangles with a repeated index

@@ -963,12 +963,12 @@ Error simplifyZhangMulti(const Mesh& in, const std::vector<size_t>& targets, con
                          std::vector<Mesh>& out, std::vector<ZhangStats>* stats, const ProgressCallback& progress) {
   out.clear();
   if (stats) stats->clear();
-  if (Error e = validateMesh(in, "zhang simplification input")) return e;
+  if (Error e = validateMesh(in, "zhang simplification input"); !e.ok()) return e;
   for (size_t i = 1; i < targets.size(); ++i)
     if (targets[i] >= targets[i - 1])
       return {Status::kInvalidArgument, "zhang: targets must be strictly decreasing"};
   ZhangEngine engine;
-  if (Error e = engine.init(in, params)) return e;
+  if (Error e = engine.init(in, params); !e.ok()) return e;
   out.resize(targets.size());
   for (size_t i = 0; i < targets.size(); ++i) {
     engine.setProgress(progress.fn ? &progress : nullptr, targets.back());
@@ -985,7 +985,7 @@ Error simplifyZhang(const Mesh& in, size_t target_triangles, const ZhangParams& 
                     ZhangStats* stats) {
   std::vector<Mesh> meshes;
   std::vector<ZhangStats> all;
-  if (Error e = simplifyZhangMulti(in, {target_triangles}, params, meshes, &all)) {
+  if (Error e = simplifyZhangMulti(in, {target_triangles}, params, meshes, &all); !e.ok()) {
     out = Mesh{};
     return e;
   }

@@ -18,13 +18,13 @@ using namespace scenelod;
 int main() {
   // 1. the engine's content, here the built-in demo scene (any SceneData: glTF import, or filled by hand)
   scene::SceneData data;
-  if (Error e = scene::makeDemoScene(data, scene::DemoSceneParams())) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
+  if (Error e = scene::makeDemoScene(data, scene::DemoSceneParams()); !e.ok()) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
 
   // 2. offline: the runtime scene graph and every unique mesh's chain (in parallel)
   scene::Scene world;
-  if (Error e = scene::Scene::fromSceneData(data, world)) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
+  if (Error e = scene::Scene::fromSceneData(data, world); !e.ok()) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
   scene::SceneLods lods;
-  if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, &world))
+  if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, &world); !e.ok())
     return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
   selection::LevelTableData table;
   for (const LodChain& c : lods.chains) table.addChain(c);  // chain id = mesh index, as the scene uses
@@ -40,10 +40,10 @@ int main() {
   std::vector<const LodChain*> chain_ptrs;
   for (const LodChain& c : lods.chains) chain_ptrs.push_back(&c);
   selection::RayScene rays;
-  if (Error e = rays.init(Span<const LodChain* const>(chain_ptrs.data(), chain_ptrs.size())))
+  if (Error e = rays.init(Span<const LodChain* const>(chain_ptrs.data(), chain_ptrs.size())); !e.ok())
     return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
   selection::OcclusionEstimator occlusion;
-  if (Error e = occlusion.init(n)) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
+  if (Error e = occlusion.init(n); !e.ok()) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
   std::vector<int8_t> levels(n, -1);
   std::vector<int32_t> drawn(n, 0);
   std::vector<float> visible(n, 1.0f);
@@ -67,7 +67,7 @@ int main() {
 
     // visibility from last frame's drawn levels
     for (size_t i = 0; i < n; ++i) drawn[i] = levels[i];
-    if (Error e = rays.syncFromScene(world, Span<const int32_t>(drawn.data(), n))) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
+    if (Error e = rays.syncFromScene(world, Span<const int32_t>(drawn.data(), n)); !e.ok()) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
     rays.commit();
     occlusion.update(rays, camera, Span<float>(visible.data(), n));
 

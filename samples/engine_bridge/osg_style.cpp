@@ -81,7 +81,7 @@ int main() {
   LodChain chain;
   ChainParams cp;
   cp.level_count = 5;
-  if (Error e = buildChain(box(glm::vec3(1.0f, 0.5f, 2.0f), 16), cp, chain)) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
+  if (Error e = buildChain(box(glm::vec3(1.0f, 0.5f, 2.0f), 16), cp, chain); !e.ok()) return std::fprintf(stderr, "%s\n", e.message.c_str()), 1;
   auto root = std::make_shared<osgish::Node>();
   for (int i = 0; i < 50; ++i) {
     auto t = std::make_shared<osgish::MatrixTransform>();

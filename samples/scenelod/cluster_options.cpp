@@ -65,7 +65,7 @@ bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error)
 
 Error loadWorldMesh(const std::string& path, Mesh& out) {
   scene::SceneData s;
-  if (Error e = scene::loadScene(path, s)) return e;
+  if (Error e = scene::loadScene(path, s); !e.ok()) return e;
   out = scene::flattenScene(s);
   return validateMesh(out, path);
 }

@@ -158,13 +158,13 @@ Error measure(const Model& model, const Mesh& simplified, const Settings& s, Run
   }
   eval::DistanceParams dp;
   dp.area_sample_count = s.samples;
-  if (Error e = eval::measureSurfaceDistance(model.mesh, simplified, dp, run.dist)) return e;
+  if (Error e = eval::measureSurfaceDistance(model.mesh, simplified, dp, run.dist); !e.ok()) return e;
   eval::ImageErrorParams ip;
   ip.resolution = s.resolution;
-  if (Error e = eval::measureImageError(model.mesh, simplified, ip, run.image)) return e;
+  if (Error e = eval::measureImageError(model.mesh, simplified, ip, run.image); !e.ok()) return e;
   if ((run.edges || run.points) && run.triangles) {
     run.has_tri_only = true;
-    if (Error e = eval::measureSurfaceDistance(model.mesh, trianglesOnly(simplified), dp, run.dist_tri_only)) return e;
+    if (Error e = eval::measureSurfaceDistance(model.mesh, trianglesOnly(simplified), dp, run.dist_tri_only); !e.ok()) return e;
   }
   return {};
 }
@@ -174,12 +174,12 @@ Error runOurs(const Model& model, LodMethod method, const Settings& s, double pc
   cp.method = method;
   float w = 0.0f;
   const size_t target = std::max<size_t>(1, static_cast<size_t>(std::llround(model.mesh.triangleCount() * pct / 100.0)));
-  if (Error e = findCellWidthForTarget(model.mesh, cp, target, w)) return e;
+  if (Error e = findCellWidthForTarget(model.mesh, cp, target, w); !e.ok()) return e;
   cp.cell_width = w;
   Mesh out;
   Error err;
   run.time_ms = bestOf(s.runs, [&] { err = clusterMesh(model.mesh, cp, out); });
-  if (err) return err;
+  if (!err.ok()) return err;
   run.cell_width = w;
   return measure(model, out, s, run);
 }
@@ -376,7 +376,7 @@ Error writePlots(const std::string& dir, const Model& m, const std::vector<Run>&
     pp.y_label = sp.y;
     pp.log_x = true;
     pp.log_y = sp.log_y;
-    if (Error e = eval::writePlotPng(dir + "/" + m.name + "_" + sp.suffix + ".png", series, pp)) return e;
+    if (Error e = eval::writePlotPng(dir + "/" + m.name + "_" + sp.suffix + ".png", series, pp); !e.ok()) return e;
   }
   return {};
 }
@@ -459,7 +459,7 @@ int runBench(const std::vector<std::string>& argv) {
     model.path = paths[mi];
     model.name = fs::path(paths[mi]).stem().string();
     Mesh raw;
-    if (Error e = loadFlatMesh(model.path, raw)) return runError("bench", e.message);
+    if (Error e = loadFlatMesh(model.path, raw); !e.ok()) return runError("bench", e.message);
     model.mesh = weld(raw);
     if (model.mesh.triangleCount() < 100) {
       std::fprintf(stderr, "scenelod bench: %s: skipped, only %zu triangles\n", model.path.c_str(),
@@ -474,7 +474,7 @@ int runBench(const std::vector<std::string>& argv) {
       ChainParams cp;
       Error err;
       model.chain_ms = bestOf(s.runs, [&] { err = buildChain(model.mesh, cp, chain); });
-      if (err) return runError("bench", model.path + ": " + err.message);
+      if (!err.ok()) return runError("bench", model.path + ": " + err.message);
       model.chain_levels = chain.levelCount();
     }
     ProgressBar bar(model.name);
@@ -492,14 +492,14 @@ int runBench(const std::vector<std::string>& argv) {
         if (method == "floating") e = runOurs(model, LodMethod::kFloatingNearest, s, p, run);
         else if (method == "uniform") e = runOurs(model, LodMethod::kUniform, s, p, run);
         else e = runMeshopt(model, method == "sloppy", s, p, run);
-        if (e) return runError("bench", model.path + ", " + method + " at " + fmt("%g", p) + " %: " + e.message);
+        if (!e.ok()) return runError("bench", model.path + ", " + method + " at " + fmt("%g", p) + " %: " + e.message);
         model_runs.push_back(run);
         ++step;
       }
     }
     bar.update(1.0, "plots");
     bar.finish();
-    if (Error e = writePlots(out_dir, model, model_runs, methods)) return runError("bench", e.message);
+    if (Error e = writePlots(out_dir, model, model_runs, methods); !e.ok()) return runError("bench", e.message);
     models.push_back(std::move(model));
     results.push_back(std::move(model_runs));
     std::fprintf(stderr, "    done (%.1f s so far)\n", std::chrono::duration<double>(Clock::now() - t_start).count());

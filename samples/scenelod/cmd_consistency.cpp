@@ -44,7 +44,7 @@ int runConsistency(const std::vector<std::string>& argv) {
     return usageError("consistency", args.ok() ? "--far must be a finite number > 0" : args.error());
   const std::string in = args.positional()[0];
   Mesh model;
-  if (Error e = loadWorldMesh(in, model)) return runError("consistency", e.message);
+  if (Error e = loadWorldMesh(in, model); !e.ok()) return runError("consistency", e.message);
   if (model.triangleCount() == 0) return runError("consistency", in + ": the model has no triangles");
   const Aabb box = computeBounds(model);
   const float diag = box.diagonal();
@@ -82,8 +82,8 @@ int runConsistency(const std::vector<std::string>& argv) {
     p.method = method;
     p.cell_width = cell;
     Mesh a, b;
-    if (Error e = clusterMesh(model, p, a)) return runError("consistency", in + ": " + e.message);
-    if (Error e = clusterMesh(scene, p, b)) return runError("consistency", in + ": " + e.message);
+    if (Error e = clusterMesh(model, p, a); !e.ok()) return runError("consistency", in + ": " + e.message);
+    if (Error e = clusterMesh(scene, p, b); !e.ok()) return runError("consistency", in + ": " + e.message);
     const eval::TriangleChangeCount count = eval::countChangedTriangles(a, b, region, 1e-5f * diag);
     std::printf("%-18s %12zu %12zu %9.2f%%\n", lodMethodName(method), count.compared, count.changed,
                 count.compared == 0 ? 0.0 : 100.0 * double(count.changed) / double(count.compared));

@@ -43,13 +43,13 @@ int runConvert(const std::vector<std::string>& argv) {
   ProgressBar bar("convert");
   bar.update(0.0, "reading");
   scene::SceneData s;
-  if (Error e = scene::loadScene(in, s)) return runError("convert", e.message);
+  if (Error e = scene::loadScene(in, s); !e.ok()) return runError("convert", e.message);
   bar.update(0.5, "writing");
   if (ext == ".glb") {
-    if (Error e = scene::exportGlb(out, s)) return runError("convert", e.message);
+    if (Error e = scene::exportGlb(out, s); !e.ok()) return runError("convert", e.message);
   } else {
     const Mesh flat = scene::flattenScene(s);
-    if (Error e = writeObj(out, flat)) return runError("convert", e.message);
+    if (Error e = writeObj(out, flat); !e.ok()) return runError("convert", e.message);
   }
   bar.update(1.0, "done");
   bar.finish();

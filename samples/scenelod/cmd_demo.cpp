@@ -57,9 +57,9 @@ std::string compactRanges(const std::vector<size_t>& ids, size_t max_chars) {
 Error printObjectTable(const scene::SceneData& data, const scene::SceneLods& lods, const std::string& csv_path,
                        std::string& markdown) {
   scene::Scene sc;
-  if (Error e = scene::Scene::fromSceneData(data, sc, "demo scene")) return e;
+  if (Error e = scene::Scene::fromSceneData(data, sc, "demo scene"); !e.ok()) return e;
   for (size_t c = 0; c < lods.chain_spheres.size(); ++c)
-    if (Error e = sc.setChainSphere(static_cast<uint32_t>(c), lods.chain_spheres[c])) return e;
+    if (Error e = sc.setChainSphere(static_cast<uint32_t>(c), lods.chain_spheres[c]); !e.ok()) return e;
   sc.update();
   const std::vector<int32_t> nodes = scene::objectNodes(data);
   const size_t mesh_count = data.meshes.size();
@@ -191,14 +191,14 @@ int run(const std::vector<std::string>& argv) {
 
   scene::SceneData data;
   scene::DemoSceneInfo info;
-  if (Error e = scene::makeDemoScene(data, p, &info)) return runError("demo", e.message);
+  if (Error e = scene::makeDemoScene(data, p, &info); !e.ok()) return runError("demo", e.message);
   if (!info.note.empty()) std::printf("%s\n", info.note.c_str());
   scene::SceneLods lods;
   {
     ProgressBar bar("precompute");
     scene::LodBuildParams params;
     params.progress = bar.callback();
-    if (Error e = scene::buildLods(data, params, lods, nullptr, "demo scene")) return runError("demo", e.message);
+    if (Error e = scene::buildLods(data, params, lods, nullptr, "demo scene"); !e.ok()) return runError("demo", e.message);
   }
   size_t triangles = 0, levels = 0;
   for (const auto& c : lods.chains) {
@@ -206,16 +206,16 @@ int run(const std::vector<std::string>& argv) {
     if (!c.empty()) triangles += c.levels[0].mesh.triangleCount();
   }
   selection::ReplayScene scene;
-  if (Error e = selection::replaySceneFromSceneData(data, lods.chains, "demo scene", scene, &lods.chain_spheres))
+  if (Error e = selection::replaySceneFromSceneData(data, lods.chains, "demo scene", scene, &lods.chain_spheres); !e.ok())
     return runError("demo", e.message);
   std::printf("demo scene: %zu objects, %zu unique meshes (%zu triangles), %zu levels, precomputed in %.2f s\n",
               scene.objectCount(), lods.chains.size(), triangles, levels, lods.total_seconds);
   const std::string csv_path = out + "/demo_objects.csv";
   std::string objects_md;
-  if (Error e = printObjectTable(data, lods, csv_path, objects_md)) return runError("demo", e.message);
+  if (Error e = printObjectTable(data, lods, csv_path, objects_md); !e.ok()) return runError("demo", e.message);
   if (args.has("--table-only")) return 0;
   SelectionDemoResult result;
-  if (Error e = runSelectionDemo(scene, out, static_cast<size_t>(frames), result)) return runError("demo", e.message);
+  if (Error e = runSelectionDemo(scene, out, static_cast<size_t>(frames), result); !e.ok()) return runError("demo", e.message);
   {
     std::ofstream report(result.report_path, std::ios::app);
     report << "\n## Scene objects\n\nOne row per unique mesh (objects are numbered as in replay files); the "

@@ -38,9 +38,9 @@ int runDemoScene(const std::vector<std::string>& argv) {
 
   scene::SceneData s;
   scene::DemoSceneInfo info;
-  if (Error e = scene::makeDemoScene(s, p, &info)) return runError("demo-scene", e.message);
+  if (Error e = scene::makeDemoScene(s, p, &info); !e.ok()) return runError("demo-scene", e.message);
   std::fprintf(stderr, "%s\n", info.note.c_str());
-  if (Error e = scene::exportGlb(out, s)) return runError("demo-scene", e.message);
+  if (Error e = scene::exportGlb(out, s); !e.ok()) return runError("demo-scene", e.message);
   size_t tris = 0;
   const std::vector<int32_t> objects = scene::objectNodes(s);
   for (int32_t n : objects) tris += s.meshes[s.nodes[n].mesh].mesh.triangleCount();

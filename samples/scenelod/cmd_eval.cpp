@@ -37,26 +37,26 @@ const char* kUsage =
 
 int runChain(const std::string& path, long levels, double pixels, size_t samples, bool json) {
   Mesh mesh;
-  if (Error e = loadFlatMesh(path, mesh)) return runError("eval", e.message);
+  if (Error e = loadFlatMesh(path, mesh); !e.ok()) return runError("eval", e.message);
   if (mesh.triangleCount() == 0)
     return runError("eval", path + ": the model has no triangles; the error is measured against its surface");
   LodChain chain;
   ChainParams cp;
   cp.level_count = static_cast<size_t>(levels);
-  if (Error e = buildChain(mesh, cp, chain)) return runError("eval", path + ": " + e.message);
+  if (Error e = buildChain(mesh, cp, chain); !e.ok()) return runError("eval", path + ": " + e.message);
   std::vector<eval::DistanceResult> dist(chain.levelCount());
   eval::DistanceParams dp;
   dp.area_sample_count = samples;
   for (size_t k = 1; k < chain.levelCount(); ++k) {
     if (chain.levels[k].mesh.empty()) continue;
-    if (Error e = eval::measureSurfaceDistance(chain.levels[0].mesh, chain.levels[k].mesh, dp, dist[k]))
+    if (Error e = eval::measureSurfaceDistance(chain.levels[0].mesh, chain.levels[k].mesh, dp, dist[k]); !e.ok())
       return runError("eval", path + ", level " + std::to_string(k) + ": " + e.message);
   }
   eval::PoppingParams pp;
   pp.pixels_per_cell = static_cast<float>(pixels);
   std::vector<eval::PoppingTransition> pops;
   if (chain.levelCount() >= 2)
-    if (Error e = eval::measurePopping(chain, pp, pops)) return runError("eval", path + ": " + e.message);
+    if (Error e = eval::measurePopping(chain, pp, pops); !e.ok()) return runError("eval", path + ": " + e.message);
   if (json) {
     std::printf("{\"model\": %s, \"pixels_per_cell\": %s, \"levels\": [", jsonString(path).c_str(),
                 jsonNumber(pixels).c_str());
@@ -114,12 +114,12 @@ int runEval(const std::vector<std::string>& argv) {
   const std::string& b_path = args.positional()[1];
 
   Mesh original, simplified;
-  if (Error e = loadFlatMesh(a_path, original)) return runError("eval", e.message);
-  if (Error e = loadFlatMesh(b_path, simplified)) return runError("eval", e.message);
+  if (Error e = loadFlatMesh(a_path, original); !e.ok()) return runError("eval", e.message);
+  if (Error e = loadFlatMesh(b_path, simplified); !e.ok()) return runError("eval", e.message);
   if (original.triangleCount() == 0)
     return runError("eval", a_path + ": the original has no triangles; the error is measured against its surface");
   if (simplified.empty()) return runError("eval", b_path + ": the simplified model has no triangles, edges or points");
-  if (Error e = eval::checkComparableScales(original, a_path, simplified, b_path)) {
+  if (Error e = eval::checkComparableScales(original, a_path, simplified, b_path); !e.ok()) {
     if (!args.has("--force")) return runError("eval", e.message + " (use --force to measure anyway)");
     std::fprintf(stderr, "scenelod eval: warning: %s\n", e.message.c_str());
   }
@@ -127,11 +127,11 @@ int runEval(const std::vector<std::string>& argv) {
   eval::DistanceParams dp;
   dp.area_sample_count = static_cast<size_t>(samples);
   eval::DistanceResult d;
-  if (Error e = eval::measureSurfaceDistance(original, simplified, dp, d)) return runError("eval", e.message);
+  if (Error e = eval::measureSurfaceDistance(original, simplified, dp, d); !e.ok()) return runError("eval", e.message);
   eval::ImageErrorParams ip;
   ip.resolution = static_cast<int>(resolution);
   eval::ImageErrorResult im;
-  if (Error e = eval::measureImageError(original, simplified, ip, im)) return runError("eval", e.message);
+  if (Error e = eval::measureImageError(original, simplified, ip, im); !e.ok()) return runError("eval", e.message);
 
   if (args.has("--json")) {
     std::printf(

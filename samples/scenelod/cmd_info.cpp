@@ -51,7 +51,7 @@ int runInfo(const std::vector<std::string>& argv) {
   const std::string path = args.positional()[0];
 
   scene::SceneData s;
-  if (Error e = scene::loadScene(path, s)) return runError("info", e.message);
+  if (Error e = scene::loadScene(path, s); !e.ok()) return runError("info", e.message);
 
   const std::vector<int32_t> objects = scene::objectNodes(s);
   const std::vector<glm::mat4> world = scene::worldTransforms(s);
@@ -104,7 +104,7 @@ int runInfo(const std::vector<std::string>& argv) {
   }
   if (args.has("--out")) {
     const std::string out = args.get("--out");
-    if (Error e = writeFileAtomic(out, text.data(), text.size())) return runError("info", e.message);
+    if (Error e = writeFileAtomic(out, text.data(), text.size()); !e.ok()) return runError("info", e.message);
   } else {
     std::fputs(text.c_str(), stdout);
   }

@@ -46,7 +46,7 @@ const std::string kUsage = std::string(
 // every unique mesh's chain in object space, written as one GLB with MSFT_lod per mesh node
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
   scene::SceneData s;
-  if (Error e = scene::loadScene(in, s)) return runError("lods", e.message);
+  if (Error e = scene::loadScene(in, s); !e.ok()) return runError("lods", e.message);
   scene::LodBuildParams params;
   params.chain = cp;
   params.chain.first_cell_width = cell;
@@ -54,11 +54,11 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
   ProgressBar bar("lods");
   params.progress = bar.callback();
   scene::SceneLods lods;
-  if (Error e = scene::buildLods(s, params, lods, nullptr, in)) return runError("lods", e.message);
+  if (Error e = scene::buildLods(s, params, lods, nullptr, in); !e.ok()) return runError("lods", e.message);
   bar.finish();
   std::vector<const LodChain*> chains;
   for (const LodChain& c : lods.chains) chains.push_back(&c);
-  if (Error e = scene::exportGlb(out, s, &chains)) return runError("lods", e.message);
+  if (Error e = scene::exportGlb(out, s, &chains); !e.ok()) return runError("lods", e.message);
 
   const std::vector<int32_t> objects = scene::objectNodes(s);
   std::vector<size_t> instances(s.meshes.size(), 0);
@@ -157,7 +157,7 @@ int runLods(const std::vector<std::string>& argv) {
   }
 
   Mesh mesh;
-  if (Error e = loadWorldMesh(in, mesh)) return runError("lods", e.message);
+  if (Error e = loadWorldMesh(in, mesh); !e.ok()) return runError("lods", e.message);
   if (scrooge) {  // --cell-rel F: sub-volume diagonal = F x bbox diagonal; --subvolume 1/64|1/8|1
     float w = 0.0f;
     if (!scroogeFirstWidth(args, mesh, w, err)) return usageError("lods", in + ": " + err);
@@ -176,7 +176,7 @@ int runLods(const std::vector<std::string>& argv) {
                                                             : buildChain(mesh, cp, chain, &stats);
   if (cp.cluster.method == LodMethod::kZhang || scrooge)  // one run for all levels: only the total is known
     stats.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
-  if (built) return runError("lods", in + ": " + built.message);
+  if (!built.ok()) return runError("lods", in + ": " + built.message);
   bar.finish();
 
   const std::string stem = out.substr(0, out.size() - ext.size());
@@ -192,12 +192,12 @@ int runLods(const std::vector<std::string>& argv) {
     s.nodes.push_back(node);
     s.roots.push_back(0);
     std::vector<const LodChain*> chains{&chain};
-    if (Error e = scene::exportGlb(out, s, &chains)) return runError("lods", e.message);
+    if (Error e = scene::exportGlb(out, s, &chains); !e.ok()) return runError("lods", e.message);
     std::printf("wrote %s (%zu levels, MSFT_lod)\n", out.c_str(), chain.levelCount());
   } else {
     for (size_t k = 1; k < chain.levelCount(); ++k) {
       const std::string path = stem + "-level" + std::to_string(k) + ext;
-      if (Error e = writeMeshFile(path, chain.levels[k].mesh, "level" + std::to_string(k)))
+      if (Error e = writeMeshFile(path, chain.levels[k].mesh, "level" + std::to_string(k)); !e.ok())
         return runError("lods", e.message);
     }
     std::printf("wrote %s-level1%s .. %s-level%zu%s\n", stem.c_str(), ext.c_str(), stem.c_str(),

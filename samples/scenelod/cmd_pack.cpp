@@ -47,7 +47,7 @@ double timeLoad(const std::string& path, int repeats, Error& error) {
     const auto t0 = std::chrono::steady_clock::now();
     scene::Pack p;
     error = scene::Pack::load(path, p);
-    if (error) return 0.0;
+    if (!error.ok()) return 0.0;
     best = std::min(best, millisecondsSince(t0));
   }
   return best;
@@ -55,7 +55,7 @@ double timeLoad(const std::string& path, int repeats, Error& error) {
 
 int runCheck(const std::string& path) {
   scene::Pack p;
-  if (Error e = scene::Pack::load(path, p)) return runError("pack", e.message);
+  if (Error e = scene::Pack::load(path, p); !e.ok()) return runError("pack", e.message);
   size_t levels = 0, tris = 0;
   for (size_t c = 0; c < p.chainCount(); ++c) {
     levels += p.levelCount(c);
@@ -63,7 +63,7 @@ int runCheck(const std::string& path) {
   }
   Error e;
   const double ms = timeLoad(path, 5, e);
-  if (e) return runError("pack", e.message);
+  if (!e.ok()) return runError("pack", e.message);
   std::printf("%s: %zu bytes, %zu nodes, %zu objects, %zu chains, %zu levels, %zu triangles over all levels\n",
               path.c_str(), p.byteSize(), p.nodeCount(), p.objectCount(), p.chainCount(), levels, tris);
   std::printf("load (one read + checks, best of 5): %.2f ms\n", ms);
@@ -95,22 +95,22 @@ int runPack(const std::vector<std::string>& argv) {
   scene::SceneData s;
   if (demo) {
     scene::DemoSceneInfo info;
-    if (Error e = scene::makeDemoScene(s, {}, &info)) return runError("pack", e.message);
+    if (Error e = scene::makeDemoScene(s, {}, &info); !e.ok()) return runError("pack", e.message);
     std::fprintf(stderr, "%s\n", info.note.c_str());
-  } else if (Error e = scene::loadScene(in, s)) {
+  } else if (Error e = scene::loadScene(in, s); !e.ok()) {
     return runError("pack", e.message);
   }
   ProgressBar bar("pack");
   params.progress = bar.callback();
   scene::SceneLods lods;
-  if (Error e = scene::buildLods(s, params, lods, nullptr, in)) return runError("pack", e.message);
+  if (Error e = scene::buildLods(s, params, lods, nullptr, in); !e.ok()) return runError("pack", e.message);
   bar.finish();
 
   scene::PackWriteOptions wo;
   wo.optimize_order = !args.has("--no-order");
   scene::PackWriteStats stats;
   const auto t_write = std::chrono::steady_clock::now();
-  if (Error e = scene::writePack(out, s, lods.chains, lods.chain_spheres, wo, &stats)) return runError("pack", e.message);
+  if (Error e = scene::writePack(out, s, lods.chains, lods.chain_spheres, wo, &stats); !e.ok()) return runError("pack", e.message);
   const double write_ms = millisecondsSince(t_write);
 
   const std::vector<int32_t> objects = scene::objectNodes(s);
@@ -129,7 +129,7 @@ int runPack(const std::vector<std::string>& argv) {
   }
   Error load_error;
   const double load_ms = timeLoad(out, 5, load_error);
-  if (load_error) return runError("pack", "the pack just written does not load: " + load_error.message);
+  if (!load_error.ok()) return runError("pack", "the pack just written does not load: " + load_error.message);
   std::printf("%s: %zu objects, %zu unique meshes, %zu levels\n", in.c_str(), objects.size(), s.meshes.size(), total_levels);
   std::printf("precompute %.1f ms (meshes in parallel), write %.1f ms\n", lods.total_seconds * 1e3, write_ms);
   std::printf("wrote %s: %zu bytes; ACMR (FIFO 16) %.3f -> %.3f\n", out.c_str(), stats.bytes, stats.acmr_before,

@@ -79,7 +79,7 @@ int run(const std::vector<std::string>& argv) {
   }
   const std::string scene_path = args.positional()[0];
   ReplayScene scene;
-  if (Error e = loadReplayScene(scene_path, scene)) return runError("record", e.message);
+  if (Error e = loadReplayScene(scene_path, scene); !e.ok()) return runError("record", e.message);
   const std::string out = args.get("--out");
   replay.header.scene = relativeTo(out, scene_path);
   replay.header.fov_y_deg = fov;
@@ -87,7 +87,7 @@ int run(const std::vector<std::string>& argv) {
   replay.header.has_budget = args.has("--budget");
   replay.header.budget_ms = budget;
   makeCameraPath(sceneBounds(scene), kind, static_cast<size_t>(frames), fps, replay);
-  if (Error e = writeReplay(out, replay)) return runError("record", e.message);
+  if (Error e = writeReplay(out, replay); !e.ok()) return runError("record", e.message);
   std::printf("wrote %s: %ld frames over %s (%zu objects)\n", out.c_str(), frames, scene_path.c_str(), scene.objectCount());
   return 0;
 }

@@ -101,12 +101,12 @@ int runRender(const std::vector<std::string>& argv) {
   const std::string in = args.positional()[0], out = args.get("--out");
 
   Mesh mesh;
-  if (Error e = loadFlatMesh(in, mesh)) return runError("render", e.message);
+  if (Error e = loadFlatMesh(in, mesh); !e.ok()) return runError("render", e.message);
   if (mesh.empty()) return runError("render", in + ": the model has no triangles, edges or points");
   if (!grid && !args.has("--level")) {
     eval::Image img;
-    if (Error e = eval::renderMesh(mesh, rp, img)) return runError("render", in + ": " + e.message);
-    if (Error e = eval::writePng(out, img)) return runError("render", e.message);
+    if (Error e = eval::renderMesh(mesh, rp, img); !e.ok()) return runError("render", in + ": " + e.message);
+    if (Error e = eval::writePng(out, img); !e.ok()) return runError("render", e.message);
     std::printf("wrote %s (%dx%d, %zu triangles, %zu edges, %zu points)\n", out.c_str(), img.width, img.height,
                 mesh.triangleCount(), mesh.edgeCount(), mesh.pointCount());
     return 0;
@@ -117,7 +117,7 @@ int runRender(const std::vector<std::string>& argv) {
   cp.level_count = static_cast<size_t>(grid ? levels : std::max<long>(levels, level));
   ProgressBar bar("building chain");
   cp.progress = bar.callback();
-  if (Error e = buildChain(mesh, cp, chain)) return runError("render", in + ": " + e.message);
+  if (Error e = buildChain(mesh, cp, chain); !e.ok()) return runError("render", in + ": " + e.message);
   bar.finish();
   rp.frame = eval::boundingSphere(chain.levels[0].mesh);  // every level framed like the original
   if (!grid) {
@@ -125,8 +125,8 @@ int runRender(const std::vector<std::string>& argv) {
       return runError("render", "the chain has " + std::to_string(chain.levelCount()) + " levels, no level " +
                                     std::to_string(level));
     eval::Image img;
-    if (Error e = eval::renderMesh(chain.levels[level].mesh, rp, img)) return runError("render", e.message);
-    if (Error e = eval::writePng(out, img)) return runError("render", e.message);
+    if (Error e = eval::renderMesh(chain.levels[level].mesh, rp, img); !e.ok()) return runError("render", e.message);
+    if (Error e = eval::writePng(out, img); !e.ok()) return runError("render", e.message);
     const Mesh& m = chain.levels[level].mesh;
     std::printf("wrote %s: level %ld, cell width %g, %zu triangles, %zu edges, %zu points\n", out.c_str(), level,
                 chain.levels[level].cell_width, m.triangleCount(), m.edgeCount(), m.pointCount());
@@ -141,7 +141,7 @@ int runRender(const std::vector<std::string>& argv) {
     eval::Image tile;
     if (lv.mesh.empty()) {
       tile = eval::Image(rp.width, rp.height);
-    } else if (Error e = eval::renderMesh(lv.mesh, rp, tile)) {
+    } else if (Error e = eval::renderMesh(lv.mesh, rp, tile); !e.ok()) {
       return runError("render", "level " + std::to_string(k) + ": " + e.message);
     }
     const int x = (k % cols) * rp.width, y = (k / cols) * (rp.height + label_h);
@@ -155,7 +155,7 @@ int runRender(const std::vector<std::string>& argv) {
     drawLabel(sheet, x + 4, y + rp.height + 2 + eval::kTextHeight + 3, line2);
     drawLabel(sheet, x + 4, y + rp.height + 2 + 2 * (eval::kTextHeight + 3), line3);
   }
-  if (Error e = eval::writePng(out, sheet)) return runError("render", e.message);
+  if (Error e = eval::writePng(out, sheet); !e.ok()) return runError("render", e.message);
   std::printf("wrote %s: %d levels\n", out.c_str(), n);
   for (int k = 0; k < n; ++k)
     std::printf("  level %d: cell width %-10.4g %8zu triangles %8zu edges %8zu points\n", k,

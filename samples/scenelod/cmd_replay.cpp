@@ -75,21 +75,21 @@ int run(const std::vector<std::string>& argv) {
   const std::string path = args.positional()[0];
   // the replay is read, run and logged one frame at a time: memory does not grow with its length
   ReplayReader reader;
-  if (Error e = reader.open(path)) return runError("replay", e.message);
+  if (Error e = reader.open(path); !e.ok()) return runError("replay", e.message);
   const ReplayHeader header = reader.header();
   const std::string scene_path = resolveReplayScene(path, header.scene);
   ReplayScene scene;
-  if (Error e = loadReplayScene(scene_path, scene)) return runError("replay", e.message);
+  if (Error e = loadReplayScene(scene_path, scene); !e.ok()) return runError("replay", e.message);
   ReplayVisibility visibility;
   if (args.has("--visibility")) {
     ReplayVisibilityParams vp;
     vp.occlusion.ray_budget = static_cast<uint32_t>(ray_budget);
-    if (Error e = visibility.init(scene, vp)) return runError("replay", scene_path + ": visibility: " + e.message);
+    if (Error e = visibility.init(scene, vp); !e.ok()) return runError("replay", scene_path + ": visibility: " + e.message);
     opt.visibility = &visibility;
   }
   AtomicFile log;
   if (args.has("--out"))
-    if (Error e = log.open(args.get("--out"))) return runError("replay", e.message);
+    if (Error e = log.open(args.get("--out")); !e.ok()) return runError("replay", e.message);
   ReplayRunDigest digest;
   size_t frames = 0;
   auto next = [&](ReplayFrame& f, Error& e) { return reader.next(f, e); };
@@ -99,9 +99,9 @@ int run(const std::vector<std::string>& argv) {
     ++frames;
     return Error();
   };
-  if (Error e = runReplayStream(header, next, scene, opt, sink)) return runError("replay", e.message);
+  if (Error e = runReplayStream(header, next, scene, opt, sink); !e.ok()) return runError("replay", e.message);
   if (log.stream())
-    if (Error e = log.commit()) return runError("replay", e.message);
+    if (Error e = log.commit(); !e.ok()) return runError("replay", e.message);
   const ReplaySummary s = digest.summary.summary();
   std::printf("%zu frames, %zu objects, mean predicted %.3f ms, mean measured %.3f ms, %.4f switches/object/s, "
               "mean benefit %.6g\n", s.frames, s.objects, s.mean_predicted_ms, s.mean_measured_ms,
@@ -125,7 +125,7 @@ int run(const std::vector<std::string>& argv) {
     in.run_names = {digest.has_budget ? "budget" : "distance"};
     in.runs = {&digest};
     std::vector<std::string> lines;
-    if (Error e = writeReplayReport(args.get("--report"), in, lines)) return runError("replay", e.message);
+    if (Error e = writeReplayReport(args.get("--report"), in, lines); !e.ok()) return runError("replay", e.message);
     std::printf("report: %s\n", args.get("--report").c_str());
   }
   return 0;

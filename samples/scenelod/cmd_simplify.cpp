@@ -39,9 +39,9 @@ int runZhangSimplify(const std::string& in, const std::string& out, const Mesh& 
   const auto t0 = std::chrono::steady_clock::now();
   Mesh result;
   ZhangStats st;
-  if (Error e = simplifyZhang(mesh, t, zp, result, &st)) return runError("simplify", in + ": " + e.message);
+  if (Error e = simplifyZhang(mesh, t, zp, result, &st); !e.ok()) return runError("simplify", in + ": " + e.message);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (Error e = writeMeshFile(out, result, "simplified")) return runError("simplify", e.message);
+  if (Error e = writeMeshFile(out, result, "simplified"); !e.ok()) return runError("simplify", e.message);
   std::printf("%s: %zu vertices, %zu triangles\n", in.c_str(), mesh.vertexCount(), mesh.triangleCount());
   std::printf("method zhang (%s, placement %s, influence %s), target %zu triangles\n", zhangModeName(zp.mode),
               zhangPlacementName(zp.placement), zhangInfluenceName(zp.influence), t);
@@ -92,17 +92,17 @@ int runSimplify(const std::vector<std::string>& argv) {
     return usageError("simplify", "--method zhang takes --target-triangles, not --cell or --cell-rel");
 
   Mesh mesh;
-  if (Error e = loadWorldMesh(in, mesh)) return runError("simplify", e.message);
+  if (Error e = loadWorldMesh(in, mesh); !e.ok()) return runError("simplify", e.message);
   if (params.method == LodMethod::kZhang) return runZhangSimplify(in, out, mesh, target, zp);
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
   PreparedMesh prepared;
-  if (Error e = prepareMesh(mesh, params, prepared, in)) return runError("simplify", e.message);
+  if (Error e = prepareMesh(mesh, params, prepared, in); !e.ok()) return runError("simplify", e.message);
   const double prepare_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   if (prepared.order.empty()) return runError("simplify", in + ": the model has no triangles, edges or points");
   if (target > 0) {
     float w = 0.0f;
-    if (Error e = findCellWidthForTarget(prepared, params, size_t(target), w)) return runError("simplify", in + ": " + e.message);
+    if (Error e = findCellWidthForTarget(prepared, params, size_t(target), w); !e.ok()) return runError("simplify", in + ": " + e.message);
     params.cell_width = w;
   } else if (cell > 0.0) {
     params.cell_width = float(cell);
@@ -112,9 +112,9 @@ int runSimplify(const std::vector<std::string>& argv) {
   const Clock::time_point t1 = Clock::now();
   Mesh result;
   ClusterStats stats;
-  if (Error e = clusterPrepared(prepared, params, result, &stats)) return runError("simplify", in + ": " + e.message);
+  if (Error e = clusterPrepared(prepared, params, result, &stats); !e.ok()) return runError("simplify", in + ": " + e.message);
   const double level_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
-  if (Error e = writeMeshFile(out, result, "simplified")) return runError("simplify", e.message);
+  if (Error e = writeMeshFile(out, result, "simplified"); !e.ok()) return runError("simplify", e.message);
   std::printf("%s: %zu vertices, %zu triangles, %zu edges, %zu points\n", in.c_str(), mesh.vertexCount(),
               mesh.triangleCount(), mesh.edgeCount(), mesh.pointCount());
   std::printf("method %s, grading %s, synthesis %s, cells %s, cell width %.6g (%.4g x diagonal)\n",

@@ -81,13 +81,13 @@ Error loadViewScene(const std::string& path, ReplayScene& out) {
   if (path.empty() || path == "builtin") {
     scene::SceneData data;
     scene::DemoSceneInfo info;
-    if (Error e = scene::makeDemoScene(data, scene::DemoSceneParams(), &info)) return e;
+    if (Error e = scene::makeDemoScene(data, scene::DemoSceneParams(), &info); !e.ok()) return e;
     if (!info.note.empty()) std::printf("%s\n", info.note.c_str());
     scene::SceneLods lods;
-    if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, "demo scene")) return e;
+    if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, "demo scene"); !e.ok()) return e;
     return replaySceneFromSceneData(data, lods.chains, "demo scene", out, &lods.chain_spheres);
   }
-  if (Error e = loadReplayScene(path, out)) return e;
+  if (Error e = loadReplayScene(path, out); !e.ok()) return e;
   if (out.chains.size() != out.table.chainCount())
     return Error(Status::kUnsupported, path + ": the scene has no meshes to render (level-scene, pack and builtin:NAME "
                                               "scenes carry only level rows); give a glTF/GLB/OBJ file or `builtin`");
@@ -152,14 +152,14 @@ int run(const std::vector<std::string>& raw_argv) {
   const bool has_replay = args.has("--replay");
   std::string scene_path = args.positional().empty() ? "" : args.positional()[0];
   if (has_replay) {
-    if (Error e = readReplay(args.get("--replay"), replay)) return runError("view", e.message);
+    if (Error e = readReplay(args.get("--replay"), replay); !e.ok()) return runError("view", e.message);
     if (replay.frames.empty()) return runError("view", args.get("--replay") + ": the replay has no frames");
     if (args.positional().empty()) scene_path = resolveReplayScene(args.get("--replay"), replay.header.scene);
     if (!args.has("--budget") && replay.header.has_budget) budget = replay.header.budget_ms;
   }
   ReplayScene scene;
-  if (Error e = loadViewScene(scene_path, scene)) return runError("view", e.message);
-  if (Error e = validateReplayScene(scene, scene_path.empty() ? "demo scene" : scene_path)) return runError("view", e.message);
+  if (Error e = loadViewScene(scene_path, scene); !e.ok()) return runError("view", e.message);
+  if (Error e = validateReplayScene(scene, scene_path.empty() ? "demo scene" : scene_path); !e.ok()) return runError("view", e.message);
   if (scene.objectCount() == 0) return runError("view", scene_path + ": the scene has no objects");
   const Sphere bounds = sceneBounds(scene);
   if (!has_replay) makeCameraPath(bounds, CameraPathKind::kOrbit, frames > 0 ? static_cast<size_t>(frames) : 120, 30.0, replay);
@@ -171,7 +171,7 @@ int run(const std::vector<std::string>& raw_argv) {
   rc.height_px = static_cast<uint32_t>(height);
   gl::Renderer renderer;
   bool unavailable = false;
-  if (Error e = renderer.init(rc, &unavailable)) {
+  if (Error e = renderer.init(rc, &unavailable); !e.ok()) {
     std::fprintf(stderr, "scenelod view: %s\n", e.message.c_str());
     if (unavailable) {
       std::fprintf(stderr, "scenelod view: headless OpenGL cannot start on this machine (see docs/GL.md: Debian "
@@ -180,7 +180,7 @@ int run(const std::vector<std::string>& raw_argv) {
     }
     return 1;
   }
-  if (Error e = renderer.uploadChains(scene.chains)) return runError("view", e.message);
+  if (Error e = renderer.uploadChains(scene.chains); !e.ok()) return runError("view", e.message);
   std::printf("%s\n", renderer.description().c_str());
   std::printf("scene %s: %zu objects, %zu chains, %zu level rows, %.1f MB on the GPU; %zu frames at %ldx%ld, budget %.3g ms\n",
               scene_path.empty() ? "builtin (demo)" : scene_path.c_str(), scene.objectCount(), scene.table.chainCount(),
@@ -210,7 +210,7 @@ int run(const std::vector<std::string>& raw_argv) {
   for (size_t f = 0; f < frame_count; ++f) {
     const ReplayFrame& rf = replay.frames[f];
     if (!rf.moves.empty())
-      if (Error e = applyMoves(scene, rf.moves, "frame " + std::to_string(rf.frame))) {
+      if (Error e = applyMoves(scene, rf.moves, "frame " + std::to_string(rf.frame)); !e.ok()) {
         rc_exit = runError("view", e.message);
         break;
       }
@@ -276,11 +276,11 @@ int run(const std::vector<std::string>& raw_argv) {
       eval::Image img;
       char name[32];
       std::snprintf(name, sizeof(name), "/frame_%04zu.png", f);
-      if (Error e = renderer.readPixels(img)) {
+      if (Error e = renderer.readPixels(img); !e.ok()) {
         rc_exit = runError("view", e.message);
         break;
       }
-      if (Error e = eval::writePng(png_dir + name, img)) {
+      if (Error e = eval::writePng(png_dir + name, img); !e.ok()) {
         rc_exit = runError("view", e.message);
         break;
       }

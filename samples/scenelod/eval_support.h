@@ -18,7 +18,7 @@ inline Error loadFlatMesh(const std::string& path, Mesh& out) {
   if (::stat(path.c_str(), &st) != 0) return {Status::kIoError, path + ": no such file"};
   if (S_ISDIR(st.st_mode)) return {Status::kIoError, path + ": is a folder, not a model file"};
   scene::SceneData scene;
-  if (Error e = scene::loadScene(path, scene)) return e;
+  if (Error e = scene::loadScene(path, scene); !e.ok()) return e;
   out = scene::flattenScene(scene);
   return validateMesh(out, path);
 }

@@ -17,19 +17,19 @@ using namespace scenelod::selection;
 Error runSelectionDemo(const ReplayScene& scene, const std::string& out_dir, size_t frames, SelectionDemoResult& result) {
   ::mkdir(out_dir.c_str(), 0755);
   const std::string dir = out_dir.empty() || out_dir.back() == '/' ? out_dir : out_dir + "/";
-  if (Error e = writeLevelScene(dir + "demo_scene.json", scene)) return e;
+  if (Error e = writeLevelScene(dir + "demo_scene.json", scene); !e.ok()) return e;
   Replay replay;
   replay.header.scene = "demo_scene.json";
   replay.header.pixels_per_cell = 4.0;  // Low & Tan found 5-10 pixels per cell acceptable
   makeCameraPath(sceneBounds(scene), CameraPathKind::kFlythrough, frames, 60.0, replay);
   const std::string replay_path = dir + "demo_flythrough.jsonl";
-  if (Error e = writeReplay(replay_path, replay)) return e;
+  if (Error e = writeReplay(replay_path, replay); !e.ok()) return e;
 
   ReplayRunOptions distance;
   distance.force_distance = true;
   std::vector<ReplayLogFrame> dlog, blog;
   ReplayScene s1 = scene;
-  if (Error e = runReplay(replay, s1, distance, dlog)) return e;
+  if (Error e = runReplay(replay, s1, distance, dlog); !e.ok()) return e;
   const ReplaySummary ds = summarizeReplay(dlog);
   ReplayRunOptions budget;
   budget.override_budget = true;
@@ -37,9 +37,9 @@ Error runSelectionDemo(const ReplayScene& scene, const std::string& out_dir, siz
   const double fixed_ms = budget.true_cost.per_frame_ms;
   budget.budget_ms = std::max(0.1, std::round((fixed_ms + 0.5 * (ds.mean_measured_ms - fixed_ms)) * 100.0) / 100.0);
   ReplayScene s2 = scene;
-  if (Error e = runReplay(replay, s2, budget, blog)) return e;
-  if (Error e = writeReplayLog(dir + "demo_distance.jsonl", dlog)) return e;
-  if (Error e = writeReplayLog(dir + "demo_budget.jsonl", blog)) return e;
+  if (Error e = runReplay(replay, s2, budget, blog); !e.ok()) return e;
+  if (Error e = writeReplayLog(dir + "demo_distance.jsonl", dlog); !e.ok()) return e;
+  if (Error e = writeReplayLog(dir + "demo_budget.jsonl", blog); !e.ok()) return e;
 
   ReplayReportInput in;
   in.replay_path = replay_path;
@@ -54,7 +54,7 @@ Error runSelectionDemo(const ReplayScene& scene, const std::string& out_dir, siz
   in.runs = {&ddigest, &bdigest};
   result.report_path = dir + "demo_report.md";
   std::vector<std::string> lines;
-  if (Error e = writeReplayReport(result.report_path, in, lines)) return e;
+  if (Error e = writeReplayReport(result.report_path, in, lines); !e.ok()) return e;
   const ReplaySummary bs = summarizeReplay(blog);
   char line[512];
   result.summary_lines.clear();

@@ -198,13 +198,13 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     p.x_label = xl;
     p.y_label = yl;
     const std::string file = stem + suffix;
-    if (Error e = eval::writePlotPng(dir + file, series, p)) return e;
+    if (Error e = eval::writePlotPng(dir + file, series, p); !e.ok()) return e;
     images.push_back({title, file});
     return Error();
   };
-  if (Error e = plot(cost, "_cost.png", "frame cost vs budget", "time (s)", "ms")) return e;
-  if (Error e = plot(levels, "_levels.png", "level histogram (-1 = not drawn)", "level", "% of object-frames")) return e;
-  if (Error e = plot(switches, "_switches.png", "level switches per second", "time (s)", "switches")) return e;
+  if (Error e = plot(cost, "_cost.png", "frame cost vs budget", "time (s)", "ms"); !e.ok()) return e;
+  if (Error e = plot(levels, "_levels.png", "level histogram (-1 = not drawn)", "level", "% of object-frames"); !e.ok()) return e;
+  if (Error e = plot(switches, "_switches.png", "level switches per second", "time (s)", "switches"); !e.ok()) return e;
   if (!images.empty()) {
     o << "\n## Plots\n\n";
     for (const auto& im : images) o << "![" << im.first << "](" << im.second << ")\n\n";

@@ -106,15 +106,15 @@ int runScroogeSimplify(Args& args, const std::string& in, const std::string& out
   std::string err;
   if (!parseScroogeOptions(args, params, err)) return usageError("simplify", err);
   Mesh mesh;
-  if (Error e = loadWorldMesh(in, mesh)) return runError("simplify", e.message);
+  if (Error e = loadWorldMesh(in, mesh); !e.ok()) return runError("simplify", e.message);
   if (!scroogeSubvolume(args, mesh, params.subvolume_size, err)) return usageError("simplify", in + ": " + err);
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
   Mesh result;
   ScroogeStats stats;
-  if (Error e = scroogeMesh(mesh, params, result, &stats, in.c_str())) return runError("simplify", e.message);
+  if (Error e = scroogeMesh(mesh, params, result, &stats, in.c_str()); !e.ok()) return runError("simplify", e.message);
   const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  if (Error e = writeMeshFile(out, result, "simplified")) return runError("simplify", e.message);
+  if (Error e = writeMeshFile(out, result, "simplified"); !e.ok()) return runError("simplify", e.message);
   const float diag = computeBounds(mesh).diagonal();
   const glm::vec3 s = params.subvolume_size;
   std::printf("%s: %zu vertices, %zu triangles, %zu polygons read\n", in.c_str(), mesh.vertexCount(),

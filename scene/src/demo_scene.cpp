@@ -266,7 +266,7 @@ namespace {
 
 bool readBunnyObj(const std::string& path, Mesh& out) {
   Mesh m;
-  if (readObj(path, m) || m.triangles.empty()) return false;
+  if (!readObj(path, m).ok() || m.triangles.empty()) return false;
   if (m.normals.empty()) computeVertexNormals(m);
   m.colors.assign(m.positions.size(), glm::vec3(0.75f, 0.7f, 0.65f));
   m.uvs.clear();

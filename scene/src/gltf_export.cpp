@@ -200,7 +200,7 @@ float sphereRadius(const LodLevel& level) {
 }  // namespace
 
 Error exportGlb(const std::string& path, const SceneData& scene, const std::vector<const LodChain*>* chains) {
-  if (Error e = validateSceneData(scene, path)) return e;
+  if (Error e = validateSceneData(scene, path); !e.ok()) return e;
   if (chains && chains->size() != scene.meshes.size())
     return {Status::kInvalidArgument, path + ": " + std::to_string(chains->size()) + " chains for " +
                                           std::to_string(scene.meshes.size()) + " meshes"};
@@ -220,7 +220,7 @@ Error exportGlb(const std::string& path, const SceneData& scene, const std::vect
       if (c->levels[l].mesh.empty()) return {Status::kInvalidArgument, what + " is empty"};
       if (!(c->levels[l].cell_width > c->levels[l - 1].cell_width))
         return {Status::kInvalidArgument, what + ": cell widths must strictly increase"};
-      if (Error e = validateMesh(c->levels[l].mesh, what)) return e;
+      if (Error e = validateMesh(c->levels[l].mesh, what); !e.ok()) return e;
     }
   }
   try {
@@ -312,7 +312,7 @@ Error exportGlb(const std::string& path, const SceneData& scene, const std::vect
     if (!writer.WriteGltfSceneToStream(&w.model, glb, false, true))
       return {Status::kIoError, path + ": cannot serialise the GLB"};
     const std::string bytes = glb.str();
-    if (Error e = writeFileAtomic(path, bytes.data(), bytes.size())) return e;
+    if (Error e = writeFileAtomic(path, bytes.data(), bytes.size()); !e.ok()) return e;
   } catch (const std::bad_alloc&) {
     return {Status::kOutOfMemory, path + ": out of memory while writing"};
   } catch (const std::exception& e) {

@@ -331,7 +331,7 @@ class GltfReader {
     const unsigned char* p = nullptr;
     size_t stride = 0;
     if (a.bufferView >= 0) {
-      if (Error e = viewBytes(a.bufferView, a.byteOffset, 0, a.count, elem, what, p, stride)) return e;
+      if (Error e = viewBytes(a.bufferView, a.byteOffset, 0, a.count, elem, what, p, stride); !e.ok()) return e;
     } else if (a.count > kMaxUnbackedValues / static_cast<size_t>(ccount)) {
       return fail(Status::kInvalidMesh, what + " has no buffer view and an implausible count " + std::to_string(a.count));
     }
@@ -351,10 +351,10 @@ class GltfReader {
       const unsigned char* vp = nullptr;
       size_t istride = 0, vstride = 0;
       if (Error e = viewBytes(a.sparse.indices.bufferView, static_cast<size_t>(std::max(a.sparse.indices.byteOffset, 0)),
-                              static_cast<size_t>(isize), n, static_cast<size_t>(isize), what + " sparse indices", ip, istride))
+                              static_cast<size_t>(isize), n, static_cast<size_t>(isize), what + " sparse indices", ip, istride); !e.ok())
         return e;
       if (Error e = viewBytes(a.sparse.values.bufferView, static_cast<size_t>(std::max(a.sparse.values.byteOffset, 0)), elem, n,
-                              elem, what + " sparse values", vp, vstride))
+                              elem, what + " sparse values", vp, vstride); !e.ok())
         return e;
       for (size_t i = 0; i < n; ++i) {
         const double target = readComponent(ip + i * istride, a.sparse.indices.componentType, false);
@@ -373,7 +373,7 @@ class GltfReader {
   Error readVec(int index, const std::string& user, const char* semantic, int min_comps, int max_comps,
                 std::vector<double>& out, int& comps) const {
     int ctype = 0;
-    if (Error e = readAccessor(index, user + " " + semantic, out, comps, ctype)) return e;
+    if (Error e = readAccessor(index, user + " " + semantic, out, comps, ctype); !e.ok()) return e;
     if (comps < min_comps || comps > max_comps)
       return fail(Status::kInvalidMesh, user + " " + semantic + ": accessor " + std::to_string(index) + " has " +
                                             std::to_string(comps) + " components per element, expected " +
@@ -385,7 +385,7 @@ class GltfReader {
   Error readIndices(int index, const std::string& user, std::vector<uint32_t>& out) const {
     std::vector<double> v;
     int comps = 0, ctype = 0;
-    if (Error e = readAccessor(index, user + " indices", v, comps, ctype)) return e;
+    if (Error e = readAccessor(index, user + " indices", v, comps, ctype); !e.ok()) return e;
     if (comps != 1 || ctype == TINYGLTF_COMPONENT_TYPE_FLOAT)
       return fail(Status::kInvalidMesh, user + " indices: accessor " + std::to_string(index) +
                                             " must hold integer scalars");
@@ -456,7 +456,7 @@ class GltfReader {
                      Mesh& m, MeshBuild& b, uint32_t& base, uint32_t& count) const {
     std::vector<double> v;
     int comps = 0;
-    if (Error e = readVec(a.position, what, "POSITION", 3, 3, v, comps)) return e;
+    if (Error e = readVec(a.position, what, "POSITION", 3, 3, v, comps); !e.ok()) return e;
     count = static_cast<uint32_t>(v.size() / 3);
     if (m.positions.size() + count > (size_t(1) << 31)) return fail(Status::kUnsupported, mesh_what + ": too many vertices");
     base = static_cast<uint32_t>(m.positions.size());
@@ -470,7 +470,7 @@ class GltfReader {
     m.normals.resize(m.positions.size(), glm::vec3(0.0f));
     b.has_normal.resize(m.positions.size(), 0);
     if (a.normal >= 0) {
-      if (Error e = readVec(a.normal, what, "NORMAL", 3, 3, v, comps)) return e;
+      if (Error e = readVec(a.normal, what, "NORMAL", 3, 3, v, comps); !e.ok()) return e;
       if (v.size() / 3 != count)
         return fail(Status::kInvalidMesh, what + ": NORMAL has " + std::to_string(v.size() / 3) + " elements, POSITION " +
                                               std::to_string(count));
@@ -485,7 +485,7 @@ class GltfReader {
     }
     m.uvs.resize(m.positions.size(), glm::vec2(0.0f));
     if (a.uv >= 0) {
-      if (Error e = readVec(a.uv, what, "TEXCOORD_0", 2, 2, v, comps)) return e;
+      if (Error e = readVec(a.uv, what, "TEXCOORD_0", 2, 2, v, comps); !e.ok()) return e;
       if (v.size() / 2 != count)
         return fail(Status::kInvalidMesh, what + ": TEXCOORD_0 has " + std::to_string(v.size() / 2) + " elements, POSITION " +
                                               std::to_string(count));
@@ -497,7 +497,7 @@ class GltfReader {
     b.vertex_color.resize(m.positions.size(), mat_color);
     if (has_material) b.any_color = true;
     if (a.color >= 0) {
-      if (Error e = readVec(a.color, what, "COLOR_0", 3, 4, v, comps)) return e;
+      if (Error e = readVec(a.color, what, "COLOR_0", 3, 4, v, comps); !e.ok()) return e;
       if (v.size() / static_cast<size_t>(comps) != count)
         return fail(Status::kInvalidMesh, what + ": COLOR_0 has " + std::to_string(v.size() / static_cast<size_t>(comps)) +
                                               " elements, POSITION " + std::to_string(count));
@@ -518,7 +518,7 @@ class GltfReader {
       for (uint32_t i = 0; i < count; ++i) idx[i] = i;
       return {};
     }
-    if (Error e = readIndices(p.indices, what, idx)) return e;
+    if (Error e = readIndices(p.indices, what, idx); !e.ok()) return e;
     for (size_t i = 0; i < idx.size(); ++i)
       if (idx[i] >= count)
         return fail(Status::kInvalidMesh, what + ": index " + std::to_string(i) + " is " + std::to_string(idx[i]) +
@@ -605,13 +605,13 @@ class GltfReader {
         base = found->second.offset;
         count = found->second.count;
       } else {
-        if (Error e = readVertices(p, a, what, mesh_what, m, b, base, count)) return e;
+        if (Error e = readVertices(p, a, what, mesh_what, m, b, base, count); !e.ok()) return e;
         b.shared.emplace(key, MeshBuild::Vertices{base, count});
       }
       std::vector<double> thickness;  // per vertex of this primitive, when it has _THICKNESS
       if (a.thickness >= 0) {
         int comps = 0;
-        if (Error e = readVec(a.thickness, what, "_THICKNESS", 1, 1, thickness, comps)) return e;
+        if (Error e = readVec(a.thickness, what, "_THICKNESS", 1, 1, thickness, comps); !e.ok()) return e;
         if (thickness.size() != count)
           return fail(Status::kInvalidMesh, what + ": _THICKNESS has " + std::to_string(thickness.size()) + " elements, POSITION " +
                                                 std::to_string(count));
@@ -621,8 +621,8 @@ class GltfReader {
         }
       }
       std::vector<uint32_t> idx;
-      if (Error e = readPrimitiveIndices(p, count, what, idx)) return e;
-      if (Error e = addPrimitive(mode, idx, base, thickness, a.thickness >= 0, what, m, b)) return e;
+      if (Error e = readPrimitiveIndices(p, count, what, idx); !e.ok()) return e;
+      if (Error e = addPrimitive(mode, idx, base, thickness, a.thickness >= 0, what, m, b); !e.ok()) return e;
     }
     if (b.any_thickness) m.edge_thickness = std::move(b.edge_thickness);
     if (!b.any_uv) m.uvs.clear();
@@ -784,9 +784,9 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
   const std::string ext = lowerExtension(path);
   const bool binary = data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0;
   if (ext == ".glb" || binary)
-    if (Error e = checkGlbContainer(path, data)) return e;
+    if (Error e = checkGlbContainer(path, data); !e.ok()) return e;
   if (data.size() > UINT_MAX) return {Status::kUnsupported, path + ": file larger than 4 GiB"};
-  if (Error e = checkGltfJson(path, data, binary)) return e;
+  if (Error e = checkGltfJson(path, data, binary); !e.ok()) return e;
 
   const size_t slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
@@ -837,12 +837,12 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
 Error readScene(const std::string& path, const tinygltf::Model& model, const LoadContext& ctx, SceneData& out) {
   GltfReader reader(path, model, ctx);
   SceneData s;
-  if (Error e = reader.readMaterials(s.materials)) return e;
+  if (Error e = reader.readMaterials(s.materials); !e.ok()) return e;
   s.meshes.resize(model.meshes.size());
   for (size_t m = 0; m < model.meshes.size(); ++m)
-    if (Error e = reader.readMesh(m, s.meshes[m])) return e;
-  if (Error e = reader.readNodes(s)) return e;
-  if (Error e = validateSceneData(s, path)) return e;
+    if (Error e = reader.readMesh(m, s.meshes[m]); !e.ok()) return e;
+  if (Error e = reader.readNodes(s); !e.ok()) return e;
+  if (Error e = validateSceneData(s, path); !e.ok()) return e;
   out = std::move(s);
   return {};
 }
@@ -887,7 +887,7 @@ Error importGltf(const std::string& path, SceneData& out) {
   return withoutExceptions(path, [&]() -> Error {
     tinygltf::Model model;
     LoadContext ctx;
-    if (Error e = loadModel(path, model, ctx)) return e;
+    if (Error e = loadModel(path, model, ctx); !e.ok()) return e;
     return readScene(path, model, ctx, out);
   });
 }
@@ -896,9 +896,9 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
   return withoutExceptions(path, [&]() -> Error {
     tinygltf::Model model;
     LoadContext ctx;
-    if (Error e = loadModel(path, model, ctx)) return e;
+    if (Error e = loadModel(path, model, ctx); !e.ok()) return e;
     SceneData raw;
-    if (Error e = readScene(path, model, ctx, raw)) return e;
+    if (Error e = readScene(path, model, ctx, raw); !e.ok()) return e;
 
     const size_t n = raw.nodes.size();
     std::vector<char> is_level(n, 0);
@@ -989,7 +989,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
         c[m].levels.push_back(std::move(l0));
         computeChainBounds(c[m]);
       }
-    if (Error e = validateSceneData(s, path)) return e;
+    if (Error e = validateSceneData(s, path); !e.ok()) return e;
     out = std::move(s);
     chains = std::move(c);
     return {};

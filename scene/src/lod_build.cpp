@@ -52,7 +52,7 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
       const float diagonal = computeBounds(md.mesh).diagonal();
       cp.first_cell_width = diagonal > 0.0f ? params.first_cell_rel * diagonal : 0.0f;
     }
-    if (Error e = buildChain(md.mesh, cp, out.chains[m])) {
+    if (Error e = buildChain(md.mesh, cp, out.chains[m]); !e.ok()) {
       errors[m] = Error(e.status, what + " mesh " + std::to_string(m) + (md.name.empty() ? "" : " '" + md.name + "'") +
                                       ": " + e.message);
     } else {
@@ -64,11 +64,11 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
     params.progress(done_work / total_work, "building chains");
   });
   for (size_t m = 0; m < n; ++m)
-    if (errors[m]) return errors[m];
+    if (!errors[m].ok()) return errors[m];
   if (scene) {
     scene->setChainCount(n);
     for (size_t m = 0; m < n; ++m)
-      if (Error e = scene->setChainSphere(static_cast<uint32_t>(m), out.chain_spheres[m])) return e;
+      if (Error e = scene->setChainSphere(static_cast<uint32_t>(m), out.chain_spheres[m]); !e.ok()) return e;
   }
   out.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   params.progress(1.0, "done");

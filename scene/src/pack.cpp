@@ -165,7 +165,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
     return {Status::kInvalidArgument, what + ": " + std::to_string(chains.size()) + " chains and " +
                                           std::to_string(chain_spheres.size()) + " chain spheres for " +
                                           std::to_string(scene.meshes.size()) + " meshes"};
-  if (Error e = validateSceneData(scene, what)) return e;
+  if (Error e = validateSceneData(scene, what); !e.ok()) return e;
   const std::vector<int32_t> object_nodes = objectNodes(scene);
   const size_t object_count = object_nodes.size();
   if ((!opt.importance.empty() && opt.importance.size() != object_count) ||
@@ -240,7 +240,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
     for (uint32_t l = 0; l < chain_records[c].level_count; ++l) {
       const LodLevel& src = chains[c].levels[l];
       const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
-      if (Error e = validateMesh(src.mesh, level_name)) return e;
+      if (Error e = validateMesh(src.mesh, level_name); !e.ok()) return e;
       Mesh m = src.mesh;
       const double tris = double(m.triangleCount());
       if (tris > 0) acmr_before += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
@@ -311,7 +311,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
 Error writePack(const std::string& path, const SceneData& scene, const std::vector<LodChain>& chains,
                 const std::vector<Sphere>& chain_spheres, const PackWriteOptions& options, PackWriteStats* stats) {
   std::vector<uint8_t> bytes;
-  if (Error e = writePackBytes(bytes, scene, chains, chain_spheres, options, stats, path)) return e;
+  if (Error e = writePackBytes(bytes, scene, chains, chain_spheres, options, stats, path); !e.ok()) return e;
   return writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
@@ -608,14 +608,14 @@ Error Pack::toScene(Scene& out) const {
     std::memcpy(&d.nodes[i].local[0][0], v.local, 16 * sizeof(float));
   }
   for (size_t i = 0; i < root_count_; ++i) d.roots.push_back(static_cast<int32_t>(root(i)));
-  if (Error e = Scene::fromSceneData(d, out, "pack")) return e;
+  if (Error e = Scene::fromSceneData(d, out, "pack"); !e.ok()) return e;
   out.setChainCount(chain_count_);
   for (size_t c = 0; c < chain_count_; ++c)
-    if (Error e = out.setChainSphere(static_cast<uint32_t>(c), chainSphere(c))) return e;
+    if (Error e = out.setChainSphere(static_cast<uint32_t>(c), chainSphere(c)); !e.ok()) return e;
   for (size_t k = 0; k < object_count_; ++k) {
     const PackObjectView o = object(k);
     ObjectHandle h;
-    if (Error e = out.addObject(ObjectDesc{NodeHandle{o.node, 0}, o.chain, o.importance, o.must_draw, o.user_data}, h))
+    if (Error e = out.addObject(ObjectDesc{NodeHandle{o.node, 0}, o.chain, o.importance, o.must_draw, o.user_data}, h); !e.ok())
       return e;
   }
   out.update();

@@ -867,7 +867,7 @@ size_t Scene::update() {
 }
 
 Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string& what) {
-  if (Error e = validateSceneData(data, what)) return e;
+  if (Error e = validateSceneData(data, what); !e.ok()) return e;
   out = Scene{};
   const size_t n = data.nodes.size();
   // insert parents before children: a depth-first walk from every parentless node (roots of the
@@ -922,7 +922,7 @@ Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string&
     d.node = NodeHandle{static_cast<uint32_t>(node), 0};
     d.chain = static_cast<uint32_t>(data.nodes[node].mesh);
     ObjectHandle h;
-    if (Error e = out.addObject(d, h)) return e;
+    if (Error e = out.addObject(d, h); !e.ok()) return e;
   }
   out.update();
   return {};

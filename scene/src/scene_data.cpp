@@ -36,7 +36,7 @@ Error validateSceneData(const SceneData& s, const std::string& what) {
   }
   for (size_t m = 0; m < s.meshes.size(); ++m) {
     const std::string name = what + " mesh " + std::to_string(m) + (s.meshes[m].name.empty() ? "" : " '" + s.meshes[m].name + "'");
-    if (Error e = validateMesh(s.meshes[m].mesh, name)) return e;
+    if (Error e = validateMesh(s.meshes[m].mesh, name); !e.ok()) return e;
     for (int32_t mat : s.meshes[m].primitive_materials)
       if (mat < -1 || mat >= static_cast<int32_t>(s.materials.size()))
         return {Status::kInvalidArgument, name + ": material " + std::to_string(mat) + " out of range"};

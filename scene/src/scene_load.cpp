@@ -37,7 +37,7 @@ Error loadScene(const std::string& path, SceneData& out) {
     SceneData s;
     MeshData mesh;
     mesh.name = fileStem(path);
-    if (Error e = readObj(path, mesh.mesh)) return e;
+    if (Error e = readObj(path, mesh.mesh); !e.ok()) return e;
     s.meshes.push_back(std::move(mesh));
     NodeData node;
     node.name = fileStem(path);

@@ -123,7 +123,7 @@ Error RayScene::init(Span<const LodChain* const> chains, const RaySceneParams& p
     for (size_t l = 0; l < chain->levelCount(); ++l) {
       const Mesh& mesh = chain->levels[l].mesh;
       Error e = validateMesh(mesh, what + " level " + std::to_string(l));
-      if (e) return e;
+      if (!e.ok()) return e;
       for (const glm::vec3& q : mesh.positions) {
         lo = glm::min(lo, q);
         hi = glm::max(hi, q);
@@ -235,7 +235,7 @@ Error RayScene::setObjects(Span<const glm::mat4> world, Span<const uint32_t> cha
                                                std::to_string(drawn_levels.count) + " drawn levels");
   for (size_t i = 0; i < world.count; ++i) {
     Error e = checkObject(m, world[i], chain_ids[i], drawn_levels[i], "ray scene: object " + std::to_string(i));
-    if (e) return e;
+    if (!e.ok()) return e;
   }
   for (size_t i = 0; i < m.live.size(); ++i) clearObject(m, i);
   growTo(m, world.count);
@@ -251,7 +251,7 @@ Error RayScene::addObject(const glm::mat4& world, uint32_t chain_id, int32_t dra
   Impl& m = *impl_;
   if (!m.device) return Error(Status::kInvalidArgument, "ray scene: addObject before init");
   Error e = checkObject(m, world, chain_id, drawn_level, "ray scene: new object");
-  if (e) return e;
+  if (!e.ok()) return e;
   if (!m.free_ids.empty()) {
     auto it = std::min_element(m.free_ids.begin(), m.free_ids.end());
     id = *it;
@@ -294,8 +294,8 @@ Error RayScene::syncFromScene(const scene::Scene& sc, Span<const int32_t> drawn_
   auto fetch = [&](size_t i, scene::ObjectDesc& desc, glm::mat4& world) -> Error {
     const scene::ObjectHandle h = sc.objectAt(i);
     Error e = sc.getObject(h, desc);
-    if (!e) e = sc.getWorld(desc.node, world);
-    if (e) return Error(e.status, "ray scene: scene object " + std::to_string(i) + ": " + e.message);
+    if (e.ok()) e = sc.getWorld(desc.node, world);
+    if (!e.ok()) return Error(e.status, "ray scene: scene object " + std::to_string(i) + ": " + e.message);
     return {};
   };
   // check everything first, so a refused sync leaves the ray scene as it was
@@ -303,9 +303,9 @@ Error RayScene::syncFromScene(const scene::Scene& sc, Span<const int32_t> drawn_
     scene::ObjectDesc desc;
     glm::mat4 world;
     Error e = fetch(i, desc, world);
-    if (!e) e = checkObject(m, world, desc.chain, drawn_levels.empty() ? 0 : drawn_levels[i],
+    if (e.ok()) e = checkObject(m, world, desc.chain, drawn_levels.empty() ? 0 : drawn_levels[i],
                             "ray scene: scene object " + std::to_string(i));
-    if (e) return e;
+    if (!e.ok()) return e;
   }
   for (size_t id = n; id < m.live.size(); ++id)
     if (m.live[id]) removeObject(static_cast<uint32_t>(id));

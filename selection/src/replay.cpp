@@ -230,7 +230,7 @@ bool ReplayReader::nextLine(std::string& line) {
 static Error readReplayImpl(const std::string& path, Replay& out) {
   out = Replay();
   ReplayReader reader;
-  if (Error e = reader.open(path)) return e;
+  if (Error e = reader.open(path); !e.ok()) return e;
   out.header = reader.header();
   ReplayFrame f;
   Error e;

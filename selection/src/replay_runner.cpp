@@ -74,7 +74,7 @@ CostCoefficients syntheticTrueCost() {
 
 Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame, ReplayScene& scene,
                       const ReplayRunOptions& options, const ReplayLogSink& sink) {
-  if (Error e = validateReplayScene(scene, scene.name)) return e;
+  if (Error e = validateReplayScene(scene, scene.name); !e.ok()) return e;
   const size_t n = scene.objectCount();
   SelectorConfig cfg;
   cfg.max_object_count = std::max<size_t>(n, 1);
@@ -105,7 +105,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
   std::vector<glm::vec3> centers;
   std::vector<float> radii, scales;
   computeWorldSpheres(scene, centers, radii, scales);
-  if (Error e = checkWorldSpheres(centers, radii, scales, scene.name)) return e;
+  if (Error e = checkWorldSpheres(centers, radii, scales, scene.name); !e.ok()) return e;
   const LevelTable table = scene.table.view();
   Gaussian noise(options.seed);
 
@@ -114,9 +114,9 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
   while (next_frame(f, read_error)) {
     const std::string where = scene.name + ": replay frame " + std::to_string(f.frame);
     if (!f.moves.empty()) {
-      if (Error e = applyMoves(scene, f.moves, where)) return e;
+      if (Error e = applyMoves(scene, f.moves, where); !e.ok()) return e;
       computeWorldSpheres(scene, centers, radii, scales);
-      if (Error e = checkWorldSpheres(centers, radii, scales, where)) return e;
+      if (Error e = checkWorldSpheres(centers, radii, scales, where); !e.ok()) return e;
     }
     cam.eye = f.eye;
     cam.target = f.target;
@@ -139,7 +139,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     job.stats = &st;
     job.context = ctx.c;
     if (options.visibility)
-      if (Error e = options.visibility->beforeSelect(scene, cam, f, job)) return Error(e.status, where + ": " + e.message);
+      if (Error e = options.visibility->beforeSelect(scene, cam, f, job); !e.ok()) return Error(e.status, where + ": " + e.message);
     if (!job.run()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame's input");
     if (options.visibility) options.visibility->afterSelect(job, out);
     out.frame = f.frame;
@@ -164,7 +164,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
       out.measured_ms = std::max(0.0, truth * (1.0 + options.noise * noise.next()));
     }
     if (out.has_measured) reportFrameTime(ctx.c, st.frame, static_cast<float>(out.measured_ms));
-    if (Error e = sink(out)) return e;
+    if (Error e = sink(out); !e.ok()) return e;
   }
   return read_error;
 }
@@ -222,7 +222,7 @@ std::string replayLogLine(const ReplayLogFrame& f) {
 
 Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log) {
   AtomicFile out;
-  if (Error e = out.open(path)) return e;
+  if (Error e = out.open(path); !e.ok()) return e;
   for (const ReplayLogFrame& f : log) out.write(replayLogLine(f) + "\n");
   return out.commit();
 }

@@ -403,7 +403,7 @@ Error loadPackScene(const std::string& path, ReplayScene& s) {
   s = ReplayScene();
   s.name = path;
   scene::Pack pack;
-  if (Error e = scene::Pack::load(path, pack)) return e;
+  if (Error e = scene::Pack::load(path, pack); !e.ok()) return e;
   for (size_t c = 0; c < pack.chainCount(); ++c) {
     std::vector<float> w;
     std::vector<uint32_t> t, v, lp;
@@ -448,16 +448,16 @@ Error loadReplayScene(const std::string& path, ReplayScene& out) {
     scene::SceneData data;
     std::vector<LodChain> chains;
     if (ext == "obj") {
-      if (Error e = scene::loadScene(path, data)) return e;
+      if (Error e = scene::loadScene(path, data); !e.ok()) return e;
     } else {
-      if (Error e = scene::importGltfLods(path, data, chains)) return e;
+      if (Error e = scene::importGltfLods(path, data, chains); !e.ok()) return e;
     }
     // files with MSFT_lod levels keep them; otherwise every mesh's chain is built here
     bool have_levels = !chains.empty();
     for (const LodChain& c : chains) have_levels = have_levels && c.levelCount() > 1;
     if (!have_levels) {
       scene::SceneLods lods;
-      if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, path)) return e;
+      if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, path); !e.ok()) return e;
       return replaySceneFromSceneData(data, lods.chains, path, out, &lods.chain_spheres);
     }
     return replaySceneFromSceneData(data, chains, path, out);

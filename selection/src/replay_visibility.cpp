@@ -66,12 +66,12 @@ Error ReplayVisibility::init(const ReplayScene& scene, const ReplayVisibilityPar
       chains[c] = &s.stand_ins[c];
     }
   }
-  if (Error e = s.rays.init(Span<const LodChain* const>(chains.data(), chains.size()), params.ray_scene)) return e;
+  if (Error e = s.rays.init(Span<const LodChain* const>(chains.data(), chains.size()), params.ray_scene); !e.ok()) return e;
   computeObjectWorlds(scene, s.world);
   const std::vector<int32_t> levels(s.objects, 0);
-  if (Error e = s.rays.setObjects(s.world, scene.object_chain, levels)) return e;
+  if (Error e = s.rays.setObjects(s.world, scene.object_chain, levels); !e.ok()) return e;
   s.rays.commit();
-  if (Error e = s.occlusion.init(std::max<size_t>(s.objects, 1), params.occlusion)) return e;
+  if (Error e = s.occlusion.init(std::max<size_t>(s.objects, 1), params.occlusion); !e.ok()) return e;
   SelectorConfig cfg;
   cfg.max_object_count = std::max<size_t>(s.objects, 1);
   cfg.max_levels_per_chain = std::max<size_t>(scene.table.maxLevelsPerChain(), 1);

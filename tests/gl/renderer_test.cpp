@@ -41,8 +41,8 @@ class RendererTest : public ::testing::Test {
     rc.height_px = 200;
     bool unavailable = false;
     Error e = renderer_.init(rc, &unavailable);
-    if (e && unavailable) GTEST_SKIP() << "EGL cannot start here: " << e.message;
-    ASSERT_FALSE(e) << e.message;
+    if (!e.ok() && unavailable) GTEST_SKIP() << "EGL cannot start here: " << e.message;
+    ASSERT_TRUE(e.ok()) << e.message;
     // orthographic, 2 world units over 200 pixels: 100 pixels per unit
     cam_.projection = selection::Projection::kOrthographic;
     cam_.ortho_height = 2.0f;
@@ -62,7 +62,7 @@ class RendererTest : public ::testing::Test {
     FrameResult r;
     EXPECT_TRUE(renderer_.drawFrame(in, &r));
     Error e = renderer_.readPixels(img);
-    EXPECT_FALSE(e) << e.message;
+    EXPECT_TRUE(e.ok()) << e.message;
     return r;
   }
 
@@ -73,7 +73,7 @@ class RendererTest : public ::testing::Test {
 };
 
 TEST_F(RendererTest, ThickEdgeIsAsWideAsItsThickness) {
-  ASSERT_FALSE(renderer_.uploadChains({edgeChain(0.1f), edgeChain(0.0f)}));
+  ASSERT_TRUE(renderer_.uploadChains({edgeChain(0.1f), edgeChain(0.0f)}).ok());
   eval::Image img;
   FrameResult r = draw(0, img);
   EXPECT_EQ(r.edges, 1u);
@@ -92,7 +92,7 @@ TEST_F(RendererTest, ThickEdgeIsAsWideAsItsThickness) {
 }
 
 TEST_F(RendererTest, HairlineIsAtLeastOnePixelAndLevelMinusOneDrawsNothing) {
-  ASSERT_FALSE(renderer_.uploadChains({edgeChain(0.0f)}));
+  ASSERT_TRUE(renderer_.uploadChains({edgeChain(0.0f)}).ok());
   eval::Image img;
   draw(0, img);
   const int covered = coveredInColumn(img, 100);
@@ -107,7 +107,7 @@ TEST_F(RendererTest, RejectsBadLevelsAndInputs) {
   LodChain bad = edgeChain(0.1f);
   bad.levels[0].mesh.edges = {0, 7};  // index out of range
   Error e = renderer_.uploadChains({bad});
-  EXPECT_TRUE(e);
+  EXPECT_FALSE(e.ok());
   EXPECT_NE(e.message.find("chain 0 level 0"), std::string::npos) << e.message;
   FrameInput in;  // no camera
   FrameResult r;

@@ -688,7 +688,7 @@ TEST(GltfImport, CorruptedGlbNeverCrashes) {
     writeBytes(path, bytes);
     SceneData s;
     const Error e = importGltf(path, s);
-    if (e) {
+    if (!e.ok()) {
       ++failures;
       EXPECT_EQ(e.message.rfind(path + ": ", 0), 0u) << e.message;
     } else {

@@ -79,7 +79,7 @@ TEST(Scene, WorldTransformsMatchBruteForceAfterMovesAndReparenting) {
       const NodeHandle a = nodes[rng() % nodes.size()], b = nodes[rng() % nodes.size()];
       const Error e = s.reparent(a, rng() % 4 == 0 ? NodeHandle{} : b);
       // refused only when b is a or under a
-      if (e) {
+      if (!e.ok()) {
         EXPECT_EQ(e.status, Status::kInvalidArgument);
         bool under = false;
         for (NodeHandle h = b; h.slot != kInvalidSlot;) {

@@ -105,9 +105,9 @@ TEST(Replay, GoldenLogsMatchExactly) {
   const std::string dir = dataDir();
   if (updateGolden()) {
     ReplayScene small;
-    ASSERT_FALSE(makeBuiltinScene("builtin:small", small));
+    ASSERT_TRUE(makeBuiltinScene("builtin:small", small).ok());
     small.name = "tiny_scene";
-    ASSERT_FALSE(writeLevelScene(dir + "/tiny_scene.json", small));
+    ASSERT_TRUE(writeLevelScene(dir + "/tiny_scene.json", small).ok());
   }
   for (const GoldenCase& c : kCases) {
     SCOPED_TRACE(c.name);
@@ -115,18 +115,18 @@ TEST(Replay, GoldenLogsMatchExactly) {
     const std::string expected_path = dir + "/" + c.name + ".expected.jsonl";
     if (updateGolden()) {
       ReplayScene scene;
-      ASSERT_FALSE(loadReplayScene(resolveReplayScene(replay_path, c.scene), scene));
-      ASSERT_FALSE(writeReplay(replay_path, makeGoldenReplay(c, scene)));
+      ASSERT_TRUE(loadReplayScene(resolveReplayScene(replay_path, c.scene), scene).ok());
+      ASSERT_TRUE(writeReplay(replay_path, makeGoldenReplay(c, scene)).ok());
     }
     Replay replay;
     const Error re = readReplay(replay_path, replay);
-    ASSERT_FALSE(re) << re.message;
+    ASSERT_TRUE(re.ok()) << re.message;
     ReplayScene scene;
     const Error se = loadReplayScene(resolveReplayScene(replay_path, replay.header.scene), scene);
-    ASSERT_FALSE(se) << se.message;
+    ASSERT_TRUE(se.ok()) << se.message;
     std::vector<ReplayLogFrame> log;
     const Error ue = runReplay(replay, scene, ReplayRunOptions(), log);
-    ASSERT_FALSE(ue) << ue.message;
+    ASSERT_TRUE(ue.ok()) << ue.message;
     ASSERT_EQ(log.size(), c.frames);
     const std::string text = logText(log);
     if (updateGolden()) writeText(expected_path, text);
@@ -149,13 +149,13 @@ TEST(Replay, GoldenLogsMatchExactly) {
 
 TEST(Replay, WriteThenReadRoundTrips) {
   ReplayScene scene;
-  ASSERT_FALSE(makeBuiltinScene("builtin:small", scene));
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", scene).ok());
   const GoldenCase c{"x", "builtin:small", CameraPathKind::kFlythrough, 20, 1.5, true};
   const Replay r = makeGoldenReplay(c, scene);
   const std::string path = scenelod::test::scratchDir() + "/roundtrip.jsonl";
-  ASSERT_FALSE(writeReplay(path, r));
+  ASSERT_TRUE(writeReplay(path, r).ok());
   Replay back;
-  ASSERT_FALSE(readReplay(path, back));
+  ASSERT_TRUE(readReplay(path, back).ok());
   EXPECT_EQ(back.header.scene, r.header.scene);
   EXPECT_EQ(back.header.viewport_width_px, 640u);
   EXPECT_TRUE(back.header.has_budget);
@@ -174,10 +174,10 @@ TEST(Replay, WriteThenReadRoundTrips) {
 
 TEST(Replay, LevelSceneRoundTrips) {
   ReplayScene a, b;
-  ASSERT_FALSE(makeBuiltinScene("builtin:city", a));
+  ASSERT_TRUE(makeBuiltinScene("builtin:city", a).ok());
   const std::string path = scenelod::test::scratchDir() + "/city.json";
-  ASSERT_FALSE(writeLevelScene(path, a));
-  ASSERT_FALSE(loadLevelScene(path, b));
+  ASSERT_TRUE(writeLevelScene(path, a).ok());
+  ASSERT_TRUE(loadLevelScene(path, b).ok());
   EXPECT_EQ(a.table.cell_width, b.table.cell_width);
   EXPECT_EQ(a.table.triangle_count, b.table.triangle_count);
   EXPECT_EQ(a.object_chain, b.object_chain);
@@ -194,7 +194,7 @@ TEST(Replay, LevelSceneRoundTrips) {
 
 TEST(Replay, MovesPropagateThroughParents) {
   ReplayScene s;
-  ASSERT_FALSE(makeBuiltinScene("builtin:small", s));
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", s).ok());
   std::vector<glm::vec3> c0, c1;
   std::vector<float> r0, r1, m0, m1;
   computeWorldSpheres(s, c0, r0, m0);
@@ -204,7 +204,7 @@ TEST(Replay, MovesPropagateThroughParents) {
   mv.object = 2;
   mv.translation = glm::vec3(1.0f, 2.0f, 3.0f);
   mv.scale = 2.0f;
-  ASSERT_FALSE(applyMoves(s, {mv}, "test"));
+  ASSERT_TRUE(applyMoves(s, {mv}, "test").ok());
   computeWorldSpheres(s, c1, r1, m1);
   EXPECT_NEAR(glm::length(c1[2] - glm::vec3(1.0f, 2.0f, -7.0f)), 0.0f, 1e-5f);
   EXPECT_NEAR(r1[2], 2.0f * r0[2], 1e-5f);
@@ -218,7 +218,7 @@ TEST(Replay, MovesPropagateThroughParents) {
 TEST(Replay, UnlimitedBudgetReplayEqualsDistanceReplay) {
   Replay r;
   ReplayScene scene;
-  ASSERT_FALSE(makeBuiltinScene("builtin:city", scene));
+  ASSERT_TRUE(makeBuiltinScene("builtin:city", scene).ok());
   makeCameraPath(sceneBounds(scene), CameraPathKind::kFlythrough, 80, 60.0, r);
   r.header.scene = "builtin:city";
   ReplayRunOptions distance, unlimited;
@@ -227,8 +227,8 @@ TEST(Replay, UnlimitedBudgetReplayEqualsDistanceReplay) {
   unlimited.budget_ms = 1e9;
   std::vector<ReplayLogFrame> a, b;
   ReplayScene s1 = scene, s2 = scene;
-  ASSERT_FALSE(runReplay(r, s1, distance, a));
-  ASSERT_FALSE(runReplay(r, s2, unlimited, b));
+  ASSERT_TRUE(runReplay(r, s1, distance, a).ok());
+  ASSERT_TRUE(runReplay(r, s2, unlimited, b).ok());
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].levels, b[i].levels) << "frame " << i;
@@ -242,13 +242,13 @@ TEST(Replay, SyntheticRendererBudgetAdherence) {
   // frames (the benchmark reports the exact share on longer replays)
   Replay r;
   ReplayScene scene;
-  ASSERT_FALSE(makeBuiltinScene("builtin:field", scene));
+  ASSERT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
   makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 150, 60.0, r);
   ReplayRunOptions o;
   o.override_budget = true;
   o.budget_ms = 4.0;
   std::vector<ReplayLogFrame> log;
-  ASSERT_FALSE(runReplay(r, scene, o, log));
+  ASSERT_TRUE(runReplay(r, scene, o, log).ok());
   const ReplaySummary s = summarizeReplay(log, 30);
   ASSERT_EQ(s.budget_frames, 120u);
   EXPECT_GE(s.within_10_percent, 108u);
@@ -307,7 +307,7 @@ TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
     writeText(path, cases[i].text);
     Replay r;
     const Error e = readReplay(path, r);
-    EXPECT_TRUE(e) << cases[i].text;
+    EXPECT_FALSE(e.ok()) << cases[i].text;
     EXPECT_NE(e.message.find(path), std::string::npos) << e.message;
     EXPECT_NE(e.message.find(cases[i].expect), std::string::npos) << e.message;
   }
@@ -356,12 +356,12 @@ TEST(Replay, BadScenesAndFramesAreRefused) {
     const std::string path = dir + "/scene" + std::to_string(i) + ".json";
     writeText(path, bad_scenes[i].first);
     const Error e = loadReplayScene(path, s);
-    EXPECT_TRUE(e) << bad_scenes[i].first;
+    EXPECT_FALSE(e.ok()) << bad_scenes[i].first;
     EXPECT_NE(e.message.find(path), std::string::npos) << e.message;
     EXPECT_NE(e.message.find(bad_scenes[i].second), std::string::npos) << e.message;
   }
   // a frame whose eye equals its target
-  ASSERT_FALSE(makeBuiltinScene("builtin:small", s));
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", s).ok());
   Replay r;
   r.frames.resize(2);
   r.frames[0].frame = 0;
@@ -435,11 +435,11 @@ TEST(Replay, PackScenesGiveTheSameSelectionAsTheirData) {
   const std::string path = scenelod::test::scratchDir() + "/two.pack";
   scene::PackWriteOptions opt;
   opt.must_draw = {0, 1};
-  ASSERT_FALSE(scene::writePack(path, d, {chain}, {sphere}, opt));
+  ASSERT_TRUE(scene::writePack(path, d, {chain}, {sphere}, opt).ok());
   ReplayScene from_pack, from_data;
   const Error e = loadReplayScene(path, from_pack);
-  ASSERT_FALSE(e) << e.message;
-  ASSERT_FALSE(replaySceneFromSceneData(d, {chain}, "data", from_data));
+  ASSERT_TRUE(e.ok()) << e.message;
+  ASSERT_TRUE(replaySceneFromSceneData(d, {chain}, "data", from_data).ok());
   ASSERT_EQ(from_pack.objectCount(), 2u);
   EXPECT_EQ(from_pack.table.triangle_count, from_data.table.triangle_count);
   EXPECT_EQ(from_pack.table.cell_width, from_data.table.cell_width);
@@ -457,12 +457,12 @@ TEST(Replay, PackScenesGiveTheSameSelectionAsTheirData) {
   r.frames[0].eye = glm::vec3(0.0f, 0.0f, 1.0f);
   r.frames[0].target = glm::vec3(0.0f, 0.0f, -1.0f);
   std::vector<ReplayLogFrame> log;
-  ASSERT_FALSE(runReplay(r, from_pack, ReplayRunOptions(), log));
+  ASSERT_TRUE(runReplay(r, from_pack, ReplayRunOptions(), log).ok());
   ASSERT_EQ(log.size(), 1u);
   EXPECT_LT(log[0].levels[0], log[0].levels[1]);
   // a truncated pack is refused with the scene loader's message
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   writeText(path, bytes.substr(0, bytes.size() / 2));
-  EXPECT_TRUE(loadReplayScene(path, from_pack));
+  EXPECT_FALSE(loadReplayScene(path, from_pack).ok());
 }

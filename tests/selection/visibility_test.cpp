@@ -103,7 +103,7 @@ struct WallScene {
   }
   Error build(RayScene& rs, const RaySceneParams& p = {}) {
     Error e = rs.init(Span<const LodChain* const>(chains.data(), chains.size()), p);
-    if (e) return e;
+    if (!e.ok()) return e;
     e = rs.setObjects(world, chain_ids, levels);
     rs.commit();
     return e;

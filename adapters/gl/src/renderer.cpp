@@ -138,8 +138,8 @@ Error compileShader(GLenum type, const char* source, const char* name, GLuint& o
 
 Error linkProgram(const char* vs_source, const char* name, Program& out) {
   GLuint vs = 0, fs = 0;
-  if (Error e = compileShader(GL_VERTEX_SHADER, vs_source, name, vs)) return e;
-  if (Error e = compileShader(GL_FRAGMENT_SHADER, kFs, "fragment", fs)) {
+  if (Error e = compileShader(GL_VERTEX_SHADER, vs_source, name, vs); !e.ok()) return e;
+  if (Error e = compileShader(GL_FRAGMENT_SHADER, kFs, "fragment", fs); !e.ok()) {
     glDeleteShader(vs);
     return e;
   }
@@ -299,7 +299,7 @@ Error Renderer::init(const RendererConfig& config, bool* unavailable) {
   impl_ = std::make_unique<Impl>();
   Impl& m = *impl_;
   m.config = config;
-  if (Error e = m.startEgl()) {
+  if (Error e = m.startEgl(); !e.ok()) {
     if (unavailable) *unavailable = true;
     impl_.reset();
     return e;
@@ -325,7 +325,7 @@ Error Renderer::init(const RendererConfig& config, bool* unavailable) {
   }
   for (auto [src, name, prog] : {std::make_tuple(kTriangleVs, "triangles", &m.tri),
                                  std::make_tuple(kEdgeVs, "edges", &m.edge), std::make_tuple(kPointVs, "points", &m.point)})
-    if (Error e = linkProgram(src, name, *prog)) {
+    if (Error e = linkProgram(src, name, *prog); !e.ok()) {
       impl_.reset();
       return e;
     }
@@ -355,7 +355,7 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains) {
     for (size_t l = 0; l < chains[c].levels.size(); ++l) {
       const Mesh& src = chains[c].levels[l].mesh;
       const std::string what = "chain " + std::to_string(c) + " level " + std::to_string(l);
-      if (Error e = validateMesh(src, what)) return Error(e.status, "GL renderer: " + e.message);
+      if (Error e = validateMesh(src, what); !e.ok()) return Error(e.status, "GL renderer: " + e.message);
       Mesh normals_mesh;
       const std::vector<glm::vec3>* normals = &src.normals;
       if (src.normals.size() != src.positions.size()) {

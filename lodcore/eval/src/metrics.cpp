@@ -182,8 +182,8 @@ OneSidedDistance measureOneSided(const std::vector<glm::vec3>& unordered, const 
 Error measureSurfaceDistance(const Mesh& original, const Mesh& simplified, const DistanceParams& params,
                              DistanceResult& out) {
   out = DistanceResult{};
-  if (Error e = validateMesh(original, "original mesh")) return e;
-  if (Error e = validateMesh(simplified, "simplified mesh")) return e;
+  if (Error e = validateMesh(original, "original mesh"); !e.ok()) return e;
+  if (Error e = validateMesh(simplified, "simplified mesh"); !e.ok()) return e;
   if (original.triangleCount() == 0)
     return {Status::kInvalidMesh, "original mesh has no triangles: the error is measured against its surface"};
   double area = 0.0;
@@ -194,8 +194,8 @@ Error measureSurfaceDistance(const Mesh& original, const Mesh& simplified, const
 
   out.diagonal = computeBounds(original).diagonal();
   detail::EmbreeScene original_scene, simplified_scene;
-  if (Error e = original_scene.build(original)) return e;
-  if (Error e = simplified_scene.build(simplified)) return e;
+  if (Error e = original_scene.build(original); !e.ok()) return e;
+  if (Error e = simplified_scene.build(simplified); !e.ok()) return e;
 
   const float scale = static_cast<float>(out.diagonal > 0.0 ? out.diagonal : 1.0);
   out.forward = measureOneSided(samplePoints(original, params), simplified_scene, scale);

@@ -209,7 +209,7 @@ Error drawPlot(const std::vector<PlotSeries>& series, const PlotParams& params, 
 
 Error writePlotPng(const std::string& path, const std::vector<PlotSeries>& series, const PlotParams& params) {
   Image img;
-  if (Error e = drawPlot(series, params, img)) {
+  if (Error e = drawPlot(series, params, img); !e.ok()) {
     e.message = path + ": " + e.message;
     return e;
   }

@@ -86,12 +86,12 @@ Error renderMesh(const Mesh& mesh, const RenderParams& params, Image& out) {
   if (params.width < 1 || params.height < 1 || params.width > 16384 || params.height > 16384)
     return {Status::kInvalidArgument, "render: image size " + std::to_string(params.width) + "x" +
                                           std::to_string(params.height) + " is not in [1, 16384]"};
-  if (Error e = validateMesh(mesh, "render")) return e;
+  if (Error e = validateMesh(mesh, "render"); !e.ok()) return e;
   const Sphere frame = params.frame.radius > 0.0f ? params.frame : boundingSphere(mesh);
   if (!(frame.radius > 0.0f)) return {Status::kInvalidMesh, "render: the mesh is empty or a single point, nothing to frame"};
   const OrthoCamera cam(params.view, frame, params.width, params.height);
   detail::EmbreeScene scene;
-  if (Error e = scene.build(mesh, params.min_radius_px * cam.pixelSize())) return e;
+  if (Error e = scene.build(mesh, params.min_radius_px * cam.pixelSize()); !e.ok()) return e;
   out = Image(params.width, params.height);
   const uint8_t bg[3] = {toSrgb8(params.background.x), toSrgb8(params.background.y), toSrgb8(params.background.z)};
   tbb::parallel_for(0, params.height, [&](int y) {
@@ -118,8 +118,8 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
   out = ImageErrorResult{};
   if (params.resolution < 1 || params.resolution > 8192)
     return {Status::kInvalidArgument, "image error: resolution " + std::to_string(params.resolution) + " is not in [1, 8192]"};
-  if (Error e = validateMesh(original, "original mesh")) return e;
-  if (Error e = validateMesh(simplified, "simplified mesh")) return e;
+  if (Error e = validateMesh(original, "original mesh"); !e.ok()) return e;
+  if (Error e = validateMesh(simplified, "simplified mesh"); !e.ok()) return e;
   const Sphere frame = params.frame.radius > 0.0f ? params.frame : boundingSphere(original);
   if (!(frame.radius > 0.0f))
     return {Status::kInvalidMesh, "image error: the original is empty or a single point, nothing to frame"};
@@ -127,8 +127,8 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
   // the pixel size is the same in every view: both BVHs are built once
   const float pixel = OrthoCamera(standardView(0), frame, res, res).pixelSize();
   detail::EmbreeScene a, b;
-  if (Error e = a.build(original, params.min_radius_px * pixel)) return e;
-  if (Error e = b.build(simplified, params.min_radius_px * pixel)) return e;
+  if (Error e = a.build(original, params.min_radius_px * pixel); !e.ok()) return e;
+  if (Error e = b.build(simplified, params.min_radius_px * pixel); !e.ok()) return e;
 
   struct RowSum {
     size_t either = 0, one = 0, both = 0;
@@ -188,7 +188,7 @@ Error measurePopping(const LodChain& chain, const PoppingParams& params, std::ve
     ip.resolution = t.resolution;
     ip.frame = frame;
     ip.min_radius_px = params.min_radius_px;
-    if (Error e = measureImageError(chain.levels[k].mesh, chain.levels[k + 1].mesh, ip, t.error)) {
+    if (Error e = measureImageError(chain.levels[k].mesh, chain.levels[k + 1].mesh, ip, t.error); !e.ok()) {
       e.message = "popping, levels " + std::to_string(k) + "-" + std::to_string(k + 1) + ": " + e.message;
       return e;
     }

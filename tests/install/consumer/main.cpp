@@ -23,17 +23,17 @@ int main(int argc, char** argv) {
     return 2;
   }
   scenelod::scene::SceneData s;
-  if (scenelod::Error e = scenelod::scene::loadScene(argv[1], s)) {
+  if (scenelod::Error e = scenelod::scene::loadScene(argv[1], s); !e.ok()) {
     std::fprintf(stderr, "%s\n", e.message.c_str());
     return 1;
   }
   print("obj", s);
-  if (scenelod::Error e = scenelod::scene::exportGlb(argv[2], s)) {
+  if (scenelod::Error e = scenelod::scene::exportGlb(argv[2], s); !e.ok()) {
     std::fprintf(stderr, "%s\n", e.message.c_str());
     return 1;
   }
   scenelod::scene::SceneData r;
-  if (scenelod::Error e = scenelod::scene::importGltf(argv[2], r)) {
+  if (scenelod::Error e = scenelod::scene::importGltf(argv[2], r); !e.ok()) {
     std::fprintf(stderr, "%s\n", e.message.c_str());
     return 1;
   }

@@ -29,7 +29,6 @@ struct Error {
   Error() = default;
   Error(Status s, std::string m) : status(s), message(std::move(m)) {}
   bool ok() const { return status == Status::kOk; }
-  explicit operator bool() const { return status != Status::kOk; }  // true when there is an error
 };
 
 }  // namespace scenelod
