@@ -297,6 +297,305 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// The levels of one chain, built on TBB's threads from one prepared mesh. What the members hold and
+// why each step is ordered as it is:
+// - Levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
+//   takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
+//   (wall time near the ideal split, and the two largest levels never hold their scratch at once).
+// - That order alone keeps levels 1 and 2 apart only while level 1 keeps pace: when its thread is
+//   held up (descheduled on a loaded machine, or a first chain's thread start), the other thread ran
+//   through levels n .. 3 and took level 2 while level 1 was still in synthesis, and the 1 M sphere's
+//   chain peaked at 51.7-52.5 MB instead of 49.6 (budget 49.79; level 1's primitives,
+//   representatives and synthesis scratch, ~17 MB, beside level 2's grid and ids, ~6 MB). So level 2
+//   starts once level 1 is past synthesis. In an unhindered run level 1 is done first (the other
+//   levels together take longer), so nothing waits; with two levels there is nothing else to run
+//   beside level 1, and they overlap as before.
+// - Where the levels read positions through the order (no sorted copy), level 2 goes to the first
+//   thread free once level 1 is past synthesis, ahead of the levels still unclaimed, the level it
+//   displaces taking the last claim: on the bunny's chain the thread that finished level 1 took
+//   level 3 while level 2 waited for the other thread's level 4, and level 1's held output pass
+//   waited for level 2's synthesis (trace: level 1 past synthesis at 5.76 ms, level 2 from 6.19).
+//   Not with the sorted copy (the 1 M sphere): the copy, 12 bytes per vertex, lives until the last
+//   assignment, which the displaced level then made after level 2's synthesis scratch was taken; the
+//   1 M chain peaked at 53.7-55.2 MB in 2 of 35 loaded runs (budget 49.79), against 49.66 with level
+//   2 last. Without the copy the order alone (4 bytes per vertex) outlives it.
+// - The finest level's output pass (face normals, corner lists and the output arrays, on top of its
+//   eliminated primitives and representatives) was the chain's peak while the prepared mesh (44
+//   bytes per vertex) was still held for the other levels. So that level is held between its
+//   synthesis and its output pass until every level has passed synthesis; the level that passes last
+//   frees the prepared mesh's arrays (no level reads them after its synthesis) and hands the held
+//   output pass to the task group, where the thread that runs out of levels takes it.
+// - The sort (order and sorted positions, 16 bytes per vertex) is read by assignments only: freed
+//   when every level has made its assignment, before the later levels' elimination and output.
+// - Levels n, n - 1, ..., 3 are built at the width of the search's first probe while it runs (small
+//   meshes, two threads or more): they are the chain's own if that width becomes w_1, and are dropped
+//   otherwise. They take the claims, so the level loop starts after them. Only levels that no other
+//   level waits for (not 1 or 2), and no progress is reported for them.
+class ChainLevels {
+ public:
+  ChainLevels(const Mesh& original, const ChainParams& params, PreparedMesh& p, LodChain& out, ChainStats& stats)
+      : original_(original), params_(params), p_(p), out_(out), stats_(stats), n_(params.level_count),
+        errors_(n_), synthesis_pending_(n_), second_early_(p.sorted_positions.empty() && n_ >= 3),
+        release_pending_(n_) {
+    out_.levels.resize(n_ + 1);
+    stats_.level_seconds.assign(n_, 0.0);
+  }
+  ~ChainLevels() {  // (on the way out of an exception only: every other path has waited)
+    try {
+      speculation_.wait();
+    } catch (...) {
+    }
+  }
+
+  // Chooses w_1 (searched when params.first_cell_width is 0), builds levels 1..n, and sets
+  // `base_bounds` to level 0's sphere. On an error the levels are cleared.
+  Error run(std::optional<Sphere>& base_bounds);
+
+ private:
+  static constexpr size_t kNoLevel = SIZE_MAX;
+
+  ClusterParams levelParams(size_t k, float first_width) const;
+  size_t claimLevel();
+  bool allClaimed();
+  void firstSynthesized();
+  void passSynthesis();
+  static void releaseSorted(void* self);
+  void runLevel(size_t k, float first_width, bool report);
+  void finishLevel(size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds, bool report);
+  void speculate();
+  void dropSpeculativeLevels();
+  FirstProbeHooks speculationHooks();
+  Error chooseFirstWidth();
+
+  const Mesh& original_;
+  const ChainParams& params_;
+  PreparedMesh& p_;
+  LodChain& out_;
+  ChainStats& stats_;
+  const size_t n_;
+  float w1_ = 0.0f;  // level 1's width, searched when 0 (level 1 is only ever built at it)
+  std::vector<Error> errors_;
+  std::mutex progress_mutex_;
+  std::atomic<size_t> done_{0};
+  detail::LevelParts held_;  // level 1 between its synthesis and its output pass
+  double held_seconds_ = 0.0;
+  std::atomic<size_t> synthesis_pending_;
+  std::atomic<bool> first_ready_{false};  // level 1's parts are held (set after held_ is written)
+  tbb::task_group finish_group_;
+  // the claims: guarded by first_mutex_, as is first_synthesized_
+  bool first_claimed_ = false;  // level 1 (k = 0)
+  size_t next_claim_ = 0;       // claim c is level n - c (k = n - 1 - c), c < n - 1
+  std::mutex first_mutex_;
+  std::condition_variable first_cv_;
+  bool first_synthesized_ = false;
+  const bool second_early_;
+  bool second_taken_ = false;
+  size_t displaced_ = 1;
+  std::atomic<size_t> release_pending_;  // assignments still to be made before the sort is freed
+  detail::Assignment first_;  // the search's last probe, at w_1 (empty when w_1 is given or not probed last)
+  tbb::task_group speculation_;
+  std::atomic<bool> speculating_{false};
+  float speculative_w1_ = 0.0f;
+};
+
+ClusterParams ChainLevels::levelParams(size_t k, float first_width) const {
+  ClusterParams cp = params_.cluster;
+  cp.cell_width = static_cast<float>(double(first_width) * std::pow(double(params_.growth), double(k)));
+  return cp;
+}
+
+size_t ChainLevels::claimLevel() {
+  std::unique_lock<std::mutex> lock(first_mutex_);
+  if (!first_claimed_) {
+    first_claimed_ = true;
+    return 0;
+  }
+  if (next_claim_ + 1 >= n_) return kNoLevel;
+  const size_t natural = n_ - 1 - next_claim_++;  // n - 1, n - 2, ..., 1
+  size_t k = natural;
+  if (natural == 1 && second_taken_) k = displaced_;
+  else if (second_early_ && natural >= 2 && first_synthesized_ && !second_taken_) k = 1, displaced_ = natural;
+  if (k == 1) {
+    second_taken_ = true;
+    // (level 1 was claimed first, by a thread running it now: the wait ends; no level calls TBB, so
+    // a waiting thread holds no task another one needs)
+    if (n_ >= 3) first_cv_.wait(lock, [&] { return first_synthesized_; });
+  }
+  return k;
+}
+
+bool ChainLevels::allClaimed() {
+  std::lock_guard<std::mutex> lock(first_mutex_);
+  return first_claimed_ && next_claim_ + 1 >= n_;
+}
+
+void ChainLevels::firstSynthesized() {
+  {
+    std::lock_guard<std::mutex> lock(first_mutex_);
+    first_synthesized_ = true;
+  }
+  first_cv_.notify_all();
+}
+
+void ChainLevels::passSynthesis() {
+  if (--synthesis_pending_ != 0) return;
+  // every level is past synthesis (and assignment): only the mesh itself is read from here on
+  std::vector<float>().swap(p_.weights);
+  std::vector<VertexFaceSums>().swap(p_.face_sums);
+  std::vector<glm::vec4>().swap(p_.face_colors);
+  if (first_ready_.load())
+    finish_group_.run([this] { finishLevel(0, held_, levelParams(0, w1_), held_seconds_, true); });
+}
+
+void ChainLevels::releaseSorted(void* self) {
+  ChainLevels& c = *static_cast<ChainLevels*>(self);
+  if (--c.release_pending_ == 0) {
+    std::vector<uint32_t>().swap(c.p_.order);
+    std::vector<glm::vec3>().swap(c.p_.sorted_positions);
+  }
+}
+
+// (levels built while the search's first probe runs report no progress: they may be dropped)
+void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds,
+                              bool report) {
+  const Clock::time_point start = Clock::now();
+  LodLevel& level = out_.levels[k + 1];
+  detail::finishLevel(parts, cp, level.mesh);
+  level.bounds = computeBoundingSphere(level.mesh);
+  stats_.level_seconds[k] = seconds + since(start);
+  const size_t d = ++done_;
+  if (report && params_.progress.fn) {
+    std::lock_guard<std::mutex> lock(progress_mutex_);
+    params_.progress(0.1 + 0.9 * double(d) / double(n_), "clustering levels");
+  }
+}
+
+void ChainLevels::runLevel(size_t k, float first_width, bool report) {
+  const Clock::time_point start = Clock::now();
+  const ClusterParams cp = levelParams(k, first_width);
+  LodLevel& level = out_.levels[k + 1];
+  detail::LevelParts parts;
+  ClusterStats cs;
+  // level 2, where it was claimed early, is synthesized before its elimination: the last level past
+  // synthesis, it then frees the prepared arrays and hands over level 1's held output pass an
+  // elimination sooner (the bunny: 0.65 ms), the other thread, idle, taking it
+  const bool synthesis_first = k == 1 && second_early_;
+  auto passed = [](void* self) { static_cast<ChainLevels*>(self)->passSynthesis(); };
+  if (k == 0 && !first_.cluster_of.empty()) {
+    releaseSorted(this);
+    errors_[k] = detail::clusterLevelParts(p_, cp, first_, parts, &cs);
+  } else if (synthesis_first) {
+    errors_[k] = detail::clusterLevelParts(p_, cp, parts, &cs, releaseSorted, this, passed, this);
+  } else {
+    errors_[k] = detail::clusterLevelParts(p_, cp, parts, &cs, releaseSorted, this);
+  }
+  level.cell_width = cp.cell_width;
+  level.max_error = cs.max_error;
+  level.method = cp.method;
+  const double seconds = since(start);
+  if (k == 0) {
+    held_ = std::move(parts);
+    held_seconds_ = seconds;
+    first_ready_.store(errors_[0].ok());
+    firstSynthesized();  // also after an error: level 2 must not wait for ever
+  }
+  // (a level's only error is its assignment's, before synthesis: then the callback was not made)
+  if (!synthesis_first || !errors_[k].ok()) passSynthesis();
+  if (k != 0 && errors_[k].ok()) finishLevel(k, parts, cp, seconds, report);
+}
+
+void ChainLevels::speculate() {
+  while (speculating_.load()) {
+    size_t k = kNoLevel;
+    {
+      std::lock_guard<std::mutex> lock(first_mutex_);
+      if (speculating_.load() && next_claim_ + 3 <= n_) k = n_ - 1 - next_claim_++;  // k >= 2
+    }
+    if (k == kNoLevel) break;
+    runLevel(k, speculative_w1_, false);
+  }
+}
+
+// the speculative levels were built at a width that did not become w_1
+void ChainLevels::dropSpeculativeLevels() {
+  speculation_.wait();  // the level under way, then drop what was built
+  std::lock_guard<std::mutex> lock(first_mutex_);
+  for (size_t c = 0; c < next_claim_; ++c) {
+    const size_t k = n_ - 1 - c;
+    out_.levels[k + 1] = LodLevel();
+    stats_.level_seconds[k] = 0.0;
+    errors_[k] = Error();
+  }
+  synthesis_pending_ += next_claim_;
+  release_pending_ += next_claim_;
+  done_ -= next_claim_;
+  next_claim_ = 0;
+}
+
+FirstProbeHooks ChainLevels::speculationHooks() {
+  FirstProbeHooks hooks;
+  const int mode = detail::g_speculation.load();
+  hooks.before = [this, mode](float wa) {
+    if (!second_early_ || mode == 0) return;
+    if (mode == 1 && tbb::this_task_arena::max_concurrency() < 2) return;
+    speculative_w1_ = wa;
+    speculating_.store(true);
+    if (mode == 2) speculate();
+    else speculation_.run([this] { speculate(); });
+  };
+  hooks.after = [this](bool hit) {
+    if (speculating_.exchange(false) && !hit) dropSpeculativeLevels();
+  };
+  return hooks;
+}
+
+Error ChainLevels::chooseFirstWidth() {
+  w1_ = params_.first_cell_width;
+  if (w1_ == 0.0f) {
+    params_.progress(0.05, "choosing w1");
+    const size_t tn = original_.triangleCount();
+    if (tn >= 2) {
+      const FirstProbeHooks hooks = speculationHooks();
+      if (Error e = searchCellWidth(p_, params_.cluster, tn / 2, w1_, 0.05, &first_, &stats_.first_width_probes, &hooks);
+          !e.ok())
+        return e;
+    } else {
+      w1_ = p_.mean_edge_length > 0.0f ? p_.mean_edge_length : std::max(p_.bounds.diagonal() / 64.0f, 1e-6f);
+    }
+  }
+  return detail::checkCellWidth(p_, w1_);
+}
+
+Error ChainLevels::run(std::optional<Sphere>& base_bounds) {
+  const Clock::time_point t0 = Clock::now();
+  const Error chosen = chooseFirstWidth();
+  stats_.first_width_seconds = since(t0);
+  if (!chosen.ok()) {
+    speculation_.wait();
+    out_.levels.clear();
+    return chosen;
+  }
+  std::atomic<bool> bounds_taken{false};
+  tbb::parallel_for(size_t(0), n_, [&](size_t) {
+    const size_t k = claimLevel();
+    if (k == kNoLevel) return;  // (taken while the search ran)
+    runLevel(k, w1_, true);
+    // level 0's bounds by the first thread to find no level left to claim: it would otherwise wait
+    // for the last levels' synthesis (the held output pass) or for the other thread's last level
+    // (the bunny chain: 0.16 ms that came after both, at the end)
+    if (allClaimed() && !bounds_taken.exchange(true)) base_bounds = computeBoundingSphere(original_);
+  });
+  speculation_.wait();
+  if (!base_bounds) base_bounds = computeBoundingSphere(original_);
+  finish_group_.wait();
+  for (const Error& e : errors_)
+    if (!e.ok()) {
+      out_.levels.clear();
+      return e;
+    }
+  return {};
+}
+
 // `take`, when given, is `original` itself, handed over by the caller: level 0 takes it by move
 // instead of a copy once the levels are done
 Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
@@ -312,268 +611,21 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   // level 0, the copy of the input, is made last, once the prepared mesh and the levels' scratch are
   // freed, so that it does not add to the peak memory of the levels
   std::optional<Sphere> base_bounds;
-  auto finish = [&]() {
-    p = PreparedMesh();
-    LodLevel& base = out.levels[0];
-    base.bounds = base_bounds ? *base_bounds : computeBoundingSphere(original);
-    if (take) base.mesh = std::move(*take);
-    else base.mesh = original;
-    base.cell_width = 0.0f;
-    base.max_error = 0.0f;
-    base.method = LodMethod::kOriginal;
-  };
   out.levels.resize(1);
-  if (p.order.empty() || params.level_count == 0) {
-    finish();
-    params.progress(1.0, "done");
-    return {};
+  const bool no_levels = p.order.empty() || params.level_count == 0;
+  if (!no_levels) {
+    ChainLevels levels(original, params, p, out, stats);
+    if (Error e = levels.run(base_bounds); !e.ok()) return e;
   }
-
-  const size_t n = params.level_count;
-  float w1 = params.first_cell_width;  // searched below when 0 (level 1 is only ever built at it)
-  out.levels.resize(n + 1);
-  std::vector<Error> errors(n);
-  stats.level_seconds.assign(n, 0.0);
-  std::mutex progress_mutex;
-  std::atomic<size_t> done{0};
-  // The finest level's output pass (face normals, corner lists and the output arrays, on top of its
-  // eliminated primitives and representatives) was the chain's peak while the prepared mesh (44
-  // bytes per vertex) was still held for the other levels. So that level is held between its
-  // synthesis and its output pass until every level has passed synthesis; the level that passes
-  // last frees the prepared mesh's arrays (no level reads them after its synthesis) and hands the
-  // held output pass to the task group, where the thread that runs out of levels takes it.
-  detail::LevelParts held;
-  double held_seconds = 0.0;
-  std::atomic<size_t> synthesis_pending{n};
-  std::atomic<bool> first_ready{false};  // level 1's parts are held (set after `held` is written)
-  // the sort (order and sorted positions, 16 bytes per vertex) is read by assignments only: freed
-  // when every level has made its assignment, before the later levels' elimination and output
-  struct Release {
-    PreparedMesh* p;
-    std::atomic<size_t> pending;
-  } release{&p, {n}};
-  auto releaseSorted = [](void* context) {
-    Release& r = *static_cast<Release*>(context);
-    if (--r.pending == 0) {
-      std::vector<uint32_t>().swap(r.p->order);
-      std::vector<glm::vec3>().swap(r.p->sorted_positions);
-    }
-  };
-  tbb::task_group finish_group;
-  // (levels built while the search's first probe runs report no progress: they may be dropped)
-  auto finishLevel = [&](size_t k, detail::LevelParts& parts, const ClusterParams& cp, double seconds, bool report) {
-    const Clock::time_point start = Clock::now();
-    LodLevel& level = out.levels[k + 1];
-    detail::finishLevel(parts, cp, level.mesh);
-    level.bounds = computeBoundingSphere(level.mesh);
-    stats.level_seconds[k] = seconds + since(start);
-    const size_t d = ++done;
-    if (report && params.progress.fn) {
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
-    }
-  };
-  auto levelParams = [&](size_t k, float first_width) {
-    ClusterParams cp = params.cluster;
-    cp.cell_width = static_cast<float>(double(first_width) * std::pow(double(params.growth), double(k)));
-    return cp;
-  };
-  // levels get cheaper with k (level 1 alone is about a third of the work): whichever thread is free
-  // takes the next level of the order 1, n, n-1, ..., 2, so level 1 overlaps the smallest levels
-  // (wall time near the ideal split, and the two largest levels never hold their scratch at once)
-  bool first_claimed = false;  // level 1 (k = 0)
-  size_t next_claim = 0;       // claim c is level n - c (k = n - 1 - c), c < n - 1
-  std::atomic<bool> bounds_taken{false};
-  // That order alone keeps levels 1 and 2 apart only while level 1 keeps pace: when its thread is
-  // held up (descheduled on a loaded machine, or a first chain's thread start), the other thread
-  // ran through levels n .. 3 and took level 2 while level 1 was still in synthesis, and the 1 M
-  // sphere's chain peaked at 51.7-52.5 MB instead of 49.6 (budget 49.79; level 1's primitives,
-  // representatives and synthesis scratch, ~17 MB, beside level 2's grid and ids, ~6 MB). So level 2
-  // starts once level 1 is past synthesis. In an unhindered run level 1 is done first (the other
-  // levels together take longer), so nothing waits; with two levels there is nothing else to run
-  // beside level 1, and they overlap as before.
-  std::mutex first_mutex;  // guards the claims below and first_synthesized
-  std::condition_variable first_cv;
-  bool first_synthesized = false;
-  auto firstSynthesized = [&] {
-    {
-      std::lock_guard<std::mutex> lock(first_mutex);
-      first_synthesized = true;
-    }
-    first_cv.notify_all();
-  };
-  // Where the levels read positions through the order (no sorted copy), level 2 goes to the first
-  // thread free once level 1 is past synthesis, ahead of the levels still unclaimed, the level it
-  // displaces taking the last claim: on the bunny's chain the thread that finished level 1 took
-  // level 3 while level 2 waited for the other thread's level 4, and level 1's held output pass
-  // waited for level 2's synthesis (trace: level 1 past synthesis at 5.76 ms, level 2 from 6.19).
-  // Not with the sorted copy (the 1 M sphere): the copy, 12 bytes per vertex, lives until the last
-  // assignment, which the displaced level then made after level 2's synthesis scratch was taken;
-  // the 1 M chain peaked at 53.7-55.2 MB in 2 of 35 loaded runs (budget 49.79), against 49.66
-  // with level 2 last. Without the copy the order alone (4 bytes per vertex) outlives it.
-  const bool second_early = p.sorted_positions.empty() && n >= 3;
-  bool second_taken = false;
-  size_t displaced = 1;
-  constexpr size_t kNoLevel = SIZE_MAX;
-  auto claimLevel = [&]() -> size_t {
-    std::unique_lock<std::mutex> lock(first_mutex);
-    if (!first_claimed) {
-      first_claimed = true;
-      return 0;
-    }
-    if (next_claim + 1 >= n) return kNoLevel;
-    const size_t natural = n - 1 - next_claim++;  // n - 1, n - 2, ..., 1
-    size_t k = natural;
-    if (natural == 1 && second_taken) k = displaced;
-    else if (second_early && natural >= 2 && first_synthesized && !second_taken) k = 1, displaced = natural;
-    if (k == 1) {
-      second_taken = true;
-      // (level 1 was claimed first, by a thread running it now: the wait ends; no level calls TBB,
-      // so a waiting thread holds no task another one needs)
-      if (n >= 3) first_cv.wait(lock, [&] { return first_synthesized; });
-    }
-    return k;
-  };
-  auto allClaimed = [&] {
-    std::lock_guard<std::mutex> lock(first_mutex);
-    return first_claimed && next_claim + 1 >= n;
-  };
-  std::function<void()> passSynthesis = [&] {
-    if (--synthesis_pending == 0) {
-      // every level is past synthesis (and assignment): only the mesh itself is read from here on
-      std::vector<float>().swap(p.weights);
-      std::vector<VertexFaceSums>().swap(p.face_sums);
-      std::vector<glm::vec4>().swap(p.face_colors);
-      if (first_ready.load()) finish_group.run([&] { finishLevel(0, held, levelParams(0, w1), held_seconds, true); });
-    }
-  };
-  // the search's last probe, at w1: level 1's assignment (empty when w1 is given or was not probed last)
-  detail::Assignment first;
-  auto runLevel = [&](size_t k, float first_width, bool report) {
-    const Clock::time_point start = Clock::now();
-    const ClusterParams cp = levelParams(k, first_width);
-    LodLevel& level = out.levels[k + 1];
-    detail::LevelParts parts;
-    ClusterStats cs;
-    // level 2, where it was claimed early, is synthesized before its elimination: the last level
-    // past synthesis, it then frees the prepared arrays and hands over level 1's held output pass
-    // an elimination sooner (the bunny: 0.65 ms), the other thread, idle, taking it
-    const bool synthesis_first = k == 1 && second_early;
-    auto passed = [](void* f) { (*static_cast<std::function<void()>*>(f))(); };
-    if (k == 0 && !first.cluster_of.empty()) {
-      releaseSorted(&release);
-      errors[k] = detail::clusterLevelParts(p, cp, first, parts, &cs);
-    } else if (synthesis_first) {
-      errors[k] = detail::clusterLevelParts(p, cp, parts, &cs, releaseSorted, &release, passed, &passSynthesis);
-    } else {
-      errors[k] = detail::clusterLevelParts(p, cp, parts, &cs, releaseSorted, &release);
-    }
-    level.cell_width = cp.cell_width;
-    level.max_error = cs.max_error;
-    level.method = cp.method;
-    const double seconds = since(start);
-    if (k == 0) {
-      held = std::move(parts);
-      held_seconds = seconds;
-      first_ready.store(errors[0].ok());
-      firstSynthesized();  // also after an error: level 2 must not wait for ever
-    }
-    // (a level's only error is its assignment's, before synthesis: then the callback was not made)
-    if (!synthesis_first || !errors[k].ok()) passSynthesis();
-    if (k != 0 && errors[k].ok()) finishLevel(k, parts, cp, seconds, report);
-  };
-
-  // Levels n, n - 1, ..., 3 built at the width of the search's first probe while it runs (small
-  // meshes, two threads or more): they are the chain's own if that width becomes w_1, and are
-  // dropped otherwise. They take the claims above, so the level loop below starts after them. Only
-  // levels that no other level waits for (not 1 or 2), and no progress is reported for them.
-  tbb::task_group speculation;
-  std::atomic<bool> speculating{false};
-  float speculative_w1 = 0.0f;
-  struct WaitFor {
-    tbb::task_group& g;
-    ~WaitFor() {  // (on the way out of an exception only: every other path has waited)
-      try {
-        g.wait();
-      } catch (...) {
-      }
-    }
-  } wait_speculation{speculation};
-  FirstProbeHooks hooks;
-  const int speculation_mode = detail::g_speculation.load();
-  hooks.before = [&](float wa) {
-    if (!second_early || speculation_mode == 0) return;
-    if (speculation_mode == 1 && tbb::this_task_arena::max_concurrency() < 2) return;
-    speculative_w1 = wa;
-    speculating.store(true);
-    auto speculate = [&] {
-      while (speculating.load()) {
-        size_t k = kNoLevel;
-        {
-          std::lock_guard<std::mutex> lock(first_mutex);
-          if (speculating.load() && next_claim + 3 <= n) k = n - 1 - next_claim++;  // k >= 2
-        }
-        if (k == kNoLevel) break;
-        runLevel(k, speculative_w1, false);
-      }
-    };
-    if (speculation_mode == 2) speculate();
-    else speculation.run(speculate);
-  };
-  hooks.after = [&](bool hit) {
-    if (!speculating.exchange(false) || hit) return;
-    speculation.wait();  // the level under way, then drop what was built
-    std::lock_guard<std::mutex> lock(first_mutex);
-    for (size_t c = 0; c < next_claim; ++c) {
-      const size_t k = n - 1 - c;
-      out.levels[k + 1] = LodLevel();
-      stats.level_seconds[k] = 0.0;
-      errors[k] = Error();
-    }
-    synthesis_pending += next_claim;
-    release.pending += next_claim;
-    done -= next_claim;
-    next_claim = 0;
-  };
-
-  t0 = Clock::now();
-  if (w1 == 0.0f) {
-    params.progress(0.05, "choosing w1");
-    const size_t tn = original.triangleCount();
-    if (tn >= 2) {
-      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, &first, &stats.first_width_probes, &hooks); !e.ok()) {
-        out.levels.clear();
-        return e;
-      }
-    } else {
-      w1 = p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
-    }
-  }
-  stats.first_width_seconds = since(t0);
-  if (Error e = detail::checkCellWidth(p, w1); !e.ok()) {
-    speculation.wait();
-    out.levels.clear();
-    return e;
-  }
-
-  tbb::parallel_for(size_t(0), n, [&](size_t) {
-    const size_t k = claimLevel();
-    if (k == kNoLevel) return;  // (taken while the search ran)
-    runLevel(k, w1, true);
-    // level 0's bounds by the first thread to find no level left to claim: it would otherwise wait
-    // for the last levels' synthesis (the held output pass) or for the other thread's last level
-    // (the bunny chain: 0.16 ms that came after both, at the end)
-    if (allClaimed() && !bounds_taken.exchange(true)) base_bounds = computeBoundingSphere(original);
-  });
-  speculation.wait();
-  if (!base_bounds) base_bounds = computeBoundingSphere(original);
-  finish_group.wait();
-  for (const Error& e : errors)
-    if (!e.ok()) {
-      out.levels.clear();
-      return e;
-    }
-  finish();
+  p = PreparedMesh();
+  LodLevel& base = out.levels[0];
+  base.bounds = base_bounds ? *base_bounds : computeBoundingSphere(original);
+  if (take) base.mesh = std::move(*take);
+  else base.mesh = original;
+  base.cell_width = 0.0f;
+  base.max_error = 0.0f;
+  base.method = LodMethod::kOriginal;
+  if (no_levels) params.progress(1.0, "done");
   return {};
 }
 
