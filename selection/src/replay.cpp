@@ -241,7 +241,6 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
 static Error writeReplayImpl(const std::string& path, const Replay& r) {
   std::ostringstream out;
   const ReplayHeader& h = r.header;
-  json hj;
   std::ostringstream s;
   s << "{\"scenelod_replay\": 1, \"scene\": " << json(h.scene).dump() << ", \"viewport\": [" << h.viewport_width_px
     << ", " << h.viewport_height_px << "], \"fov_y_deg\": " << fmt(h.fov_y_deg)
