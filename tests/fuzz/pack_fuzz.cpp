@@ -1,6 +1,9 @@
-// Pack::fromBytes on arbitrary bytes; a pack it accepts is then used the way an engine would: every
-// root, node, object, chain sphere, mesh name and level view read, every index followed, and the
-// owned copies made (toSceneData, toChains, toScene).
+// Pack::fromBytes on arbitrary bytes, as given and again with the CRC-32 at byte 24 recomputed (most
+// mutations would otherwise stop at the checksum, never reaching the section and index checks: a
+// hand-edited pack is re-checksummed just as easily). A pack it accepts is then used the way an
+// engine would: every root, node, object, chain sphere, mesh name and level view read, every index
+// followed, and the owned copies made (toSceneData, toChains, toScene).
+#include <cstring>
 #include <vector>
 
 #include "fuzz_input.h"
@@ -53,11 +56,9 @@ float walkNodes(const Pack& pack) {
   return sum;
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+void useBytes(const uint8_t* data, size_t size) {
   Pack pack;
-  if (!Pack::fromBytes(data, size, pack, "fuzz input").ok()) return 0;
+  if (!Pack::fromBytes(data, size, pack, "fuzz input").ok()) return;
   volatile float sink = walkNodes(pack) + walkLevels(pack);
   (void)sink;
   scenelod::scene::SceneData scene;
@@ -67,5 +68,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   pack.toChains(chains, spheres);
   scenelod::scene::Scene runtime;
   (void)pack.toScene(runtime);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  useBytes(data, size);
+  constexpr size_t kChecksumOffset = 24;
+  if (size < kChecksumOffset + 4) return 0;
+  std::vector<uint8_t> fixed(data, data + size);
+  std::memset(fixed.data() + kChecksumOffset, 0, 4);
+  uint32_t crc = scenelod::scene::crc32(fixed.data(), fixed.size());
+  std::memcpy(fixed.data() + kChecksumOffset, &crc, 4);
+  useBytes(fixed.data(), fixed.size());
   return 0;
 }
