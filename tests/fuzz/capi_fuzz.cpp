@@ -3,6 +3,7 @@
 // object add/move/remove with arbitrary numbers and handles, selections with arbitrary cameras,
 // frame params, strides and capacities, chain destruction). Every call must return a known status.
 #include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #include "fuzz_input.h"
@@ -69,7 +70,9 @@ void buildChain(Cursor& in, State& st) {
   slod_chain_desc desc;
   slod_chain_desc_init(&desc);
   desc.size = structSize(in, desc.size);
-  desc.method = static_cast<slod_method>(in.byte() % 5);
+  // as a C caller can: any int in the enum field (4 is none of its values)
+  int method = in.byte() % 5;
+  std::memcpy(&desc.method, &method, sizeof(method));
   desc.level_count = in.byte() % 5;
   desc.first_cell_width = in.byte() < 128 ? 0.0f : in.f32();
   slod_chain chain = SLOD_NULL_CHAIN;
