@@ -308,15 +308,24 @@ selection::Camera toCamera(const slod_camera& c) {
 // Builds a chain and appends it at the next dense index (= its level table chain id).
 Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, const std::string& what, slod_chain& handle) {
   ChainParams params;
-  switch (d.method) {
+  // a C caller may store any int in the enum field, and C++ may not load an enum holding a value
+  // outside its enumerators: the field is read as the int it is
+  int method = 0;
+  static_assert(sizeof(method) == sizeof(d.method), "slod_method is stored as an int");
+  std::memcpy(&method, &d.method, sizeof(method));
+  switch (method) {
     case SLOD_METHOD_FLOATING: break;
     case SLOD_METHOD_UNIFORM: params.cluster.method = LodMethod::kUniform; break;
     case SLOD_METHOD_ZHANG: params.cluster.method = LodMethod::kZhang; break;
     case SLOD_METHOD_SCROOGE: params.cluster.method = LodMethod::kScrooge; break;
-    default: return {Status::kInvalidArgument, what + ": unknown method " + std::to_string(static_cast<int>(d.method))};
+    default: return {Status::kInvalidArgument, what + ": unknown method " + std::to_string(method)};
   }
   if (d.level_count > 62) return {Status::kInvalidArgument, what + ": level_count " + std::to_string(d.level_count) + " is above 62"};
   params.level_count = d.level_count;
+  // 0 is automatic; a denormal width would make the grid's 1 / width infinite
+  if (d.first_cell_width != 0.0f && !(std::isnormal(d.first_cell_width) && d.first_cell_width > 0.0f))
+    return {Status::kInvalidArgument, what + ": first_cell_width " + std::to_string(d.first_cell_width) +
+                                          " is not 0 (automatic) or a finite positive number of at least 1.2e-38"};
   params.first_cell_width = d.first_cell_width;
   LodChain chain;
   if (Error e = buildChain(mesh, params, chain); !e.ok()) return e;

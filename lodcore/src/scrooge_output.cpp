@@ -261,6 +261,17 @@ Error runScrooge(const Mesh& in, const ScroogeParams& params, bool degrade, Mesh
   const std::string name = what ? what : "mesh";
   if (Error e = checkParams(params, degrade, name); !e.ok()) return e;
   if (Error e = validateMesh(in, name); !e.ok()) return e;
+  if (degrade) {
+    // sub-volume indices are int64: a coordinate more than 2^30 sub-volumes from the origin (a huge
+    // coordinate over a tiny sub-volume) has none
+    const Aabb b = computeBounds(in);
+    const glm::vec3 far = glm::max(glm::abs(b.min), glm::abs(b.max));
+    for (int a = 0; a < 3; ++a)
+      if (double(far[a]) / double(params.subvolume_size[a]) > 1073741824.0)
+        return {Status::kInvalidArgument, name + ": SCROOGE sub-volume size " + std::to_string(params.subvolume_size[a]) +
+                                              " is too small for coordinates up to " + std::to_string(far[a]) +
+                                              " (more than 2^30 sub-volumes along an axis)"};
+  }
   ScroogeStats local;
   ScroogeStats& st = stats ? *stats : local;
   st = ScroogeStats{};

@@ -461,7 +461,7 @@ class GltfReader {
     if (m.positions.size() + count > (size_t(1) << 31)) return fail(Status::kUnsupported, mesh_what + ": too many vertices");
     base = static_cast<uint32_t>(m.positions.size());
     for (uint32_t i = 0; i < count; ++i) {
-      const glm::vec3 q(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
+      const glm::vec3 q{float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2])};
       if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
         return fail(Status::kInvalidMesh, what + " POSITION: accessor " + std::to_string(a.position) + " element " +
                                               std::to_string(i) + " has a NaN or infinite coordinate");
@@ -475,7 +475,7 @@ class GltfReader {
         return fail(Status::kInvalidMesh, what + ": NORMAL has " + std::to_string(v.size() / 3) + " elements, POSITION " +
                                               std::to_string(count));
       for (uint32_t i = 0; i < count; ++i) {
-        const glm::vec3 n(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
+        const glm::vec3 n{float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2])};
         if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
           return fail(Status::kInvalidMesh, what + " NORMAL: element " + std::to_string(i) + " is NaN or infinite");
         m.normals[base + i] = n;

@@ -140,6 +140,20 @@ int main(int argc, char** argv) {
   CHECK(slod_level_get(ctx, chain, levels, &ld) == SLOD_ERROR_NOT_FOUND);
   CHECK(strstr(slod_last_error_message(ctx), "levels") != NULL);
 
+  /* bad chain descriptors are refused with a message: an int outside the method enum, a denormal
+   * first cell width (both found by the capi fuzz target) */
+  {
+    slod_chain_desc bad = chd;
+    int unknown = 4;
+    memcpy(&bad.method, &unknown, sizeof unknown);
+    CHECK(slod_chain_build(ctx, &md, &bad, &levels_chain) == SLOD_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(slod_last_error_message(ctx), "unknown method 4") != NULL);
+    bad = chd;
+    bad.first_cell_width = 1e-43f;
+    CHECK(slod_chain_build(ctx, &md, &bad, &levels_chain) == SLOD_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(slod_last_error_message(ctx), "first_cell_width") != NULL);
+  }
+
   /* bad meshes are refused with a message */
   indices[5] = 100000;
   CHECK(slod_chain_build(ctx, &md, &chd, &levels_chain) == SLOD_ERROR_INVALID_MESH);

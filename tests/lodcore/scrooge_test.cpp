@@ -485,6 +485,12 @@ TEST(Scrooge, BadInputGivesClearErrors) {
   p.weld_epsilon_rel = std::numeric_limits<float>::infinity();
   EXPECT_EQ(scroogeMesh(in, p, out).status, Status::kInvalidArgument);
   p.weld_epsilon_rel = 1e-6f;
+  // sub-volume indices would not fit an int64 (found by the capi fuzz target)
+  Mesh far = in;
+  far.positions[0].x = 1e36f;
+  e = scroogeMesh(far, p, out, nullptr, "hub.obj");
+  EXPECT_EQ(e.status, Status::kInvalidArgument);
+  EXPECT_NE(e.message.find("more than 2^30 sub-volumes"), std::string::npos) << e.message;
 
   Mesh bad = in;
   bad.face_corners[3] = 99;
