@@ -64,28 +64,16 @@ Error checkStream(const std::vector<Vec>& v, size_t n, const std::string& name, 
   return {};
 }
 
-// the skeleton: parents in range and no cycle (each walk to a root ends within joint-count steps)
+// the skeleton: parents in range and no cycle
 Error checkSkeleton(const std::vector<int32_t>& parents, const std::string& what) {
   const size_t j = parents.size();
   for (size_t i = 0; i < j; ++i)
     if (parents[i] < -1 || parents[i] >= static_cast<int64_t>(j))
       return {Status::kInvalidMesh, what + ": joint " + std::to_string(i) + " has parent " + std::to_string(parents[i]) +
                                         " but the skeleton has " + std::to_string(j) + " joints"};
-  std::vector<uint8_t> state(j, 0);  // 0 unvisited, 1 on the current walk, 2 reaches a root
-  std::vector<size_t> walk;
-  for (size_t i = 0; i < j; ++i) {
-    walk.clear();
-    size_t k = i;
-    while (state[k] == 0) {
-      state[k] = 1;
-      walk.push_back(k);
-      if (parents[k] < 0) break;
-      k = static_cast<size_t>(parents[k]);
-    }
-    if (state[k] == 1 && parents[k] >= 0)
-      return {Status::kInvalidMesh, what + ": the skeleton's joint parents form a cycle through joint " + std::to_string(k)};
-    for (size_t w : walk) state[w] = 2;
-  }
+  const size_t cycle = firstParentCycle(Span<const int32_t>(parents.data(), j));
+  if (cycle < j)
+    return {Status::kInvalidMesh, what + ": the skeleton's joint parents form a cycle through joint " + std::to_string(cycle)};
   return {};
 }
 
@@ -197,6 +185,25 @@ Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinat
 }
 
 }  // namespace detail
+
+size_t firstParentCycle(Span<const int32_t> parent) {
+  const size_t n = parent.size();
+  std::vector<uint8_t> state(n, 0);  // 0 unvisited, 1 on the current walk, 2 reaches a root
+  std::vector<size_t> walk;
+  for (size_t i = 0; i < n; ++i) {
+    walk.clear();
+    size_t k = i;
+    while (state[k] == 0) {
+      state[k] = 1;
+      walk.push_back(k);
+      if (parent[k] < 0) break;
+      k = static_cast<size_t>(parent[k]);
+    }
+    if (state[k] == 1 && parent[k] >= 0) return k;
+    for (size_t w : walk) state[w] = 2;
+  }
+  return n;
+}
 
 Error validateMesh(const Mesh& m, const std::string& what) {
   return detail::validateMeshScanned(m, what, detail::coordinatesFinite(m), false);

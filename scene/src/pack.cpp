@@ -356,25 +356,6 @@ T read(const std::vector<uint8_t>& b, uint64_t offset) {
   return t;
 }
 
-// the node parents form no cycle: each walk up ends at a root within node-count steps
-bool parentsAcyclic(const std::vector<int32_t>& parent) {
-  std::vector<uint8_t> state(parent.size(), 0);  // 0 unvisited, 1 on this walk, 2 reaches a root
-  std::vector<size_t> walk;
-  for (size_t i = 0; i < parent.size(); ++i) {
-    walk.clear();
-    size_t k = i;
-    while (state[k] == 0) {
-      state[k] = 1;
-      walk.push_back(k);
-      if (parent[k] < 0) break;
-      k = static_cast<size_t>(parent[k]);
-    }
-    if (state[k] == 1 && parent[k] >= 0) return false;
-    for (size_t w : walk) state[w] = 2;
-  }
-  return true;
-}
-
 }  // namespace
 
 Error Pack::parse(const std::string& what, bool check_indices) {
@@ -438,7 +419,8 @@ Error Pack::parse(const std::string& what, bool check_indices) {
       return corrupt("node " + std::to_string(i) + " has an index out of range");
     parents[i] = r.parent;
   }
-  if (!parentsAcyclic(parents)) return corrupt("the node parents form a cycle");
+  if (firstParentCycle(Span<const int32_t>(parents.data(), parents.size())) < parents.size())
+    return corrupt("the node parents form a cycle");
   for (size_t i = 0; i < children_count_; ++i)
     if (read<uint32_t>(bytes_, children_ + 4 * i) >= node_count_) return corrupt("child list entry out of range");
   for (size_t i = 0; i < root_count_; ++i)

@@ -20,12 +20,12 @@ Error validateSceneData(const SceneData& s, const std::string& what) {
                                               " but names parent " + std::to_string(s.nodes[c].parent)};
     }
   }
-  // walking up from any node must end at a root within n steps
-  for (int32_t i = 0; i < n; ++i) {
-    int32_t p = s.nodes[i].parent, steps = 0;
-    while (p >= 0 && steps <= n) { p = s.nodes[p].parent; ++steps; }
-    if (steps > n) return {Status::kInvalidArgument, what + ": node " + std::to_string(i) + " is part of a parent cycle"};
-  }
+  // walking up from any node must end at a root (linear in the nodes, however deep the tree)
+  std::vector<int32_t> parents(s.nodes.size());
+  for (size_t i = 0; i < s.nodes.size(); ++i) parents[i] = s.nodes[i].parent;
+  const size_t cycle = firstParentCycle(Span<const int32_t>(parents.data(), parents.size()));
+  if (cycle < parents.size())
+    return {Status::kInvalidArgument, what + ": node " + std::to_string(cycle) + " is part of a parent cycle"};
   std::vector<char> seen(s.nodes.size(), 0);
   for (int32_t r : s.roots) {
     if (r < 0 || r >= n) return {Status::kInvalidArgument, what + ": root " + std::to_string(r) + " out of range"};

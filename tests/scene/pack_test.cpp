@@ -341,39 +341,36 @@ TEST(Pack, SectionTableOffsetNearTwoToThe64IsRefused) {
   EXPECT_NE(e.message.find("hostile.slodpack: section table out of bounds"), std::string::npos) << e.message;
 }
 
-TEST(Pack, SectionOffsetNearTwoToThe64IsRefused) {
+// a made pack with the 4 or 8 bytes of `value` written at `at(bytes)`, re-signed: parse must refuse
+// it as corrupt with `expect` in the message
+template <class T, class At>
+void expectRefusedEdit(At at, T value, const std::string& expect) {
   std::vector<uint8_t> bytes = makePack();
-  uint64_t table;
-  std::memcpy(&table, bytes.data() + 32, 8);
-  const uint64_t huge = ~uint64_t(0) - 3;
-  std::memcpy(bytes.data() + table + 8, &huge, 8);  // the first section's offset
+  const size_t offset = at(bytes);
+  ASSERT_NE(offset, 0u);
+  std::memcpy(bytes.data() + offset, &value, sizeof value);
   resign(bytes);
   const Error e = parseBytes(bytes);
   EXPECT_EQ(e.status, Status::kCorrupt);
-  EXPECT_NE(e.message.find("lies outside the file"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find(expect), std::string::npos) << e.message;
+}
+
+TEST(Pack, SectionOffsetNearTwoToThe64IsRefused) {
+  auto first_section_offset = [](const std::vector<uint8_t>& b) {
+    uint64_t table;
+    std::memcpy(&table, b.data() + 32, 8);
+    return size_t(table + 8);
+  };
+  expectRefusedEdit(first_section_offset, ~uint64_t(0) - 3, "lies outside the file");
 }
 
 TEST(Pack, ChainWithoutLevelsIsRefused) {
   // such a pack once passed `pack --check`, and a replay then culled every object
-  std::vector<uint8_t> bytes = makePack();
-  const size_t chains = sectionOffset(bytes, 5);
-  ASSERT_NE(chains, 0u);
-  const uint32_t zero = 0;
-  std::memcpy(bytes.data() + chains + 4, &zero, 4);  // chain 0's level_count
-  resign(bytes);
-  const Error e = parseBytes(bytes);
-  EXPECT_EQ(e.status, Status::kCorrupt);
-  EXPECT_NE(e.message.find("chain 0 has no levels"), std::string::npos) << e.message;
+  auto chain0_level_count = [](const std::vector<uint8_t>& b) { return sectionOffset(b, 5) + 4; };
+  expectRefusedEdit(chain0_level_count, uint32_t(0), "chain 0 has no levels");
 }
 
 TEST(Pack, NodeParentCycleIsRefused) {
-  std::vector<uint8_t> bytes = makePack();
-  const size_t nodes = sectionOffset(bytes, 1);
-  ASSERT_NE(nodes, 0u);
-  const int32_t self = 0;
-  std::memcpy(bytes.data() + nodes, &self, 4);  // node 0 is its own parent
-  resign(bytes);
-  const Error e = parseBytes(bytes);
-  EXPECT_EQ(e.status, Status::kCorrupt);
-  EXPECT_NE(e.message.find("the node parents form a cycle"), std::string::npos) << e.message;
+  auto node0_parent = [](const std::vector<uint8_t>& b) { return sectionOffset(b, 1); };
+  expectRefusedEdit(node0_parent, int32_t(0), "the node parents form a cycle");  // its own parent
 }

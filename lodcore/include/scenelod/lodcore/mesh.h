@@ -93,6 +93,11 @@ Error meshFromView(const MeshView& view, Mesh& out, const std::string& what);
 Aabb computeBounds(const Mesh& mesh);
 Aabb computeBounds(Span<const glm::vec3> positions);
 
+// The first element on a cycle of parent links (each -1 for a root, or an index below the count),
+// or the count when the links form a forest (skeletons' joint parents, scene and pack nodes).
+// Precondition: every link is -1 or in range. Cost: O(n), one allocation.
+size_t firstParentCycle(Span<const int32_t> parent);
+
 // Fan-triangulates polygon faces (face_offsets/face_corners) into mesh.triangles, replacing them.
 // Convex faces triangulate exactly; concave faces use ear clipping in the face's best-fit plane.
 // Faces with fewer than 3 corners are dropped. Returns the number of triangles written.
