@@ -37,6 +37,10 @@ struct LodLevel {
   float max_error = 0.0f;    // measured maximum vertex displacement, object space
   LodMethod method = LodMethod::kOriginal;
   Sphere bounds;             // contains every vertex of this level
+  // for every vertex of `mesh`, one vertex of the original (levels[0].mesh) it stands for: its
+  // attributes' main source, for engines that rebuild their own vertex format. Empty for level 0
+  // (the identity) and where a generator does not record it.
+  std::vector<uint32_t> source_vertex;
 };
 
 struct LodChain {

@@ -15,19 +15,76 @@
 
 namespace scenelod::scene {
 
+// An image as the file holds it (encoded bytes, kept for export) and decoded to 8-bit RGBA rows
+// (top row first; empty when the bytes are not PNG or JPEG or failed to decode).
+struct ImageData {
+  std::string name;
+  std::string mime_type;             // "image/png", "image/jpeg", ...
+  std::vector<uint8_t> encoded;      // the file's bytes
+  int32_t width = 0, height = 0;
+  std::vector<uint8_t> rgba8;        // width x height x 4, sRGB as stored
+};
+
+// A glTF texture: an image and the sampler's wrap modes (GL enums: 10497 REPEAT, 33071
+// CLAMP_TO_EDGE, 33648 MIRRORED_REPEAT).
+struct TextureData {
+  int32_t image = -1;                // index into SceneData::images, -1 for none
+  int32_t wrap_s = 10497, wrap_t = 10497;
+};
+
+// KHR_texture_transform of one texture reference: uv' = T(offset) R(rotation) S(scale) uv.
+struct TextureTransform {
+  glm::vec2 offset{0.0f};
+  float rotation = 0.0f;             // radians, counter-clockwise in UV space
+  glm::vec2 scale{1.0f};
+  int32_t texcoord = -1;             // overrides the reference's set when >= 0
+};
+
 struct MaterialData {
   std::string name;
   glm::vec4 base_color{1.0f};             // linear RGBA factor
   bool textured = false;                  // has a base colour texture
   glm::vec3 average_texel_color{1.0f};    // linear RGB mean of the base colour texture (SCROOGE §7.3)
+  int32_t base_color_texture = -1;        // index into SceneData::textures, -1 for none
+  uint32_t base_color_texcoord = 0;       // which TEXCOORD_n set the texture reads
+  TextureTransform base_color_transform;  // identity unless the file has KHR_texture_transform
 };
 
 struct MeshData {
   std::string name;
-  // every primitive of the glTF mesh merged into one Mesh; per-vertex colours hold the linear
-  // base colour (factor x COLOR_0 x average texel), so a simplifier can average them by area
+  // every primitive of the glTF mesh merged into one Mesh; mesh.triangle_groups holds each
+  // triangle's primitive index (a group per primitive, so that levels keep primitives apart)
   Mesh mesh;
   std::vector<int32_t> primitive_materials;  // material of each source primitive, in order (-1 = none)
+};
+
+// A glTF skin: the joint nodes, their inverse bind matrices (identity when the file has none) and
+// the optional skeleton root.
+struct SkinData {
+  std::string name;
+  std::vector<int32_t> joints;            // node indices; JOINTS_0 values index this list
+  std::vector<glm::mat4> inverse_bind;    // one per joint
+  int32_t skeleton = -1;
+};
+
+// One animation: samplers (key times and values) and the node properties they drive.
+struct AnimationData {
+  enum class Path : uint8_t { kTranslation, kRotation, kScale, kWeights };
+  enum class Interpolation : uint8_t { kLinear, kStep, kCubicSpline };
+  struct Sampler {
+    std::vector<float> times;             // seconds, increasing
+    std::vector<glm::vec4> values;        // xyz (translation, scale), xyzw (rotation quaternion);
+                                          // cubic splines hold in-tangent, value, out-tangent per key
+    Interpolation interpolation = Interpolation::kLinear;
+  };
+  struct Channel {
+    int32_t node = -1;
+    Path path = Path::kTranslation;
+    int32_t sampler = -1;
+  };
+  std::string name;
+  std::vector<Sampler> samplers;
+  std::vector<Channel> channels;
 };
 
 struct NodeData {
@@ -36,6 +93,7 @@ struct NodeData {
   std::vector<int32_t> children;      // in file order
   glm::mat4 local{1.0f};              // local transform (TRS composed, or the node's matrix)
   int32_t mesh = -1;                  // index into SceneData::meshes, -1 for none
+  int32_t skin = -1;                  // index into SceneData::skins, -1 for none
 };
 
 struct SceneData {
@@ -43,6 +101,10 @@ struct SceneData {
   std::vector<int32_t> roots;         // the default scene's root nodes, in order
   std::vector<MeshData> meshes;
   std::vector<MaterialData> materials;
+  std::vector<TextureData> textures;
+  std::vector<ImageData> images;
+  std::vector<SkinData> skins;
+  std::vector<AnimationData> animations;
 };
 
 // Checks parent/child links agree, there are no cycles, every node is reachable at most once from the
