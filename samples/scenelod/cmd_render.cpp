@@ -7,6 +7,7 @@
 
 #include "args.h"
 #include "command.h"
+#include "eval_materials.h"
 #include "eval_support.h"
 #include "progress.h"
 #include "scenelod/eval/image.h"
@@ -19,11 +20,14 @@ namespace {
 
 const char* kUsage =
     "usage: scenelod render IN -o OUT.png [--view axis|diag N] [--size W H] [--level K | --grid]\n"
-    "                       [--levels N]\n"
+    "                       [--levels N] [--plain]\n"
     "\n"
     "Draws IN (OBJ, glTF or GLB, flattened to one world-space mesh) with an orthographic Embree ray\n"
-    "cast: headlight Lambert + ambient shading, vertex colours when present, otherwise grey\n"
-    "triangles, blue edges (capsules of their thickness, at least one pixel) and red points.\n"
+    "cast: headlight Lambert + ambient shading. Triangles of a model with materials show their\n"
+    "material's base colour factor x base colour texture (its texCoord set, KHR_texture_transform,\n"
+    "the sampler's wrap modes, bilinear) x COLOR_0; a level without that texture coordinate set\n"
+    "shows the texture's mean colour. Without materials: vertex colours when present, otherwise grey\n"
+    "triangles. Edges are blue capsules of their thickness (at least one pixel), points red.\n"
     "\n"
     "  --view axis N   N in 0..5: seen from +x, -x, +y, -y, +z, -z\n"
     "  --view diag N   N in 0..7: seen from (+-1, +-1, +-1), bits of N = negative x, y, z\n"
@@ -32,7 +36,8 @@ const char* kUsage =
     "  --level K       build the LOD chain (floating cells, default settings) and draw level K\n"
     "  --grid          build the chain and lay out all its levels side by side, each labelled with\n"
     "                  its triangle, edge and point counts; every level framed like level 0\n"
-    "  --levels N      simplified levels in the chain (default 8)\n";
+    "  --levels N      simplified levels in the chain (default 8)\n"
+    "  --plain         ignore materials and textures: vertex colours or grey, as without materials\n";
 
 // "--view axis 3" and "--size 640 480" take two words: join them so Args sees one value
 std::vector<std::string> joinTwoWordOptions(const std::vector<std::string>& in) {
@@ -74,7 +79,7 @@ void drawLabel(eval::Image& img, int x, int y, const std::string& text) {
 }
 
 int runRender(const std::vector<std::string>& argv) {
-  Args args(joinTwoWordOptions(argv), {"--grid"}, {"--out", "--view", "--size", "--level", "--levels"});
+  Args args(joinTwoWordOptions(argv), {"--grid", "--plain"}, {"--out", "--view", "--size", "--level", "--levels"});
   long level = -1, levels = 8;
   args.getInt("--level", level);
   args.getInt("--levels", levels);
@@ -101,8 +106,13 @@ int runRender(const std::vector<std::string>& argv) {
   const std::string in = args.positional()[0], out = args.get("--out");
 
   Mesh mesh;
-  if (Error e = loadFlatMesh(in, mesh); !e.ok()) return runError("render", e.message);
+  EvalMaterials materials;
+  if (Error e = loadFlatModel(in, mesh, materials); !e.ok()) return runError("render", e.message);
   if (mesh.empty()) return runError("render", in + ": the model has no triangles, edges or points");
+  if (!args.has("--plain")) rp.materials = materials.materials;
+  if (materials.undecoded && !args.has("--plain"))
+    std::fprintf(stderr, "scenelod render: %s: %zu textured materials drawn untextured (image not decoded)\n",
+                 in.c_str(), materials.undecoded);
   if (!grid && !args.has("--level")) {
     eval::Image img;
     if (Error e = eval::renderMesh(mesh, rp, img); !e.ok()) return runError("render", in + ": " + e.message);
