@@ -53,6 +53,14 @@ Error evalMaterials(const scene::SceneData& scene, EvalMaterials& out, const std
   return {};
 }
 
+std::vector<eval::Material> primitiveMaterials(const EvalMaterials& all, const scene::MeshData& mesh) {
+  std::vector<eval::Material> out;
+  for (int32_t m : mesh.primitive_materials)
+    out.push_back(m >= 0 && static_cast<size_t>(m) < all.materials.size() ? all.materials[static_cast<size_t>(m)]
+                                                                         : eval::Material{});
+  return out;
+}
+
 Error loadFlatModel(const std::string& path, Mesh& mesh, EvalMaterials& materials) {
   scene::SceneData scene;
   if (Error e = loadSceneFile(path, scene); !e.ok()) return e;

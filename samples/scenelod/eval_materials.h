@@ -36,6 +36,10 @@ struct EvalMaterials {
 // image whose pixel buffer does not match its size, naming `what` and the material.
 Error evalMaterials(const scene::SceneData& scene, EvalMaterials& out, const std::string& what);
 
+// The materials of one scene mesh's triangle groups (its primitives): entry g draws primitive g
+// (MeshData::primitive_materials[g]; a primitive without a material gets the white default).
+std::vector<eval::Material> primitiveMaterials(const EvalMaterials& all, const scene::MeshData& mesh);
+
 // Loads OBJ, glTF or GLB as one world-space mesh (like loadFlatMesh) and its materials.
 Error loadFlatModel(const std::string& path, Mesh& mesh, EvalMaterials& materials);
 

@@ -134,3 +134,47 @@ TEST(DemoScene, BadParametersAreRefused) {
   p.gearbox_count = 0;
   EXPECT_EQ(makeDemoScene(s, p).status, Status::kInvalidArgument);
 }
+
+// every part is textured: uvs on every vertex, a material with a texture whose image is decoded
+// (RGBA8 of its size) and encoded (PNG bytes, for exporters); a checker and a label made in code
+TEST(DemoScene, PartsCarryUvsAndGeneratedTextures) {
+  DemoSceneParams p;
+  p.bunny_path = "";
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  ASSERT_EQ(s.images.size(), 2u);
+  for (const ImageData& img : s.images) {
+    ASSERT_EQ(img.rgba8.size(), static_cast<size_t>(img.width) * img.height * 4) << img.name;
+    ASSERT_GE(img.encoded.size(), 8u) << img.name;
+    EXPECT_EQ(img.encoded[1], 'P');
+    EXPECT_EQ(img.encoded[2], 'N');
+    EXPECT_EQ(img.encoded[3], 'G');
+    EXPECT_EQ(img.mime_type, "image/png");
+    // two kinds of texel at least: a checker's two greys, a label's ink and plate
+    bool light = false, dark = false;
+    for (size_t i = 0; i < img.rgba8.size(); i += 4) (img.rgba8[i] > 200 ? light : dark) = true;
+    EXPECT_TRUE(light && dark) << img.name;
+  }
+  for (const MaterialData& m : s.materials) {
+    ASSERT_GE(m.base_color_texture, 0) << m.name;
+    ASSERT_LT(static_cast<size_t>(m.base_color_texture), s.textures.size()) << m.name;
+    const TextureData& t = s.textures[static_cast<size_t>(m.base_color_texture)];
+    ASSERT_GE(t.image, 0);
+    ASSERT_LT(static_cast<size_t>(t.image), s.images.size());
+    EXPECT_TRUE(m.textured);
+    EXPECT_EQ(m.base_color, glm::vec4(1.0f)) << m.name;  // the colour is in the vertex colours
+    EXPECT_LT(m.average_texel_color.x, 1.0f);
+    EXPECT_GT(m.average_texel_color.x, 0.2f);
+  }
+  int labelled = 0;
+  for (const MaterialData& m : s.materials) labelled += s.textures[m.base_color_texture].image == 1;
+  EXPECT_GE(labelled, 1);
+  for (const MeshData& md : s.meshes) {
+    ASSERT_EQ(md.mesh.uvs.size(), md.mesh.vertexCount()) << md.name;
+    EXPECT_TRUE(validateMesh(md.mesh, md.name).ok());
+    // the texture repeats over the part: its uvs span more than a single texel
+    glm::vec2 lo(1e30f), hi(-1e30f);
+    for (const glm::vec2& uv : md.mesh.uvs) lo = glm::min(lo, uv), hi = glm::max(hi, uv);
+    EXPECT_GT(std::max(hi.x - lo.x, hi.y - lo.y), 0.02f) << md.name;
+  }
+}
