@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "attribute_level.h"
 #include "cluster_internal.h"
 #include "test_hooks.h"
 
@@ -192,6 +193,8 @@ void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out) {
 
 Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
   out = Mesh();
+  if (prepared.mesh && detail::hasAttributes(*prepared.mesh))
+    return detail::clusterAttributeMesh(prepared, params, out, nullptr, stats);
   detail::LevelParts parts;
   if (Error e = detail::clusterLevelParts(prepared, params, parts, stats); !e.ok()) return e;
   detail::finishLevel(parts, params, out);
