@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "scenelod/lodcore/mesh_attributes.h"
+#include "skin_clusters.h"
 
 namespace scenelod::detail {
 
@@ -356,6 +357,22 @@ void OutputVertices::write(Mesh& out) const {
   }
 }
 
+// every output vertex takes its cluster's joint weights; the skeleton is kept
+void writeSkin(const Mesh& m, const Assignment& a, const std::vector<uint32_t>& group_of_vertex,
+               const AttributeGroups& groups, Mesh& out) {
+  std::vector<glm::u16vec4> joints;
+  std::vector<glm::vec4> weights;
+  clusterSkinWeights(m, a, joints, weights);
+  out.joints.resize(group_of_vertex.size());
+  out.weights.resize(group_of_vertex.size());
+  for (size_t i = 0; i < group_of_vertex.size(); ++i) {
+    const uint32_t c = groups[group_of_vertex[i]].cluster;
+    out.joints[i] = joints[c];
+    out.weights[i] = weights[c];
+  }
+  out.joint_parents = m.joint_parents;
+}
+
 }  // namespace
 
 Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
@@ -366,6 +383,7 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
   const Mesh& m = am.mesh();
   Assignment a;
   if (Error e = assign(p, params, a); !e.ok()) return e;
+  splitSkinClusters(p, a);
   Representatives r;
   synthesize(p, a, params.synthesis, r);
   Eliminated el;
@@ -383,6 +401,7 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
   out.points.resize(el.points.size());
   for (size_t i = 0; i < el.points.size(); ++i) out.points[i] = vertices.edgeVertex(el.points[i]);
   vertices.write(out);
+  if (m.skinned()) writeSkin(m, a, vertices.groupOfVertex(), groups, out);
 
   if (source_vertex) {
     const std::vector<uint32_t>& group_of = vertices.groupOfVertex();

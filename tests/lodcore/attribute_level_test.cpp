@@ -257,3 +257,108 @@ TEST(AttributeLevel, BadAttributesGiveErrorsNamingTheAttribute) {
   m.triangle_groups.assign(m.triangleCount() - 1, 0);
   expectError(m, "triangle groups");
 }
+
+namespace {
+
+// weights sum to 1, are non-negative, and unused slots are joint 0 with weight 0
+void expectNormalisedSkin(const Mesh& out) {
+  ASSERT_EQ(out.joints.size(), out.vertexCount());
+  ASSERT_EQ(out.weights.size(), out.vertexCount());
+  for (size_t v = 0; v < out.vertexCount(); ++v) {
+    const glm::vec4& w = out.weights[v];
+    EXPECT_NEAR(w.x + w.y + w.z + w.w, 1.0f, 1e-5f);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_GE(w[k], 0.0f);
+      if (w[k] == 0.0f) { EXPECT_EQ(out.joints[v][k], 0u); }
+    }
+  }
+}
+
+// two limbs (cylinders along x) touching along y = 0, bound to two unrelated bone chains:
+// 1 -> 2 for the upper limb, 3 -> 4 for the lower, all children of the root 0; each vertex also
+// gives a little weight to the root and to one of three leaf joints 5, 6, 7
+Mesh touchingLimbs() {
+  const float r = 0.25f;
+  Mesh m = test::makeCylinder(0.0f, 2.0f, r, 16, 16, glm::vec3(0, r, 0));
+  const size_t upper = m.vertexCount();
+  test::appendMesh(m, test::makeCylinder(0.0f, 2.0f, r, 16, 16, glm::vec3(0, -r, 0)));
+  for (size_t v = 0; v < m.vertexCount(); ++v) {
+    const float t = std::clamp(m.positions[v].x * 0.5f, 0.0f, 1.0f);
+    const uint16_t root = v < upper ? 1 : 3;
+    m.joints.push_back(glm::u16vec4(root, root + 1, 0, 5 + v % 3));
+    m.weights.push_back(glm::vec4(0.85f * (1.0f - t), 0.85f * t, 0.1f, 0.05f));
+  }
+  m.joint_parents = {-1, 0, 1, 0, 3, 0, 0, 0};
+  return m;
+}
+
+}  // namespace
+
+TEST(AttributeLevel, SkinWeightsAreTheClustersTopFour) {
+  // one cluster (a quad far smaller than the cell) collapsing to a point
+  Mesh m;
+  m.positions = {{0, 0, 0}, {0.01f, 0, 0}, {0.01f, 0.01f, 0}, {0, 0.01f, 0}};
+  m.triangles = {0, 1, 2, 0, 2, 3};
+  m.joints = {{1, 2, 3, 4}, {1, 5, 0, 0}, {1, 0, 0, 0}, {1, 2, 6, 0}};
+  m.weights = {{0.4f, 0.3f, 0.2f, 0.1f}, {0.5f, 0.5f, 0, 0}, {1, 0, 0, 0}, {0.4f, 0.3f, 0.3f, 0}};
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(m, params(LodMethod::kUniform, 1.0f), out).ok());
+  ASSERT_EQ(out.vertexCount(), 1u);
+  ASSERT_EQ(out.pointCount(), 1u);
+  // sums: joint 1 2.3, 2 0.6, 5 0.5, 6 0.3, 3 0.2, 4 0.1: the first four, over 3.7
+  EXPECT_EQ(out.joints[0], glm::u16vec4(1, 2, 5, 6));
+  EXPECT_NEAR(out.weights[0].x, 2.3f / 3.7f, 1e-6f);
+  EXPECT_NEAR(out.weights[0].y, 0.6f / 3.7f, 1e-6f);
+  EXPECT_NEAR(out.weights[0].z, 0.5f / 3.7f, 1e-6f);
+  EXPECT_NEAR(out.weights[0].w, 0.3f / 3.7f, 1e-6f);
+}
+
+TEST(AttributeLevel, UnrelatedLimbsNeverShareACluster) {
+  Mesh in = touchingLimbs();
+  for (bool skeleton : {true, false}) {
+    if (!skeleton) in.joint_parents.clear();
+    for (LodMethod method : kMethods) {
+      for (float width : {0.2f, 0.4f, 0.8f}) {
+        Mesh out;
+        ASSERT_TRUE(clusterMesh(in, params(method, width), out).ok());
+        ASSERT_TRUE(validateMesh(out, "level").ok()) << validateMesh(out, "level").message;
+        expectNormalisedSkin(out);
+        size_t mixed = 0;
+        for (size_t v = 0; v < out.vertexCount(); ++v) {
+          bool upper = false, lower = false;
+          for (int k = 0; k < 4; ++k) {
+            if (out.weights[v][k] == 0.0f) continue;
+            upper |= out.joints[v][k] == 1 || out.joints[v][k] == 2;
+            lower |= out.joints[v][k] == 3 || out.joints[v][k] == 4;
+          }
+          mixed += upper && lower;
+        }
+        EXPECT_EQ(mixed, 0u) << lodMethodName(method) << " at " << width << (skeleton ? "" : " without skeleton");
+      }
+    }
+  }
+}
+
+TEST(AttributeLevel, AllGroupsOfAClusterShareItsSkinWeights) {
+  Mesh in = seamedBox(8);
+  for (const glm::vec3& p : in.positions) {
+    in.joints.push_back(glm::u16vec4(1, 2, 0, 0));
+    in.weights.push_back(glm::vec4(0.5f * (p.x + 1.0f) + 0.01f, 0.5f * (1.0f - p.x) + 0.01f, 0, 0));
+  }
+  in.joint_parents = {-1, 0, 1};
+  for (LodMethod method : kMethods) {
+    Mesh out;
+    ASSERT_TRUE(clusterMesh(in, params(method, 0.5f), out).ok());
+    expectNormalisedSkin(out);
+    std::map<std::tuple<float, float, float>, size_t> first_at;
+    size_t shared = 0;
+    for (size_t v = 0; v < out.vertexCount(); ++v) {
+      const auto [it, fresh] = first_at.insert({{out.positions[v].x, out.positions[v].y, out.positions[v].z}, v});
+      if (fresh) continue;
+      ++shared;
+      EXPECT_EQ(out.joints[v], out.joints[it->second]);
+      EXPECT_EQ(out.weights[v], out.weights[it->second]);
+    }
+    EXPECT_GT(shared, 8u) << lodMethodName(method);  // the seams' clusters have several groups
+  }
+}
