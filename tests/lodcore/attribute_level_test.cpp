@@ -29,10 +29,9 @@ ClusterParams params(LodMethod method, float width) {
   return p;
 }
 
-// a grid of n x n quads over [0, 1]^2 with planar texture coordinates, written non-indexed (three
-// fresh vertices per triangle, as the glTF Fox is)
-Mesh nonIndexedGrid(int n) {
-  const Mesh g = test::makeGrid(n, 1.0f);
+// `g` with texture coordinates (x, y), written non-indexed (three fresh vertices per triangle, as
+// the glTF Fox is)
+Mesh nonIndexed(const Mesh& g) {
   Mesh m;
   for (uint32_t i : g.triangles) {
     m.triangles.push_back(static_cast<uint32_t>(m.positions.size()));
@@ -41,6 +40,9 @@ Mesh nonIndexedGrid(int n) {
   }
   return m;
 }
+
+// a grid of n x n quads over [0, 1]^2 with planar texture coordinates, non-indexed
+Mesh nonIndexedGrid(int n) { return nonIndexed(test::makeGrid(n, 1.0f)); }
 
 // a box whose six faces (each its own vertices, n x n quads) lie in six squares of texture space:
 // face f in [2f, 2f + 1] x [0, 1], so every box edge is a UV seam
@@ -360,5 +362,78 @@ TEST(AttributeLevel, AllGroupsOfAClusterShareItsSkinWeights) {
       EXPECT_EQ(out.weights[v], out.weights[it->second]);
     }
     EXPECT_GT(shared, 8u) << lodMethodName(method);  // the seams' clusters have several groups
+  }
+}
+
+namespace {
+
+// every level vertex's source is an input vertex within the level's max_error of it
+void expectSourcesWithinError(const Mesh& in, const Mesh& level, const std::vector<uint32_t>& source,
+                              float max_error, const char* what) {
+  ASSERT_EQ(source.size(), level.vertexCount()) << what;
+  for (size_t v = 0; v < source.size(); ++v) {
+    ASSERT_LT(source[v], in.vertexCount()) << what;
+    EXPECT_LE(glm::length(in.positions[source[v]] - level.positions[v]), max_error * 1.0001f + 1e-7f) << what;
+  }
+}
+
+}  // namespace
+
+TEST(AttributeLevel, ChainLevelsKeepAttributesAndRecordSourceVertices) {
+  Mesh in = nonIndexed(test::makeSphere(glm::vec3(0.0f), 1.0f, 24, 48));
+  in.triangle_groups.resize(in.triangleCount());
+  for (size_t t = 0; t < in.triangleCount(); ++t) in.triangle_groups[t] = t % 7 < 3 ? 0u : 1u;
+  for (LodMethod method : kMethods) {
+    ChainParams cp;
+    cp.cluster.method = method;
+    cp.level_count = 4;
+    LodChain chain;
+    ASSERT_TRUE(buildChain(in, cp, chain).ok());
+    ASSERT_EQ(chain.levelCount(), 5u);
+    EXPECT_EQ(chain.levels[0].mesh.vertexCount(), in.vertexCount());  // level 0 is the input, unwelded
+    EXPECT_TRUE(chain.levels[0].source_vertex.empty());
+    for (size_t k = 1; k < chain.levelCount(); ++k) {
+      const LodLevel& level = chain.levels[k];
+      ASSERT_TRUE(validateMesh(level.mesh, "level").ok()) << validateMesh(level.mesh, "level").message;
+      EXPECT_EQ(level.mesh.uvs.size(), level.mesh.vertexCount());
+      EXPECT_EQ(level.mesh.triangle_groups.size(), level.mesh.triangleCount());
+      EXPECT_GT(level.max_error, 0.0f);
+      EXPECT_GT(level.cell_width, chain.levels[k - 1].cell_width);
+      expectSourcesWithinError(in, level.mesh, level.source_vertex, level.max_error, lodMethodName(method));
+    }
+    // the first level has about half the input's triangles (the w_1 search ran on the welded mesh)
+    EXPECT_NEAR(double(chain.levels[1].mesh.triangleCount()) / double(in.triangleCount()), 0.5, 0.1);
+    // the same chain on any number of threads, and from a handed-over mesh
+    LodChain again;
+    Mesh copy = in;
+    ASSERT_TRUE(buildChain(std::move(copy), cp, again).ok());
+    EXPECT_TRUE(copy.positions.empty());
+    for (size_t k = 1; k < chain.levelCount(); ++k) {
+      EXPECT_EQ(again.levels[k].mesh.positions, chain.levels[k].mesh.positions);
+      EXPECT_EQ(again.levels[k].source_vertex, chain.levels[k].source_vertex);
+    }
+    EXPECT_EQ(again.levels[0].mesh.positions, in.positions);
+  }
+}
+
+TEST(AttributeLevel, SourceVerticesOfSingleLevels) {
+  const Mesh with = nonIndexedGrid(16);
+  const Mesh without = test::makeSphere(glm::vec3(0.0f), 1.0f, 16, 32);
+  for (LodMethod method : kMethods) {
+    for (const Mesh* in : {&with, &without}) {
+      Mesh out;
+      ClusterOutputs outputs;
+      ASSERT_TRUE(clusterMesh(*in, params(method, in == &with ? 0.15f : 0.3f), out, outputs).ok());
+      ASSERT_GT(out.vertexCount(), 0u);
+      EXPECT_EQ(outputs.stats.cluster_count > 0, true);
+      expectSourcesWithinError(*in, out, outputs.source_vertex, outputs.stats.max_error, lodMethodName(method));
+      // the plain overload gives the same level
+      Mesh plain;
+      float max_error = -1.0f;
+      ASSERT_TRUE(clusterMesh(*in, params(method, in == &with ? 0.15f : 0.3f), plain, &max_error).ok());
+      EXPECT_EQ(plain.positions, out.positions);
+      EXPECT_EQ(plain.triangles, out.triangles);
+      EXPECT_EQ(max_error, outputs.stats.max_error);
+    }
   }
 }
