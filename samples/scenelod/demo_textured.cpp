@@ -24,7 +24,7 @@ std::string fmt(const char* f, double v) {
 // the meshes shown in the picture: a few kinds of part and the organic mesh (the last one)
 std::vector<size_t> pictureMeshes(const scene::SceneData& data) {
   std::vector<size_t> out;
-  for (const char* name : {"gear_24", "bracket", "pipe"})
+  for (const char* name : {"gear_24", "bracket", "bolt"})
     for (size_t m = 0; m < data.meshes.size(); ++m)
       if (data.meshes[m].name == name) out.push_back(m);
   if (!data.meshes.empty() && std::find(out.begin(), out.end(), data.meshes.size() - 1) == out.end())
@@ -106,8 +106,10 @@ Error writeTexturedLevels(const scene::SceneData& data, const scene::SceneLods& 
   }
   if (Error e = drawPicture(data, lods, all, out_dir + "/textured_levels.png"); !e.ok()) return e;
   out.markdown =
-      "\n## Textured levels\n\nEvery part carries texture coordinates and a texture made in code (a checker, and a "
-      "\"SCENELOD\" label through KHR_texture_transform), tinted by its vertex colours. Each level is drawn with its "
+      "\n## Textured levels\n\nThe parts carry texture coordinates and a texture made in code (a checker, and a "
+      "\"SCENELOD\" label through KHR_texture_transform), tinted by their vertex colours; the shafts, pipes and rods "
+      "stay untextured (texture coordinates would have their repeated seam vertices welded and change their chains). "
+      "Each level is drawn with its "
       "material (`scenelod render`'s Embree ray cast: base colour factor x texture x COLOR_0, headlight shading) "
       "from the 14 standard views at " + std::to_string(resolution) + " x " + std::to_string(resolution) +
       " pixels, framed like level 0, and compared with level 0 (`scenelod eval --image`).\n\n"

@@ -226,18 +226,18 @@ uint32_t hashMix(uint32_t x) {
   return x;
 }
 
-// Box-mapped texture coordinates: each vertex projected along the axis its normal is closest to,
-// `per_unit` texture repeats per object unit. No vertex is added, so the parts' geometry (and their
-// chains) stay as they were; smooth parts smear the texture where the axis changes, which is fine
-// for a demo.
-void addBoxUvs(Mesh& m, float per_unit) {
+// Texture coordinates from the position alone: the projection along (1, 1, 1) onto its plane, so
+// every face of the axis-aligned parts shows the texture alike (sheared, never degenerate), at
+// `per_unit` texture repeats per object unit, v running down the parts as images do. Vertices at one
+// position get one uv, so no UV seam is added: the parts' UV charts, and so their chains, stay what
+// they were without texture coordinates. Round parts show a streak where their side turns parallel
+// to the projection; fine for a demo.
+void addProjectedUvs(Mesh& m, float per_unit) {
+  const glm::vec3 e1 = glm::vec3(1.0f, 0.0f, -1.0f) / std::sqrt(2.0f);
+  const glm::vec3 e2 = glm::vec3(1.0f, -2.0f, 1.0f) / std::sqrt(6.0f);
   m.uvs.resize(m.positions.size());
-  for (size_t v = 0; v < m.positions.size(); ++v) {
-    const glm::vec3 p = m.positions[v], a = glm::abs(m.normals.empty() ? glm::vec3(0, 1, 0) : m.normals[v]);
-    const glm::vec2 uv = a.x >= a.y && a.x >= a.z ? glm::vec2(p.z, -p.y) : a.y >= a.z ? glm::vec2(p.x, p.z)
-                                                                                      : glm::vec2(p.x, -p.y);
-    m.uvs[v] = uv * per_unit;
-  }
+  for (size_t v = 0; v < m.positions.size(); ++v)
+    m.uvs[v] = per_unit * glm::vec2(glm::dot(m.positions[v], e1), glm::dot(m.positions[v], e2));
 }
 
 // 3 x 5 pixel glyphs of the label's letters, rows top to bottom, bit 2 the left column
@@ -374,6 +374,10 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   auto material = [&](const char* name, int32_t texture) {
     MaterialData m;
     m.name = name;
+    if (texture < 0) {
+      out.materials.push_back(m);
+      return static_cast<int32_t>(out.materials.size() - 1);
+    }
     m.textured = true;
     m.base_color_texture = texture;
     m.average_texel_color = averageTexel(out.images[static_cast<size_t>(texture)]);
@@ -383,7 +387,7 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
     return static_cast<int32_t>(out.materials.size() - 1);
   };
   auto mesh = [&](const char* name, Mesh m, int32_t mat) {
-    if (m.uvs.empty()) addBoxUvs(m, 2.0f);
+    if (out.materials[static_cast<size_t>(mat)].textured && m.uvs.empty()) addProjectedUvs(m, 2.0f);
     MeshData d;
     d.name = name;
     d.mesh = std::move(m);
@@ -394,17 +398,22 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   const glm::vec3 steel(0.55f, 0.56f, 0.58f), brass(0.78f, 0.57f, 0.11f), paint(0.1f, 0.25f, 0.6f),
       copper(0.72f, 0.35f, 0.2f), alu(0.85f, 0.86f, 0.88f), dark(0.1f, 0.1f, 0.1f);
   const int32_t m_steel = material("steel", 0), m_brass = material("brass", 0), m_paint = material("paint", 1),
-                m_copper = material("copper", 0), m_alu = material("aluminium", 0), m_dark = material("rubber", 0);
+                m_alu = material("aluminium", 0), m_dark = material("rubber", 0);
+  // The shafts, pipes and rods are extruded in bands whose seam rings repeat each vertex exactly:
+  // with texture coordinates the clustering would weld those copies first (a mesh with attributes
+  // is welded, #37) and their chains, and so the demo's selection, would change. They stay
+  // untextured, coloured by their vertex colours alone.
+  const int32_t m_plain = material("plain", -1);
 
   const int32_t base = mesh("base_plate", box({6.0f, 0.2f, 4.0f}, paint), m_paint);
   const int32_t gear_big = mesh("gear_24", gear(24, 0.5f, 0.6f, 0.12f, 0.12f, seg, brass), m_brass);
   const int32_t gear_small = mesh("gear_12", gear(12, 0.25f, 0.33f, 0.12f, 0.08f, seg, brass), m_brass);
-  const int32_t shaft = mesh("shaft", cylinder(0.06f, 1.0f, seg, steel), m_steel);
+  const int32_t shaft = mesh("shaft", cylinder(0.06f, 1.0f, seg, steel), m_plain);
   const int32_t boltm = mesh("bolt", bolt(seg, steel), m_steel);
   const int32_t brack = mesh("bracket", bracket(paint), m_paint);
-  const int32_t pipem = mesh("pipe", pipe(0.15f, 0.12f, 2.5f, seg, copper), m_copper);
+  const int32_t pipem = mesh("pipe", pipe(0.15f, 0.12f, 2.5f, seg, copper), m_plain);
   const int32_t fin = mesh("fin", box({0.01f, 0.5f, 0.8f}, alu), m_alu);            // thin plate
-  const int32_t rod = mesh("rod", cylinder(0.008f, 1.6f, 8, dark), m_dark);          // thin wire
+  const int32_t rod = mesh("rod", cylinder(0.008f, 1.6f, 8, dark), m_plain);         // thin wire
   const int32_t hexm = mesh("hex_prism", prism(6, 0.2f, 0.3f, steel), m_steel);
   const int32_t trim = mesh("tri_prism", prism(3, 0.25f, 0.6f, paint), m_paint);
 
@@ -423,7 +432,7 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   }
   const Aabb ob = computeBounds(organic);
   // about four checker repeats across the organic mesh, whatever its units
-  if (!organic.positions.empty()) addBoxUvs(organic, 4.0f / std::max(ob.diagonal(), 1e-6f));
+  if (!organic.positions.empty()) addProjectedUvs(organic, 4.0f / std::max(ob.diagonal(), 1e-6f));
   // no mesh without an instance: unused meshes would only surprise exporters and tables
   const int32_t bunny = p.bunny_count == 0 ? -1 : mesh(local_info.bunny_loaded ? "bunny" : "organic_blob", std::move(organic), m_dark);
 
