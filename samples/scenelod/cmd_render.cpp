@@ -38,7 +38,8 @@ const char* kUsage =
     "                  its triangle, edge and point counts; every level framed like level 0\n"
     "  --show LIST     like --grid, only the listed levels (e.g. 0,2,4,6; each at most 32)\n"
     "  --levels N      simplified levels in the chain (default 8)\n"
-    "  --plain         ignore materials and textures: vertex colours or grey, as without materials\n";
+    "  --plain         ignore materials and textures: vertex colours (material colours baked in) or\n"
+    "                  grey, as without materials\n";
 
 // "--view axis 3" and "--size 640 480" take two words: join them so Args sees one value
 std::vector<std::string> joinTwoWordOptions(const std::vector<std::string>& in) {
@@ -158,10 +159,12 @@ int runRender(const std::vector<std::string>& argv) {
 
   Mesh mesh;
   EvalMaterials materials;
-  if (Error e = loadFlatModel(in, mesh, materials); !e.ok()) return runError("render", e.message);
+  // --plain: the material colours baked into the vertex colours, as the other tools draw
+  const Error load = args.has("--plain") ? loadFlatMesh(in, mesh) : loadFlatModel(in, mesh, materials);
+  if (!load.ok()) return runError("render", load.message);
   if (mesh.empty()) return runError("render", in + ": the model has no triangles, edges or points");
-  if (!args.has("--plain")) rp.materials = materials.materials;
-  if (materials.undecoded && !args.has("--plain"))
+  rp.materials = materials.materials;
+  if (materials.undecoded)
     std::fprintf(stderr, "scenelod render: %s: %zu textured materials drawn untextured (image not decoded)\n",
                  in.c_str(), materials.undecoded);
   if (!grid && !args.has("--level")) {
