@@ -20,10 +20,12 @@ inline Error loadSceneFile(const std::string& path, scene::SceneData& out) {
   return scene::loadScene(path, out);
 }
 
-// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene).
+// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene),
+// material colours baked into the vertex colours (scene::bakeMaterialColors).
 inline Error loadFlatMesh(const std::string& path, Mesh& out) {
   scene::SceneData scene;
   if (Error e = loadSceneFile(path, scene); !e.ok()) return e;
+  scene::bakeMaterialColors(scene);  // the renderer shades by vertex colour
   out = scene::flattenScene(scene);
   return validateMesh(out, path);
 }
