@@ -1,4 +1,5 @@
 // Textured renders and the textured image error: a quad filling the view, a checker made in code.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -171,6 +172,34 @@ TEST(TexturedRender, MissingMaterialIsWhiteAndMissingUvsShowTheMean) {
   const Image grey = renderQuad(makeQuad(), {});
   EXPECT_EQ(grey.pixel(32, 32)[0], grey.pixel(10, 50)[0]);
   EXPECT_NE(grey.pixel(32, 32)[0], 0);
+}
+
+// A checker of single texels, about 5 texels to a pixel: drawn through the mip levels it is the even
+// grey a GPU shows (linear mean 0.5, sRGB 188), not an aliased pattern of black and white pixels.
+TEST(TexturedRender, MinifiedTexturesAreFilteredLikeMipmaps) {
+  const Texture fine = makeChecker(256, 1);
+  std::vector<Material> mats(1);
+  mats[0].texture = &fine;
+  const Image img = renderQuad(makeQuad(), mats, 50);
+  int lo = 255, hi = 0;
+  for (int y = 4; y < 46; ++y)
+    for (int x = 4; x < 46; ++x) lo = std::min<int>(lo, img.pixel(x, y)[0]), hi = std::max<int>(hi, img.pixel(x, y)[0]);
+  EXPECT_GE(lo, 186);
+  EXPECT_LE(hi, 190);
+  // the filter follows the footprint: the same texture over 8 blocks of 32 texels is sharp again
+  const Texture coarse = makeChecker(8, 32);
+  mats[0].texture = &coarse;
+  const Image sharp = renderQuad(makeQuad(), mats, 64);
+  EXPECT_EQ(cellValue(sharp, 8, 0, 0), 0);
+  EXPECT_EQ(cellValue(sharp, 8, 1, 0), 255);
+  // levels of a non-square, non-power-of-two texture end in one texel holding about the mean
+  Texture odd = makeChecker(3, 5);
+  odd.width = 15;
+  odd.height = 15;
+  const FilteredTexture chain(odd);
+  EXPECT_EQ(chain.levelCount(), 4);  // 15, 7, 3, 1
+  const glm::vec4 top = chain.sample({0.5f, 0.5f}, 10.0f, Wrap::kRepeat, Wrap::kRepeat);
+  EXPECT_NEAR(top.r, meanTextureColor(odd).r, 0.15f);
 }
 
 TEST(TexturedRender, BadTextureIsAnError) {

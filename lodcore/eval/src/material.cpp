@@ -77,25 +77,77 @@ glm::mat3 textureTransform(glm::vec2 offset, float rotation, glm::vec2 scale) {
   return t * r * sc;
 }
 
-glm::vec4 sampleTexture(const Texture& tex, glm::vec2 uv, Wrap wrap_s, Wrap wrap_t) {
-  const auto& lin = srgbToLinearTable();
+namespace {
+
+// bilinear filtering between the four texel centres around uv on a w x h grid; `texel(x, y)` gives
+// a texel's linear RGBA
+template <class Fetch>
+glm::vec4 bilinear(glm::vec2 uv, int w, int h, Wrap wrap_s, Wrap wrap_t, const Fetch& texel) {
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = glm::vec2(0.0f);
   // texel centres sit at half-integers
-  const float x = reduceCoordinate(uv.x * static_cast<float>(tex.width) - 0.5f, tex.width, wrap_s);
-  const float y = reduceCoordinate(uv.y * static_cast<float>(tex.height) - 0.5f, tex.height, wrap_t);
+  const float x = reduceCoordinate(uv.x * static_cast<float>(w) - 0.5f, w, wrap_s);
+  const float y = reduceCoordinate(uv.y * static_cast<float>(h) - 0.5f, h, wrap_t);
   const float fx = std::floor(x), fy = std::floor(y);
   const float ax = x - fx, ay = y - fy;
   const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-  const int xs[2] = {wrapIndex(x0, tex.width, wrap_s), wrapIndex(x0 + 1, tex.width, wrap_s)};
-  const int ys[2] = {wrapIndex(y0, tex.height, wrap_t), wrapIndex(y0 + 1, tex.height, wrap_t)};
+  const int xs[2] = {wrapIndex(x0, w, wrap_s), wrapIndex(x0 + 1, w, wrap_s)};
+  const int ys[2] = {wrapIndex(y0, h, wrap_t), wrapIndex(y0 + 1, h, wrap_t)};
   glm::vec4 out(0.0f);
   for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      const uint8_t* p = tex.rgba8.data() + (static_cast<size_t>(ys[j]) * tex.width + xs[i]) * 4;
-      const float w = (i ? ax : 1.0f - ax) * (j ? ay : 1.0f - ay);
-      out += w * glm::vec4(lin[p[0]], lin[p[1]], lin[p[2]], static_cast<float>(p[3]) / 255.0f);
-    }
+    for (int i = 0; i < 2; ++i) out += (i ? ax : 1.0f - ax) * (j ? ay : 1.0f - ay) * texel(xs[i], ys[j]);
   return out;
+}
+
+glm::vec4 linearTexel(const Texture& tex, int x, int y) {
+  const auto& lin = srgbToLinearTable();
+  const uint8_t* p = tex.rgba8.data() + (static_cast<size_t>(y) * tex.width + x) * 4;
+  return glm::vec4(lin[p[0]], lin[p[1]], lin[p[2]], static_cast<float>(p[3]) / 255.0f);
+}
+
+}  // namespace
+
+glm::vec4 sampleTexture(const Texture& tex, glm::vec2 uv, Wrap wrap_s, Wrap wrap_t) {
+  return bilinear(uv, tex.width, tex.height, wrap_s, wrap_t, [&](int x, int y) { return linearTexel(tex, x, y); });
+}
+
+FilteredTexture::FilteredTexture(const Texture& texture) : base_(&texture) {
+  int w = texture.width, h = texture.height;
+  const std::vector<glm::vec4>* prev = nullptr;
+  while (w > 1 || h > 1) {
+    const int nw = std::max(1, w / 2), nh = std::max(1, h / 2);
+    Level next{nw, nh, std::vector<glm::vec4>(static_cast<size_t>(nw) * nh)};
+    for (int y = 0; y < nh; ++y)
+      for (int x = 0; x < nw; ++x) {
+        // the 2 x 2 texels above (one row or column when that side is already 1)
+        glm::vec4 sum(0.0f);
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i) {
+            const int sx = std::min(2 * x + i, w - 1), sy = std::min(2 * y + j, h - 1);
+            sum += prev ? (*prev)[static_cast<size_t>(sy) * w + sx] : linearTexel(texture, sx, sy);
+          }
+        next.texels[static_cast<size_t>(y) * nw + x] = 0.25f * sum;
+      }
+    levels_.push_back(std::move(next));
+    prev = &levels_.back().texels;
+    w = nw;
+    h = nh;
+  }
+}
+
+glm::vec4 FilteredTexture::sampleLevel(glm::vec2 uv, int level, Wrap wrap_s, Wrap wrap_t) const {
+  if (level <= 0) return sampleTexture(*base_, uv, wrap_s, wrap_t);
+  const Level& l = levels_[static_cast<size_t>(level - 1)];
+  return bilinear(uv, l.width, l.height, wrap_s, wrap_t,
+                  [&](int x, int y) { return l.texels[static_cast<size_t>(y) * l.width + x]; });
+}
+
+glm::vec4 FilteredTexture::sample(glm::vec2 uv, float lod, Wrap wrap_s, Wrap wrap_t) const {
+  const float top = static_cast<float>(levels_.size());
+  if (!(lod > 0.0f)) return sampleTexture(*base_, uv, wrap_s, wrap_t);  // NaN too
+  if (lod >= top) return sampleLevel(uv, static_cast<int>(top), wrap_s, wrap_t);
+  const int lo = static_cast<int>(lod);
+  const float t = lod - static_cast<float>(lo);
+  return (1.0f - t) * sampleLevel(uv, lo, wrap_s, wrap_t) + t * sampleLevel(uv, lo + 1, wrap_s, wrap_t);
 }
 
 glm::vec3 meanTextureColor(const Texture& tex) {

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "embree_scene.h"
+#include "shader.h"
 
 namespace scenelod::eval {
 
@@ -37,64 +38,13 @@ struct OrthoCamera {
     t_max = 8.0f * r;
   }
   float pixelSize() const { return 2.0f * half_h / static_cast<float>(height); }
+  // the ray direction and the world-space steps of one pixel across and down the image
+  detail::PixelFootprint footprint() const { return {dir, right * pixelSize(), -up * pixelSize()}; }
   glm::vec3 rayOrigin(int x, int y) const {
     const float sx = ((static_cast<float>(x) + 0.5f) / static_cast<float>(width) * 2.0f - 1.0f) * half_w;
     const float sy = (1.0f - (static_cast<float>(y) + 0.5f) / static_cast<float>(height) * 2.0f) * half_h;
     return origin0 + sx * right + sy * up;
   }
-};
-
-uint8_t toSrgb8(float c) {
-  c = std::clamp(c, 0.0f, 1.0f);
-  const float s = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-  return static_cast<uint8_t>(std::lround(s * 255.0f));
-}
-
-// The colour of a hit on one mesh: vertex colours, or its triangle's material (render.h).
-class Shader {
- public:
-  Shader(const Mesh& mesh, Span<const Material> materials) : mesh_(mesh), materials_(materials) {
-    has_colors_ = mesh.colors.size() == mesh.vertexCount();
-    for (const Material& m : materials) {
-      const std::vector<glm::vec2>* uvs = m.texture ? materialUvs(mesh, m) : nullptr;
-      uvs_.push_back(uvs);
-      // without its coordinates a textured material shows what it looks like from afar
-      fallback_.push_back(m.texture && !uvs ? meanTextureColor(*m.texture) : glm::vec3(1.0f));
-    }
-  }
-
-  glm::vec3 baseColor(const detail::RayHit& h) const {
-    if (h.kind != 0 || materials_.empty()) return h.color;
-    const glm::vec3 color0 = has_colors_ ? h.color : glm::vec3(1.0f);
-    const uint32_t group = mesh_.triangleGroup(h.prim);
-    if (group >= materials_.size()) return color0;  // no material: white
-    const Material& m = materials_[group];
-    glm::vec3 c = glm::vec3(m.base_color) * color0;
-    if (!m.texture) return c;
-    const std::vector<glm::vec2>* uvs = uvs_[group];
-    if (!uvs) return c * fallback_[group];
-    const uint32_t* tri = mesh_.triangles.data() + 3 * static_cast<size_t>(h.prim);
-    const glm::vec2 uv = (1.0f - h.u - h.v) * (*uvs)[tri[0]] + h.u * (*uvs)[tri[1]] + h.v * (*uvs)[tri[2]];
-    const glm::vec3 uvt = m.uv_transform * glm::vec3(uv, 1.0f);
-    return c * glm::vec3(sampleTexture(*m.texture, glm::vec2(uvt), m.wrap_s, m.wrap_t));
-  }
-
-  // headlight Lambert + ambient of the base colour, as 8-bit sRGB
-  void shade(const detail::RayHit& h, const glm::vec3& dir, float ambient, bool smooth, uint8_t* px) const {
-    const glm::vec3 n = smooth ? h.shading : h.normal;
-    const float lambert = std::max(0.0f, glm::dot(n, -dir));
-    const glm::vec3 c = baseColor(h) * (ambient + (1.0f - ambient) * lambert);
-    px[0] = toSrgb8(c.x);
-    px[1] = toSrgb8(c.y);
-    px[2] = toSrgb8(c.z);
-  }
-
- private:
-  const Mesh& mesh_;
-  Span<const Material> materials_;
-  bool has_colors_ = false;
-  std::vector<const std::vector<glm::vec2>*> uvs_;  // per material: its texture coordinates, or null
-  std::vector<glm::vec3> fallback_;                 // per material: the texture's mean when uvs_ is null
 };
 
 }  // namespace
@@ -140,9 +90,11 @@ Error renderMesh(const Mesh& mesh, const RenderParams& params, Image& out) {
   const OrthoCamera cam(params.view, frame, params.width, params.height);
   detail::EmbreeScene scene;
   if (Error e = scene.build(mesh, params.min_radius_px * cam.pixelSize()); !e.ok()) return e;
-  const Shader shader(mesh, params.materials);
+  const detail::Shader shader(mesh, params.materials);
   out = Image(params.width, params.height);
-  const uint8_t bg[3] = {toSrgb8(params.background.x), toSrgb8(params.background.y), toSrgb8(params.background.z)};
+  const detail::PixelFootprint fp = cam.footprint();
+  const uint8_t bg[3] = {detail::toSrgb8(params.background.x), detail::toSrgb8(params.background.y),
+                         detail::toSrgb8(params.background.z)};
   tbb::parallel_for(0, params.height, [&](int y) {
     for (int x = 0; x < params.width; ++x) {
       uint8_t* px = out.pixel(x, y);
@@ -151,7 +103,7 @@ Error renderMesh(const Mesh& mesh, const RenderParams& params, Image& out) {
         std::copy_n(bg, 3, px);
         continue;
       }
-      shader.shade(h, cam.dir, params.ambient, params.smooth, px);
+      shader.shade(h, fp, params.ambient, params.smooth, px);
     }
   });
   return {};
@@ -176,7 +128,7 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
   if (Error e = a.build(original, params.min_radius_px * pixel); !e.ok()) return e;
   if (Error e = b.build(simplified, params.min_radius_px * pixel); !e.ok()) return e;
 
-  const Shader shade_a(original, params.original_materials), shade_b(simplified, params.simplified_materials);
+  const detail::Shader shade_a(original, params.original_materials), shade_b(simplified, params.simplified_materials);
   const RenderParams look;  // the default shading of renderMesh
 
   struct RowSum {
@@ -187,6 +139,7 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
   tbb::parallel_for(size_t(0), rows.size(), [&](size_t row) {
     const int view = static_cast<int>(row / res), y = static_cast<int>(row % res);
     const OrthoCamera cam(standardView(view), frame, res, res);
+    const detail::PixelFootprint fp = cam.footprint();
     RowSum s;
     for (int x = 0; x < res; ++x) {
       const glm::vec3 o = cam.rayOrigin(x, y);
@@ -200,8 +153,8 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
         const glm::dvec3 na(ha.normal), nb(hb.normal);
         s.angle_deg += std::atan2(glm::length(glm::cross(na, nb)), glm::dot(na, nb)) * kRadToDeg;
         uint8_t pa[3], pb[3];
-        shade_a.shade(ha, cam.dir, look.ambient, look.smooth, pa);
-        shade_b.shade(hb, cam.dir, look.ambient, look.smooth, pb);
+        shade_a.shade(ha, fp, look.ambient, look.smooth, pa);
+        shade_b.shade(hb, fp, look.ambient, look.smooth, pb);
         int worst = 0;
         for (int c = 0; c < 3; ++c) {
           const int d = std::abs(int(pa[c]) - int(pb[c]));

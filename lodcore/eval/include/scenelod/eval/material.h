@@ -49,6 +49,32 @@ glm::mat3 textureTransform(glm::vec2 offset, float rotation, glm::vec2 scale);
 // Precondition: validateTexture(texture) passes. Cost: 4 texel reads, no allocation.
 glm::vec4 sampleTexture(const Texture& texture, glm::vec2 uv, Wrap wrap_s, Wrap wrap_t);
 
+// A texture filtered for minification (trilinear, as a GPU does with mipmaps): the texture and its
+// mip levels, each half the size of the one before (at least 1 texel), box-filtered in linear colour.
+// Keeps a pointer to `texture`, which must outlive it. Cost of building: one pass over the texels,
+// a third of the texture's size again in floats (16 bytes per texel).
+class FilteredTexture {
+ public:
+  explicit FilteredTexture(const Texture& texture);
+
+  // Linear RGBA at `uv` for a pixel whose footprint is 2^lod texels of the full-size texture:
+  // lod <= 0 samples the texture bilinearly (sampleTexture), larger values blend the two nearest
+  // levels, beyond the last level its single texel. Thread-safe.
+  glm::vec4 sample(glm::vec2 uv, float lod, Wrap wrap_s, Wrap wrap_t) const;
+
+  int levelCount() const { return static_cast<int>(levels_.size()) + 1; }
+
+ private:
+  struct Level {
+    int width = 0, height = 0;
+    std::vector<glm::vec4> texels;  // linear RGBA
+  };
+  glm::vec4 sampleLevel(glm::vec2 uv, int level, Wrap wrap_s, Wrap wrap_t) const;
+
+  const Texture* base_;
+  std::vector<Level> levels_;  // levels 1, 2, ... (level 0 is the texture itself)
+};
+
 // Mean linear RGB of all texels (what a model shows from afar, and what a textured material is
 // drawn with on a mesh that lacks its texture coordinates). Cost: one pass over the texels.
 glm::vec3 meanTextureColor(const Texture& texture);
