@@ -322,16 +322,19 @@ void ZhangEngine::forStar(uint32_t v, F&& f) {
   }
 }
 
-uint32_t ZhangEngine::find(uint32_t v) {
+// union-find root with path compression
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
   uint32_t r = v;
-  while (parent_[r] != r) r = parent_[r];
-  while (parent_[v] != r) {
-    const uint32_t n = parent_[v];
-    parent_[v] = r;
+  while (parent[r] != r) r = parent[r];
+  while (parent[v] != r) {
+    const uint32_t n = parent[v];
+    parent[v] = r;
     v = n;
   }
   return r;
 }
+
+uint32_t ZhangEngine::find(uint32_t v) { return findRoot(parent_, v); }
 
 void ZhangEngine::updateTriangle(uint32_t t) {
   const glm::vec3 &a = pos_[faces_[t].v[0]], &b = pos_[faces_[t].v[1]], &c = pos_[faces_[t].v[2]];
@@ -603,16 +606,7 @@ void ZhangEngine::initWedges(const Mesh& in, std::vector<uint32_t>& corner_wedge
   for (size_t set = 0; set < in.extra_uvs.size(); ++set) perWedge(extra_uv_[set], in.extra_uvs[set]);
 }
 
-uint32_t ZhangEngine::wedgeFind(uint32_t w) {
-  uint32_t r = w;
-  while (wedge_parent_[r] != r) r = wedge_parent_[r];
-  while (wedge_parent_[w] != r) {
-    const uint32_t n = wedge_parent_[w];
-    wedge_parent_[w] = r;
-    w = n;
-  }
-  return r;
-}
+uint32_t ZhangEngine::wedgeFind(uint32_t w) { return findRoot(wedge_parent_, w); }
 
 // the seam edges around v: edges whose two triangles disagree on the wedge of either end (a UV or
 // attribute seam, a group border), and border edges

@@ -368,6 +368,25 @@ TEST(ZhangAttributes, SeamBendLimitsCollapsesAlongACurvedSeam) {
     }
 }
 
+TEST(ZhangAttributes, BadAttributesAreClearErrors) {
+  Mesh m = seamedCube(2);
+  m.uvs[5].x = std::nanf("");
+  Mesh out;
+  Error e = simplifyZhang(m, 4, ZhangParams{}, out);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_NE(e.message.find("texture coordinates"), std::string::npos) << e.message;
+  m = seamedCube(2);
+  m.triangle_groups.assign(m.triangleCount() - 1, 0u);
+  e = simplifyZhang(m, 4, ZhangParams{}, out);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_NE(e.message.find("triangle groups"), std::string::npos) << e.message;
+  ChainParams params;
+  LodChain chain;
+  e = buildZhangChain(m, params, chain);
+  EXPECT_EQ(e.status, Status::kInvalidMesh);
+  EXPECT_TRUE(chain.empty());
+}
+
 TEST(ZhangAttributes, BadSeamBendIsRefused) {
   ZhangParams params;
   params.max_seam_bend_deg = -1.0f;
