@@ -22,7 +22,8 @@ struct Face {
   bool rebuilt = false;         // changed by reconstruction (gets the §7.1 polygon constraints)
   bool inside = false;          // was wholly inside a sub-volume in some pass (may lose co-linear corners)
   bool alive = true;
-  uint32_t chart = 0;           // uv chart of the input polygon (computeUvCharts); merging stays inside one
+  uint32_t chart = 0;           // uv chart of the input polygon (computeUvCharts; its group without uvs);
+                                // merging stays inside one
   uint32_t group = 0;           // triangle group (material) of the input polygon
 };
 

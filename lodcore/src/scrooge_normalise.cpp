@@ -245,8 +245,9 @@ void normaliseModel(const Mesh& in, const ScroogeParams& params, Model& m, Scroo
       continue;
     }
     face.color = faceMeanColor(in, m, face);
-    face.chart = poly_chart[f];
     face.group = poly_group[f];
+    // without uvs, charts (exact position links) would split polygons that welding joined
+    face.chart = in.uvs.empty() ? face.group : poly_chart[f];
     m.faces.push_back(std::move(face));
   }
 
