@@ -162,6 +162,27 @@ TEST(ZhangAttributes, SeamedCubeKeepsEveryChartsUvs) {
     }
 }
 
+TEST(ZhangAttributes, NonIndexedInputIsWeldedByItsAttributes) {
+  // every triangle with its own three vertices (as the glTF Fox comes): equal vertices are one wedge,
+  // so the result is the indexed cube's
+  const Mesh indexed = seamedCube(8);
+  Mesh loose;
+  for (uint32_t v : indexed.triangles) {
+    loose.triangles.push_back(uint32_t(loose.positions.size()));
+    loose.positions.push_back(indexed.positions[v]);
+    loose.normals.push_back(indexed.normals[v]);
+    loose.uvs.push_back(indexed.uvs[v]);
+  }
+  Mesh a, b;
+  ZhangStats sa, sb;
+  ASSERT_TRUE(simplifyZhang(indexed, 60, ZhangParams{}, a, &sa).ok());
+  ASSERT_TRUE(simplifyZhang(loose, 60, ZhangParams{}, b, &sb).ok());
+  EXPECT_EQ(sb.seam_vertices, sa.seam_vertices);
+  EXPECT_EQ(b.triangleCount(), a.triangleCount());
+  EXPECT_EQ(b.vertexCount(), a.vertexCount());
+  expectCubeCharts(b);
+}
+
 TEST(ZhangAttributes, SeamVerticesMoveOnlyAlongTheirSeam) {
   const Mesh cube = seamedCube(8);
   Mesh out;
