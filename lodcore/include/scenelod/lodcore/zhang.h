@@ -19,7 +19,7 @@ namespace scenelod {
 enum class ZhangVertexClass : uint8_t {
   kSimple,     // C(V) = 0, smooth neighbourhood (largest normal angle <= feature angle)
   kComplex,    // C(V) > 2 or a pinched (non-disk) neighbourhood: kept
-  kEdge,       // C(V) = 2, on a boundary (or an attribute seam): kept
+  kEdge,       // C(V) = 2, on a boundary (or an attribute split of an unwelded mesh): kept
   kInnerEdge,  // C(V) = 0, on a crease: normalised super height <= angle_height_ratio
   kAngle,      // C(V) = 0, a corner: normalised super height > angle_height_ratio
   kIsolated,   // in no triangle
@@ -113,8 +113,9 @@ struct ZhangStats {
   size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
-  // vertices that never move, by their class on the (welded) input: edge (borders and attribute
-  // seams), complex (non-manifold), angle (only with keep_angle_vertices)
+  // vertices that never move, by their class on the (welded) input: edge (borders, and the
+  // attribute splits of an unwelded mesh without uvs), complex (non-manifold), angle (only with
+  // keep_angle_vertices)
   size_t kept_edge_vertices = 0;
   size_t kept_complex_vertices = 0;
   size_t kept_angle_vertices = 0;
