@@ -219,12 +219,19 @@ class ZhangEngine {
     uint32_t neighbour[2] = {kNone, kNone};  // the far ends of the first two
   };
   SeamInfo seamsAround(uint32_t v);
-  bool onSeam(uint32_t v) { return !vs_[v].kept && seamsAround(v).edges > 0; }
+  // a movable vertex with seam edges; cached until a collapse changes its fan
+  bool onSeam(uint32_t v) {
+    if (vs_[v].kept) return false;
+    if (seam_state_[v] < 0) seam_state_[v] = seamsAround(v).edges > 0 ? 1 : 0;
+    return seam_state_[v] == 1;
+  }
   // the wedge each wedge of the merged vertices s[] != k takes, into map_; false when a surviving
   // triangle's wedge has none or two (the collapse would carry a triangle into another chart)
   bool mapWedges(const uint32_t* s, int s_count, uint32_t k);
   // the seam vertices along which the popped vertex i may collapse (all neighbours when it is on no seam)
   void seamCandidates(uint32_t i);
+  // the one wedge pair of a collapse of the popped vertex i, on no seam, onto its neighbour j
+  void onePair(uint32_t i, uint32_t j);
   void blendWedges(const uint32_t* s, int s_count, uint32_t k);
   void pinToSeam(const uint32_t* s, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
   uint32_t wedgeFind(uint32_t w);
@@ -267,6 +274,7 @@ class ZhangEngine {
   std::vector<std::vector<glm::vec2>> extra_uv_;
   std::vector<glm::vec4> tan_;
   std::vector<uint32_t> wedge_parent_, wedge_topo_, wedge_src_, input_wedge_, face_group_;
+  std::vector<int8_t> seam_state_;  // per vertex: -1 unknown, 0 on no seam, 1 on a seam
   struct WedgePair {
     uint32_t from, to;
     int s;  // index of the merged vertex in s[]
@@ -435,6 +443,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   if (params_.weld_positions && !attr_) attr_nrm_.clear();
   std::vector<uint32_t> corner_wedge;
   if (attr_) initWedges(in, corner_wedge);
+  seam_state_.assign(attr_ ? vn : 0, -1);
   auto welded = [&](uint32_t v) { return parent_[v]; };
   face_group_.clear();
 
@@ -616,13 +625,12 @@ ZhangEngine::SeamInfo ZhangEngine::seamsAround(uint32_t v) {
     const Face& f = faces_[t];
     fan_corners_.push_back({f.v[(c + 1) % 3], f.v[(c + 2) % 3], f.a[c], f.a[(c + 1) % 3], f.a[(c + 2) % 3]});
   });
-  std::sort(fan_corners_.begin(), fan_corners_.end(), [](const FanCorner& x, const FanCorner& y) { return x.u < y.u; });
   SeamInfo info;
   for (const FanCorner& e : fan_corners_) {
-    // the triangle across the edge (v, e.w) starts its pair at e.w
-    const auto it = std::lower_bound(fan_corners_.begin(), fan_corners_.end(), e.w,
-                                     [](const FanCorner& x, uint32_t u) { return x.u < u; });
-    const bool border = it == fan_corners_.end() || it->u != e.w;
+    // the triangle across the edge (v, e.w) starts its pair at e.w (a linear scan: fans are small,
+    // and the callers' fan walks are quadratic in the degree anyway)
+    const auto it = std::find_if(fan_corners_.begin(), fan_corners_.end(), [&](const FanCorner& x) { return x.u == e.w; });
+    const bool border = it == fan_corners_.end();
     if (!border && it->ai == e.ai && it->au == e.aw) continue;
     if (info.edges < 2) info.neighbour[info.edges] = e.w;
     ++info.edges;
@@ -659,6 +667,20 @@ bool ZhangEngine::mapWedges(const uint32_t* s, int s_count, uint32_t k) {
       });
   }
   return ok;
+}
+
+void ZhangEngine::onePair(uint32_t i, uint32_t j) {
+  for (const StarEntry& e : star_i_) {
+    if (e.u != j && e.w != j) continue;
+    const Face& f = faces_[e.t];
+    WedgePair pair{kNone, kNone, 0};
+    for (int c = 0; c < 3; ++c) {
+      if (f.v[c] == i) pair.from = f.a[c];
+      if (f.v[c] == j) pair.to = f.a[c];
+    }
+    map_.assign(1, pair);
+    return;
+  }
 }
 
 void ZhangEngine::seamCandidates(uint32_t i) {
@@ -968,6 +990,10 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
       }
     }
   });
+  if (attr_) {  // the fans that changed are k's and its ring's
+    seam_state_[k] = -1;
+    for (uint32_t u : neighbours_) seam_state_[u] = -1;
+  }
   refreshAround(k);
   ++stats_.collapses;
 }
@@ -998,7 +1024,9 @@ bool ZhangEngine::stepEdge() {
     interpolate(s, 2, k, p, n, blend_w_, ok);
     if (!ok) continue;
     if (attr_) {
-      if (!mapWedges(s, 2, j)) continue;
+      // off the seams, i has one wedge and both triangles on the edge agree on j's: one pair
+      if (!i_on_seam) onePair(i, j);
+      else if (!mapWedges(s, 2, j)) continue;
       if (i_on_seam || onSeam(j)) {  // a seam vertex never moves off its seam: onto V_j
         p = pos_[j];
         n = nrm_[j];
