@@ -549,15 +549,7 @@ void ZhangEngine::weldByPosition(const Mesh& in) {
 // points takes the first wedge of its attribute class, or one of its own. `corner_wedge` gets the
 // wedge of every input triangle corner.
 void ZhangEngine::initWedges(const Mesh& in, std::vector<uint32_t>& corner_wedge) {
-  Mesh attrs;
-  attrs.positions = in.positions;
-  attrs.normals = in.normals;
-  attrs.colors = in.colors;
-  attrs.uvs = in.uvs;
-  attrs.extra_uvs = in.extra_uvs;
-  attrs.tangents = in.tangents;
-  attrs.joints = in.joints;
-  attrs.weights = in.weights;
+  Mesh attrs = in;  // welded for its vertex classes only
   std::vector<uint32_t> cls;
   weldVertices(attrs, &cls);
   const size_t vn = in.vertexCount(), tn = in.triangleCount();
