@@ -159,13 +159,27 @@ double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cac
   return double(misses) / double(tri_count);
 }
 
-void optimizeMeshOrder(Mesh& m) {
+void optimizeMeshOrder(Mesh& m, std::vector<uint32_t>* vertex_remap) {
   const size_t n = m.vertexCount();
   if (!m.triangles.empty()) {
-    std::vector<uint32_t> tri(m.triangles.size());
-    optimizeVertexCache(Span<uint32_t>(tri.data(), tri.size()),
-                        Span<const uint32_t>(m.triangles.data(), m.triangles.size()), n);
+    // triangles sorted by group (stable), each group's run ordered for the cache on its own, so a
+    // group stays one contiguous index range (one draw call per material)
+    std::vector<uint32_t> order(m.triangleCount());
+    for (uint32_t t = 0; t < order.size(); ++t) order[t] = t;
+    if (!m.triangle_groups.empty())
+      std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.triangle_groups[a] < m.triangle_groups[b]; });
+    std::vector<uint32_t> grouped(m.triangles.size()), tri(m.triangles.size());
+    for (size_t i = 0; i < order.size(); ++i)
+      for (size_t c = 0; c < 3; ++c) grouped[3 * i + c] = m.triangles[3 * order[i] + c];
+    for (size_t first = 0; first < order.size();) {
+      size_t last = first + 1;
+      while (last < order.size() && m.triangleGroup(order[last]) == m.triangleGroup(order[first])) ++last;
+      optimizeVertexCache(Span<uint32_t>(tri.data() + 3 * first, 3 * (last - first)),
+                          Span<const uint32_t>(grouped.data() + 3 * first, 3 * (last - first)), n);
+      first = last;
+    }
     m.triangles.swap(tri);
+    if (!m.triangle_groups.empty()) std::sort(m.triangle_groups.begin(), m.triangle_groups.end());
   }
   // first use across triangles, then edges, then points
   std::vector<uint32_t> all;
@@ -185,10 +199,15 @@ void optimizeMeshOrder(Mesh& m) {
   permute(m.normals);
   permute(m.colors);
   permute(m.uvs);
+  for (std::vector<glm::vec2>& set : m.extra_uvs) permute(set);
+  permute(m.tangents);
+  permute(m.joints);
+  permute(m.weights);
   for (uint32_t& i : m.triangles) i = remap[i];
   for (uint32_t& i : m.edges) i = remap[i];
   for (uint32_t& i : m.points) i = remap[i];
   for (uint32_t& i : m.face_corners) i = remap[i];
+  if (vertex_remap) vertex_remap->swap(remap);
 }
 
 }  // namespace scenelod::scene
