@@ -158,8 +158,15 @@ bool hasExtraAttributes(const LodLevel& l) {
          !m.triangle_groups.empty() || !l.source_vertex.empty();
 }
 
-// a level's source_vertex is empty or one vertex of level 0 (`original_vertices` of them) per vertex
-Error checkSourceVertex(const LodLevel& l, size_t original_vertices, const std::string& what) {
+// what the pack needs beyond validateMesh: every extra texture set one value per vertex (a set is
+// stored by position), source_vertex empty or one vertex of level 0 (`original_vertices` of them)
+// per vertex
+Error checkLevelExtras(const LodLevel& l, size_t original_vertices, const std::string& what) {
+  for (size_t s = 0; s < l.mesh.extra_uvs.size(); ++s)
+    if (l.mesh.extra_uvs[s].size() != l.mesh.vertexCount())
+      return {Status::kInvalidMesh, what + ": texture coordinate set " + std::to_string(s + 1) + " has " +
+                                        std::to_string(l.mesh.extra_uvs[s].size()) + " values for " +
+                                        std::to_string(l.mesh.vertexCount()) + " vertices"};
   const std::vector<uint32_t>& sv = l.source_vertex;
   if (sv.empty()) return {};
   if (sv.size() != l.mesh.vertexCount())
@@ -312,7 +319,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
       const LodLevel& src = chains[c].levels[l];
       const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
       if (Error e = validateMesh(src.mesh, level_name); !e.ok()) return e;
-      if (Error e = checkSourceVertex(src, chains[c].levels[0].mesh.vertexCount(), level_name); !e.ok()) return e;
+      if (Error e = checkLevelExtras(src, chains[c].levels[0].mesh.vertexCount(), level_name); !e.ok()) return e;
       Mesh m = src.mesh;
       const double tris = double(m.triangleCount());
       if (tris > 0) acmr_before += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());

@@ -83,8 +83,8 @@ static int checkChainLifecycle(slod_context* ctx, slod_chain used, const slod_me
 /* A textured sphere with two materials (northern and southern half as two index ranges): level 0
  * gives back the input's UVs and ranges, every level streams of its vertex count and ranges that
  * cover its triangles, with their materials; the GENERIC kind is refused as not supported. */
-static int checkAttributes(slod_context* ctx, const float* positions, size_t vertex_count, const uint32_t* indices,
-                           size_t index_count) {
+static int checkAttributes(slod_context* ctx, const slod_mesh_desc* sphere) {
+  const size_t vertex_count = sphere->vertex_count, index_count = sphere->index_count;
   float* uv = (float*)malloc(vertex_count * 2 * sizeof(float));
   slod_attribute_stream stream;
   slod_index_range ranges[2];
@@ -111,11 +111,7 @@ static int checkAttributes(slod_context* ctx, const float* positions, size_t ver
   ranges[1].first_index = ranges[0].index_count;
   ranges[1].index_count = (uint32_t)(index_count - index_count / 2);
   ranges[1].material = 20;
-  slod_mesh_desc_init(&md);
-  md.positions = positions;
-  md.vertex_count = vertex_count;
-  md.indices = indices;
-  md.index_count = index_count;
+  md = *sphere;
   md.name = "textured sphere";
   md.attributes = &stream;
   md.attribute_count = 1;
@@ -302,7 +298,7 @@ int main(int argc, char** argv) {
   for (i = 0; i < 39; ++i) CHECK(sel[i].object != objects[3]);
 
   CHECK(checkChainLifecycle(ctx, chain, &md, &cam, &fp, objects[0]));
-  CHECK(checkAttributes(ctx, positions, vertex_count, indices, index_count));
+  CHECK(checkAttributes(ctx, &md));
 
   slod_context_destroy(ctx);
   free(positions);

@@ -203,7 +203,7 @@ TEST(PackAttributes, ReorderedLevelsKeepTrianglesCornersGroupsAndSources) {
   EXPECT_TRUE(back[0].levels[0].source_vertex.empty());  // level 0: the identity
 }
 
-TEST(PackAttributes, WriterRefusesSourceVerticesOutsideLevelZero) {
+TEST(PackAttributes, WriterRefusesSourceVerticesOutsideLevelZeroAndEmptySets) {
   SceneData s;
   std::vector<LodChain> chains;
   std::vector<Sphere> spheres;
@@ -216,6 +216,12 @@ TEST(PackAttributes, WriterRefusesSourceVerticesOutsideLevelZero) {
   chains[0].levels[2].source_vertex.pop_back();
   e = writePackBytes(bytes, s, chains, spheres);
   EXPECT_NE(e.message.find("2 source vertices for 3 vertices"), std::string::npos) << e.message;
+  // an empty extra texture set, which validateMesh lets pass, has no place in the pack's layout
+  chains[0].levels[2].source_vertex.push_back(40);
+  chains[0].levels[2].mesh.extra_uvs.assign(2, {});
+  chains[0].levels[2].mesh.extra_uvs[1].assign(3, glm::vec2(0.5f));
+  e = writePackBytes(bytes, s, chains, spheres);
+  EXPECT_NE(e.message.find("level 2: texture coordinate set 1 has 0 values for 3 vertices"), std::string::npos) << e.message;
 }
 
 TEST(PackAttributes, HandEditedAttributesAreRefusedEvenWithAValidChecksum) {
