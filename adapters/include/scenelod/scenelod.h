@@ -216,7 +216,9 @@ static inline void slod_chain_desc_init(slod_chain_desc* desc) {
  * (SLOD_ERROR_UNSUPPORTED). Not thread-safe on ctx. */
 SLOD_API slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh, const slod_chain_desc* desc,
                                       slod_chain* out_chain);
-/* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space). */
+/* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space).
+ * Its levels' index ranges are the flattened mesh's triangle groups, its materials: material and
+ * source_range are both the file's material index (0xffffffff for none). */
 SLOD_API slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc,
                                           slod_chain* out_chain);
 /* Destroys a chain and frees its levels; its handle becomes stale, and so do the pointers
@@ -242,7 +244,8 @@ typedef struct slod_level_data {
   const uint32_t* points;      /* 1 per point */
   /* since 1.1 */
   uint32_t attribute_count;    /* streams: read stream i with slod_level_attribute_get */
-  uint32_t range_count;        /* index ranges; 0 when the mesh had none */
+  uint32_t range_count;        /* index ranges; 0 when the mesh had none or the level's generator did
+                                  not keep them */
   const slod_index_range* ranges; /* range_count, in triangle order, one per input range that still
                                   has triangles in this level */
   const uint32_t* source_vertex; /* 1 per vertex: the vertex of level 0 (the input) whose attributes
