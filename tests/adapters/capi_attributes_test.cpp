@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/lodcore/chain.h"
+#include "scenelod/scene/pack.h"
 #include "scenelod/scenelod.h"
 
 using namespace scenelod;
@@ -436,4 +437,33 @@ TEST(CapiAttributes, NewerCallersLongerStreamsAreReadAsFarAsKnown) {
   EXPECT_EQ(out.s.kind, SLOD_ATTRIBUTE_UV);
   EXPECT_EQ(out.s.size, sizeof(NewerStream));
   EXPECT_EQ(out.future, 42.0);
+}
+
+TEST(CapiAttributes, RecordingsKeepTheAttributesInTheirPack) {
+  Context c;
+  TexturedGrid g(8);
+  const slod_chain chain = build(c, g.desc);
+  slod_object_desc od;
+  slod_object_desc_init(&od);
+  od.chain = chain;
+  slod_object object;
+  ASSERT_EQ(slod_object_add(c.ctx, &od, &object), SLOD_OK) << c.message();
+  const std::string dir = ::testing::TempDir();
+  const std::string replay = dir + "capi_attributes.jsonl", pack_path = dir + "capi_attributes.slodpack";
+  ASSERT_EQ(slod_record_start(c.ctx, replay.c_str(), pack_path.c_str()), SLOD_OK) << c.message();
+  ASSERT_EQ(slod_record_stop(c.ctx), SLOD_OK) << c.message();
+  scene::Pack pack;
+  const Error e = scene::Pack::load(pack_path, pack);
+  ASSERT_TRUE(e.ok()) << e.message;
+  ASSERT_EQ(pack.chainCount(), 1u);
+  ASSERT_EQ(pack.levelCount(0), slod_chain_level_count(c.ctx, chain));
+  // the recording keeps the context's order (no reordering): level 0 is the input
+  const scene::PackLevelView v = pack.level(0, 0);
+  const Mesh m = g.mesh();
+  EXPECT_EQ(std::vector<glm::vec2>(v.uvs.begin(), v.uvs.end()), m.uvs);
+  EXPECT_EQ(std::vector<glm::vec2>(v.extra_uvs.begin(), v.extra_uvs.end()), m.extra_uvs[0]);
+  EXPECT_EQ(std::vector<glm::vec4>(v.tangents.begin(), v.tangents.end()), m.tangents);
+  EXPECT_EQ(std::vector<glm::vec4>(v.weights.begin(), v.weights.end()), m.weights);
+  EXPECT_EQ(std::vector<int32_t>(v.joint_parents.begin(), v.joint_parents.end()), g.joint_parents);
+  EXPECT_EQ(std::vector<uint32_t>(v.triangle_groups.begin(), v.triangle_groups.end()), m.triangle_groups);
 }
