@@ -162,24 +162,27 @@ double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cac
 void optimizeMeshOrder(Mesh& m, std::vector<uint32_t>* vertex_remap) {
   const size_t n = m.vertexCount();
   if (!m.triangles.empty()) {
-    // triangles sorted by group (stable), each group's run ordered for the cache on its own, so a
-    // group stays one contiguous index range (one draw call per material)
+    // each triangle group (primitive) on its own, groups in increasing order, so that a group stays
+    // one contiguous range of triangles
     std::vector<uint32_t> order(m.triangleCount());
-    for (uint32_t t = 0; t < order.size(); ++t) order[t] = t;
-    if (!m.triangle_groups.empty())
-      std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.triangle_groups[a] < m.triangle_groups[b]; });
+    for (size_t t = 0; t < order.size(); ++t) order[t] = static_cast<uint32_t>(t);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.triangleGroup(a) < m.triangleGroup(b); });
     std::vector<uint32_t> grouped(m.triangles.size()), tri(m.triangles.size());
-    for (size_t i = 0; i < order.size(); ++i)
-      for (size_t c = 0; c < 3; ++c) grouped[3 * i + c] = m.triangles[3 * order[i] + c];
-    for (size_t first = 0; first < order.size();) {
-      size_t last = first + 1;
-      while (last < order.size() && m.triangleGroup(order[last]) == m.triangleGroup(order[first])) ++last;
-      optimizeVertexCache(Span<uint32_t>(tri.data() + 3 * first, 3 * (last - first)),
-                          Span<const uint32_t>(grouped.data() + 3 * first, 3 * (last - first)), n);
-      first = last;
+    for (size_t t = 0; t < order.size(); ++t)
+      for (size_t k = 0; k < 3; ++k) grouped[3 * t + k] = m.triangles[3 * size_t(order[t]) + k];
+    for (size_t begin = 0; begin < order.size();) {
+      size_t end = begin + 1;
+      while (end < order.size() && m.triangleGroup(order[end]) == m.triangleGroup(order[begin])) ++end;
+      optimizeVertexCache(Span<uint32_t>(tri.data() + 3 * begin, 3 * (end - begin)),
+                          Span<const uint32_t>(grouped.data() + 3 * begin, 3 * (end - begin)), n);
+      begin = end;
+    }
+    if (!m.triangle_groups.empty()) {
+      std::vector<uint32_t> groups(order.size());
+      for (size_t t = 0; t < order.size(); ++t) groups[t] = m.triangle_groups[order[t]];
+      m.triangle_groups.swap(groups);
     }
     m.triangles.swap(tri);
-    if (!m.triangle_groups.empty()) std::sort(m.triangle_groups.begin(), m.triangle_groups.end());
   }
   // first use across triangles, then edges, then points
   std::vector<uint32_t> all;
