@@ -15,6 +15,7 @@
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/scene/pack.h"
 #include "scenelod/scenelod.h"
+#include "test_support.h"
 
 using namespace scenelod;
 
@@ -466,4 +467,47 @@ TEST(CapiAttributes, RecordingsKeepTheAttributesInTheirPack) {
   EXPECT_EQ(std::vector<glm::vec4>(v.weights.begin(), v.weights.end()), m.weights);
   EXPECT_EQ(std::vector<int32_t>(v.joint_parents.begin(), v.joint_parents.end()), g.joint_parents);
   EXPECT_EQ(std::vector<uint32_t>(v.triangle_groups.begin(), v.triangle_groups.end()), m.triangle_groups);
+  // every simplified level as the context hands it out: skin, source vertices, texture coordinates
+  for (uint32_t l = 1; l < pack.levelCount(0); ++l) {
+    const scene::PackLevelView pl = pack.level(0, l);
+    slod_level_data d;
+    slod_level_data_init(&d);
+    ASSERT_EQ(slod_level_get(c.ctx, chain, l, &d), SLOD_OK);
+    ASSERT_EQ(pl.positions.size(), d.vertex_count);
+    EXPECT_EQ(pl.source_vertex.empty(), d.source_vertex == nullptr);
+    EXPECT_TRUE(std::equal(pl.source_vertex.begin(), pl.source_vertex.end(), d.source_vertex));
+    EXPECT_EQ(pl.weights.empty(), d.weights == nullptr);
+    EXPECT_TRUE(pl.weights.empty() || std::memcmp(pl.weights.data, d.weights, 16 * d.vertex_count) == 0);
+    EXPECT_EQ(pl.triangles.size(), 3 * size_t(d.triangle_count));
+    EXPECT_TRUE(std::equal(pl.triangles.begin(), pl.triangles.end(), d.triangles));
+  }
+}
+
+TEST(CapiAttributes, FileChainsHaveOneRangePerMaterial) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  // four meshes, one material each: the flattened chain's groups are the materials
+  const std::string file = test::sharedModelsDir() + "/SheenChair/SheenChair.gltf";
+  Context c;
+  slod_chain chain = SLOD_NULL_CHAIN;
+  const slod_chain_desc cd = chainDesc();
+  ASSERT_EQ(slod_chain_load_file(c.ctx, file.c_str(), &cd, &chain), SLOD_OK) << c.message();
+  for (uint32_t l = 0; l < slod_chain_level_count(c.ctx, chain); ++l) {
+    SCOPED_TRACE("level " + std::to_string(l));
+    slod_level_data d;
+    slod_level_data_init(&d);
+    ASSERT_EQ(slod_level_get(c.ctx, chain, l, &d), SLOD_OK);
+    if (l == 0) {
+      EXPECT_EQ(d.range_count, 4u);
+      EXPECT_EQ(d.triangle_count, 39936u);
+    }
+    uint32_t next = 0;
+    for (uint32_t r = 0; r < d.range_count; ++r) {
+      EXPECT_EQ(d.ranges[r].first_index, next);
+      EXPECT_EQ(d.ranges[r].material, d.ranges[r].source_range);
+      EXPECT_LT(d.ranges[r].material, 6u);
+      EXPECT_GT(d.ranges[r].index_count, 0u);
+      next += d.ranges[r].index_count;
+    }
+    EXPECT_EQ(next, d.range_count ? 3 * d.triangle_count : 0u);
+  }
 }
