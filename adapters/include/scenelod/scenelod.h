@@ -27,9 +27,11 @@
  *   through *_init) is refused with SLOD_ERROR_INVALID_ARGUMENT and a message naming the struct;
  * - arrays of structs the library writes (slod_select's output) come with their element stride in
  *   bytes (the caller's sizeof); the library writes only min(stride, its own sizeof) bytes per element;
- * - slod_allocator is nested in slod_context_desc and never grows.
+ * - arrays of size-tagged structs the caller passes (slod_mesh_desc.attributes) are stepped by their
+ *   elements' size, which must be the same for all; each element is read as a single struct is;
+ * - slod_allocator (nested in slod_context_desc) and slod_index_range never grow.
  * A binary built against a newer header needs a library at least as new (as for any shared library).
- * docs/INTEGRATION.md ("Migration") lists what changed between major versions. */
+ * docs/INTEGRATION.md ("Migration") lists what changed between versions. */
 #ifndef SCENELOD_SCENELOD_H
 #define SCENELOD_SCENELOD_H
 
