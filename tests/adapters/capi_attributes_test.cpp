@@ -150,9 +150,10 @@ slod_chain_desc chainDesc() {
 }
 
 // a chain of 4 simplified levels from `mesh`, which must be accepted
-slod_chain build(const Context& c, const slod_mesh_desc& mesh) {
+slod_chain build(const Context& c, const slod_mesh_desc& mesh, slod_method method = SLOD_METHOD_FLOATING) {
   slod_chain chain = SLOD_NULL_CHAIN;
-  const slod_chain_desc cd = chainDesc();
+  slod_chain_desc cd = chainDesc();
+  cd.method = method;
   EXPECT_EQ(slod_chain_build(c.ctx, &mesh, &cd, &chain), SLOD_OK) << c.message();
   return chain;
 }
@@ -238,15 +239,19 @@ TEST(CapiAttributes, LevelZeroReturnsTheInputStreamsExactly) {
   EXPECT_NE(c.message().find("level 0 has 5 attribute streams, not stream 5"), std::string::npos) << c.message();
 }
 
-TEST(CapiAttributes, EveryLevelReturnsWhatItsMeshHolds) {
+namespace {
+
+// every level of a chain built through the C API with `method` against the chain lodcore builds from
+// the same mesh with the same parameters (`lod_method`; deterministic)
+void checkLevelsAgainstLodcore(slod_method method, LodMethod lod_method) {
   Context c;
   TexturedGrid g(24);
-  const slod_chain chain = build(c, g.desc);
+  const slod_chain chain = build(c, g.desc, method);
   ASSERT_NE(chain, SLOD_NULL_CHAIN);
-  // the chain lodcore builds from the same mesh with the same parameters (deterministic)
   LodChain expected;
   ChainParams params;
   params.level_count = 4;
+  params.cluster.method = lod_method;
   ASSERT_TRUE(buildChain(g.mesh(), params, expected).ok());
   ASSERT_EQ(slod_chain_level_count(c.ctx, chain), expected.levels.size());
   for (uint32_t l = 0; l < expected.levels.size(); ++l) {
@@ -314,6 +319,20 @@ TEST(CapiAttributes, EveryLevelReturnsWhatItsMeshHolds) {
       }
       EXPECT_NEAR(sum, 1.0f, 1e-4f);
     }
+  }
+}
+
+}  // namespace
+
+TEST(CapiAttributes, EveryLevelReturnsWhatItsMeshHolds) {
+  ChainParams floating;  // the C API's SLOD_METHOD_FLOATING: the clustering defaults
+  const std::pair<slod_method, LodMethod> methods[] = {{SLOD_METHOD_FLOATING, floating.cluster.method},
+                                                       {SLOD_METHOD_UNIFORM, LodMethod::kUniform},
+                                                       {SLOD_METHOD_ZHANG, LodMethod::kZhang},
+                                                       {SLOD_METHOD_SCROOGE, LodMethod::kScrooge}};
+  for (const auto& [method, lod_method] : methods) {
+    SCOPED_TRACE("method " + std::to_string(int(method)));
+    checkLevelsAgainstLodcore(method, lod_method);
   }
 }
 
