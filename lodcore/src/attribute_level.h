@@ -15,6 +15,10 @@ namespace scenelod::detail {
 // than one distinct triangle group
 bool hasAttributes(const Mesh& m);
 
+// A mesh without attributes whose triangles all carry one group (a material index other than 0,
+// as scene::flattenScene writes) keeps it: every triangle of its level `out` gets that group.
+void carryUniformGroup(const Mesh& in, Mesh& out);
+
 // A mesh made ready for attribute levels once (a chain's levels share it): welded (a non-indexed
 // input would otherwise be one UV chart per triangle) and split into UV charts.
 struct AttributeMesh {
@@ -23,13 +27,15 @@ struct AttributeMesh {
   bool did_weld = false;
   std::vector<uint32_t> input_vertex;  // per welded vertex: its first vertex in the input
   std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts)
-  std::vector<uint32_t> chart_group;   // per chart: its triangle group
+  // per triangle: what each corner adds to its group's weight, a third of the area (floored at 1e-6
+  // of the mean triangle's, so that a group of degenerate triangles takes the plain mean)
+  std::vector<float> corner_weight;
 
   // the mesh the levels cluster: the welded copy, or the input where nothing welded
   const Mesh& mesh() const { return did_weld ? welded : *input; }
 };
 
-// Welds a copy of `in` (kept only where a vertex was removed) and computes its charts. Keeps a
+// Welds a copy of `in` (made only where a vertex is removed) and computes its charts. Keeps a
 // pointer to `in`, which must outlive `out`. Precondition: validateMesh(in) passes.
 void makeAttributeMesh(const Mesh& in, AttributeMesh& out);
 

@@ -468,6 +468,7 @@ void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const Cluster
   const Clock::time_point start = Clock::now();
   LodLevel& level = out_.levels[k + 1];
   detail::finishLevel(parts, cp, level.mesh);
+  detail::carryUniformGroup(original_, level.mesh);
   level.bounds = computeBoundingSphere(level.mesh);
   stats_.level_seconds[k] = seconds + since(start);
   const size_t d = ++done_;

@@ -437,3 +437,19 @@ TEST(AttributeLevel, SourceVerticesOfSingleLevels) {
     }
   }
 }
+
+TEST(AttributeLevel, OneGroupOtherThanZeroIsKeptByThePlainPath) {
+  Mesh in = test::makeSphere(glm::vec3(0.0f), 1.0f, 16, 32);
+  in.triangle_groups.assign(in.triangleCount(), 5u);
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(in, params(LodMethod::kFloatingNearest, 0.3f), out).ok());
+  ASSERT_GT(out.triangleCount(), 0u);
+  EXPECT_EQ(out.triangle_groups, std::vector<uint32_t>(out.triangleCount(), 5u));
+  EXPECT_TRUE(out.uvs.empty());
+  ChainParams cp;
+  cp.level_count = 3;
+  LodChain chain;
+  ASSERT_TRUE(buildChain(in, cp, chain).ok());
+  for (size_t k = 1; k < chain.levelCount(); ++k)
+    EXPECT_EQ(chain.levels[k].mesh.triangle_groups, std::vector<uint32_t>(chain.levels[k].mesh.triangleCount(), 5u));
+}
