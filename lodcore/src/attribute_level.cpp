@@ -40,7 +40,16 @@ void makeAttributeMesh(const Mesh& in, AttributeMesh& out) {
     for (size_t i = old_to_new.size(); i-- > 0;) out.input_vertex[old_to_new[i]] = static_cast<uint32_t>(i);
   }
   const Mesh& m = out.mesh();
-  computeUvCharts(m, out.chart);
+  // without texture coordinates there is no seam to keep: a group's pieces share their clusters'
+  // vertices, as in the plain path (BrainStem's 515 pieces would otherwise split its clusters)
+  const bool any_uvs = !m.uvs.empty() || std::any_of(m.extra_uvs.begin(), m.extra_uvs.end(),
+                                                      [](const std::vector<glm::vec2>& set) { return !set.empty(); });
+  if (any_uvs) {
+    computeUvCharts(m, out.chart);
+  } else {
+    out.chart.resize(m.triangleCount());
+    for (size_t t = 0; t < out.chart.size(); ++t) out.chart[t] = m.triangleGroup(t);
+  }
   const size_t tn = m.triangleCount();
   out.corner_weight.resize(tn);
   double total = 0.0;

@@ -26,7 +26,8 @@ struct AttributeMesh {
   Mesh welded;                         // used only where welding removed a vertex
   bool did_weld = false;
   std::vector<uint32_t> input_vertex;  // per welded vertex: its first vertex in the input
-  std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts)
+  std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts), or its
+                                       // triangle group where the mesh has no texture coordinates
   // per triangle: what each corner adds to its group's weight, a third of the area (floored at 1e-6
   // of the mean triangle's, so that a group of degenerate triangles takes the plain mean)
   std::vector<float> corner_weight;
