@@ -332,14 +332,15 @@ void OutputVertices::addTriangles(const std::vector<uint32_t>& kept, const std::
     face[i] = l > 0.0f ? glm::vec4(n / l, l) : glm::vec4(0.0f);
   }
   // each cluster's output corners, in order (a counting sort)
-  std::vector<uint32_t> offset(nc + 1, 0), corners(3 * kn), corner_cluster(3 * kn);
+  // (each corner's cluster held in out.triangles until the corner's vertex takes its place)
+  std::vector<uint32_t> offset(nc + 1, 0), corners(3 * kn);
+  uint32_t* corner_cluster = out.triangles.data();
   for (size_t i = 0; i < kn; ++i)
     for (int k = 0; k < 3; ++k) corner_cluster[3 * i + k] = cluster_of_[m_.triangles[3 * size_t(kept[i]) + k]];
-  for (uint32_t c : corner_cluster) ++offset[c + 1];
+  for (size_t i = 0; i < 3 * kn; ++i) ++offset[corner_cluster[i] + 1];
   for (size_t c = 0; c < nc; ++c) offset[c + 1] += offset[c];
   std::vector<uint32_t> fill(offset.begin(), offset.end() - 1);
   for (size_t i = 0; i < 3 * kn; ++i) corners[fill[corner_cluster[i]]++] = static_cast<uint32_t>(i);
-  std::vector<uint32_t>().swap(corner_cluster);
   // normals.cpp's sufficient test for a cluster whose faces all lie within the crease angle of each
   // other: each face within alpha of their normalised sum, 2 alpha the crease angle less a margin
   // for rounding; every corner's sum is then the sum of all its faces, in order (the same bits)
@@ -417,25 +418,42 @@ void writeSkin(const Mesh& m, const Assignment& a, const std::vector<uint32_t>& 
 
 }  // namespace
 
-Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
-                            std::vector<uint32_t>* source_vertex, ClusterStats* stats) {
-  out = Mesh();
-  if (source_vertex) source_vertex->clear();
+Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, AttributeLevelParts& parts,
+                            ClusterStats* stats) {
+  parts = AttributeLevelParts();
   if (stats) *stats = ClusterStats();
-  const Mesh& m = am.mesh();
-  Assignment a;
+  Assignment& a = parts.assignment;
   if (Error e = assign(p, params, a); !e.ok()) return e;
   splitSkinClusters(p, a);
-  Representatives r;
-  synthesize(p, a, params.synthesis, r);
-  Eliminated el;
-  eliminate(p, a, params.keep_edges, params.keep_points, true, el);
-  std::vector<uint32_t>().swap(el.triangles);  // (the pass below keeps triangles per group)
-  const uint32_t* cluster_of = a.cluster_of.data();
+  synthesize(p, a, params.synthesis, parts.representatives);
+  eliminate(p, a, params.keep_edges, params.keep_points, true, parts.eliminated);
+  std::vector<uint32_t>().swap(parts.eliminated.triangles);  // (the output pass keeps triangles per group)
+  if (stats) {
+    stats->cluster_count = a.cluster_count;
+    stats->collapsed_triangles = parts.eliminated.collapsed_triangles;
+    const Mesh& m = *p.mesh;
+    float max_d2 = 0.0f;
+    for (size_t v = 0; v < a.cluster_of.size(); ++v)
+      if (a.cluster_of[v] != kNone) {
+        const glm::vec3 d = m.positions[v] - parts.representatives.positions[a.cluster_of[v]];
+        max_d2 = std::max(max_d2, glm::dot(d, d));
+      }
+    stats->max_error = std::sqrt(max_d2);
+  }
+  return {};
+}
 
+void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
+                          std::vector<uint32_t>* source_vertex) {
+  out = Mesh();
+  if (source_vertex) source_vertex->clear();
+  const Mesh& m = am.mesh();
+  const Assignment& a = parts.assignment;
+  Eliminated& el = parts.eliminated;
+  const uint32_t* cluster_of = a.cluster_of.data();
   AttributeGroups groups(m, a.cluster_count);
   gatherGroups(m, am, cluster_of, groups);
-  OutputVertices vertices(m, r, cluster_of, groups);
+  OutputVertices vertices(m, parts.representatives, cluster_of, groups);
   vertices.addTriangles(survivingTriangles(m, cluster_of, a.cluster_count), am.chart, params.crease_angle_deg, out);
   out.edges.resize(el.edges.size());
   for (size_t i = 0; i < el.edges.size(); ++i) out.edges[i] = vertices.edgeVertex(el.edges[i]);
@@ -445,7 +463,6 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
   for (size_t i = 0; i < el.points.size(); ++i) out.points[i] = vertices.edgeVertex(el.points[i]);
   vertices.write(out);
   if (m.skinned()) writeSkin(m, a, vertices.groupOfVertex(), groups, out);
-
   if (source_vertex) {
     const std::vector<uint32_t>& group_of = vertices.groupOfVertex();
     source_vertex->resize(group_of.size());
@@ -454,17 +471,16 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
       (*source_vertex)[i] = am.did_weld ? am.input_vertex[v] : v;
     }
   }
-  if (stats) {
-    stats->cluster_count = a.cluster_count;
-    stats->collapsed_triangles = el.collapsed_triangles;
-    float max_d2 = 0.0f;
-    for (size_t v = 0; v < a.cluster_of.size(); ++v)
-      if (cluster_of[v] != kNone) {
-        const glm::vec3 d = m.positions[v] - r.positions[cluster_of[v]];
-        max_d2 = std::max(max_d2, glm::dot(d, d));
-      }
-    stats->max_error = std::sqrt(max_d2);
-  }
+  parts = AttributeLevelParts();
+}
+
+Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
+                            std::vector<uint32_t>* source_vertex, ClusterStats* stats) {
+  out = Mesh();
+  if (source_vertex) source_vertex->clear();
+  AttributeLevelParts parts;
+  if (Error e = clusterAttributeParts(p, params, parts, stats); !e.ok()) return e;
+  finishAttributeLevel(am, params, parts, out, source_vertex);
   return {};
 }
 

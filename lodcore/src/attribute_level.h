@@ -47,6 +47,19 @@ void makeAttributeMesh(const Mesh& in, AttributeMesh& out);
 Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
                             std::vector<uint32_t>* source_vertex, ClusterStats* stats);
 
+// clusterAttributeLevel in two steps, so that a chain can free the prepared mesh's arrays between
+// them: the first (assignment with the skin split, synthesis, elimination, the stats) reads them;
+// the second (the output pass, which frees `parts`) reads only the attribute mesh.
+struct AttributeLevelParts {
+  Assignment assignment;
+  Representatives representatives;
+  Eliminated eliminated;  // its edges and points (its triangles are freed: the output pass makes its own)
+};
+Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, AttributeLevelParts& parts,
+                            ClusterStats* stats);
+void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
+                          std::vector<uint32_t>* source_vertex);
+
 // clusterPrepared and clusterMesh for a mesh with attributes: weld, charts, and (where welding
 // removed vertices) a preparation of the welded mesh with `prepared`'s grading
 Error clusterAttributeMesh(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out,
