@@ -443,6 +443,28 @@ Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, 
   return {};
 }
 
+// each edge and point in the triangle group (material) of its first vertex's attribute group: a thin
+// part collapsed into thick edges keeps the material its triangles had. A group no triangle made
+// (vertices only edges and points use) takes the mesh's first triangle group.
+void writeEdgeAndPointGroups(const AttributeMesh& am, const AttributeGroups& groups,
+                             const std::vector<uint32_t>& group_of_vertex, Mesh& out) {
+  if (out.edges.empty() && out.points.empty()) return;
+  const Mesh& m = am.mesh();
+  std::vector<uint32_t> chart_group;  // (a chart lies in one triangle group)
+  for (size_t t = 0; t < am.chart.size(); ++t) {
+    if (am.chart[t] >= chart_group.size()) chart_group.resize(size_t(am.chart[t]) + 1, 0);
+    chart_group[am.chart[t]] = m.triangleGroup(t);
+  }
+  auto groupOf = [&](uint32_t v) {
+    const uint32_t chart = groups[group_of_vertex[v]].chart;
+    return chart == kNone ? m.triangleGroup(0) : chart_group[chart];
+  };
+  out.edge_groups.resize(out.edgeCount());
+  for (size_t e = 0; e < out.edgeCount(); ++e) out.edge_groups[e] = groupOf(out.edges[2 * e]);
+  out.point_groups.resize(out.pointCount());
+  for (size_t i = 0; i < out.pointCount(); ++i) out.point_groups[i] = groupOf(out.points[i]);
+}
+
 void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
                           std::vector<uint32_t>* source_vertex) {
   out = Mesh();
@@ -462,6 +484,7 @@ void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, 
   out.points.resize(el.points.size());
   for (size_t i = 0; i < el.points.size(); ++i) out.points[i] = vertices.edgeVertex(el.points[i]);
   vertices.write(out);
+  if (!m.triangle_groups.empty()) writeEdgeAndPointGroups(am, groups, vertices.groupOfVertex(), out);
   if (m.skinned()) writeSkin(m, a, vertices.groupOfVertex(), groups, out);
   if (source_vertex) {
     const std::vector<uint32_t>& group_of = vertices.groupOfVertex();

@@ -163,6 +163,12 @@ Error validateMeshScanned(const Mesh& m, const std::string& what, bool coordinat
     return {Status::kInvalidMesh, what + ": " + std::to_string(m.triangle_groups.size()) + " triangle groups for " +
                                       std::to_string(m.triangleCount()) + " triangles"};
   if (Error e = checkIndices(m.points, 1, n, "point", what); !e.ok()) return e;
+  if (!m.edge_groups.empty() && m.edge_groups.size() != m.edgeCount())
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.edge_groups.size()) + " edge groups for " +
+                                      std::to_string(m.edgeCount()) + " edges"};
+  if (!m.point_groups.empty() && m.point_groups.size() != m.pointCount())
+    return {Status::kInvalidMesh, what + ": " + std::to_string(m.point_groups.size()) + " point groups for " +
+                                      std::to_string(m.pointCount()) + " points"};
   if (!m.edge_thickness.empty()) {
     if (m.edge_thickness.size() != m.edgeCount())
       return {Status::kInvalidMesh, what + ": " + std::to_string(m.edge_thickness.size()) +

@@ -153,6 +153,8 @@ size_t weldedCopy(const Mesh& m, Mesh& out, std::vector<uint32_t>* old_to_new) {
     out.edge_thickness = m.edge_thickness;
     out.points = remapped(m.points, to);
     out.triangle_groups = m.triangle_groups;
+    out.edge_groups = m.edge_groups;
+    out.point_groups = m.point_groups;
     out.face_offsets = m.face_offsets;
     out.face_corners = remapped(m.face_corners, to);
   }

@@ -155,6 +155,38 @@ TEST(TexturedRender, TexcoordSetFactorAndColor0) {
   EXPECT_EQ(p[2], 0);
 }
 
+// A thick edge across the picture in group 1, whose material is a white texture tinted green: it
+// draws green (its material at its vertices' coordinates), not the untextured edges' blue.
+TEST(TexturedRender, ThickEdgesTakeTheirGroupsMaterial) {
+  const Texture white = makeChecker(1, 4, 255);
+  Texture plain;
+  plain.width = plain.height = 1;
+  plain.rgba8 = {255, 255, 255, 255};
+  Mesh edge;
+  edge.positions = {{-1, 0, 0}, {1, 0, 0}};
+  edge.uvs = {{0.5f, 0.5f}, {0.5f, 0.5f}};
+  edge.edges = {0, 1};
+  edge.edge_thickness = {0.5f};
+  edge.edge_groups = {1};
+  std::vector<Material> mats(2);
+  mats[0].texture = &white;
+  mats[0].base_color = glm::vec4(1.0f, 0.0f, 0.0f, 1.0f);
+  mats[1].texture = &plain;
+  mats[1].base_color = glm::vec4(0.0f, 1.0f, 0.0f, 1.0f);
+  RenderParams p;
+  p.width = p.height = 64;
+  p.view = standardView(4);
+  p.frame = Sphere{glm::vec3(0.0f), 1.0f};
+  p.materials = mats;
+  p.ambient = 1.0f;
+  Image img;
+  ASSERT_TRUE(renderMesh(edge, p, img).ok());
+  const uint8_t* c = img.pixel(32, 32);
+  EXPECT_EQ(c[0], 0);
+  EXPECT_EQ(c[1], 255);
+  EXPECT_EQ(c[2], 0);
+}
+
 TEST(TexturedRender, MissingMaterialIsWhiteAndMissingUvsShowTheMean) {
   const Texture checker = makeChecker(2, 8);
   std::vector<Material> mats(1);

@@ -152,6 +152,36 @@ TEST(AttributeLevel, TwoMaterialsStaySeparateAtEveryLevel) {
   }
 }
 
+// A plate (group 0) and, apart from it, a strip 0.01 wide (group 1) that a cell of 0.1 collapses
+// into thick edges: the edges keep the strip's group, so a renderer draws them in its material.
+TEST(AttributeLevel, ThickEdgesKeepTheGroupOfTheirTriangles) {
+  Mesh in = test::makeGrid(16, 1.0f);
+  in.triangle_groups.assign(in.triangleCount(), 0u);
+  const uint32_t base = static_cast<uint32_t>(in.positions.size());
+  for (int i = 0; i <= 10; ++i) {
+    in.positions.push_back(glm::vec3(0.1f * float(i), 2.0f, 0.0f));
+    in.positions.push_back(glm::vec3(0.1f * float(i), 2.01f, 0.0f));
+  }
+  for (uint32_t i = 0; i < 10; ++i) {
+    const uint32_t a = base + 2 * i, b = a + 1, c = a + 2, d = a + 3;
+    in.triangles.insert(in.triangles.end(), {a, c, b, b, c, d});
+    in.triangle_groups.insert(in.triangle_groups.end(), {1u, 1u});
+  }
+  in.normals.clear();
+  for (LodMethod method : kMethods) {
+    Mesh out;
+    ASSERT_TRUE(clusterMesh(in, params(method, 0.1f), out).ok());
+    ASSERT_TRUE(validateMesh(out, "level").ok());
+    ASSERT_GT(out.edgeCount(), 0u) << lodMethodName(method);
+    ASSERT_EQ(out.edge_groups.size(), out.edgeCount());
+    for (size_t e = 0; e < out.edgeCount(); ++e) {
+      const float y = out.positions[out.edges[2 * e]].y;
+      EXPECT_EQ(out.edge_groups[e], y > 1.5f ? 1u : 0u) << lodMethodName(method) << " edge " << e;
+    }
+    EXPECT_EQ(out.point_groups.size(), out.pointCount());
+  }
+}
+
 TEST(AttributeLevel, StrippedMeshClustersAsThePlainPath) {
   // an indexed mesh (welding removes nothing): the same assignment, so the same representatives and
   // the same surviving cluster triangles; only the vertices split by attribute group differ

@@ -54,8 +54,27 @@ Shader::Shader(const Mesh& mesh, Span<const Material> materials) : mesh_(mesh), 
   }
 }
 
+glm::vec3 Shader::roundBaseColor(const RayHit& h) const {
+  // rounds are the edges in order, then the points (embree_scene.cpp)
+  const bool point = h.kind == 2;
+  const size_t i = point ? h.prim - mesh_.edgeCount() : h.prim;
+  const uint32_t group = point ? mesh_.pointGroup(i) : mesh_.edgeGroup(i);
+  const glm::vec3 color0 = has_colors_ ? h.color : glm::vec3(1.0f);
+  if (group >= materials_.size()) return color0;
+  const Material& m = materials_[group];
+  const glm::vec3 c = glm::vec3(m.base_color) * color0;
+  if (!m.texture) return c;
+  const std::vector<glm::vec2>* uvs = uvs_[group];
+  if (!uvs) return c * fallback_[group];
+  const uint32_t a = point ? mesh_.points[i] : mesh_.edges[2 * i], b = point ? a : mesh_.edges[2 * i + 1];
+  const glm::vec2 uv = 0.5f * (glm::vec2(m.uv_transform * glm::vec3((*uvs)[a], 1.0f)) +
+                               glm::vec2(m.uv_transform * glm::vec3((*uvs)[b], 1.0f)));
+  return c * glm::vec3(filtered_[group]->sample(uv, 0.0f, m.wrap_s, m.wrap_t));
+}
+
 glm::vec3 Shader::baseColor(const RayHit& h, const PixelFootprint& fp) const {
-  if (h.kind != 0 || materials_.empty()) return h.color;
+  if (materials_.empty()) return h.color;
+  if (h.kind != 0) return roundBaseColor(h);
   const glm::vec3 color0 = has_colors_ ? h.color : glm::vec3(1.0f);
   const uint32_t group = mesh_.triangleGroup(h.prim);
   if (group >= materials_.size()) return color0;  // no material: white

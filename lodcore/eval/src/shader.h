@@ -34,6 +34,8 @@ class Shader {
 
   // Linear base colour of the hit: factor x texture x COLOR_0 with materials, else the hit's colour.
   glm::vec3 baseColor(const RayHit& h, const PixelFootprint& fp) const;
+  // a thick edge's or a point's: its group's material at the mean of its vertices' coordinates
+  glm::vec3 roundBaseColor(const RayHit& h) const;
 
   // Headlight Lambert + ambient of the base colour, as 8-bit sRGB into px[0..2]. Thread-safe.
   void shade(const RayHit& h, const PixelFootprint& fp, float ambient, bool smooth, uint8_t* px) const;

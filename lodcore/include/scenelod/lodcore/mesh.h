@@ -53,6 +53,10 @@ struct Mesh {
   // the primitive (material) each triangle belongs to, one per triangle; empty = all in group 0.
   // Triangles of different groups never merge and a group border is a seam between UV charts.
   std::vector<uint32_t> triangle_groups;
+  // the same for edges and points (a thin part collapsed into a thick edge keeps its material):
+  // empty = all in group 0, else one per edge / point
+  std::vector<uint32_t> edge_groups;
+  std::vector<uint32_t> point_groups;
 
   // original polygon faces (optional): face f has corners face_corners[face_offsets[f] ..
   // face_offsets[f+1]); face_offsets is empty or face_count + 1 long, starting at 0
@@ -68,6 +72,8 @@ struct Mesh {
 
   float edgeThickness(size_t e) const { return edge_thickness.empty() ? 0.0f : edge_thickness[e]; }
   uint32_t triangleGroup(size_t t) const { return triangle_groups.empty() ? 0u : triangle_groups[t]; }
+  uint32_t edgeGroup(size_t e) const { return edge_groups.empty() ? 0u : edge_groups[e]; }
+  uint32_t pointGroup(size_t p) const { return point_groups.empty() ? 0u : point_groups[p]; }
   bool skinned() const { return !joints.empty(); }
 };
 
