@@ -11,6 +11,7 @@
 #include <glm/vec4.hpp>
 
 #include "scenelod/lodcore/mesh.h"
+#include "scenelod/lodcore/span.h"
 #include "scenelod/lodcore/status.h"
 
 namespace scenelod::scene {
@@ -119,5 +120,7 @@ std::vector<int32_t> objectNodes(const SceneData& scene);
 // World transform of every node (identity parent for roots); nodes not reachable from the roots get
 // their chain of parents applied all the same.
 std::vector<glm::mat4> worldTransforms(const SceneData& scene);
+// The same from the given local transforms, one per node (a pose: skin_pose.h's animatedLocals).
+std::vector<glm::mat4> worldTransforms(const SceneData& scene, Span<const glm::mat4> locals);
 
 }  // namespace scenelod::scene
