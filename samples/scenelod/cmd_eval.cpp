@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "command.h"
+#include "eval_animated.h"
 #include "eval_support.h"
 #include "scenelod/eval/metrics.h"
 #include "scenelod/eval/render.h"
@@ -16,6 +17,7 @@ namespace {
 const char* kUsage =
     "usage: scenelod eval ORIGINAL SIMPLIFIED [--json] [--samples N] [--resolution N] [--force]\n"
     "       scenelod eval MODEL --chain [--levels N] [--pixels X] [--json] [--samples N]\n"
+    "       scenelod eval MODEL --animated [LEVEL...] [--levels N] [--json] [--samples N]\n"
     "\n"
     "Measures how far SIMPLIFIED is from ORIGINAL (OBJ, glTF or GLB; each flattened to one\n"
     "world-space mesh):\n"
@@ -33,7 +35,12 @@ const char* kUsage =
     "With --chain, builds MODEL's LOD chain (buildChain, default settings, --levels simplified levels,\n"
     "default 8) and prints per level its counts, cell width, Hausdorff and RMS against level 0, and\n"
     "per transition the popping: the image error between levels k and k+1 at the distance where the\n"
-    "selector switches (cell width of k+1 = X pixels, --pixels X, default 1).\n";
+    "selector switches (cell width of k+1 = X pixels, --pixels X, default 1).\n"
+    "\n"
+    "With --animated, builds the chain of every mesh MODEL draws with a skin (as --chain does) and\n"
+    "poses the original and each level (the LEVEL indices given, else all) at 16 evenly spaced times\n"
+    "of every animation; prints per level the bind-pose Hausdorff and the worst posed one. A level\n"
+    "without joints and weights is reported as carrying no skin and is not posed.\n";
 
 int runChain(const std::string& path, long levels, double pixels, size_t samples, bool json) {
   Mesh mesh;
@@ -92,7 +99,7 @@ int runChain(const std::string& path, long levels, double pixels, size_t samples
 }
 
 int runEval(const std::vector<std::string>& argv) {
-  Args args(argv, {"--json", "--force", "--chain"}, {"--samples", "--resolution", "--levels", "--pixels"});
+  Args args(argv, {"--json", "--force", "--chain", "--animated"}, {"--samples", "--resolution", "--levels", "--pixels"});
   long samples = 100000, resolution = 256, levels = 8;
   double pixels = 1.0;
   args.getInt("--samples", samples);
@@ -100,6 +107,14 @@ int runEval(const std::vector<std::string>& argv) {
   args.getInt("--levels", levels);
   args.getDouble("--pixels", pixels);
   if (!args.ok()) return usageError("eval", args.error());
+  if (args.has("--animated")) {
+    if (args.has("--chain")) return usageError("eval", "--animated and --chain exclude each other");
+    if (args.positional().empty()) return usageError("eval", "--animated needs MODEL");
+    if (levels < 1 || levels > 32) return usageError("eval", "--levels must be in [1, 32]");
+    if (samples < 1 || samples > 100000000) return usageError("eval", "--samples must be in [1, 1e8]");
+    const std::vector<std::string> level_args(args.positional().begin() + 1, args.positional().end());
+    return runAnimatedEval(args.positional()[0], level_args, levels, samples, args.has("--json"));
+  }
   if (args.has("--chain")) {
     if (args.positional().size() != 1) return usageError("eval", "--chain needs exactly one MODEL");
     if (levels < 1 || levels > 32) return usageError("eval", "--levels must be in [1, 32]");
