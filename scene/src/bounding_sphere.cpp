@@ -265,10 +265,11 @@ Sphere sphereOfSpheres(Span<const Sphere> spheres) {
   return out;
 }
 
-bool meshDrawnWithSkin(const SceneData& scene, int32_t mesh) {
+std::vector<uint8_t> meshesDrawnWithSkin(const SceneData& scene) {
+  std::vector<uint8_t> out(scene.meshes.size(), 0);
   for (const NodeData& node : scene.nodes)
-    if (node.mesh == mesh && node.skin >= 0) return true;
-  return false;
+    if (node.skin >= 0 && node.mesh >= 0 && static_cast<size_t>(node.mesh) < out.size()) out[node.mesh] = 1;
+  return out;
 }
 
 namespace {
@@ -331,10 +332,12 @@ void posedJointSpheres(const SceneData& scene, int32_t node, int32_t animation, 
 Error animatedMeshSphere(const SceneData& scene, int32_t mesh, Span<const Mesh* const> levels, Sphere& out,
                          const std::string& what, uint32_t steps_per_key) {
   std::vector<Sphere> all, bind, prev, cur;
-  // levels without a skin are drawn as stored
+  // levels without a skin, and every level on a node without one, are drawn as stored
+  bool unskinned_node = false;
+  for (const NodeData& node : scene.nodes) unskinned_node = unskinned_node || (node.mesh == mesh && node.skin < 0);
   std::vector<glm::vec3> unposed;
   for (const Mesh* m : levels)
-    if (!m->skinned()) unposed.insert(unposed.end(), m->positions.begin(), m->positions.end());
+    if (!m->skinned() || unskinned_node) unposed.insert(unposed.end(), m->positions.begin(), m->positions.end());
   if (!unposed.empty()) all.push_back(minimalSphere(Span<const glm::vec3>(unposed.data(), unposed.size())));
   for (size_t n = 0; n < scene.nodes.size(); ++n) {
     const NodeData& node = scene.nodes[n];

@@ -38,6 +38,7 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
   out.chain_spheres.resize(n);
   out.build_seconds.assign(n, 0.0);
   std::vector<Error> errors(n);
+  const std::vector<uint8_t> skinned = meshesDrawnWithSkin(data);
 
   // work = primitives, so the bar moves evenly with a mix of large and small meshes
   std::vector<double> work(n);
@@ -70,7 +71,7 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
                                       ": " + e.message);
     } else {
       out.chain_spheres[m] = computeChainBounds(out.chains[m]);
-      if (meshDrawnWithSkin(data, static_cast<int32_t>(m))) errors[m] = animatedChainSphere(data, m, out, what);
+      if (skinned[m]) errors[m] = animatedChainSphere(data, m, out, what);
     }
     out.build_seconds[m] = std::chrono::duration<double>(Clock::now() - t0).count();
     std::lock_guard<std::mutex> lock(progress_mutex);

@@ -915,10 +915,11 @@ Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string&
   out.countChildren();
   out.dirty_from_ = 0;
   out.setChainCount(data.meshes.size());
+  const std::vector<uint8_t> skinned = meshesDrawnWithSkin(data);
   for (size_t m = 0; m < data.meshes.size(); ++m) {
     const Mesh& mesh = data.meshes[m].mesh;
     const int32_t mi = static_cast<int32_t>(m);
-    if (!meshDrawnWithSkin(data, mi)) {
+    if (!skinned[m]) {
       out.chain_spheres_[m] = minimalSphere(Span<const glm::vec3>(mesh.positions.data(), mesh.positions.size()));
       continue;
     }

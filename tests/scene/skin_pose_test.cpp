@@ -406,6 +406,27 @@ TEST(SkinPose, BuildLodsGivesSkinnedChainsAnimatedSpheres) {
   }
 }
 
+TEST(SkinPose, AMeshAlsoDrawnWithoutASkinKeepsItsStoredVerticesInItsSphere) {
+  SceneData s = armScene();
+  const Mesh& mesh = s.meshes[0].mesh;
+  Scene skinned_only;
+  ASSERT_TRUE(Scene::fromSceneData(s, skinned_only, "arm").ok());
+  // the posed arm lies far from the mesh node's origin, where the stored vertices are
+  bool stored_outside = false;
+  for (const glm::vec3& q : mesh.positions)
+    stored_outside |= glm::length(q - skinned_only.chainSpheres()[0].center) > skinned_only.chainSpheres()[0].radius;
+  EXPECT_TRUE(stored_outside);
+  // a second, unskinned node drawing the same mesh draws the stored vertices
+  s.nodes.push_back(NodeData{});
+  s.nodes[4].mesh = 0;
+  s.roots.push_back(4);
+  Scene both;
+  ASSERT_TRUE(Scene::fromSceneData(s, both, "arm").ok());
+  const Sphere chain = both.chainSpheres()[0];
+  for (const glm::vec3& q : mesh.positions) EXPECT_LE(glm::length(q - chain.center), chain.radius);
+  EXPECT_LE(worstEscape(s, 3, mesh, chain, 300), 1e-6f);
+}
+
 TEST(SkinPose, SharedModelsAnimatedSpheresHoldEveryPose) {
   SCENELOD_REQUIRE_SHARED_MODELS();
   for (const char* name : {"Fox/Fox.glb", "BrainStem/BrainStem.glb"}) {

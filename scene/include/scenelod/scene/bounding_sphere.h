@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -43,9 +44,9 @@ Sphere mergeSpheres(const Sphere& a, const Sphere& b);
 // Cost: O(n); allocates O(n) scratch.
 Sphere sphereOfSpheres(Span<const Sphere> spheres);
 
-// Whether some node draws mesh `mesh` with a skin: its bounding sphere must then follow the
-// skin's animations (animatedMeshSphere).
-bool meshDrawnWithSkin(const SceneData& scene, int32_t mesh);
+// One flag per mesh of `scene`: 1 when some node draws it with a skin, so that its bounding sphere
+// must follow the skin's animations (animatedMeshSphere). Cost: one pass over the nodes.
+std::vector<uint8_t> meshesDrawnWithSkin(const SceneData& scene);
 
 // Key interval subdivisions animatedMeshSphere samples by default.
 constexpr uint32_t kAnimatedSphereStepsPerKey = 4;
@@ -53,7 +54,8 @@ constexpr uint32_t kAnimatedSphereStepsPerKey = 4;
 // A sphere in the frame of the nodes that draw mesh `mesh` with a skin, containing `levels` (the
 // mesh and its LOD levels) skinned in the rest pose and all through every animation of the scene,
 // for every such node: the chain sphere of a skinned mesh. Levels without joints cannot be posed
-// and are drawn as stored, so the sphere holds their vertices unposed. The engine moves the node
+// and are drawn as stored, so the sphere holds their vertices unposed, as it holds every level's
+// when some node draws the mesh without a skin. The engine moves the node
 // and its skeleton together (through their common ancestors), so the scene's sphere, the node's
 // world transform x this sphere, follows the character wherever it goes.
 //
