@@ -176,3 +176,26 @@ TEST(ToolConvert, RefusesUnknownOutputAndBadInput) {
   r = runTool({"convert", dir + "/only_in.obj"});
   EXPECT_EQ(r.exit_code, 2);
 }
+
+TEST(ToolInfo, ListsTheLevelsScenelodLodsWrote) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const std::string out = ::testing::TempDir() + "info_duck_lods.glb";
+  const RunResult lods = runTool({"lods", test::sharedModelsDir() + "/Duck/Duck.glb", "-o", out, "--levels", "3"});
+  ASSERT_EQ(lods.exit_code, 0) << lods.err;
+  const RunResult r = runTool({"info", out, "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // one object: the original and three levels, each coarser than the one before
+  const size_t at = r.out.find("\"level_triangles\": [");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  std::istringstream in(r.out.substr(at + 20));
+  std::vector<long long> tris;
+  for (long long n; in >> n;) {
+    tris.push_back(n);
+    char sep = 0;
+    if (!(in >> sep) || sep != ',') break;
+  }
+  ASSERT_EQ(tris.size(), 4u) << r.out;
+  EXPECT_EQ(tris[0], 4212);
+  for (size_t k = 1; k < tris.size(); ++k) EXPECT_LT(tris[k], tris[k - 1]) << "level " << k;
+  std::remove(out.c_str());
+}
