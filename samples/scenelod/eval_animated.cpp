@@ -3,6 +3,7 @@
 // blend skinning (scene/skin_pose.h), which ignores the skinned node's own transform.
 #include "eval_animated.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -131,6 +132,9 @@ Error evalObject(const scene::SceneData& s, const std::vector<std::string>& leve
   return measurePoses(s, obj, chain, dp, diagonal, obj.levels);
 }
 
+// worst posed over bind-pose Hausdorff; NaN (JSON null) for a level equal to the original unposed
+double ratio(const LevelResult& r) { return r.bind > 0.0 ? r.posed / r.bind : NAN; }
+
 std::string poseName(const scene::SceneData& s, const Pose& p) {
   if (p.animation == scene::kRestPose) return "rest pose";
   const std::string& name = s.animations[p.animation].name;
@@ -151,7 +155,7 @@ void printJson(const std::string& path, const scene::SceneData& s, const std::ve
                   r.level, r.triangles, r.skinned ? "true" : "false", jsonNumber(r.bind).c_str());
       if (r.skinned)
         std::printf(", \"posed_hausdorff\": %s, \"ratio\": %s, \"worst_pose\": %s", jsonNumber(r.posed).c_str(),
-                    jsonNumber(r.bind > 0.0 ? r.posed / r.bind : 0.0).c_str(), jsonString(poseName(s, r.worst)).c_str());
+                    jsonNumber(ratio(r)).c_str(), jsonString(poseName(s, r.worst)).c_str());
       std::printf("}");
     }
     std::printf("]}");
@@ -171,7 +175,7 @@ void printTable(const std::string& path, const scene::SceneData& s, const std::v
         continue;
       }
       std::printf("%6zu %10zu %9.4f%% %11.4f%% %7.2f  %s\n", r.level, r.triangles, 100.0 * r.bind, 100.0 * r.posed,
-                  r.bind > 0.0 ? r.posed / r.bind : 0.0, poseName(s, r.worst).c_str());
+                  ratio(r), poseName(s, r.worst).c_str());
     }
   }
 }
