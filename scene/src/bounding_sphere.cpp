@@ -320,8 +320,9 @@ void posedJointSpheres(const SceneData& scene, int32_t node, int32_t animation, 
   const std::vector<glm::mat4> world = worldTransforms(scene, Span<const glm::mat4>(locals.data(), locals.size()));
   skinMatrices(scene, scene.nodes[node].skin, Span<const glm::mat4>(world.data(), world.size()), joints);
   // a node scaled to nothing has no frame; its world sphere is a point whatever this one is
-  glm::mat4 to_node = glm::inverse(world[node]);
-  if (!(std::fabs(glm::determinant(world[node])) > 1e-30f)) to_node = glm::mat4(1.0f);
+  const glm::mat4 frame = nodeFrame(scene, Span<const glm::mat4>(locals.data(), locals.size()), node);
+  glm::mat4 to_node = glm::inverse(frame);
+  if (!(std::fabs(glm::determinant(frame)) > 1e-30f)) to_node = glm::mat4(1.0f);
   out.resize(bind.size());
   for (size_t j = 0; j < bind.size(); ++j)
     out[j] = bind[j].radius < 0.0f ? bind[j] : transformSphere(bind[j], to_node * joints[j]);

@@ -213,6 +213,16 @@ void animatedLocals(const SceneData& scene, int32_t animation, float t, std::vec
     if (driven[i]) out[i] = composeTrs(trs[i]);
 }
 
+glm::mat4 nodeFrame(const SceneData& scene, Span<const glm::mat4> locals, int32_t node) {
+  glm::mat4 m(1.0f);
+  // validateSceneData rules out parent cycles; the count bounds the walk all the same
+  for (size_t depth = 0; node >= 0 && depth < scene.nodes.size(); ++depth) {
+    m = locals[node] * m;
+    node = scene.nodes[node].parent;
+  }
+  return m;
+}
+
 void skinMatrices(const SceneData& scene, int32_t skin, Span<const glm::mat4> world, std::vector<glm::mat4>& out) {
   const SkinData& s = scene.skins[skin];
   out.resize(s.joints.size());

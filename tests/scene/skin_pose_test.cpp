@@ -1,5 +1,6 @@
 #include "scenelod/scene/skin_pose.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -127,13 +128,38 @@ Mesh posed(const SceneData& s, int32_t node, int32_t animation, float t, const M
   return out;
 }
 
-// the world sphere the runtime scene gives node `node` at that pose: its chain sphere moved by the
-// node's animated world transform
-Sphere worldSphere(const SceneData& s, int32_t node, int32_t animation, float t, const Sphere& chain_sphere) {
+// the runtime scene of `s` with chain sphere `chain_sphere` for the mesh of node `node`, driven as
+// an engine drives it: every node's local transform set to the pose, then update()
+class PosedScene {
+ public:
+  PosedScene(const SceneData& s, int32_t node, const Sphere& chain_sphere) : s_(s) {
+    const Error e = Scene::fromSceneData(s, scene_, "test");
+    EXPECT_TRUE(e.ok()) << e.message;
+    EXPECT_TRUE(scene_.setChainSphere(static_cast<uint32_t>(s.nodes[node].mesh), chain_sphere).ok());
+    const std::vector<int32_t> objects = objectNodes(s);
+    object_ = static_cast<size_t>(std::find(objects.begin(), objects.end(), node) - objects.begin());
+  }
+
+  // the object's world sphere at time t of `animation`
+  Sphere sphereAt(int32_t animation, float t) {
+    std::vector<glm::mat4> locals;
+    animatedLocals(s_, animation, t, locals);
+    for (size_t i = 0; i < locals.size(); ++i) EXPECT_TRUE(scene_.setLocal(NodeHandle{uint32_t(i), 0}, locals[i]).ok());
+    scene_.update();
+    return Sphere{scene_.worldCenters()[object_], scene_.worldRadii()[object_]};
+  }
+
+ private:
+  const SceneData& s_;
+  Scene scene_;
+  size_t object_ = 0;
+};
+
+// node `node`'s own frame at a pose (the product of its ancestors' locals and its own)
+glm::mat4 frameAt(const SceneData& s, int32_t node, int32_t animation, float t) {
   std::vector<glm::mat4> locals;
   animatedLocals(s, animation, t, locals);
-  const std::vector<glm::mat4> world = worldTransforms(s, Span<const glm::mat4>(locals.data(), locals.size()));
-  return transformSphere(chain_sphere, world[node]);
+  return nodeFrame(s, Span<const glm::mat4>(locals.data(), locals.size()), node);
 }
 
 void expectNear(const glm::vec3& a, const glm::vec3& b, float tol = 1e-5f) {
@@ -148,8 +174,9 @@ void expectNear(const glm::vec3& a, const glm::vec3& b, float tol = 1e-5f) {
 float worstEscape(const SceneData& s, int32_t node, const Mesh& mesh, const Sphere& chain_sphere, int count) {
   std::mt19937 rng(7);
   float worst = -1.0f;
+  PosedScene scene(s, node, chain_sphere);
   auto check = [&](int32_t a, float t) {
-    const Sphere w = worldSphere(s, node, a, t, chain_sphere);
+    const Sphere w = scene.sphereAt(a, t);
     for (const glm::vec3& p : posed(s, node, a, t, mesh).positions)
       worst = std::max(worst, (glm::length(p - w.center) - w.radius) / w.radius);
   };
@@ -168,9 +195,7 @@ float worstEscape(const SceneData& s, int32_t node, const Mesh& mesh, const Sphe
 Sphere sampledPoseSphere(const SceneData& s, int32_t node, const Mesh& mesh, int count) {
   std::vector<glm::vec3> all;
   auto add = [&](int32_t a, float t) {
-    std::vector<glm::mat4> locals;
-    animatedLocals(s, a, t, locals);
-    const glm::mat4 to_node = glm::inverse(worldTransforms(s, Span<const glm::mat4>(locals.data(), locals.size()))[node]);
+    const glm::mat4 to_node = glm::inverse(frameAt(s, node, a, t));
     for (const glm::vec3& p : posed(s, node, a, t, mesh).positions) all.push_back(glm::vec3(to_node * glm::vec4(p, 1.0f)));
   };
   add(kRestPose, 0.0f);
@@ -349,6 +374,14 @@ TEST(SkinPose, AnimatedSpheresHoldEveryPosedVertexBetweenTheSamples) {
   EXPECT_GT(worstEscape(s, 3, mesh, bind, 200), 0.1f);
   // the object's world sphere is the node's transform of it (the scene follows the node)
   expectNear(scene.worldCenters()[0], chain.center + glm::vec3(5.0f));
+
+  // the character moved by the common ancestor, its mesh node turned and scaled on its own
+  SceneData moved = s;
+  moved.nodes[0].local = glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(-3.0f, 2.0f, 7.0f)), 0.5f, glm::vec3(1, 0, 0));
+  moved.nodes[3].local = glm::scale(glm::rotate(moved.nodes[3].local, 1.5f, glm::vec3(0, 1, 0)), glm::vec3(2.0f));
+  Scene moved_scene;
+  ASSERT_TRUE(Scene::fromSceneData(moved, moved_scene, "arm").ok());
+  EXPECT_LE(worstEscape(moved, 3, mesh, moved_scene.chainSpheres()[0], 500), 1e-6f);
 }
 
 TEST(SkinPose, ChordSpheresCoverNearHalfTurnsBetweenTwoSamples) {

@@ -58,6 +58,12 @@ void animatedLocals(const SceneData& scene, int32_t animation, float t, std::vec
 // negative x scale). Exact, up to rounding, for matrices composed as T x R x S.
 Trs decomposeTrs(const glm::mat4& m);
 
+// Node `node`'s world transform from the given local transforms (one per node): the product of the
+// locals from its root down. This is the frame the runtime Scene moves an object's sphere by, also
+// for a skinned mesh node, whose posed vertices ignore it (and which worldTransforms may report as
+// the identity). Cost: O(depth of the node).
+glm::mat4 nodeFrame(const SceneData& scene, Span<const glm::mat4> locals, int32_t node);
+
 // The skinning matrix of every joint of skin `skin`: world(joint_i) x inverse_bind_i.
 // Preconditions: validateSkinning passed, `skin` in range, `world` one per node. `out` is resized.
 void skinMatrices(const SceneData& scene, int32_t skin, Span<const glm::mat4> world, std::vector<glm::mat4>& out);
