@@ -64,6 +64,9 @@ TEST_F(EvalAnimated, TheFoxIsPosedSixteenTimesPerAnimationAtEveryLevel) {
   for (const std::string& s : skinned) with_skin += s == "true";
   EXPECT_EQ(posed.size(), with_skin) << r.output;
   for (const std::string& p : posed) EXPECT_GT(std::atof(p.c_str()), 0.0) << r.output;
+  // levels bound to the same skin move with the original: a level posed with the wrong matrices
+  // (or not at all) is off by a leg's length, many times its bind-pose error
+  for (const std::string& ratio : jsonValues(r.output, "ratio")) EXPECT_LT(std::atof(ratio.c_str()), 3.0) << r.output;
 
   r = runTool("eval --animated " + fox + " 9 --levels 4");
   EXPECT_EQ(r.code, 1) << r.output;
