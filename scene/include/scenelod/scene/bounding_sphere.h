@@ -74,7 +74,8 @@ constexpr uint32_t kAnimatedSphereStepsPerKey = 4;
 // slack where one joint moves vertices far apart.
 // Preconditions: validateSkinning(scene) passed; `mesh` in range; steps_per_key >= 1.
 // Errors: kInvalidMesh naming `what` when a level's vertex uses a joint at or above the skin's
-// joint count. Cost: O(level vertices + animations' samples x (nodes + joints)); allocates.
+// joint count. Cost: O(level vertices + skinned nodes drawing the mesh x samples x (nodes +
+// joints)); allocates.
 Error animatedMeshSphere(const SceneData& scene, int32_t mesh, Span<const Mesh* const> levels, Sphere& out,
                          const std::string& what, uint32_t steps_per_key = kAnimatedSphereStepsPerKey);
 
