@@ -481,6 +481,7 @@ slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod
     if (!path || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_load_file: null argument");
     scene::SceneData data;
     if (Error e = scene::loadScene(path, data); !e.ok()) return fail(ctx, e);
+    scene::bakeMaterialColors(data);  // a chain of one mesh has no materials: colours carry them
     const Mesh m = scene::flattenScene(data);
     if (Error e = addChain(ctx, m, desc, path, *out_chain); !e.ok()) return fail(ctx, e);
     return ok(ctx);

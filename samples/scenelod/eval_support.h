@@ -12,13 +12,15 @@
 
 namespace scenelod::tool {
 
-// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene).
+// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene),
+// material colours baked into the vertex colours (scene::bakeMaterialColors).
 inline Error loadFlatMesh(const std::string& path, Mesh& out) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) return {Status::kIoError, path + ": no such file"};
   if (S_ISDIR(st.st_mode)) return {Status::kIoError, path + ": is a folder, not a model file"};
   scene::SceneData scene;
   if (Error e = scene::loadScene(path, scene); !e.ok()) return e;
+  scene::bakeMaterialColors(scene);  // the renderer shades by vertex colour
   out = scene::flattenScene(scene);
   return validateMesh(out, path);
 }
