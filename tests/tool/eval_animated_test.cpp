@@ -41,7 +41,7 @@ TEST_F(EvalAnimated, AModelWithoutSkinsIsRefusedWithTheReason) {
   EXPECT_NE(r.output.find("no mesh is drawn with a skin (0 skins, 0 animations read)"), std::string::npos) << r.output;
   r = runTool("eval --animated " + path + " --chain");
   EXPECT_EQ(r.code, 2) << r.output;
-  EXPECT_NE(r.output.find("--animated and --chain exclude each other"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--animated takes neither --chain nor --image"), std::string::npos) << r.output;
   r = runTool("eval --animated");
   EXPECT_EQ(r.code, 2) << r.output;
 }
