@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "command.h"
+#include "eval_animated.h"
 #include "eval_materials.h"
 #include "eval_support.h"
 #include "scenelod/eval/metrics.h"
@@ -18,6 +19,7 @@ const char* kUsage =
     "usage: scenelod eval ORIGINAL SIMPLIFIED [--image] [--json] [--samples N] [--resolution N] [--force]\n"
     "       scenelod eval MODEL --chain [--image [--at-switch K|all]] [--levels N] [--pixels X] [--json]\n"
     "                                   [--samples N] [--resolution N]\n"
+    "       scenelod eval MODEL --animated [LEVEL...] [--levels N] [--json] [--samples N]\n"
     "\n"
     "Measures how far SIMPLIFIED is from ORIGINAL (OBJ, glTF or GLB; each flattened to one\n"
     "world-space mesh):\n"
@@ -44,7 +46,12 @@ const char* kUsage =
     "--at-switch K (or all), level K (every level) is seen instead where the selector switches to\n"
     "it: one pixel is cell width / X, so the window around level 0's bounding sphere (radius r) is\n"
     "2 r X / cell width pixels across (clamped to [8, 1024]), as a perspective camera at that\n"
-    "distance shows it.\n";
+    "distance shows it.\n"
+    "\n"
+    "With --animated, builds the chain of every mesh MODEL draws with a skin (as --chain does) and\n"
+    "poses the original and each level (the LEVEL indices given, else all) at 16 evenly spaced times\n"
+    "of every animation; prints per level the bind-pose Hausdorff and the worst posed one. A level\n"
+    "without joints and weights is reported as carrying no skin and is not posed.\n";
 
 struct ChainOptions {
   long levels = 8;
@@ -179,7 +186,7 @@ int runChain(const std::string& path, const ChainOptions& o) {
 }
 
 int runEval(const std::vector<std::string>& argv) {
-  Args args(argv, {"--json", "--force", "--chain", "--image"},
+  Args args(argv, {"--json", "--force", "--chain", "--image", "--animated"},
             {"--samples", "--resolution", "--levels", "--pixels", "--at-switch"});
   long samples = 100000, resolution = 256, levels = 8;
   double pixels = 1.0;
@@ -193,6 +200,13 @@ int runEval(const std::vector<std::string>& argv) {
   if (resolution < 1 || resolution > 8192) return usageError("eval", "--resolution must be in [1, 8192]");
   if (args.has("--at-switch") && !(args.has("--chain") && image))
     return usageError("eval", "--at-switch needs --chain and --image (only a built chain's levels have a cell width)");
+  if (args.has("--animated")) {
+    if (args.has("--chain") || image) return usageError("eval", "--animated takes neither --chain nor --image");
+    if (args.positional().empty()) return usageError("eval", "--animated needs MODEL");
+    if (levels < 1 || levels > 32) return usageError("eval", "--levels must be in [1, 32]");
+    const std::vector<std::string> level_args(args.positional().begin() + 1, args.positional().end());
+    return runAnimatedEval(args.positional()[0], level_args, levels, samples, args.has("--json"));
+  }
   if (args.has("--chain")) {
     if (args.positional().size() != 1) return usageError("eval", "--chain needs exactly one MODEL");
     if (levels < 1 || levels > 32) return usageError("eval", "--levels must be in [1, 32]");

@@ -1,7 +1,8 @@
 // Bounding spheres: Ritter 1990 ("An efficient bounding sphere", Graphics Gems I) and the minimal
 // enclosing sphere of Welzl 1991 ("Smallest enclosing disks (balls and ellipsoids)") in the
 // move-to-front form of Gärtner 1999 ("Fast and robust smallest enclosing balls"), in double
-// precision with an explicit support set of at most 4 points.
+// precision with an explicit support set of at most 4 points. Skinned meshes: per-joint spheres
+// posed over the animations (bounding_sphere.h, animatedMeshSphere).
 #include "scenelod/scene/bounding_sphere.h"
 
 #include <algorithm>
@@ -10,7 +11,11 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <glm/vec3.hpp>
+
+#include "scenelod/scene/scene.h"
+#include "scenelod/scene/skin_pose.h"
 
 namespace scenelod::scene {
 
@@ -239,6 +244,128 @@ Sphere computeChainBounds(LodChain& chain) {
     all.insert(all.end(), l.mesh.positions.begin(), l.mesh.positions.end());
   }
   return minimalSphere(Span<const glm::vec3>(all.data(), all.size()));
+}
+
+Sphere sphereOfSpheres(Span<const Sphere> spheres) {
+  if (spheres.empty()) return Sphere{};
+  std::vector<glm::vec3> extremes;
+  extremes.reserve(6 * spheres.size());
+  for (const Sphere& s : spheres)
+    for (int axis = 0; axis < 3; ++axis) {
+      glm::vec3 d(0.0f);
+      d[axis] = s.radius;
+      extremes.push_back(s.center + d);
+      extremes.push_back(s.center - d);
+    }
+  Sphere out = minimalSphere(Span<const glm::vec3>(extremes.data(), extremes.size()));
+  double r = 0.0;
+  for (const Sphere& s : spheres)
+    r = std::max(r, glm::length(glm::dvec3(s.center) - glm::dvec3(out.center)) + double(s.radius));
+  out.radius = std::nextafter(static_cast<float>(r), INFINITY);
+  return out;
+}
+
+std::vector<uint8_t> meshesDrawnWithSkin(const SceneData& scene) {
+  std::vector<uint8_t> out(scene.meshes.size(), 0);
+  for (const NodeData& node : scene.nodes)
+    if (node.skin >= 0 && node.mesh >= 0 && static_cast<size_t>(node.mesh) < out.size()) out[node.mesh] = 1;
+  return out;
+}
+
+namespace {
+
+// per joint, the bind-space sphere of every level vertex the joint moves (radius < 0: none)
+Error bindJointSpheres(Span<const Mesh* const> levels, size_t joint_count, const std::string& what,
+                       std::vector<Sphere>& out) {
+  std::vector<std::vector<glm::vec3>> points(joint_count);
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const Mesh& m = *levels[l];
+    if (!m.skinned()) continue;
+    for (size_t v = 0; v < m.joints.size(); ++v)
+      for (int c = 0; c < 4; ++c) {
+        if (m.weights[v][c] == 0.0f) continue;
+        if (m.joints[v][c] >= joint_count)
+          return {Status::kInvalidMesh, what + " level " + std::to_string(l) + ": vertex " + std::to_string(v) +
+                                            " uses joint " + std::to_string(m.joints[v][c]) + " but the skin has " +
+                                            std::to_string(joint_count) + " joints"};
+        points[m.joints[v][c]].push_back(m.positions[v]);
+      }
+  }
+  out.assign(joint_count, Sphere{glm::vec3(0.0f), -1.0f});
+  for (size_t j = 0; j < joint_count; ++j)
+    if (!points[j].empty()) out[j] = minimalSphere(Span<const glm::vec3>(points[j].data(), points[j].size()));
+  return {};
+}
+
+// every key time of an animation's samplers, each interval cut into `steps` equal parts
+std::vector<float> sampleTimes(const AnimationData& a, uint32_t steps) {
+  std::vector<float> keys;
+  for (const AnimationData::Sampler& s : a.samplers) keys.insert(keys.end(), s.times.begin(), s.times.end());
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<float> out;
+  for (size_t k = 0; k < keys.size(); ++k) {
+    out.push_back(keys[k]);
+    if (k + 1 < keys.size())
+      for (uint32_t i = 1; i < steps; ++i) out.push_back(keys[k] + (keys[k + 1] - keys[k]) * (float(i) / float(steps)));
+  }
+  return out;
+}
+
+// the joint spheres of skin `skin` posed at one time, in node `node`'s frame at that time
+void posedJointSpheres(const SceneData& scene, int32_t node, int32_t animation, float t,
+                       const std::vector<Sphere>& bind, std::vector<Sphere>& out) {
+  std::vector<glm::mat4> locals, joints;
+  animatedLocals(scene, animation, t, locals);
+  const std::vector<glm::mat4> world = worldTransforms(scene, Span<const glm::mat4>(locals.data(), locals.size()));
+  skinMatrices(scene, scene.nodes[node].skin, Span<const glm::mat4>(world.data(), world.size()), joints);
+  // a node scaled to nothing has no frame; its world sphere is a point whatever this one is
+  const glm::mat4 frame = nodeFrame(scene, Span<const glm::mat4>(locals.data(), locals.size()), node);
+  glm::mat4 to_node = glm::inverse(frame);
+  if (!(std::fabs(glm::determinant(frame)) > 1e-30f)) to_node = glm::mat4(1.0f);
+  out.resize(bind.size());
+  for (size_t j = 0; j < bind.size(); ++j)
+    out[j] = bind[j].radius < 0.0f ? bind[j] : transformSphere(bind[j], to_node * joints[j]);
+}
+
+}  // namespace
+
+Error animatedMeshSphere(const SceneData& scene, int32_t mesh, Span<const Mesh* const> levels, Sphere& out,
+                         const std::string& what, uint32_t steps_per_key) {
+  std::vector<Sphere> all, bind, prev, cur;
+  // levels without a skin, and every level on a node without one, are drawn as stored
+  bool unskinned_node = false;
+  for (const NodeData& node : scene.nodes) unskinned_node = unskinned_node || (node.mesh == mesh && node.skin < 0);
+  std::vector<glm::vec3> unposed;
+  for (const Mesh* m : levels)
+    if (!m->skinned() || unskinned_node) unposed.insert(unposed.end(), m->positions.begin(), m->positions.end());
+  if (!unposed.empty()) all.push_back(minimalSphere(Span<const glm::vec3>(unposed.data(), unposed.size())));
+  for (size_t n = 0; n < scene.nodes.size(); ++n) {
+    const NodeData& node = scene.nodes[n];
+    if (node.mesh != mesh || node.skin < 0) continue;
+    if (Error e = bindJointSpheres(levels, scene.skins[node.skin].joints.size(), what, bind); !e.ok()) return e;
+    const int32_t ni = static_cast<int32_t>(n);
+    posedJointSpheres(scene, ni, kRestPose, 0.0f, bind, cur);
+    all.insert(all.end(), cur.begin(), cur.end());
+    for (size_t a = 0; a < scene.animations.size(); ++a) {
+      const std::vector<float> times = sampleTimes(scene.animations[a], std::max(steps_per_key, 1u));
+      for (size_t i = 0; i < times.size(); ++i) {
+        posedJointSpheres(scene, ni, static_cast<int32_t>(a), times[i], bind, cur);
+        for (size_t j = 0; j < cur.size(); ++j) {
+          if (cur[j].radius < 0.0f) continue;
+          if (i == 0) { all.push_back(cur[j]); continue; }
+          // the step from the previous sample: the chord's diametral ball, grown by the radius
+          const float chord = glm::length(cur[j].center - prev[j].center);
+          all.push_back(Sphere{(cur[j].center + prev[j].center) * 0.5f,
+                               chord * 0.5f + std::max(cur[j].radius, prev[j].radius)});
+        }
+        std::swap(prev, cur);
+      }
+    }
+  }
+  all.erase(std::remove_if(all.begin(), all.end(), [](const Sphere& s) { return s.radius < 0.0f; }), all.end());
+  out = sphereOfSpheres(Span<const Sphere>(all.data(), all.size()));
+  return {};
 }
 
 }  // namespace scenelod::scene

@@ -12,19 +12,33 @@
 
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/scene.h"
+#include "scenelod/scene/skin_pose.h"
 
 namespace scenelod::scene {
+namespace {
+
+// a skinned mesh's chain sphere follows its animations, every level posed with its own weights
+Error animatedChainSphere(const SceneData& data, size_t m, SceneLods& out, const std::string& what) {
+  std::vector<const Mesh*> levels;
+  for (const LodLevel& level : out.chains[m].levels) levels.push_back(&level.mesh);
+  return animatedMeshSphere(data, static_cast<int32_t>(m), Span<const Mesh* const>(levels.data(), levels.size()),
+                            out.chain_spheres[m], what + " mesh " + std::to_string(m));
+}
+
+}  // namespace
 
 Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& out, Scene* scene,
                 const std::string& what) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
+  if (Error e = validateSkinning(data, what); !e.ok()) return e;
   const size_t n = data.meshes.size();
   out = SceneLods{};
   out.chains.resize(n);
   out.chain_spheres.resize(n);
   out.build_seconds.assign(n, 0.0);
   std::vector<Error> errors(n);
+  const std::vector<uint8_t> skinned = meshesDrawnWithSkin(data);
 
   // work = primitives, so the bar moves evenly with a mix of large and small meshes
   std::vector<double> work(n);
@@ -57,6 +71,7 @@ Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& 
                                       ": " + e.message);
     } else {
       out.chain_spheres[m] = computeChainBounds(out.chains[m]);
+      if (skinned[m]) errors[m] = animatedChainSphere(data, m, out, what);
     }
     out.build_seconds[m] = std::chrono::duration<double>(Clock::now() - t0).count();
     std::lock_guard<std::mutex> lock(progress_mutex);

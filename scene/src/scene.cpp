@@ -18,6 +18,7 @@
 #endif
 
 #include "scenelod/scene/bounding_sphere.h"
+#include "scenelod/scene/skin_pose.h"
 #include "scene_wide.h"
 
 namespace scenelod::scene {
@@ -868,6 +869,7 @@ size_t Scene::update() {
 
 Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string& what) {
   if (Error e = validateSceneData(data, what); !e.ok()) return e;
+  if (Error e = validateSkinning(data, what); !e.ok()) return e;
   out = Scene{};
   const size_t n = data.nodes.size();
   // insert parents before children: a depth-first walk from every parentless node (roots of the
@@ -913,9 +915,18 @@ Error Scene::fromSceneData(const SceneData& data, Scene& out, const std::string&
   out.countChildren();
   out.dirty_from_ = 0;
   out.setChainCount(data.meshes.size());
+  const std::vector<uint8_t> skinned = meshesDrawnWithSkin(data);
   for (size_t m = 0; m < data.meshes.size(); ++m) {
-    const auto& pos = data.meshes[m].mesh.positions;
-    out.chain_spheres_[m] = minimalSphere(Span<const glm::vec3>(pos.data(), pos.size()));
+    const Mesh& mesh = data.meshes[m].mesh;
+    const int32_t mi = static_cast<int32_t>(m);
+    if (!skinned[m]) {
+      out.chain_spheres_[m] = minimalSphere(Span<const glm::vec3>(mesh.positions.data(), mesh.positions.size()));
+      continue;
+    }
+    const Mesh* levels[] = {&mesh};
+    const std::string name = what + " mesh " + std::to_string(m);
+    if (Error e = animatedMeshSphere(data, mi, Span<const Mesh* const>(levels, 1), out.chain_spheres_[m], name); !e.ok())
+      return e;
   }
   for (int32_t node : objectNodes(data)) {
     ObjectDesc d;

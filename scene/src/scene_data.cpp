@@ -129,6 +129,12 @@ std::vector<int32_t> objectNodes(const SceneData& s) {
 }
 
 std::vector<glm::mat4> worldTransforms(const SceneData& s) {
+  std::vector<glm::mat4> locals(s.nodes.size());
+  for (size_t i = 0; i < s.nodes.size(); ++i) locals[i] = s.nodes[i].local;
+  return worldTransforms(s, Span<const glm::mat4>(locals.data(), locals.size()));
+}
+
+std::vector<glm::mat4> worldTransforms(const SceneData& s, Span<const glm::mat4> locals) {
   const size_t n = s.nodes.size();
   std::vector<glm::mat4> world(n, glm::mat4(1.0f));
   std::vector<char> done(n, 0);
@@ -140,7 +146,7 @@ std::vector<glm::mat4> worldTransforms(const SceneData& s) {
     while (p >= 0 && !done[p] && chain.size() <= n) { chain.push_back(p); p = s.nodes[p].parent; }
     glm::mat4 m = p >= 0 && done[p] ? world[p] : glm::mat4(1.0f);
     for (auto c = chain.rbegin(); c != chain.rend(); ++c) {
-      m = m * s.nodes[*c].local;
+      m = m * locals[*c];
       world[*c] = m;
       done[*c] = 1;
     }

@@ -29,10 +29,11 @@ struct SceneLods {
 
 // Builds the chain of every mesh of `data` with lodcore's buildChain, meshes in parallel (TBB, each
 // chain itself parallel over levels), then every level's bounding sphere (LodLevel::bounds, the
-// minimal sphere of the level) and the chain's sphere containing all levels. When `scene` is not
+// minimal sphere of the level) and the chain's sphere containing all levels (for a mesh drawn with
+// a skin, all levels in every pose of the animations: animatedMeshSphere). When `scene` is not
 // null its chain spheres are set from the result (its chain count becomes the mesh count).
-// The chains do not depend on the thread count. Errors: the first failing mesh (lowest index), its
-// message naming `what`, the mesh index and name. Allocates; blocks until done.
+// The chains do not depend on the thread count. Errors: validateSkinning's; the first failing mesh
+// (lowest index), its message naming `what`, the mesh index and name. Allocates; blocks until done.
 Error buildLods(const SceneData& data, const LodBuildParams& params, SceneLods& out, Scene* scene = nullptr,
                 const std::string& what = "scene");
 

@@ -74,8 +74,10 @@ class Scene {
   // Builds the runtime scene from raw data: every node (same parents and local transforms; node i of
   // `data` is nodeHandle(i)) and one object per node with a mesh, numbered as objectNodes() does
   // (object k has dense index k until objects are removed). Chain ids are mesh indices; each
-  // chain's object-space sphere starts as the minimal sphere of its mesh. World transforms and
-  // spheres are current on return. Errors: validateSceneData's. Allocates.
+  // chain's object-space sphere starts as the minimal sphere of its mesh, or for a mesh drawn with a
+  // skin the sphere over its animations (bounding_sphere.h, animatedMeshSphere). World transforms
+  // and spheres are current on return. Errors: validateSceneData's and validateSkinning's
+  // (skin_pose.h). Allocates.
   static Error fromSceneData(const SceneData& data, Scene& out, const std::string& what = "scene");
 
   // ---- chains: their object-space bounding spheres, indexed by chain id ----

@@ -11,6 +11,7 @@
 #include <glm/vec4.hpp>
 
 #include "scenelod/lodcore/mesh.h"
+#include "scenelod/lodcore/span.h"
 #include "scenelod/lodcore/status.h"
 
 namespace scenelod::scene {
@@ -128,6 +129,8 @@ std::vector<int32_t> objectNodes(const SceneData& scene);
 // their chain of parents applied all the same. A node with a mesh and a skin gets the identity
 // (glTF 2.0, "Skins": the skinned mesh node's own transform is ignored); its children do not.
 std::vector<glm::mat4> worldTransforms(const SceneData& scene);
+// The same from the given local transforms, one per node (a pose: skin_pose.h's animatedLocals).
+std::vector<glm::mat4> worldTransforms(const SceneData& scene, Span<const glm::mat4> locals);
 
 // The colours the importer baked before materials were kept, for consumers that draw a mesh by
 // vertex colour alone (SCROOGE's texture averaging, the GL viewer, OBJ output): per vertex, the
