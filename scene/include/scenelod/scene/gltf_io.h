@@ -57,6 +57,33 @@ std::string lowerExtension(const std::string& path);
 Error exportGlb(const std::string& path, const SceneData& scene,
                 const std::vector<const LodChain*>* chains = nullptr);
 
+// Writes the glTF file `input` again as `output` with LOD levels added and everything else kept:
+// `output` is `input`'s own model (tinygltf), so materials, textures, samplers, images, skins,
+// animations, cameras, lights, names, extras and extensions (unknown optional ones included) come
+// through unchanged, mesh and node indices too; level 0 of every mesh is the input mesh itself.
+// `chains[m]` (one per mesh of the file, as importGltf numbers them; null or one level for none)
+// gives the levels: level l of mesh m becomes a mesh "<name>_LOD<l>" whose vertices are shared by
+// one TRIANGLES primitive per triangle group the level still has (group g = source primitive g:
+// its material and KHR_materials_variants mappings; when the level lacks the UV sets the material's
+// textures read, or the tangents its normal map had, an untextured copy of the material appended
+// to the file, base colour factor x the texture's mean from `scene`), LINES with _THICKNESS for
+// edges and POINTS,
+// with every attribute the level mesh has (POSITION, NORMAL, TANGENT, COLOR_0, TEXCOORD_n,
+// JOINTS_0 / WEIGHTS_0). Each node drawing such a mesh gets MSFT_lod ids of new parentless level
+// nodes (as exportGlb writes them) and extras.MSFT_screencoverage; a level node of a skinned node
+// has the same skin and no transform, or, when the level has no weights, no skin and the identity
+// (bind pose; extras.scenelod.skin "dropped"). Levels never carry morph targets
+// (extras.scenelod.morph_targets "dropped"). `notes` (optional) receives those two facts.
+// The output is a GLB (every buffer and image in its binary chunk) or, for a .gltf name, a .gltf
+// with <stem>.bin and images that were files beside it as <stem>_image<i>.<ext>. Every file is
+// replaced atomically after everything succeeded, so `output` may be `input` for a GLB; a .gltf
+// output that would replace a file the input reads is refused. Refused too: a required extension
+// outside the material and texture ones, KHR_mesh_quantization and KHR_lights_punctual (named in
+// the message), and an input that already has MSFT_lod. Never throws.
+// `scene` is importGltf's reading of `input` (for the texture means).
+Error exportGltfLods(const std::string& input, const std::string& output, const SceneData& scene,
+                     const std::vector<const LodChain*>& chains, std::vector<std::string>* notes = nullptr);
+
 // Merges every object of the scene (one copy per node instance) into one world-space mesh, as used
 // to simplify or measure a whole model: positions by the world transform (worldTransforms: skinned
 // mesh nodes in their bind pose), normals by its inverse transpose (renormalised), tangents by its
