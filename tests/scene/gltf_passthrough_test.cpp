@@ -17,19 +17,21 @@ using test::makeDir;
 
 namespace {
 
-// one triangle in a data URI, with a camera, extras, and an optional extension scenelod does not know
+// one triangle in a data URI with a morph target, a camera, a light, extras, and an optional
+// extension scenelod does not know
 std::string triangleGltf(const std::string& required = "") {
-  return std::string(R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_unknown_thing")") +
+  return std::string(R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_unknown_thing","KHR_lights_punctual")") +
          (required.empty() ? "" : ",\"" + required + "\"") + "]" +
          (required.empty() ? "" : ",\"extensionsRequired\":[\"" + required + "\"]") +
          R"(,"extras":{"pipeline":"test"},
+    "extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","color":[1,0.5,0],"intensity":2,"name":"lamp"}]}},
     "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
     "bufferViews":[{"buffer":0,"byteLength":36}],
     "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
     "materials":[{"name":"red","pbrMetallicRoughness":{"baseColorFactor":[1,0,0,1]},"extras":{"note":"kept"}}],
-    "meshes":[{"name":"tri","primitives":[{"attributes":{"POSITION":0},"material":0}]}],
+    "meshes":[{"name":"tri","weights":[0.5],"primitives":[{"attributes":{"POSITION":0},"material":0,"targets":[{"POSITION":0}]}]}],
     "cameras":[{"type":"perspective","perspective":{"yfov":0.8,"znear":0.1}}],
-    "nodes":[{"name":"object","mesh":0,"extensions":{"EXT_unknown_thing":{"answer":42}}},{"name":"eye","camera":0}],
+    "nodes":[{"name":"object","mesh":0,"extensions":{"EXT_unknown_thing":{"answer":42}}},{"name":"eye","camera":0,"extensions":{"KHR_lights_punctual":{"light":0}}}],
     "scenes":[{"nodes":[0,1]}],"scene":0})";
 }
 
@@ -101,7 +103,11 @@ TEST(GltfPassThrough, KeepsUnknownExtensionsExtrasCamerasAndLevelZero) {
   for (const char* key : {"materials", "cameras", "accessors"}) expectKeptArray(a, b, key);
   EXPECT_EQ(withoutDefaults(b["meshes"][0]), withoutDefaults(a["meshes"][0]));  // level 0 is the input mesh itself
   EXPECT_EQ(b["meshes"][1]["primitives"][0]["material"], 0);
-  EXPECT_EQ(b["extensionsUsed"], nlohmann::json::array({"EXT_unknown_thing", "MSFT_lod"}));
+  EXPECT_EQ(b["extensionsUsed"], nlohmann::json::array({"EXT_unknown_thing", "KHR_lights_punctual", "MSFT_lod"}));
+  EXPECT_EQ(withoutDefaults(b["extensions"]), withoutDefaults(a["extensions"]));
+  // the level has no morph targets, and says so
+  EXPECT_FALSE(b["meshes"][1]["primitives"][0].contains("targets"));
+  EXPECT_EQ(b["nodes"][2]["extras"]["scenelod"]["morph_targets"], "dropped");
   // read back: the same scene and a two-level chain
   SceneData s;
   std::vector<LodChain> chains;
