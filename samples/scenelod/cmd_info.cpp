@@ -25,10 +25,16 @@ const char kUsage[] =
     "             triple, degenerate ones included; strips and fans count as their triangles\n"
     "  unique_*   the same counted once per mesh\n"
     "  bounds     world-space box of the drawn vertices\n"
-    "  materials  number of materials\n"
+    "  materials, textures, images, skins, animations\n"
+    "             how many the file has, then per object (node with a mesh): its mesh, each\n"
+    "             primitive's material, the vertex attributes it carries (uv sets, tangents,\n"
+    "             colours, skin weights), its skin and its LOD levels (MSFT_lod, as scenelod lods\n"
+    "             writes them) with their triangle counts\n"
     "\n"
     "  --json       print one JSON object (keys: file, nodes, meshes, objects, vertices, triangles,\n"
-    "               edges, points, unique_vertices, unique_triangles, materials, bounds)\n"
+    "               edges, points, unique_vertices, unique_triangles, materials, textures, images,\n"
+    "               skins, animations, bounds, object_details: [{node, name, mesh, materials,\n"
+    "               attributes, skin, level_triangles}])\n"
     "  -o, --out F  write the report to F instead of standard output";
 
 std::string jsonString(const std::string& s) {
@@ -44,14 +50,100 @@ std::string jsonString(const std::string& s) {
   return out + "\"";
 }
 
+// the vertex attributes a mesh carries, by short name
+std::vector<std::string> attributeNames(const Mesh& m) {
+  std::vector<std::string> out;
+  if (!m.normals.empty()) out.push_back("normals");
+  if (!m.uvs.empty()) out.push_back("uv0");
+  for (size_t k = 0; k < m.extra_uvs.size(); ++k) out.push_back("uv" + std::to_string(k + 1));
+  if (!m.tangents.empty()) out.push_back("tangents");
+  if (!m.colors.empty()) out.push_back("colors");
+  if (m.skinned()) out.push_back("skin_weights");
+  return out;
+}
+
+// what the report says of one object (a node with a mesh)
+struct ObjectInfo {
+  int32_t node = -1;
+  int32_t mesh = -1;
+  std::vector<int32_t> materials;         // per primitive, -1 = none
+  std::vector<std::string> attributes;
+  int32_t skin = -1;
+  std::vector<size_t> level_triangles;    // level 0 first
+};
+
+std::vector<ObjectInfo> describeObjects(const scene::SceneData& s, const std::vector<int32_t>& objects,
+                                        const std::vector<LodChain>& chains) {
+  std::vector<ObjectInfo> out;
+  for (int32_t node : objects) {
+    ObjectInfo o;
+    o.node = node;
+    o.mesh = s.nodes[static_cast<size_t>(node)].mesh;
+    o.skin = s.nodes[static_cast<size_t>(node)].skin;
+    const scene::MeshData& md = s.meshes[static_cast<size_t>(o.mesh)];
+    o.materials = md.primitive_materials;
+    o.attributes = attributeNames(md.mesh);
+    if (static_cast<size_t>(o.mesh) < chains.size() && !chains[static_cast<size_t>(o.mesh)].empty()) {
+      for (const LodLevel& level : chains[static_cast<size_t>(o.mesh)].levels)
+        o.level_triangles.push_back(level.mesh.triangleCount());
+    } else {
+      o.level_triangles.push_back(md.mesh.triangleCount());
+    }
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+template <typename T, typename F>
+std::string joined(const std::vector<T>& items, const char* separator, F format) {
+  std::string out;
+  for (size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + format(items[i]);
+  return out;
+}
+
+std::string objectsJson(const scene::SceneData& s, const std::vector<ObjectInfo>& objects) {
+  return "[" + joined(objects, ", ", [&](const ObjectInfo& o) {
+           return "{\"node\": " + std::to_string(o.node) + ", \"name\": " +
+                  jsonString(s.nodes[static_cast<size_t>(o.node)].name) + ", \"mesh\": " + std::to_string(o.mesh) +
+                  ", \"materials\": [" + joined(o.materials, ", ", [](int32_t m) { return std::to_string(m); }) +
+                  "], \"attributes\": [" + joined(o.attributes, ", ", jsonString) + "], \"skin\": " +
+                  std::to_string(o.skin) + ", \"level_triangles\": [" +
+                  joined(o.level_triangles, ", ", [](size_t n) { return std::to_string(n); }) + "]}";
+         }) + "]";
+}
+
+std::string objectsText(const scene::SceneData& s, const std::vector<ObjectInfo>& objects) {
+  auto quoted = [](const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; };
+  std::string out;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const ObjectInfo& o = objects[i];
+    out += "object " + std::to_string(i) + ": node " + std::to_string(o.node) + quoted(s.nodes[static_cast<size_t>(o.node)].name) +
+           ", mesh " + std::to_string(o.mesh) + quoted(s.meshes[static_cast<size_t>(o.mesh)].name) + "\n";
+    out += "  materials:  " + joined(o.materials, ", ", [&](int32_t m) {
+             return m < 0 ? std::string("none") : std::to_string(m) + quoted(s.materials[static_cast<size_t>(m)].name);
+           }) + "\n";
+    out += "  attributes: " + (o.attributes.empty() ? std::string("positions only") : joined(o.attributes, " ", [](const std::string& a) { return a; })) + "\n";
+    out += "  skin:       " + (o.skin < 0 ? std::string("none") : std::to_string(o.skin) + quoted(s.skins[static_cast<size_t>(o.skin)].name) + " (" +
+                                 std::to_string(s.skins[static_cast<size_t>(o.skin)].joints.size()) + " joints)") + "\n";
+    out += "  levels:     " + std::to_string(o.level_triangles.size()) + " (" +
+           joined(o.level_triangles, ", ", [](size_t n) { return std::to_string(n); }) + " triangles)\n";
+  }
+  return out;
+}
+
 int runInfo(const std::vector<std::string>& argv) {
   Args args(argv, {"--json"}, {"--out"});
   if (!args.ok()) return usageError("info", args.error());
   if (args.positional().size() != 1) return usageError("info", "expected exactly one FILE");
   const std::string path = args.positional()[0];
 
+  // glTF files are read with their MSFT_lod levels, which come back as each mesh's chain
   scene::SceneData s;
-  if (Error e = scene::loadScene(path, s); !e.ok()) return runError("info", e.message);
+  std::vector<LodChain> chains;
+  const std::string ext = scene::lowerExtension(path);
+  const Error load_error =
+      ext == ".gltf" || ext == ".glb" ? scene::importGltfLods(path, s, chains) : scene::loadScene(path, s);
+  if (!load_error.ok()) return runError("info", load_error.message);
 
   const std::vector<int32_t> objects = scene::objectNodes(s);
   const std::vector<glm::mat4> world = scene::worldTransforms(s);
@@ -77,30 +169,37 @@ int runInfo(const std::vector<std::string>& argv) {
     }
   }
 
+  const std::vector<ObjectInfo> details = describeObjects(s, objects, chains);
   std::string text;
   char buf[512];
   if (args.has("--json")) {
     std::snprintf(buf, sizeof(buf),
                   "{\"file\": %s, \"nodes\": %zu, \"meshes\": %zu, \"objects\": %zu, \"vertices\": %" PRIu64
                   ", \"triangles\": %" PRIu64 ", \"edges\": %" PRIu64 ", \"points\": %" PRIu64
-                  ", \"unique_vertices\": %" PRIu64 ", \"unique_triangles\": %" PRIu64 ", \"materials\": %zu, ",
+                  ", \"unique_vertices\": %" PRIu64 ", \"unique_triangles\": %" PRIu64 ", \"materials\": %zu, "
+                  "\"textures\": %zu, \"images\": %zu, \"skins\": %zu, \"animations\": %zu, ",
                   jsonString(path).c_str(), s.nodes.size(), s.meshes.size(), objects.size(), vertices, triangles, edges, points,
-                  unique_vertices, unique_triangles, s.materials.size());
+                  unique_vertices, unique_triangles, s.materials.size(), s.textures.size(), s.images.size(), s.skins.size(),
+                  s.animations.size());
     text += buf;
-    std::snprintf(buf, sizeof(buf), "\"bounds\": {\"min\": [%.9g, %.9g, %.9g], \"max\": [%.9g, %.9g, %.9g], \"diagonal\": %.9g}}\n",
+    std::snprintf(buf, sizeof(buf), "\"bounds\": {\"min\": [%.9g, %.9g, %.9g], \"max\": [%.9g, %.9g, %.9g], \"diagonal\": %.9g}, ",
                   box.min.x, box.min.y, box.min.z, box.max.x, box.max.y, box.max.z, box.diagonal());
     text += buf;
+    text += "\"object_details\": " + objectsJson(s, details) + "}\n";
   } else {
     std::snprintf(buf, sizeof(buf),
                   "file:       %s\nnodes:      %zu\nmeshes:     %zu\nobjects:    %zu\n"
                   "vertices:   %" PRIu64 " drawn (%" PRIu64 " unique)\ntriangles:  %" PRIu64 " drawn (%" PRIu64 " unique)\n"
-                  "edges:      %" PRIu64 "\npoints:     %" PRIu64 "\nmaterials:  %zu\n",
+                  "edges:      %" PRIu64 "\npoints:     %" PRIu64 "\nmaterials:  %zu\ntextures:   %zu (%zu images)\n"
+                  "skins:      %zu\nanimations: %zu\n",
                   path.c_str(), s.nodes.size(), s.meshes.size(), objects.size(), vertices, unique_vertices, triangles,
-                  unique_triangles, edges, points, s.materials.size());
+                  unique_triangles, edges, points, s.materials.size(), s.textures.size(), s.images.size(), s.skins.size(),
+                  s.animations.size());
     text += buf;
     std::snprintf(buf, sizeof(buf), "bounds:     min (%g, %g, %g) max (%g, %g, %g) diagonal %g\n", box.min.x, box.min.y,
                   box.min.z, box.max.x, box.max.y, box.max.z, box.diagonal());
     text += buf;
+    text += objectsText(s, details);
   }
   if (args.has("--out")) {
     const std::string out = args.get("--out");

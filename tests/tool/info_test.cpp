@@ -176,3 +176,45 @@ TEST(ToolConvert, RefusesUnknownOutputAndBadInput) {
   r = runTool({"convert", dir + "/only_in.obj"});
   EXPECT_EQ(r.exit_code, 2);
 }
+
+TEST(ToolInfo, ListsMaterialsSkinsAndAttributesPerObject) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  // the Fox: one skinned mesh with one textured material and three animations (Survey, Walk, Run)
+  const RunResult r = runTool({"info", test::sharedModelsDir() + "/Fox/Fox.glb", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(jsonInt(r.out, "objects"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "materials"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "textures"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "images"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "skins"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "animations"), 3) << r.out;
+  EXPECT_TRUE(contains(r.out, "\"attributes\": [\"uv0\", \"skin_weights\"]")) << r.out;
+  EXPECT_TRUE(contains(r.out, "\"skin\": 0")) << r.out;
+  const RunResult text = runTool({"info", test::sharedModelsDir() + "/Fox/Fox.glb"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_TRUE(contains(text.out, "skin:       0 ")) << text.out;
+  EXPECT_TRUE(contains(text.out, "levels:     1 (576 triangles)")) << text.out;
+}
+
+TEST(ToolInfo, ListsTheLevelsScenelodLodsWrote) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const std::string out = ::testing::TempDir() + "info_duck_lods.glb";
+  const RunResult lods = runTool({"lods", test::sharedModelsDir() + "/Duck/Duck.glb", "-o", out, "--levels", "3"});
+  ASSERT_EQ(lods.exit_code, 0) << lods.err;
+  const RunResult r = runTool({"info", out, "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // one object: the original and three levels, each coarser than the one before
+  const size_t at = r.out.find("\"level_triangles\": [");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  std::istringstream in(r.out.substr(at + 20));
+  std::vector<long long> tris;
+  for (long long n; in >> n;) {
+    tris.push_back(n);
+    char sep = 0;
+    if (!(in >> sep) || sep != ',') break;
+  }
+  ASSERT_EQ(tris.size(), 4u) << r.out;
+  EXPECT_EQ(tris[0], 4212);
+  for (size_t k = 1; k < tris.size(); ++k) EXPECT_LT(tris[k], tris[k - 1]) << "level " << k;
+  std::remove(out.c_str());
+}
