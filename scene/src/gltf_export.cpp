@@ -558,9 +558,8 @@ int addLevelMesh(GlbWriter& w, FallbackMaterials& fallback, const Mesh& level, c
                  const std::string& name) {
   tinygltf::Mesh out;
   out.name = name;
-  w.write_skin = level.skinned();
+  w.write_skin = level.skinned();  // for the thick lines' own vertices too
   const GlbWriter::VertexSet shared = w.addVertices(level, level.positions, nullptr);
-  w.write_skin = false;
   std::map<uint32_t, std::vector<uint32_t>> by_group;
   for (size_t t = 0; t < level.triangleCount(); ++t)
     by_group[level.triangleGroup(t)].insert(by_group[level.triangleGroup(t)].end(), level.triangles.begin() + 3 * t,
@@ -590,6 +589,7 @@ int addLevelMesh(GlbWriter& w, FallbackMaterials& fallback, const Mesh& level, c
   if (!level.edges.empty())
     add(level.edge_thickness.empty() ? sharing(level.edges) : w.addThickLines(level, shared), TINYGLTF_MODE_LINE, 0);
   if (!level.points.empty()) add(sharing(level.points), TINYGLTF_MODE_POINTS, 0);
+  w.write_skin = false;
   w.model.meshes.push_back(std::move(out));
   return static_cast<int>(w.model.meshes.size() - 1);
 }

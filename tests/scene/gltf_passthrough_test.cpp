@@ -225,3 +225,26 @@ TEST(GltfPassThrough, SharedModelsRoundTrip) {
     }
   }
 }
+
+// the Fox's levels from buildLods carry weights: every level node keeps the skin, and every
+// primitive of its mesh (thick lines with their own vertices included) has JOINTS_0 and WEIGHTS_0
+TEST(GltfPassThrough, EveryPrimitiveOfASkinnedLevelIsSkinned) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const std::string out = makeDir("pass_fox_levels") + "/fox.glb";
+  SceneLods lods;
+  const Error e = test::writeLods(test::sharedModelsDir() + "/Fox/Fox.glb", out, 8, lods);
+  ASSERT_TRUE(e.ok()) << e.message;
+  const nlohmann::json j = test::readGltfJson(out);
+  const nlohmann::json& ids = j["nodes"][1]["extensions"]["MSFT_lod"]["ids"];
+  ASSERT_EQ(ids.size(), lods.chains[0].levelCount() - 1);
+  size_t primitives = 0;
+  for (const nlohmann::json& id : ids) {
+    const nlohmann::json& node = j["nodes"][id.get<size_t>()];
+    EXPECT_EQ(node["skin"], 0);
+    for (const nlohmann::json& p : j["meshes"][node["mesh"].get<size_t>()]["primitives"]) {
+      EXPECT_TRUE(p["attributes"].contains("JOINTS_0") && p["attributes"].contains("WEIGHTS_0")) << node["name"];
+      ++primitives;
+    }
+  }
+  EXPECT_GT(primitives, ids.size());  // some levels have thick lines or points beside their triangles
+}
