@@ -159,7 +159,7 @@ double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cac
   return double(misses) / double(tri_count);
 }
 
-void optimizeMeshOrder(Mesh& m) {
+void optimizeMeshOrder(Mesh& m, std::vector<uint32_t>* vertex_remap) {
   const size_t n = m.vertexCount();
   if (!m.triangles.empty()) {
     // each triangle group (primitive) on its own, groups in increasing order, so that a group stays
@@ -210,6 +210,7 @@ void optimizeMeshOrder(Mesh& m) {
   for (uint32_t& i : m.edges) i = remap[i];
   for (uint32_t& i : m.points) i = remap[i];
   for (uint32_t& i : m.face_corners) i = remap[i];
+  if (vertex_remap) vertex_remap->swap(remap);
 }
 
 }  // namespace scenelod::scene

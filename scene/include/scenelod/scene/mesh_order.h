@@ -3,6 +3,7 @@
 // speed optimiser), vertices in order of first use for vertex fetch, and the ACMR measure.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "scenelod/lodcore/mesh.h"
 #include "scenelod/lodcore/span.h"
@@ -31,8 +32,9 @@ double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cac
 // triangles with optimizeVertexCache (triangle_groups follow their triangles, so each group is one
 // contiguous range), then every vertex attribute (UV sets, colours, tangents, joints, weights) in
 // order of first use by triangles, then edges, then points; indices of triangles, edges, points and
-// polygon faces are rewritten. Edges and points keep their order. Vertex count is unchanged.
-// Cost: O(vertices + triangles log triangles); allocates.
-void optimizeMeshOrder(Mesh& mesh);
+// polygon faces are rewritten. Edges and points keep their order. Vertex count is unchanged. When
+// `vertex_remap` is given it receives each old vertex's new index (for arrays kept beside the mesh,
+// such as LodLevel::source_vertex). Cost: O(vertices + triangles log triangles); allocates.
+void optimizeMeshOrder(Mesh& mesh, std::vector<uint32_t>* vertex_remap = nullptr);
 
 }  // namespace scenelod::scene
