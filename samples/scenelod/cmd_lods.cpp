@@ -26,9 +26,13 @@ const std::string kUsage = std::string(
     "\n"
     "Builds LOD chains of IN (.obj, .gltf, .glb): level 0 is the original, levels 1..N use cell widths\n"
     "w_k = w_1 x 2^(k-1), each derived from the original.\n"
-    "OUT.glb: the scene with every unique mesh's chain (meshes in parallel, object space), each mesh\n"
-    "node written with MSFT_lod (the full node first, then the coarser level nodes) and\n"
-    "extras.MSFT_screencoverage; prints the levels summed over the scene and a table per mesh.\n"
+    "OUT.glb or OUT.gltf: the scene with every unique mesh's chain (meshes in parallel, object space),\n"
+    "each mesh node written with MSFT_lod (the full node first, then the coarser level nodes) and\n"
+    "extras.MSFT_screencoverage; prints the levels summed over the scene and a table per mesh. For a\n"
+    "glTF input, OUT is IN with the levels added: materials, textures, images, skins, animations,\n"
+    "cameras, lights, extras and extensions are kept, and level 0 is IN's mesh unchanged (docs/IO.md).\n"
+    "OUT may be IN for a .glb (written only once everything succeeded); OUT.gltf writes OUT.bin and\n"
+    "the images beside it.\n"
     "With --flatten, --split or for OUT.obj: one chain of the whole model in world space; --split and\n"
     "OUT.obj write every level to its own file OUT-level<k>.<ext>; prints the table of the levels.\n"
     "\n"
@@ -47,7 +51,11 @@ const std::string kUsage = std::string(
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
   scene::SceneData s;
   if (Error e = scene::loadScene(in, s); !e.ok()) return runError("lods", e.message);
-  scene::bakeMaterialColors(s);  // the GLB writer keeps colours, not textures
+  const std::string in_ext = scene::lowerExtension(in);
+  const bool pass_through = in_ext == ".glb" || in_ext == ".gltf";
+  if (!pass_through) scene::bakeMaterialColors(s);  // an OBJ's levels are written with their colours
+  if (!pass_through && scene::lowerExtension(out) == ".gltf")
+    return usageError("lods", "a .gltf output needs a glTF input (" + in + " is not one): write a .glb");
   scene::LodBuildParams params;
   params.chain = cp;
   params.chain.first_cell_width = cell;
@@ -59,7 +67,10 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
   bar.finish();
   std::vector<const LodChain*> chains;
   for (const LodChain& c : lods.chains) chains.push_back(&c);
-  if (Error e = scene::exportGlb(out, s, &chains); !e.ok()) return runError("lods", e.message);
+  std::vector<std::string> notes;
+  const Error written = pass_through ? scene::exportGltfLods(in, out, s, chains, &notes) : scene::exportGlb(out, s, &chains);
+  if (!written.ok()) return runError("lods", written.message);
+  for (const std::string& note : notes) std::printf("%s: %s\n", in.c_str(), note.c_str());
 
   const std::vector<int32_t> objects = scene::objectNodes(s);
   std::vector<size_t> instances(s.meshes.size(), 0);
@@ -69,8 +80,8 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
     max_levels = std::max(max_levels, c.levelCount());
     total_levels += c.levelCount();
   }
-  std::printf("wrote %s (%zu objects, %zu unique meshes, %zu levels, MSFT_lod)\n", out.c_str(), objects.size(),
-              s.meshes.size(), total_levels);
+  std::printf("wrote %s (%zu objects, %zu unique meshes, %zu levels, MSFT_lod%s)\n", out.c_str(), objects.size(),
+              s.meshes.size(), total_levels, pass_through ? "; everything else of the input kept" : "");
   std::printf("%s: method %s, grading %s, synthesis %s, cells %s; chains in object space\n", in.c_str(),
               lodMethodName(cp.cluster.method), gradingName(cp.cluster.grading), synthesisName(cp.cluster.synthesis),
               cellShapeName(cp.cluster.cell_shape));
@@ -120,7 +131,10 @@ int runLods(const std::vector<std::string>& argv) {
   if (!args.has("--out")) return usageError("lods", "missing -o OUT");
   const std::string in = args.positional()[0], out = args.get("--out");
   const std::string ext = scene::lowerExtension(out);
-  if (ext != ".obj" && ext != ".glb") return usageError("lods", "the output must end in .obj or .glb: " + out);
+  if (ext != ".obj" && ext != ".glb" && ext != ".gltf")
+    return usageError("lods", "the output must end in .obj, .glb or .gltf: " + out);
+  if (ext == ".gltf" && (args.has("--split") || args.has("--flatten")))
+    return usageError("lods", "--split and --flatten write .glb or .obj files, not .gltf");
   if (args.has("--cell") && args.has("--cell-rel")) return usageError("lods", "give only one of --cell, --cell-rel");
   ChainParams cp;
   std::string err;
@@ -147,7 +161,7 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell-rel") && (!args.getDouble("--cell-rel", rel) || !(rel > 0.0)))
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
-  if (ext == ".glb" && !args.has("--split") && !args.has("--flatten")) {
+  if (ext != ".obj" && !args.has("--split") && !args.has("--flatten")) {
     for (const std::string& o : zhangOptionNames())  // per-mesh chains go through buildChain's defaults
       if (args.has(o)) return usageError("lods", o + " needs --flatten or --split (per-mesh chains use the zhang defaults)");
     if (scrooge && (args.has("--subvolume") || args.has("--theta-max")))

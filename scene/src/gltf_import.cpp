@@ -31,6 +31,7 @@
 #include "scenelod/lodcore/json_limits.h"
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/gltf_io.h"
+#include "gltf_model.h"
 
 namespace scenelod::scene {
 
@@ -44,6 +45,7 @@ struct LoadContext {
   std::string refused;      // message for the first refused URI
   std::vector<std::vector<uint8_t>> image_bytes;  // encoded bytes per image, as tinygltf read them
   std::vector<char> image_loaded;                 // whether tinygltf delivered image i's bytes
+  std::vector<std::string> read_paths;            // external files read
 };
 
 bool readFileBytes(const std::string& path, std::vector<unsigned char>& out, std::string& err) {
@@ -136,6 +138,7 @@ bool fsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const st
     if (err) *err = e;
     return false;
   }
+  ctx.read_paths.push_back(path);
   return true;
 }
 
@@ -160,13 +163,6 @@ bool keepImageBytes(tinygltf::Image*, const int image_idx, std::string*, std::st
   return true;
 }
 
-// the mime type of encoded image bytes: PNG and JPEG by their signatures, else what the file says
-std::string imageMimeType(const std::vector<uint8_t>& bytes, const std::string& declared) {
-  static const unsigned char kPng[] = {0x89, 'P', 'N', 'G'};
-  if (bytes.size() >= 4 && std::memcmp(bytes.data(), kPng, 4) == 0) return "image/png";
-  if (bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff) return "image/jpeg";
-  return declared;
-}
 
 // decodes to RGBA8 (anything stb_image reads) and returns the linear mean RGB, or false when the
 // bytes do not decode (the image then keeps no pixels)
@@ -465,7 +461,7 @@ class GltfReader {
         img.encoded = ctx_.image_bytes[i];
       else if (!src.uri.empty())
         return fail(Status::kIoError, "image " + std::to_string(i) + ": cannot read '" + src.uri + "' (missing or unreadable)");
-      img.mime_type = imageMimeType(img.encoded, src.mimeType);
+      img.mime_type = detail::imageMimeType(img.encoded, src.mimeType);
     }
     out.textures.assign(model_.textures.size(), TextureData{});
     for (size_t t = 0; t < model_.textures.size(); ++t) {
@@ -1261,6 +1257,29 @@ Error withoutExceptions(const std::string& path, Read read) {
 }
 
 }  // namespace
+
+namespace detail {
+
+std::string imageMimeType(const std::vector<uint8_t>& bytes, const std::string& declared) {
+  static const unsigned char kPng[] = {0x89, 'P', 'N', 'G'};
+  if (bytes.size() >= 4 && std::memcmp(bytes.data(), kPng, 4) == 0) return "image/png";
+  if (bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff) return "image/jpeg";
+  return declared;
+}
+
+Error loadGltfFile(const std::string& path, GltfFile& out) {
+  return withoutExceptions(path, [&]() -> Error {
+    LoadContext ctx;
+    if (Error e = loadModel(path, out.model, ctx); !e.ok()) return e;
+    out.image_bytes = std::move(ctx.image_bytes);
+    out.image_bytes.resize(out.model.images.size());
+    out.read_paths = std::move(ctx.read_paths);
+    out.read_paths.insert(out.read_paths.begin(), path);
+    return {};
+  });
+}
+
+}  // namespace detail
 
 Error importGltf(const std::string& path, SceneData& out) {
   return withoutExceptions(path, [&]() -> Error {
