@@ -172,6 +172,112 @@ TEST(Replay, WriteThenReadRoundTrips) {
   EXPECT_TRUE(back.frames[10].has_pick);
 }
 
+// Two eyes in one group and two shadow cascades (orthographic, looking down) on every frame of r.
+void addStereoAndShadowViews(const Sphere& bounds, Replay& r) {
+  for (ReplayFrame& f : r.frames) {
+    const glm::vec3 fwd = glm::normalize(f.target - f.eye);
+    const glm::vec3 right = glm::normalize(glm::cross(fwd, f.up));
+    for (float side : {-1.0f, 1.0f}) {
+      ReplayView eye;
+      eye.kind = ViewKind::kEye;
+      eye.group = 5;
+      eye.camera.eye = f.eye + right * (0.032f * side);
+      eye.camera.target = f.target + right * (0.032f * side);
+      eye.camera.up = f.up;
+      eye.camera.near_plane = 0.05f;
+      eye.camera.viewport_width_px = 640;
+      eye.camera.viewport_height_px = 720;
+      f.views.push_back(eye);
+    }
+    for (float part : {0.5f, 1.0f}) {
+      ReplayView cascade;
+      cascade.kind = ViewKind::kShadow;
+      cascade.group = 9;
+      cascade.pixels_per_cell = 4.0f;
+      Camera& c = cascade.camera;
+      c.projection = Projection::kOrthographic;
+      const glm::vec3 centre = bounds.center + (part < 1.0f ? (f.eye - bounds.center) * 0.5f : glm::vec3(0.0f));
+      c.eye = centre + glm::vec3(0.0f, 3.0f * bounds.radius, 0.0f);
+      c.target = centre;
+      c.up = glm::vec3(0.0f, 0.0f, -1.0f);
+      c.ortho_height = 2.0f * bounds.radius * part;
+      c.near_plane = 0.1f;
+      c.far_plane = 6.0f * bounds.radius;
+      c.viewport_width_px = c.viewport_height_px = 1024;
+      f.views.push_back(cascade);
+    }
+  }
+}
+
+TEST(Replay, ViewsRoundTripAsVersion2) {
+  ReplayScene scene;
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", scene).ok());
+  Replay r;
+  r.header.scene = "builtin:small";
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 5, 30.0, r);
+  addStereoAndShadowViews(sceneBounds(scene), r);
+  const std::string path = scenelod::test::scratchDir() + "/views.jsonl";
+  ASSERT_TRUE(writeReplay(path, r).ok());
+  EXPECT_NE(readLines(path)[0].find("\"scenelod_replay\": 2"), std::string::npos);
+  Replay back;
+  ASSERT_TRUE(readReplay(path, back).ok());
+  EXPECT_EQ(back.header.version, 2);
+  ASSERT_EQ(back.frames.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    ASSERT_EQ(back.frames[i].views.size(), 4u);
+    for (size_t v = 0; v < 4; ++v) {
+      const ReplayView &a = back.frames[i].views[v], &b = r.frames[i].views[v];
+      EXPECT_EQ(a.kind, b.kind);
+      EXPECT_EQ(a.group, b.group);
+      EXPECT_EQ(a.camera.eye, b.camera.eye);
+      EXPECT_EQ(a.camera.projection, b.camera.projection);
+      EXPECT_EQ(a.camera.ortho_height, b.camera.ortho_height);
+      EXPECT_NEAR(a.camera.fov_y_rad, b.camera.fov_y_rad, 1e-6f);
+      EXPECT_EQ(a.camera.viewport_width_px, b.camera.viewport_width_px);
+      EXPECT_EQ(a.pixels_per_cell, b.pixels_per_cell);
+    }
+  }
+  // a version-1 replay is still written as version 1
+  r.frames[0].views.clear();
+  for (ReplayFrame& f : r.frames) f.views.clear();
+  ASSERT_TRUE(writeReplay(path, r).ok());
+  EXPECT_NE(readLines(path)[0].find("\"scenelod_replay\": 1"), std::string::npos);
+}
+
+TEST(Replay, BudgetHoldsWithStereoEyesAndShadowCascades) {
+  // as SyntheticRendererBudgetAdherence with four views a frame: >= 95 % of the frames after
+  // warm-up within +10 % of the budget, the shadow group never finer than the eyes' group
+  Replay r;
+  ReplayScene scene;
+  ASSERT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 150, 60.0, r);
+  addStereoAndShadowViews(sceneBounds(scene), r);
+  r.header.version = 2;
+  ReplayRunOptions o;
+  o.override_budget = true;
+  o.budget_ms = 6.0;
+  std::vector<ReplayLogFrame> log;
+  ASSERT_TRUE(runReplay(r, scene, o, log).ok());
+  const ReplaySummary s = summarizeReplay(log, 30);
+  ASSERT_EQ(s.budget_frames, 120u);
+  EXPECT_GE(s.within_10_percent, 114u);
+  EXPECT_GT(s.mean_measured_ms, 0.8 * o.budget_ms);
+  size_t shadow_drawn = 0;
+  for (const ReplayLogFrame& f : log) {
+    ASSERT_EQ(f.view_levels.size(), 2u);
+    EXPECT_EQ(f.levels, f.view_levels[0]);  // the eyes' group (no primary group)
+    for (size_t i = 0; i < f.levels.size(); ++i) {
+      const int eyes = f.view_levels[0][i], shadow = f.view_levels[1][i];
+      shadow_drawn += shadow >= 0;
+      if (eyes >= 0 && shadow >= 0) {
+        EXPECT_GE(shadow, eyes);
+      }
+    }
+  }
+  EXPECT_GT(shadow_drawn, 0u);
+  EXPECT_NE(replayLogLine(log[0]).find("\"view_levels\": [["), std::string::npos);
+}
+
 TEST(Replay, LevelSceneRoundTrips) {
   ReplayScene a, b;
   ASSERT_TRUE(makeBuiltinScene("builtin:city", a).ok());
@@ -266,7 +372,20 @@ TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
       {"", "empty replay"},
       {"{\"frame\": 0}\n", "first line must be the header"},
       {"not json\n", ":1: not valid JSON"},
-      {"{\"scenelod_replay\": 2, \"scene\": \"a.glb\"}\n", "unsupported replay version"},
+      {"{\"scenelod_replay\": 3, \"scene\": \"a.glb\"}\n", "unsupported replay version"},
+      {"{\"scenelod_replay\": 1, \"scene\": \"a\"}\n{\"frame\": 0, \"views\": [{\"kind\": \"primary\", \"group\": 0, "
+       "\"eye\": [0,0,1], \"target\": [0,0,0], \"fov_y_deg\": 60}]}\n",
+       ":2: \"views\" needs a version 2 replay"},
+      {"{\"scenelod_replay\": 2, \"scene\": \"a\"}\n{\"frame\": 0, \"views\": [{\"kind\": \"mirror\", \"group\": 0, "
+       "\"eye\": [0,0,1], \"target\": [0,0,0], \"fov_y_deg\": 60}]}\n",
+       ":2: unknown view kind \"mirror\""},
+      {"{\"scenelod_replay\": 2, \"scene\": \"a\"}\n{\"frame\": 0, \"views\": [{\"kind\": \"shadow\", \"group\": 0, "
+       "\"eye\": [0,0,1], \"target\": [0,0,0], \"fov_y_deg\": 60, \"ortho_height\": 9}]}\n",
+       "exactly one of \"fov_y_deg\" and \"ortho_height\""},
+      {"{\"scenelod_replay\": 2, \"scene\": \"a\"}\n{\"frame\": 0, \"views\": [{\"kind\": \"eye\", \"group\": 0, "
+       "\"eye\": [0,0,1], \"target\": [0,0,1], \"fov_y_deg\": 60}]}\n",
+       "a view's camera is degenerate"},
+      {"{\"scenelod_replay\": 2, \"scene\": \"a\"}\n{\"frame\": 0, \"views\": []}\n", "a list of 1 to 8 views"},
       {"{\"scenelod_replay\": 1}\n", "missing key \"scene\""},
       {"{\"scenelod_replay\": 1, \"scene\": \"a\", \"viewport\": [0, 5]}\n", "viewport"},
       {"{\"scenelod_replay\": 1, \"scene\": \"a\", \"budget_ms\": -3}\n", "budget_ms"},
