@@ -416,7 +416,7 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   vs.best_step = base + at[7];
   vs.pool = reinterpret_cast<TuplePoint*>(base + at[8]);
   ctx.total_bytes += total;
-  ctx.per_object_bytes += total / n;
+  ctx.per_object_bytes += at[8];  // all but the pool scale with the objects
   return true;
 }
 
