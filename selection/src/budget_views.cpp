@@ -83,7 +83,7 @@ size_t groupPoints(const TupleHullInput& in, size_t g, int min_level, bool none_
     return n;
   }
   if (!in.must) out[n++] = TuplePoint{0.0f, 0.0f, 0};
-  const int finest = std::max(finestLevel(ctx, in.row0, in.levels, gt.q), min_level);
+  const int finest = std::max(gt.finest, min_level);
   for (int l = in.levels - 1; l >= finest; --l) out[n++] = point(l);
   const int p = in.prev[g];
   if (p >= min_level && p < finest) out[n++] = point(p);

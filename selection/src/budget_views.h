@@ -35,6 +35,7 @@ struct GroupTerms {
   float a = 0.0f, m = 0.0f, b = 0.0f;
   float q = std::numeric_limits<float>::infinity();
   float feature_objects = 0.0f, feature_pixels = 0.0f;
+  int finest = 0;  // the coarsest level of accuracy 1 (finestLevel)
 };
 struct ObjectTerms {
   uint32_t in_mask = 0;  // bit g: some view of group g sees the object

@@ -95,6 +95,7 @@ struct ViewScratch {
   size_t max_groups = 0;
   int8_t* prev = nullptr;          // max_objects * max_groups: last frame's level per object and group
   uint32_t* slot_object = nullptr; // per slot (object in some view), in object order
+  uint8_t* slot_views = nullptr;   // per slot: bit v = view v sees the object
   float* base_cost = nullptr;      // per slot: the hull's first point (not drawn, or the cheapest
   float* base_benefit = nullptr;   // tuple of a must-draw or forced object)
   uint64_t* base_tuple = nullptr;

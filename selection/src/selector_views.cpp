@@ -144,9 +144,23 @@ ObjectChoice objectChoice(const SelectionJob& job, size_t i) {
   return o;
 }
 
-// One object's terms in every group of the frame (ObjectTerms, budget_views.h); an object whose chain
-// has no level is in no view.
-void objectTerms(const ViewFrame& f, const SelectionJob& job, size_t i, int levels, ObjectTerms* t) {
+// Bit v of mask[j] = view v sees object i0 + j, for a block of m <= kSlotBlock objects (the
+// single-view path's SIMD frustum test, once per view).
+void viewMasks(const SelectorContext& ctx, const ViewFrame& f, const SelectionJob& job, size_t i0, size_t m,
+               uint8_t* mask) {
+  alignas(32) uint8_t outside[kSlotBlock];
+  std::memset(mask, 0, m);
+  const float* const xyz = &job.centers[0].x + 3 * i0;
+  for (size_t v = 0; v < f.views; ++v) {
+    (ctx.use_avx2 ? frustumOutsideAvx2 : frustumOutsideSse2)(f.frustum[v], xyz, job.radii.data + i0, m, outside);
+    for (size_t j = 0; j < m; ++j) mask[j] |= static_cast<uint8_t>((outside[j] ? 0u : 1u) << v);
+  }
+}
+
+// One object's terms in every group of the frame (ObjectTerms, budget_views.h) from the views that
+// see it (views: bit v for view v).
+void objectTerms(const SelectorContext& ctx, const ViewFrame& f, const SelectionJob& job, size_t i, uint32_t views,
+                 const ObjectChoice& o, ObjectTerms* t) {
   const glm::vec3 c = job.centers[i];
   const float r = job.radii[i], scale = job.max_scales[i];
   const float factor = (job.importance.count ? job.importance[i] : 1.0f) * (job.focus.count ? job.focus[i] : 1.0f) *
@@ -154,7 +168,7 @@ void objectTerms(const ViewFrame& f, const SelectionJob& job, size_t i, int leve
   t->in_mask = 0;
   for (size_t g = 0; g < f.groups; ++g) t->group[g] = GroupTerms{};
   for (size_t v = 0; v < f.views; ++v) {
-    if (!sphereInFrustum(f.frustum[v], c, r)) continue;
+    if (!(views >> v & 1u)) continue;
     float pixel = f.ortho_pixel[v];
     if (!f.ortho[v]) {
       const glm::vec3 d = c - f.eye[v];
@@ -172,12 +186,13 @@ void objectTerms(const ViewFrame& f, const SelectionJob& job, size_t i, int leve
     gt.b = std::max(gt.b, w.benefit * px * (f.visible[v] ? f.visible[v][i] : 1.0f) * factor);
     gt.q = std::min(gt.q, f.x[v] * pixel / scale);
   }
-  if (levels == 0) t->in_mask = 0;
+  for (size_t g = 0; g < f.groups; ++g)
+    if (t->in_mask >> g & 1u) t->group[g].finest = finestLevel(ctx, o.row0, o.levels, t->group[g].q);
 }
 
 // Distance mode's levels of one object (-1 where a group does not see it).
-void distanceTuple(const SelectorContext& ctx, const ViewFrame& f, const ObjectTerms& t, const ObjectChoice& o,
-                   const int8_t* prev, int* level) {
+void distanceTuple(const ViewFrame& f, const ObjectTerms& t, const ObjectChoice& o, const int8_t* prev,
+                   const SelectorContext& ctx, int* level) {
   for (size_t g = 0; g < f.groups; ++g) {
     level[g] = -1;
     if (!(t.in_mask >> g & 1u) || o.levels == 0) continue;
@@ -186,7 +201,7 @@ void distanceTuple(const SelectorContext& ctx, const ViewFrame& f, const ObjectT
       continue;
     }
     const float q = t.group[g].q;
-    int l = finestLevel(ctx, o.row0, o.levels, q);
+    int l = t.group[g].finest;
     const int p = prev[g];
     if (p > l && p < o.levels && std::min(1.0f, q * ctx.row_inv_w[o.row0 + static_cast<uint32_t>(p)]) * ctx.h1 >= 1.0f)
       l = p;
@@ -243,16 +258,28 @@ void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame&
   sums->switches += changed ? 1u : 0u;
 }
 
+// An object no view sees (or with no level): -1 in every group.
+const ObjectTerms kUnseen{};
+
 void distanceFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, ViewSums* sums) {
   ObjectTerms t;
   int level[kMaxViews];
-  for (size_t i = 0; i < job.centers.count; ++i) {
-    const ObjectChoice o = objectChoice(job, i);
-    objectTerms(f, job, i, o.levels, &t);
-    distanceTuple(ctx, f, t, o, ctx.views.prev + i * ctx.views.max_groups, level);
-    uint64_t tuple = 0;
-    for (size_t g = 0; g < f.groups; ++g) tuple |= static_cast<uint64_t>(level[g] + 1) << (8 * g);
-    writeObject(job, ctx, f, i, t, o, tuple, sums);
+  alignas(32) uint8_t mask[kSlotBlock];
+  for (size_t i0 = 0; i0 < job.centers.count; i0 += kSlotBlock) {
+    const size_t m = std::min(kSlotBlock, job.centers.count - i0);
+    viewMasks(ctx, f, job, i0, m, mask);
+    for (size_t i = i0; i < i0 + m; ++i) {
+      const ObjectChoice o = mask[i - i0] ? objectChoice(job, i) : ObjectChoice{};
+      if (o.levels == 0) {
+        writeObject(job, ctx, f, i, kUnseen, o, 0, sums);
+        continue;
+      }
+      objectTerms(ctx, f, job, i, mask[i - i0], o, &t);
+      distanceTuple(f, t, o, ctx.views.prev + i * ctx.views.max_groups, ctx, level);
+      uint64_t tuple = 0;
+      for (size_t g = 0; g < f.groups; ++g) tuple |= static_cast<uint64_t>(level[g] + 1) << (8 * g);
+      writeObject(job, ctx, f, i, t, o, tuple, sums);
+    }
   }
 }
 
@@ -264,10 +291,14 @@ double tupleHulls(const SelectionJob& job, SelectorContext& ctx, const ViewFrame
   ObjectTerms t;
   double mandatory = per_frame_ms;
   size_t slots = 0, count = 0;
+  alignas(32) uint8_t mask[kSlotBlock];
   for (size_t i = 0; i < job.centers.count; ++i) {
+    if (i % kSlotBlock == 0) viewMasks(ctx, f, job, i, std::min(kSlotBlock, job.centers.count - i), mask);
+    if (!mask[i % kSlotBlock]) continue;
     const ObjectChoice o = objectChoice(job, i);
-    objectTerms(f, job, i, o.levels, &t);
-    if (t.in_mask == 0) continue;
+    if (o.levels == 0) continue;
+    objectTerms(ctx, f, job, i, mask[i % kSlotBlock], o, &t);
+    vs.slot_views[slots] = mask[i % kSlotBlock];
     const TupleHullInput hin{&ctx, &f, &t, vs.prev + i * vs.max_groups, o.row0, o.levels, o.forced, o.must,
                                vs.pool};
     TuplePoint base;
@@ -338,14 +369,14 @@ double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
   ObjectTerms t;
   size_t s = 0;
   for (size_t i = 0; i < job.centers.count; ++i) {
-    const ObjectChoice o = objectChoice(job, i);
-    objectTerms(f, job, i, o.levels, &t);
-    uint64_t tuple = 0;
-    if (s < slots && vs.slot_object[s] == i) {
-      tuple = vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s];
-      ++s;
+    if (s == slots || vs.slot_object[s] != i) {
+      writeObject(job, ctx, f, i, kUnseen, ObjectChoice{}, 0, sums);
+      continue;
     }
-    writeObject(job, ctx, f, i, t, o, tuple, sums);
+    const ObjectChoice o = objectChoice(job, i);
+    objectTerms(ctx, f, job, i, vs.slot_views[s], o, &t);
+    writeObject(job, ctx, f, i, t, o, vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s], sums);
+    ++s;
   }
   return split < count ? static_cast<double>(vs.steps[split].ratio) : 0.0;
 }
@@ -392,11 +423,12 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   ViewScratch& vs = ctx.views;
   const size_t n = ctx.max_objects;
   const size_t steps = n * max_groups * kViewStepsPerGroup;
-  const size_t sizes[9] = {steps * sizeof(ViewStep), n * sizeof(uint64_t), n * sizeof(uint32_t),
-                           n * sizeof(float),         n * sizeof(float),    n * sizeof(uint32_t),
-                           n * max_groups,            n,                    kTuplePoolCap * sizeof(TuplePoint)};
-  size_t at[9], total = 0;
-  for (size_t k = 0; k < 9; ++k) {
+  const size_t sizes[10] = {steps * sizeof(ViewStep), n * sizeof(uint64_t), n * sizeof(uint32_t),
+                            n * sizeof(float),         n * sizeof(float),    n * sizeof(uint32_t),
+                            n * max_groups,            n,                    n,
+                            kTuplePoolCap * sizeof(TuplePoint)};
+  size_t at[10], total = 0;
+  for (size_t k = 0; k < 10; ++k) {
     at[k] = total;
     total += (sizes[k] + 63) / 64 * 64;
   }
@@ -414,9 +446,10 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   vs.best = reinterpret_cast<uint32_t*>(base + at[5]);
   vs.prev = reinterpret_cast<int8_t*>(base + at[6]);
   vs.best_step = base + at[7];
-  vs.pool = reinterpret_cast<TuplePoint*>(base + at[8]);
+  vs.slot_views = base + at[8];
+  vs.pool = reinterpret_cast<TuplePoint*>(base + at[9]);
   ctx.total_bytes += total;
-  ctx.per_object_bytes += at[8];  // all but the pool scale with the objects
+  ctx.per_object_bytes += at[9];  // all but the pool scale with the objects
   return true;
 }
 
