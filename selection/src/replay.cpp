@@ -57,6 +57,19 @@ bool vec3(const json& j, const char* key, bool required, glm::vec3& out, std::st
   return true;
 }
 
+// the optional "viewport" [width, height] into w and h (unchanged when absent); false when malformed
+bool viewport(const json& j, uint32_t& w, uint32_t& h) {
+  auto vp = j.find("viewport");
+  if (vp == j.end()) return true;
+  int64_t width = 0, height = 0;
+  if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, width) ||
+      !jsonWholeNumber((*vp)[1], 1, 65536, height))
+    return false;
+  w = static_cast<uint32_t>(width);
+  h = static_cast<uint32_t>(height);
+  return true;
+}
+
 std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.9g", v);
@@ -85,15 +98,8 @@ std::string parseHeader(const json& j, ReplayHeader& h) {
   auto s = j.find("scene");
   if (s == j.end() || !s->is_string() || s->get<std::string>().empty()) return "missing key \"scene\" (a path)";
   h.scene = s->get<std::string>();
-  auto vp = j.find("viewport");
-  if (vp != j.end()) {
-    int64_t w = 0, ht = 0;
-    if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
-        !jsonWholeNumber((*vp)[1], 1, 65536, ht))
-      return "\"viewport\" must be [width, height] in whole pixels, 1..65536";
-    h.viewport_width_px = static_cast<uint32_t>(w);
-    h.viewport_height_px = static_cast<uint32_t>(ht);
-  }
+  if (!viewport(j, h.viewport_width_px, h.viewport_height_px))
+    return "\"viewport\" must be [width, height] in whole pixels, 1..65536";
   h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
   if (!err.empty()) return err;
   if (!(h.fov_y_deg > 0.0 && h.fov_y_deg < 180.0)) return "\"fov_y_deg\" must be in (0, 180)";
@@ -144,15 +150,8 @@ std::string parseView(const json& j, const ReplayHeader& h, ReplayView& v) {
   if (!err.empty()) return "view: " + err;
   c.viewport_width_px = h.viewport_width_px;
   c.viewport_height_px = h.viewport_height_px;
-  auto vp = j.find("viewport");
-  if (vp != j.end()) {
-    int64_t w = 0, ht = 0;
-    if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
-        !jsonWholeNumber((*vp)[1], 1, 65536, ht))
-      return "a view's \"viewport\" must be [width, height] in whole pixels, 1..65536";
-    c.viewport_width_px = static_cast<uint32_t>(w);
-    c.viewport_height_px = static_cast<uint32_t>(ht);
-  }
+  if (!viewport(j, c.viewport_width_px, c.viewport_height_px))
+    return "a view's \"viewport\" must be [width, height] in whole pixels, 1..65536";
   if (!cameraValid(c)) return "a view's camera is degenerate (eye = target, up along the view, fov, near/far or ortho_height)";
   if (!(v.pixels_per_cell > 0.0f) || !(v.lod_bias > 0.0f)) return "a view's pixels_per_cell and lod_bias must be > 0";
   return {};

@@ -209,6 +209,25 @@ void addStereoAndShadowViews(const Sphere& bounds, Replay& r) {
   }
 }
 
+// 150 orbit frames on builtin:field in budget mode at budget_ms (with the views of
+// addStereoAndShadowViews when `views`), measured by the synthetic renderer: the log, and its
+// summary after 30 warm-up frames.
+ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogFrame>& log) {
+  Replay r;
+  ReplayScene scene;
+  EXPECT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 150, 60.0, r);
+  if (views) {
+    addStereoAndShadowViews(sceneBounds(scene), r);
+    r.header.version = 2;
+  }
+  ReplayRunOptions o;
+  o.override_budget = true;
+  o.budget_ms = budget_ms;
+  EXPECT_TRUE(runReplay(r, scene, o, log).ok());
+  return summarizeReplay(log, 30);
+}
+
 TEST(Replay, ViewsRoundTripAsVersion2) {
   ReplayScene scene;
   ASSERT_TRUE(makeBuiltinScene("builtin:small", scene).ok());
@@ -247,21 +266,11 @@ TEST(Replay, ViewsRoundTripAsVersion2) {
 TEST(Replay, BudgetHoldsWithStereoEyesAndShadowCascades) {
   // as SyntheticRendererBudgetAdherence with four views a frame: >= 95 % of the frames after
   // warm-up within +10 % of the budget, the shadow group never finer than the eyes' group
-  Replay r;
-  ReplayScene scene;
-  ASSERT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
-  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 150, 60.0, r);
-  addStereoAndShadowViews(sceneBounds(scene), r);
-  r.header.version = 2;
-  ReplayRunOptions o;
-  o.override_budget = true;
-  o.budget_ms = 6.0;
   std::vector<ReplayLogFrame> log;
-  ASSERT_TRUE(runReplay(r, scene, o, log).ok());
-  const ReplaySummary s = summarizeReplay(log, 30);
+  const ReplaySummary s = runFieldOrbit(6.0, true, log);
   ASSERT_EQ(s.budget_frames, 120u);
   EXPECT_GE(s.within_10_percent, 114u);
-  EXPECT_GT(s.mean_measured_ms, 0.8 * o.budget_ms);
+  EXPECT_GT(s.mean_measured_ms, 0.8 * 6.0);
   size_t shadow_drawn = 0;
   for (const ReplayLogFrame& f : log) {
     ASSERT_EQ(f.view_levels.size(), 2u);
@@ -346,20 +355,12 @@ TEST(Replay, SyntheticRendererBudgetAdherence) {
   // the target, as a property of a short replay: after 30 warm-up frames the measured cost
   // (true costs + 5 % noise, cost model learnt online) is within +10 % of the budget on >= 90 % of
   // frames (the benchmark reports the exact share on longer replays)
-  Replay r;
-  ReplayScene scene;
-  ASSERT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
-  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 150, 60.0, r);
-  ReplayRunOptions o;
-  o.override_budget = true;
-  o.budget_ms = 4.0;
   std::vector<ReplayLogFrame> log;
-  ASSERT_TRUE(runReplay(r, scene, o, log).ok());
-  const ReplaySummary s = summarizeReplay(log, 30);
+  const ReplaySummary s = runFieldOrbit(4.0, false, log);
   ASSERT_EQ(s.budget_frames, 120u);
   EXPECT_GE(s.within_10_percent, 108u);
   EXPECT_LT(s.mean_abs_prediction_error, 0.08);  // the calibrated model tracks the noisy truth
-  EXPECT_GT(s.mean_measured_ms, 0.8 * o.budget_ms);  // and the budget is used, not wasted
+  EXPECT_GT(s.mean_measured_ms, 0.8 * 4.0);  // and the budget is used, not wasted
 }
 
 TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {
