@@ -4,7 +4,10 @@
 //   BM_ViewsSingle: the one camera through the single-view path (SelectionJob::camera);
 //   BM_ViewsStereoShadows: two eyes 64 mm apart in one group and two shadow cascades at X = 4 in
 //   another (orthographic, looking down: a near cascade around the eye and a far one over the view).
-// Counters: objects drawn and triangles per group (eyes, shadow) per frame, and bytes per object.
+// Counters: objects drawn and triangles per group (eyes, shadow) per frame, bytes per object, and
+// from one distance-mode frame at the orbit's start with a primary camera and the two cascades:
+// the triangles the primary view draws and those the cascades draw at X = 4 and at X = 1
+// (deterministic, unlike the times).
 // The target (issue 35): the four views within 2x the single view's time.
 #include <benchmark/benchmark.h>
 
@@ -63,11 +66,40 @@ void stereoShadowViews(size_t n, double t, View* views) {
   views[3] = cascade(cam.eye + fwd * (0.3f * side), 0.6f * side);
 }
 
+// Triangles drawn per group of one distance-mode frame at t = 0: the primary camera (group 0) and
+// the two cascades at X = shadow_x (group 1).
+void primaryAndShadowTriangles(BenchScene& s, SelectorContext* ctx, size_t n, float shadow_x, double* triangles) {
+  View views[4];
+  stereoShadowViews(n, 0.0, views);
+  views[1] = views[2];
+  views[2] = views[3];
+  views[0].camera = cameraAt(n, 0.0);
+  views[0].kind = ViewKind::kPrimary;
+  views[1].pixels_per_cell = views[2].pixels_per_cell = shadow_x;
+  std::vector<int8_t> group_levels(2 * n);
+  SelectionJob j = job(s, nullptr, nullptr);
+  j.params.mode = SelectionMode::kDistance;
+  j.views = Span<const View>(views, 3);
+  j.group_levels_out = Span<int8_t>(group_levels.data(), group_levels.size());
+  j.context = ctx;
+  j.run();
+  resetSelectorHistory(ctx);
+  for (size_t g = 0; g < 2; ++g) {
+    triangles[g] = 0.0;
+    for (size_t i = 0; i < n; ++i)
+      if (group_levels[g * n + i] >= 0)
+        triangles[g] += s.table.triangle_count[s.table.chain_level_offset[s.chains[i]] + group_levels[g * n + i]];
+  }
+}
+
 void run(benchmark::State& state, bool views) {
   const size_t n = static_cast<size_t>(state.range(0));
   BenchScene& s = scene(n);
   const float budget = budgetFor(s, n);
   ViewContext vc(n);
+  double x4[2], x1[2];
+  primaryAndShadowTriangles(s, vc.ctx, n, 4.0f, x4);
+  primaryAndShadowTriangles(s, vc.ctx, n, 1.0f, x1);
   resetSelectorHistory(s.ctx);
   std::vector<int8_t> group_levels(2 * n);
   SelectionStats st;
@@ -105,6 +137,9 @@ void run(benchmark::State& state, bool views) {
   state.counters["eye_triangles"] = triangles[0] / f;
   state.counters["shadow_triangles"] = triangles[1] / f;
   state.counters["bytes_per_object"] = selectorBytesPerObject(views ? vc.ctx : s.ctx);
+  state.counters["primary_tris"] = x4[0];
+  state.counters["shadow_tris_x4"] = x4[1];
+  state.counters["shadow_tris_x1"] = x1[1];
 }
 
 void BM_ViewsSingle(benchmark::State& s) { run(s, false); }
