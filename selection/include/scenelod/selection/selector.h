@@ -150,7 +150,8 @@ struct SelectorConfig {
   bool sse2_only = false;            // true: the SSE2 code paths even where the CPU has AVX2 (both
                                      // give the same bits; tests compare them)
   size_t max_view_groups = 0;        // 0..8: view groups a job may use (views, forced levels); 0 keeps
-                                     // no memory for them. Each costs about 200 bytes per object.
+                                     // no memory for them. Each costs 257 bytes per object, plus 26
+                                     // per object and 39 KB for any (docs/SELECTION.md, "Views").
 };
 
 // Creates a context: all memory for max_object_count objects in one allocation. Returns null on a bad
@@ -176,7 +177,7 @@ void reportFrameTime(SelectorContext* context, uint64_t frame, float measured_ms
 
 // Predicted cost and benefit (hysteresis included) the last run() gave `object` at `level` (-1 = not
 // drawn) in budget mode. Returns false when the object was culled, the level is out of range, or
-// the last run was not in budget mode. Needs nothing of the last run's inputs. For tests and tools.
+// the last run was not a single-view budget frame (no views, no forced levels). Needs nothing of the last run's inputs. For tests and tools.
 bool selectorLastPoint(const SelectorContext* context, size_t object, int level, double* cost_ms,
                        double* benefit);
 
