@@ -300,6 +300,95 @@ TEST(Views, TheBudgetHoldsAcrossViewsAlongAPath) {
   destroySelectorContext(ctx);
 }
 
+// An orthographic view looking down -z (primary) or -y (shadow) over the box [-10, 10]^3.
+View orthoView(ViewKind kind, uint32_t group, bool from_above) {
+  View v;
+  v.kind = kind;
+  v.group = group;
+  v.camera.projection = Projection::kOrthographic;
+  v.camera.eye = from_above ? glm::vec3(0.0f, 50.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 50.0f);
+  v.camera.target = glm::vec3(0.0f);
+  v.camera.up = from_above ? glm::vec3(0.0f, 0.0f, -1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+  v.camera.ortho_height = 20.0f;
+  v.camera.near_plane = 1.0f;
+  v.camera.far_plane = 100.0f;
+  v.camera.viewport_width_px = v.camera.viewport_height_px = 200;
+  return v;
+}
+
+// Cost and benefit of object i drawn at `level` in a group of one orthographic view of kind
+// `kind` (the documented model: docs/SELECTION.md, "Views"), in double.
+void groupPoint(const SyntheticScene& s, const CostCoefficients& k, const SelectionParams& params, const View& v,
+                size_t i, int level, double* cost, double* benefit) {
+  *cost = *benefit = 0.0;
+  if (level < 0) return;
+  const ViewKindWeights w = params.view_kinds[static_cast<size_t>(v.kind)];
+  const double pixel = v.camera.ortho_height / v.camera.viewport_height_px;
+  const double r_px = s.radii[i] / pixel;
+  const double px = std::min(3.14159265358979 * r_px * r_px, 200.0 * 200.0);
+  const size_t row = s.table.chain_level_offset[s.chains[i]] + static_cast<size_t>(level);
+  const double geometry = k.per_triangle_ms * s.table.triangle_count[row] + k.per_vertex_ms * s.table.vertex_count[row] +
+                          k.per_line_point_ms * s.table.line_point_count[row];
+  *cost = w.object_cost * k.per_object_ms + w.pixel_cost * k.per_pixel_ms * px + w.geometry_cost * geometry;
+  const double width = s.table.cell_width[row];
+  const double q = v.pixels_per_cell * pixel / s.scales[i];
+  const double accuracy = width > 0.0 ? std::min(1.0, q / width) : 1.0;
+  *benefit = w.benefit * px * s.importance[i] * accuracy;
+}
+
+TEST(Views, TheTupleGreedyIsWithinHalfOfTheExactOptimum) {
+  // a primary and a shadow view, each a group of one orthographic view; four objects, every
+  // consistent assignment of level tuples enumerated for the exact optimum under the budget
+  constexpr size_t kObjects = 4, kLevels = 4;
+  SyntheticScene s = makeScene(21, kObjects, 3, kLevels);
+  const glm::vec3 places[kObjects] = {{0, 0, 0}, {4, -3, 2}, {-5, 2, 30}, {6, 40, 1}};  // the third only
+  for (size_t i = 0; i < kObjects; ++i) s.centers[i] = places[i];                        // seen from above,
+  SelectorContext* ctx = viewContext(kObjects, 2);                                      // the fourth by neither
+  const std::vector<View> views = {orthoView(ViewKind::kPrimary, 0, false), orthoView(ViewKind::kShadow, 1, true)};
+  const CostCoefficients k = selectorCostModel(ctx);
+  // per object, every allowed tuple as (cost, benefit)
+  std::vector<std::vector<std::pair<double, double>>> options(kObjects);
+  for (size_t i = 0; i < kObjects; ++i) {
+    bool sees[2];
+    for (size_t g = 0; g < 2; ++g) sees[g] = sphereInFrustum(computeFrustum(views[g].camera), s.centers[i], s.radii[i]);
+    for (int lp = -1; lp < static_cast<int>(kLevels); ++lp)
+      for (int ls = -1; ls < static_cast<int>(kLevels); ++ls) {
+        if ((!sees[0] && lp >= 0) || (!sees[1] && ls >= 0)) continue;
+        if (sees[0] && ls >= 0 && (lp < 0 || ls < lp)) continue;  // the shadow rule
+        double c[2], b[2];
+        SelectionParams params = budgetParams(1.0f);
+        groupPoint(s, k, params, views[0], i, lp, &c[0], &b[0]);
+        groupPoint(s, k, params, views[1], i, ls, &c[1], &b[1]);
+        options[i].push_back({c[0] + c[1], b[0] + b[1]});
+      }
+  }
+  for (float budget : {0.503f, 0.505f, 0.507f, 0.51f, 0.515f}) {
+    double best = 0.0;
+    size_t pick[kObjects] = {};
+    for (;;) {  // every combination of one option per object
+      double cost = k.per_frame_ms, benefit = 0.0;
+      for (size_t i = 0; i < kObjects; ++i) {
+        cost += options[i][pick[i]].first;
+        benefit += options[i][pick[i]].second;
+      }
+      if (cost <= budget) best = std::max(best, benefit);
+      size_t i = 0;
+      while (i < kObjects && ++pick[i] == options[i].size()) pick[i++] = 0;
+      if (i == kObjects) break;
+    }
+    resetSelectorHistory(ctx);
+    SelectionParams params = budgetParams(budget);
+    params.hysteresis = 0.0f;
+    ViewRun run;
+    ASSERT_TRUE(runViews(s, ctx, views, 2, params, &run));
+    EXPECT_LE(run.stats.predicted_ms, budget * (1.0 + 1e-5)) << budget;
+    EXPECT_LE(run.stats.total_benefit, best * (1.0 + 1e-4)) << budget;  // no better than exact
+    EXPECT_GE(run.stats.total_benefit, 0.5 * best * (1.0 - 1e-4)) << budget;
+    EXPECT_GT(best, 0.0);
+  }
+  destroySelectorContext(ctx);
+}
+
 TEST(Views, BadInputIsRefusedWithAClearError) {
   const SyntheticScene s = makeScene(1, 10, 2, 4);
   SelectorContext* ctx = viewContext(s.centers.size(), 2);
