@@ -21,6 +21,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "attribute_level.h"
 #include "cluster_internal.h"
 #include "test_hooks.h"
 #include "scenelod/lodcore/scrooge.h"
@@ -274,6 +275,12 @@ Error searchCellWidth(const PreparedMesh& p, const ClusterParams& params, size_t
   }
   cell_width = best;
   return {};
+}
+
+// w_1 for a mesh of fewer than two triangles (no half to search for): its mean edge, else a 64th
+// of its diagonal
+float smallMeshFirstWidth(const PreparedMesh& p) {
+  return p.mean_edge_length > 0.0f ? p.mean_edge_length : std::max(p.bounds.diagonal() / 64.0f, 1e-6f);
 }
 
 }  // namespace
@@ -560,7 +567,7 @@ Error ChainLevels::chooseFirstWidth() {
           !e.ok())
         return e;
     } else {
-      w1_ = p_.mean_edge_length > 0.0f ? p_.mean_edge_length : std::max(p_.bounds.diagonal() / 64.0f, 1e-6f);
+      w1_ = smallMeshFirstWidth(p_);
     }
   }
   return detail::checkCellWidth(p_, w1_);
@@ -596,6 +603,16 @@ Error ChainLevels::run(std::optional<Sphere>& base_bounds) {
   return {};
 }
 
+// level 0: the input (taken from `take` when handed over, else copied) and its sphere
+void setBaseLevel(const Mesh& original, Mesh* take, const Sphere& bounds, LodLevel& base) {
+  base.bounds = bounds;
+  if (take) base.mesh = std::move(*take);
+  else base.mesh = original;
+  base.cell_width = 0.0f;
+  base.max_error = 0.0f;
+  base.method = LodMethod::kOriginal;
+}
+
 // `take`, when given, is `original` itself, handed over by the caller: level 0 takes it by move
 // instead of a copy once the levels are done
 Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
@@ -618,14 +635,72 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
     if (Error e = levels.run(base_bounds); !e.ok()) return e;
   }
   p = PreparedMesh();
-  LodLevel& base = out.levels[0];
-  base.bounds = base_bounds ? *base_bounds : computeBoundingSphere(original);
-  if (take) base.mesh = std::move(*take);
-  else base.mesh = original;
-  base.cell_width = 0.0f;
-  base.max_error = 0.0f;
-  base.method = LodMethod::kOriginal;
+  setBaseLevel(original, take, base_bounds ? *base_bounds : computeBoundingSphere(original), out.levels[0]);
   if (no_levels) params.progress(1.0, "done");
+  return {};
+}
+
+// The chain of a mesh with attributes (detail::hasAttributes): welded and split into UV charts once,
+// prepared once, then every level through the attribute output pass in parallel (each reads only
+// the shared welded mesh and its preparation, so the result is the same on any number of threads).
+// Each level records its source vertices in the input's indices.
+Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
+                          ChainStats& stats) {
+  params.progress(0.0, "grading");
+  Clock::time_point t0 = Clock::now();
+  if (Error e = validateMesh(original, "mesh"); !e.ok()) return e;
+  detail::AttributeMesh am;
+  detail::makeAttributeMesh(original, am);
+  PreparedMesh p;
+  if (Error e = prepareMesh(am.mesh(), params.cluster, p); !e.ok()) return e;
+  stats.prepare_seconds = since(t0);
+  const size_t n = p.order.empty() ? 0 : params.level_count;
+  out.levels.resize(n + 1);
+  if (n > 0) {
+    t0 = Clock::now();
+    float w1 = params.first_cell_width;
+    const size_t tn = am.mesh().triangleCount();
+    if (w1 == 0.0f && tn >= 2) {
+      params.progress(0.05, "choosing w1");
+      if (Error e = searchCellWidth(p, params.cluster, tn / 2, w1, 0.05, nullptr, &stats.first_width_probes); !e.ok())
+        return e;
+    } else if (w1 == 0.0f) {
+      w1 = smallMeshFirstWidth(p);
+    }
+    if (Error e = detail::checkCellWidth(p, w1); !e.ok()) return e;
+    stats.first_width_seconds = since(t0);
+    stats.level_seconds.assign(n, 0.0);
+    std::vector<Error> errors(n);
+    std::atomic<size_t> done{0};
+    std::mutex progress_mutex;
+    tbb::parallel_for(size_t(0), n, [&](size_t k) {
+      const Clock::time_point start = Clock::now();
+      ClusterParams cp = params.cluster;
+      cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+      LodLevel& level = out.levels[k + 1];
+      ClusterStats cs;
+      errors[k] = detail::clusterAttributeLevel(p, am, cp, level.mesh, &level.source_vertex, &cs);
+      level.cell_width = cp.cell_width;
+      level.max_error = cs.max_error;
+      level.method = cp.method;
+      level.bounds = computeBoundingSphere(level.mesh);
+      stats.level_seconds[k] = since(start);
+      const size_t d = ++done;
+      if (params.progress.fn) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
+      }
+    });
+    for (const Error& e : errors)
+      if (!e.ok()) {
+        out.levels.clear();
+        return e;
+      }
+  }
+  p = PreparedMesh();
+  am = detail::AttributeMesh();
+  setBaseLevel(original, take, computeBoundingSphere(original), out.levels[0]);
+  if (n == 0) params.progress(1.0, "done");
   return {};
 }
 
@@ -646,7 +721,8 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
     case LodMethod::kFloatingNearest:
     {
       const Clock::time_point t0 = Clock::now();
-      const Error e = buildClusterChain(original, take, params, out, stats);
+      const Error e = detail::hasAttributes(original) ? buildAttributeChain(original, take, params, out, stats)
+                                                      : buildClusterChain(original, take, params, out, stats);
       stats.total_seconds = since(t0);
       return e;
     }

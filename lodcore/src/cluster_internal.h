@@ -246,13 +246,20 @@ void buildOutputMesh(Eliminated& e, const Representatives& r, float crease_angle
 struct LevelParts {
   Eliminated eliminated;
   Representatives representatives;
+  // set before clusterLevelParts to keep each cluster's heaviest vertex for finishLevel's source
+  // vertices (clusterPrepared with ClusterOutputs); a chain's levels do not
+  bool keep_heaviest = false;
+  std::vector<uint32_t> heaviest;  // per cluster, when kept
 };
 // With `synthesized` given, synthesis comes before elimination and `synthesized(synthesized_context)`
 // is called between them (the prepared mesh's arrays are not read after it, only its mesh).
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, LevelParts& parts,
                         ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr,
                         void (*synthesized)(void*) = nullptr, void* synthesized_context = nullptr);
-void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out);  // frees parts
+// frees parts; `source_vertex` (optional, parts.heaviest kept) gets each output vertex's cluster's
+// heaviest vertex
+void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out,
+                 std::vector<uint32_t>* source_vertex = nullptr);
 // The same first step from an assignment already made at params.cell_width (by `assign`, e.g. a
 // width search's last probe, which a chain keeps as its first level's); consumes `a`.
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,

@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "attribute_level.h"
 #include "cluster_internal.h"
 #include "test_hooks.h"
 
@@ -152,9 +153,15 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
 
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
                         ClusterStats* stats, void (*synthesized)(void*), void* context) {
+  const bool keep_heaviest = parts.keep_heaviest;
   parts = LevelParts();
+  parts.keep_heaviest = keep_heaviest;
   if (stats) *stats = ClusterStats();
   const Mesh& m = *prepared.mesh;
+  auto releaseHeaviest = [&] {
+    if (keep_heaviest) parts.heaviest = std::move(a.heaviest);
+    else std::vector<uint32_t>().swap(a.heaviest);
+  };
   renumberByFirstVertex(a);
   // elimination before synthesis (neither reads the other's result), so that the representatives
   // (24 bytes per cluster) are not held through elimination's scratch, the largest of a level; the
@@ -165,13 +172,13 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
   Representatives& r = parts.representatives;
   if (synthesized) {
     synthesize(prepared, a, params.synthesis, r);
-    std::vector<uint32_t>().swap(a.heaviest);
+    releaseHeaviest();
     synthesized(context);
     eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
   } else {
     eliminate(prepared, a, params.keep_edges, params.keep_points, true, el);
     synthesize(prepared, a, params.synthesis, r);
-    std::vector<uint32_t>().swap(a.heaviest);
+    releaseHeaviest();
   }
   if (stats) {
     stats->cluster_count = a.cluster_count;
@@ -183,19 +190,73 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
   return {};
 }
 
-void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out) {
+void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out, std::vector<uint32_t>* source_vertex) {
+  const Eliminated& e = parts.eliminated;
+  // the triangles' cluster ids, which the output pass overwrites with vertex ids in place
+  std::vector<uint32_t> corner_cluster;
+  if (source_vertex) corner_cluster = e.triangles;
   buildOutputMesh(parts.eliminated, parts.representatives, params.crease_angle_deg, out);
+  if (source_vertex) {
+    const std::vector<uint32_t>& h = parts.heaviest;
+    source_vertex->assign(out.vertexCount(), kNone);
+    for (size_t i = 0; i < corner_cluster.size(); ++i) (*source_vertex)[out.triangles[i]] = h[corner_cluster[i]];
+    for (size_t i = 0; i < e.edges.size(); ++i) (*source_vertex)[out.edges[i]] = h[e.edges[i]];
+    for (size_t i = 0; i < e.points.size(); ++i) (*source_vertex)[out.points[i]] = h[e.points[i]];
+  }
   parts = LevelParts();
 }
 
 }  // namespace detail
 
-Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
+namespace {
+
+// clusterPrepared, with source vertices when `source_vertex` is given
+Error clusterPreparedWith(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats,
+                          std::vector<uint32_t>* source_vertex) {
   out = Mesh();
+  if (source_vertex) source_vertex->clear();
+  if (prepared.mesh && detail::hasAttributes(*prepared.mesh))
+    return detail::clusterAttributeMesh(prepared, params, out, source_vertex, stats);
   detail::LevelParts parts;
+  parts.keep_heaviest = source_vertex != nullptr;
   if (Error e = detail::clusterLevelParts(prepared, params, parts, stats); !e.ok()) return e;
-  detail::finishLevel(parts, params, out);
+  detail::finishLevel(parts, params, out, source_vertex);
   return {};
+}
+
+// clusterMesh, with source vertices when `source_vertex` is given
+Error clusterMeshWith(const Mesh& in, const ClusterParams& params, Mesh& out, ClusterStats& stats,
+                      std::vector<uint32_t>* source_vertex) {
+  out = Mesh();
+  stats = ClusterStats();
+  if (source_vertex) source_vertex->clear();
+  if (!std::isfinite(params.cell_width) || !(params.cell_width > 0.0f))
+    return {Status::kInvalidArgument,
+            "cell width " + std::to_string(params.cell_width) + " is not a finite positive number"};
+  // a mesh with attributes is prepared once, welded
+  if (detail::hasAttributes(in)) {
+    if (Error e = validateMesh(in, "mesh"); !e.ok()) return e;
+    detail::AttributeMesh am;
+    detail::makeAttributeMesh(in, am);
+    PreparedMesh p;
+    if (Error e = prepareMesh(am.mesh(), params, p); !e.ok()) return e;
+    if (p.order.empty()) return {};
+    return detail::clusterAttributeLevel(p, am, params, out, source_vertex, &stats);
+  }
+  PreparedMesh p;
+  if (Error e = prepareMesh(in, params, p); !e.ok()) return e;
+  if (p.order.empty()) return {};
+  return clusterPreparedWith(p, params, out, &stats, source_vertex);
+}
+
+}  // namespace
+
+Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterStats* stats) {
+  return clusterPreparedWith(prepared, params, out, stats, nullptr);
+}
+
+Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterOutputs& outputs) {
+  return clusterPreparedWith(prepared, params, out, &outputs.stats, &outputs.source_vertex);
 }
 
 Error assignClusters(const PreparedMesh& prepared, const ClusterParams& params, ClusterAssignment& out) {
@@ -217,19 +278,15 @@ Error countClusteredTriangles(const PreparedMesh& prepared, const ClusterParams&
   return {};
 }
 
+Error clusterMesh(const Mesh& in, const ClusterParams& params, Mesh& out, ClusterOutputs& outputs) {
+  return clusterMeshWith(in, params, out, outputs.stats, &outputs.source_vertex);
+}
+
 Error clusterMesh(const Mesh& in, const ClusterParams& params, Mesh& out, float* max_error) {
-  out = Mesh();
-  if (max_error) *max_error = 0.0f;
-  if (!std::isfinite(params.cell_width) || !(params.cell_width > 0.0f))
-    return {Status::kInvalidArgument,
-            "cell width " + std::to_string(params.cell_width) + " is not a finite positive number"};
-  PreparedMesh p;
-  if (Error e = prepareMesh(in, params, p); !e.ok()) return e;
-  if (p.order.empty()) return {};
   ClusterStats stats;
-  if (Error e = clusterPrepared(p, params, out, &stats); !e.ok()) return e;
+  const Error e = clusterMeshWith(in, params, out, stats, nullptr);
   if (max_error) *max_error = stats.max_error;
-  return {};
+  return e;
 }
 
 }  // namespace scenelod

@@ -128,14 +128,31 @@ struct ClusterStats {
   size_t collapsed_triangles = 0; // input triangles that became edges or points
 };
 
+// What clusterPrepared and clusterMesh return besides the level.
+struct ClusterOutputs {
+  ClusterStats stats;
+  // per output vertex, one vertex of the input mesh it stands for (the main source of its
+  // attributes, for engines that rebuild their own vertex format): with attributes, the member of
+  // its attribute group with the largest area share; without, its cluster's heaviest vertex. Either
+  // lies within stats.max_error of the output vertex.
+  std::vector<uint32_t> source_vertex;
+};
+
 // Simplifies a prepared mesh at params.cell_width (params.grading and boost_features are those of
 // the preparation). Writes positions, normals (crease-aware: a vertex is split where faces meet at
 // more than crease_angle_deg), colours (area-weighted, when the input has colours), triangles, thick
-// edges and points into `out`; uvs are dropped. Errors: cell width not finite or <= 0, or too small
-// for the mesh extent (more than 2^30 cells along an axis), method not a clustering method.
+// edges and points into `out`.
+// A mesh with attributes (texture coordinates, tangents, a skin or more than one triangle group) is
+// welded and each cluster emits one vertex per attribute group, with its texture coordinates,
+// tangents, joint weights and the triangles' groups (docs/CLUSTERING.md, "Attributes"); where the
+// weld removes vertices, the welded mesh is prepared again here (a chain does it once).
+// Errors: cell width not finite or <= 0, or too small for the mesh extent (more than 2^30 cells
+// along an axis), method not a clustering method.
 // Thread-safe for distinct `out`. Cost: O(V + T) time and memory per call.
 Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out,
                       ClusterStats* stats = nullptr);
+// The same, with the source vertices.
+Error clusterPrepared(const PreparedMesh& prepared, const ClusterParams& params, Mesh& out, ClusterOutputs& outputs);
 
 // Counts the triangles clusterPrepared would output at `cell_width`, without synthesis or normals
 // (used by width searches). Same errors. Cost: O(V + T).
@@ -143,10 +160,14 @@ Error countClusteredTriangles(const PreparedMesh& prepared, const ClusterParams&
 
 // Simplifies `in` (triangles, and its edges and points) at one cell width into `out`.
 // `out` gets positions, normals (crease-aware), colours (area-weighted) of the representatives and
-// the surviving triangles, thick edges and points; uvs are dropped. `max_error`, when not null,
-// receives the largest distance any input vertex moved to its representative.
-// Errors: cell width not finite or <= 0, invalid mesh (NaN, index out of range). An empty mesh gives
-// an empty result. Cost: O(N log N) for the weight sort, O(N) per call otherwise; allocates.
+// the surviving triangles, thick edges and points, and for a mesh with attributes those of
+// clusterPrepared. `max_error`, when not null, receives the largest distance any input vertex moved
+// to its representative.
+// Errors: cell width not finite or <= 0, invalid mesh (NaN, index out of range, attribute arrays
+// of the wrong size, bad skin), named "mesh". An empty mesh gives an empty result.
+// Cost: O(N log N) for the weight sort, O(N) per call otherwise; allocates.
 Error clusterMesh(const Mesh& in, const ClusterParams& params, Mesh& out, float* max_error = nullptr);
+// The same, with the source vertices.
+Error clusterMesh(const Mesh& in, const ClusterParams& params, Mesh& out, ClusterOutputs& outputs);
 
 }  // namespace scenelod

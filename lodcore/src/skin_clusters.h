@@ -1,0 +1,30 @@
+#pragma once
+// Skin weights in clustering levels (docs/CLUSTERING.md, "Attributes"): the split of clusters whose
+// vertices follow unrelated bones, and each cluster's joint weights.
+#include <cstdint>
+#include <vector>
+
+#include <glm/ext/vector_uint4_sized.hpp>
+#include <glm/vec4.hpp>
+
+#include "cluster_internal.h"
+
+namespace scenelod::detail {
+
+// Each cluster's vertices as a list: cluster c's are members[offset[c] .. offset[c + 1]), in
+// increasing index. Cost: O(V), a counting sort.
+void clusterMembers(const Assignment& a, std::vector<uint32_t>& offset, std::vector<uint32_t>& members);
+
+// Splits every cluster of `a` whose vertices' dominant joints (the joint of the largest weight) are
+// not pairwise equal or parent and child (Mesh::joint_parents; without it only equal joints go
+// together): the centre's joint keeps its members and those of the one related joint (parent or
+// child) with the most members; the others form one new cluster per dominant joint, centred on its
+// heaviest vertex. Does nothing for a mesh without a skin. Run before synthesis.
+void splitSkinClusters(const PreparedMesh& p, Assignment& a);
+
+// Per cluster: the sum of each joint's weights over its vertices, the four largest kept (ties: the
+// lower joint) and renormalised to sum 1, unused slots joint 0 weight 0. Empty skin: all zero.
+void clusterSkinWeights(const Mesh& m, const Assignment& a, std::vector<glm::u16vec4>& joints,
+                        std::vector<glm::vec4>& weights);
+
+}  // namespace scenelod::detail
