@@ -78,8 +78,7 @@ const char* viewsError(const SelectionJob& job) {
   }
   if (groups == 0) groups = 1;  // forced levels only: the camera's one group
   if (groups > ctx.views.max_groups) return "more view groups than the context's max_view_groups";
-  if (job.views.count && job.group_levels_out.count != 0 &&
-      (job.group_levels_out.count != groups * n || !job.group_levels_out.data))
+  if (job.group_levels_out.count != 0 && (job.group_levels_out.count != groups * n || !job.group_levels_out.data))
     return "group_levels_out is neither empty nor group count * objects";
   const uint32_t* offset = job.levels.chain_level_offset.data;
   for (size_t c = 0; c < job.levels.chainCount(); ++c)

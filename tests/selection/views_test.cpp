@@ -421,6 +421,14 @@ TEST(Views, BadInputIsRefusedWithAClearError) {
   EXPECT_EQ(errorOf({primaryView()}, forced), "a forced level out of its chain's range");
   forced[4] = -2;
   EXPECT_EQ(errorOf({primaryView()}, forced), "a forced level out of its chain's range");
+  {
+    std::vector<int8_t> small(s.centers.size());
+    SelectionJob j = makeJob(s, ctx, nullptr, levels, nullptr);
+    const View one = primaryView();
+    j.views = Span<const View>(&one, 1);
+    j.group_levels_out = Span<int8_t>(small.data(), small.size() - 1);
+    EXPECT_NE(std::string(j.error()).find("group_levels_out"), std::string::npos);
+  }
   // a context without view memory refuses views and forced levels alike
   SelectorContext* plain = test::makeContext(s.centers.size());
   const Camera cam = makeCamera();
