@@ -138,8 +138,14 @@ size_t tupleHull(const TupleHullInput& in, uint32_t slot, size_t max_steps, Tupl
   chain[0][0] = TuplePoint{0.0f, 0.0f, 0};
   const bool joint = f.primary >= 0 && (in.terms->in_mask >> f.primary & 1u);
   if (joint) nc = jointHull(in, chain[0]);
+  bool origin = !joint;  // the chain is still the one point "nothing drawn": a sum onto it is a copy
   for (size_t g = 0; g < f.groups; ++g) {
     if (!(in.terms->in_mask >> g & 1u) || (joint && (static_cast<int>(g) == f.primary || constrained(in, g)))) continue;
+    if (origin) {
+      nc = groupHull(in, g, 0, false, chain[cur]);
+      origin = false;
+      continue;
+    }
     const size_t nh = groupHull(in, g, 0, false, hull);
     nc = minkowski(chain[cur], nc, hull, nh, chain[cur ^ 1]);
     cur ^= 1;

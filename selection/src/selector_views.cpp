@@ -384,10 +384,16 @@ double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
 
 // The coarsest level of accuracy 1 for accuracy term q (level 0, of width 0, always is).
 int finestLevel(const SelectorContext& ctx, uint32_t row0, int levels, float q) {
-  int finest = 0;
-  for (int l = 1; l < levels; ++l)
-    if (std::min(1.0f, q * ctx.row_inv_w[row0 + static_cast<uint32_t>(l)]) >= 1.0f) finest = l;
-  return finest;
+  // widths rise along a chain, so q / width falls: a binary search for the last level of accuracy 1
+  int lo = 0, hi = levels - 1;
+  while (lo < hi) {
+    const int mid = (lo + hi + 1) / 2;
+    if (std::min(1.0f, q * ctx.row_inv_w[row0 + static_cast<uint32_t>(mid)]) >= 1.0f)
+      lo = mid;
+    else
+      hi = mid - 1;
+  }
+  return lo;
 }
 
 void runViews(const SelectionJob& job, const CostCoefficients& coef) {
