@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
+#include <string>
 #include <vector>
 
 #include "selection_fixtures.h"
@@ -385,6 +387,75 @@ TEST(Views, TheTupleGreedyIsWithinHalfOfTheExactOptimum) {
     EXPECT_LE(run.stats.total_benefit, best * (1.0 + 1e-4)) << budget;  // no better than exact
     EXPECT_GE(run.stats.total_benefit, 0.5 * best * (1.0 - 1e-4)) << budget;
     EXPECT_GT(best, 0.0);
+  }
+  destroySelectorContext(ctx);
+}
+
+TEST(Views, TheRulesHoldOnRandomFrames) {
+  // random views (kinds, groups, X, bias, projections), must-draw and forced objects, both modes,
+  // several frames each: eyes share one output, shadows never finer than the primary group where
+  // it sees the object, forced levels and must-draw honoured, unflagged budgets held
+  SyntheticScene s = makeScene(31, 300, 6, 6, 100.0f, true);
+  for (size_t i = 0; i < s.must_draw.size(); i += 13) s.must_draw[i] = 1;
+  std::vector<int8_t> forced(s.centers.size(), -1);
+  for (size_t i = 5; i < forced.size(); i += 17) forced[i] = static_cast<int8_t>(i % 6);
+  SelectorContext* ctx = viewContext(s.centers.size(), 4);
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const ViewKind kinds[4] = {ViewKind::kPrimary, ViewKind::kShadow, ViewKind::kEye, ViewKind::kSecondary};
+  for (int trial = 0; trial < 40; ++trial) {
+    // up to four groups, each of one kind and one or two views
+    const size_t groups = 1 + rng() % 4;
+    std::vector<View> views;
+    for (size_t g = 0; g < groups; ++g) {
+      const ViewKind kind = kinds[rng() % 4];
+      for (size_t k = 0, count = 1 + rng() % 2; k < count; ++k) {
+        View v = kind == ViewKind::kShadow ? shadowView(static_cast<uint32_t>(10 * g), 0.5f + 4.0f * u(rng),
+                                                        40.0f + 100.0f * u(rng))
+                                           : primaryView(glm::vec3(20.0f * (u(rng) - 0.5f), 0.0f, 10.0f * u(rng)));
+        v.kind = kind;
+        v.group = static_cast<uint32_t>(10 * g);
+        v.lod_bias = 0.5f + 2.0f * u(rng);
+        views.push_back(v);
+      }
+    }
+    const SelectionParams params = trial % 3 == 0 ? distanceParams() : budgetParams(0.6f + 3.0f * u(rng));
+    resetSelectorHistory(ctx);
+    for (int frame = 0; frame < 3; ++frame) {
+      ViewRun run;
+      ASSERT_TRUE(runViews(s, ctx, views, groups, params, &run, &forced)) << trial;
+      int primary = -1;
+      for (ViewKind k : {ViewKind::kPrimary, ViewKind::kEye, ViewKind::kSecondary})
+        for (size_t g = 0; g < groups && primary < 0; ++g)
+          for (const View& v : views)
+            if (primary < 0 && v.group == 10 * g && v.kind == k) primary = static_cast<int>(g);
+      const size_t n = s.centers.size();
+      for (size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(run.levels[i], run.group_levels[std::max(primary, 0) * n + i]);
+        bool primary_sees = false;
+        for (size_t g = 0; g < groups; ++g) {
+          bool sees = false;
+          for (const View& v : views)
+            if (v.group == 10 * g) sees |= sphereInFrustum(computeFrustum(v.camera), s.centers[i], s.radii[i]);
+          const int l = run.group_levels[g * n + i];
+          EXPECT_TRUE(sees || l == -1) << trial << " object " << i;
+          EXPECT_TRUE(!sees || forced[i] < 0 || l == forced[i]) << trial << " object " << i;
+          EXPECT_TRUE(!sees || !s.must_draw[i] || l >= 0) << trial << " object " << i;
+          if (static_cast<int>(g) == primary) primary_sees = sees;
+        }
+        if (primary < 0 || !primary_sees) continue;
+        const int p = run.group_levels[primary * n + i];
+        for (size_t g = 0; g < groups; ++g) {
+          const int l = run.group_levels[g * n + i];
+          bool shadow = false;
+          for (const View& v : views) shadow |= v.group == 10 * g && v.kind == ViewKind::kShadow;
+          EXPECT_TRUE(!shadow || l < 0 || (p >= 0 && l >= p)) << trial << " object " << i;
+        }
+      }
+      const bool held = params.mode == SelectionMode::kDistance || (run.stats.flags & kFlagOverBudget) ||
+                        run.stats.predicted_ms <= params.budget_ms * (1.0 + 1e-5);
+      EXPECT_TRUE(held) << trial;
+    }
   }
   destroySelectorContext(ctx);
 }
