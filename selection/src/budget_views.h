@@ -27,16 +27,6 @@ struct ViewFrame {
   float c_obj = 0.0f, c_px = 0.0f;
 };
 
-// One object in one group: its level-independent cost a (the views that see it, kind-weighted),
-// the geometry multiplier m (a level costs a + m * row cost), its benefit b at accuracy 1, the
-// accuracy term q (X R / scale of the view needing the finest level), and the kind-weighted object
-// and pixel features it adds when drawn.
-struct GroupTerms {
-  float a = 0.0f, m = 0.0f, b = 0.0f;
-  float q = std::numeric_limits<float>::infinity();
-  float feature_objects = 0.0f, feature_pixels = 0.0f;
-  int finest = 0;  // the coarsest level of accuracy 1 (finestLevel)
-};
 struct ObjectTerms {
   uint32_t in_mask = 0;  // bit g: some view of group g sees the object
   GroupTerms group[kMaxViews];

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "scenelod/selection/camera.h"
 #include "scenelod/selection/selector.h"
@@ -78,6 +79,16 @@ struct ViewStep {
   uint64_t order;
   uint64_t tuple;
 };
+// One object in one group: its level-independent cost a (the views that see it, kind-weighted),
+// the geometry multiplier m (a level costs a + m * row cost), its benefit b at accuracy 1, the
+// accuracy term q (X R / scale of the view needing the finest level), and the kind-weighted object
+// and pixel features it adds when drawn.
+struct GroupTerms {
+  float a = 0.0f, m = 0.0f, b = 0.0f;
+  float q = std::numeric_limits<float>::infinity();
+  float feature_objects = 0.0f, feature_pixels = 0.0f;
+  int finest = 0;  // the coarsest level of accuracy 1 (finestLevel)
+};
 // A point of a tuple hull: cost, benefit, levels (byte g = level in group g + 1, 0 = not drawn).
 // No member initialisers: the hull code's arrays of them are scratch, not to be zeroed per object.
 struct TuplePoint {
@@ -95,7 +106,8 @@ struct ViewScratch {
   size_t max_groups = 0;
   int8_t* prev = nullptr;          // max_objects * max_groups: last frame's level per object and group
   uint32_t* slot_object = nullptr; // per slot (object in some view), in object order
-  uint8_t* slot_views = nullptr;   // per slot: bit v = view v sees the object
+  uint8_t* slot_groups = nullptr;  // per slot: bit g = some view of group g sees the object
+  GroupTerms* slot_terms = nullptr; // per slot, max_groups: its terms in each group (the write-out's)
   float* base_cost = nullptr;      // per slot: the hull's first point (not drawn, or the cheapest
   float* base_benefit = nullptr;   // tuple of a must-draw or forced object)
   uint64_t* base_tuple = nullptr;

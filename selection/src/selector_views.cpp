@@ -221,8 +221,8 @@ struct ViewSums {
 
 // Writes object i's levels (tuple: byte g = level + 1) to the outputs, adds its cost, benefit and
 // features to the sums and moves its history on.
-void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, size_t i, const ObjectTerms& t,
-                 const ObjectChoice& o, uint64_t tuple, ViewSums* sums) {
+void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, size_t i, uint32_t in_mask,
+                 const GroupTerms* terms, const ObjectChoice& o, uint64_t tuple, ViewSums* sums) {
   int8_t* const prev = ctx.views.prev + i * ctx.views.max_groups;
   float cost = 0.0f;
   bool drawn = false, changed = false;
@@ -231,7 +231,7 @@ void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame&
     if (job.group_levels_out.count) job.group_levels_out[g * job.centers.count + i] = static_cast<int8_t>(level);
     changed |= prev[g] != level;
     if (level >= 0) {
-      const GroupTerms& gt = t.group[g];
+      const GroupTerms& gt = terms[g];
       const uint32_t row = o.row0 + static_cast<uint32_t>(level);
       const float group_cost = gt.a + gt.m * ctx.row_cost[row];
       const float acc = std::min(1.0f, gt.q * ctx.row_inv_w[row]) * (level == prev[g] ? ctx.h1 : 1.0f);
@@ -252,13 +252,10 @@ void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame&
   if (job.cost_ms_out.count) job.cost_ms_out[i] = cost;
   sums->predicted += cost;
   sums->drawn += drawn ? 1u : 0u;
-  sums->culled += t.in_mask == 0 ? 1u : 0u;
-  sums->dropped += t.in_mask != 0 && !drawn ? 1u : 0u;
+  sums->culled += in_mask == 0 ? 1u : 0u;
+  sums->dropped += in_mask != 0 && !drawn ? 1u : 0u;
   sums->switches += changed ? 1u : 0u;
 }
-
-// An object no view sees (or with no level): -1 in every group.
-const ObjectTerms kUnseen{};
 
 void distanceFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, ViewSums* sums) {
   ObjectTerms t;
@@ -270,14 +267,14 @@ void distanceFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
     for (size_t i = i0; i < i0 + m; ++i) {
       const ObjectChoice o = mask[i - i0] ? objectChoice(job, i) : ObjectChoice{};
       if (o.levels == 0) {
-        writeObject(job, ctx, f, i, kUnseen, o, 0, sums);
+        writeObject(job, ctx, f, i, 0, nullptr, o, 0, sums);  // seen by no view, or no level
         continue;
       }
       objectTerms(ctx, f, job, i, mask[i - i0], o, &t);
       distanceTuple(f, t, o, ctx.views.prev + i * ctx.views.max_groups, ctx, level);
       uint64_t tuple = 0;
       for (size_t g = 0; g < f.groups; ++g) tuple |= static_cast<uint64_t>(level[g] + 1) << (8 * g);
-      writeObject(job, ctx, f, i, t, o, tuple, sums);
+      writeObject(job, ctx, f, i, t.in_mask, t.group, o, tuple, sums);
     }
   }
 }
@@ -297,7 +294,8 @@ double tupleHulls(const SelectionJob& job, SelectorContext& ctx, const ViewFrame
     const ObjectChoice o = objectChoice(job, i);
     if (o.levels == 0) continue;
     objectTerms(ctx, f, job, i, mask[i % kSlotBlock], o, &t);
-    vs.slot_views[slots] = mask[i % kSlotBlock];
+    vs.slot_groups[slots] = static_cast<uint8_t>(t.in_mask);
+    std::copy(t.group, t.group + f.groups, vs.slot_terms + slots * vs.max_groups);
     const TupleHullInput hin{&ctx, &f, &t, vs.prev + i * vs.max_groups, o.row0, o.levels, o.forced, o.must,
                                vs.pool};
     TuplePoint base;
@@ -365,16 +363,14 @@ double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
     }
   }
   // the write-out in object order (the slots' order)
-  ObjectTerms t;
   size_t s = 0;
   for (size_t i = 0; i < job.centers.count; ++i) {
     if (s == slots || vs.slot_object[s] != i) {
-      writeObject(job, ctx, f, i, kUnseen, ObjectChoice{}, 0, sums);
+      writeObject(job, ctx, f, i, 0, nullptr, ObjectChoice{}, 0, sums);
       continue;
     }
-    const ObjectChoice o = objectChoice(job, i);
-    objectTerms(ctx, f, job, i, vs.slot_views[s], o, &t);
-    writeObject(job, ctx, f, i, t, o, vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s], sums);
+    writeObject(job, ctx, f, i, vs.slot_groups[s], vs.slot_terms + s * vs.max_groups, objectChoice(job, i),
+                vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s], sums);
     ++s;
   }
   return split < count ? static_cast<double>(vs.steps[split].ratio) : 0.0;
@@ -428,12 +424,19 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   ViewScratch& vs = ctx.views;
   const size_t n = ctx.max_objects;
   const size_t steps = n * max_groups * kViewStepsPerGroup;
-  const size_t sizes[10] = {steps * sizeof(ViewStep), n * sizeof(uint64_t), n * sizeof(uint32_t),
-                            n * sizeof(float),         n * sizeof(float),    n * sizeof(uint32_t),
-                            n * max_groups,            n,                    n,
+  const size_t sizes[11] = {steps * sizeof(ViewStep),
+                            n * max_groups * sizeof(GroupTerms),
+                            n * sizeof(uint64_t),
+                            n * sizeof(uint32_t),
+                            n * sizeof(float),
+                            n * sizeof(float),
+                            n * sizeof(uint32_t),
+                            n * max_groups,
+                            n,
+                            n,
                             kTuplePoolCap * sizeof(TuplePoint)};
-  size_t at[10], total = 0;
-  for (size_t k = 0; k < 10; ++k) {
+  size_t at[11], total = 0;
+  for (size_t k = 0; k < 11; ++k) {
     at[k] = total;
     total += (sizes[k] + 63) / 64 * 64;
   }
@@ -444,17 +447,18 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   vs.max_groups = max_groups;
   vs.step_capacity = steps;
   vs.steps = reinterpret_cast<ViewStep*>(base + at[0]);
-  vs.base_tuple = reinterpret_cast<uint64_t*>(base + at[1]);
-  vs.slot_object = reinterpret_cast<uint32_t*>(base + at[2]);
-  vs.base_cost = reinterpret_cast<float*>(base + at[3]);
-  vs.base_benefit = reinterpret_cast<float*>(base + at[4]);
-  vs.best = reinterpret_cast<uint32_t*>(base + at[5]);
-  vs.prev = reinterpret_cast<int8_t*>(base + at[6]);
-  vs.best_step = base + at[7];
-  vs.slot_views = base + at[8];
-  vs.pool = reinterpret_cast<TuplePoint*>(base + at[9]);
+  vs.slot_terms = reinterpret_cast<GroupTerms*>(base + at[1]);
+  vs.base_tuple = reinterpret_cast<uint64_t*>(base + at[2]);
+  vs.slot_object = reinterpret_cast<uint32_t*>(base + at[3]);
+  vs.base_cost = reinterpret_cast<float*>(base + at[4]);
+  vs.base_benefit = reinterpret_cast<float*>(base + at[5]);
+  vs.best = reinterpret_cast<uint32_t*>(base + at[6]);
+  vs.prev = reinterpret_cast<int8_t*>(base + at[7]);
+  vs.best_step = base + at[8];
+  vs.slot_groups = base + at[9];
+  vs.pool = reinterpret_cast<TuplePoint*>(base + at[10]);
   ctx.total_bytes += total;
-  ctx.per_object_bytes += at[9];  // all but the pool scale with the objects
+  ctx.per_object_bytes += at[10];  // all but the pool scale with the objects
   return true;
 }
 

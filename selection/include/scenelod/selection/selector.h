@@ -150,7 +150,7 @@ struct SelectorConfig {
   bool sse2_only = false;            // true: the SSE2 code paths even where the CPU has AVX2 (both
                                      // give the same bits; tests compare them)
   size_t max_view_groups = 0;        // 0..8: view groups a job may use (views, forced levels); 0 keeps
-                                     // no memory for them. Each costs 257 bytes per object, plus 26
+                                     // no memory for them. Each costs 285 bytes per object, plus 26
                                      // per object and 39 KB for any (docs/SELECTION.md, "Views").
 };
 
