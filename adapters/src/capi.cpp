@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <iterator>
 #include <memory>
 #include <new>
 #include <string>
@@ -97,6 +98,14 @@ void swapPop(V& v, size_t i) {
   v.pop_back();
 }
 
+// What slod_level_get hands out beside a chain's meshes: the index ranges of every level (triangles
+// sorted by group, one range per group run) and level 0's identity source_vertex.
+struct ChainOutputs {
+  std::vector<std::vector<slod_index_range>> ranges;  // per level
+  std::vector<uint32_t> identity;                     // 0 .. level 0's vertex count - 1
+  uint32_t joint_count = 0;
+};
+
 }  // namespace
 
 struct slod_context {
@@ -105,6 +114,7 @@ struct slod_context {
   std::string last_message;
 
   std::vector<LodChain> chains;            // per dense chain index (= level table chain id)
+  std::vector<ChainOutputs> outputs;       // per dense chain index
   SlotMap chain_handles{SlotMap::kKindBit};
   selection::ReplayScene objects;          // node i = object i (roots), chain spheres per chain
   SlotMap object_handles{0};
@@ -205,6 +215,7 @@ SLOD_ABI(slod_camera, eye);
 SLOD_ABI(slod_frame_params, budget_ms);
 SLOD_ABI(slod_frame_result, frame);
 SLOD_ABI(slod_pick_result, object);
+SLOD_ABI(slod_attribute_stream, kind);
 #undef SLOD_ABI
 constexpr size_t kSelectionMinStride = offsetof(slod_selection, object) + sizeof(slod_object);
 
@@ -305,8 +316,228 @@ selection::Camera toCamera(const slod_camera& c) {
   return cam;
 }
 
-// Builds a chain and appends it at the next dense index (= its level table chain id).
-Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, const std::string& what, slod_chain& handle) {
+// ---- slod_mesh_desc's attribute streams, skin and index ranges into a Mesh ----
+
+const char* attributeKindName(int kind) {
+  switch (kind) {
+    case SLOD_ATTRIBUTE_UV: return "UV";
+    case SLOD_ATTRIBUTE_COLOR: return "COLOR";
+    case SLOD_ATTRIBUTE_NORMAL: return "NORMAL";
+    case SLOD_ATTRIBUTE_TANGENT4: return "TANGENT4";
+    case SLOD_ATTRIBUTE_GENERIC: return "GENERIC";
+  }
+  return "unknown kind";
+}
+
+// n vertices of Vec from caller memory `stride` bytes apart (unaligned reads), all finite
+template <class Vec>
+Error readVectors(const void* data, size_t stride, size_t n, const std::string& name, std::vector<Vec>& out) {
+  out.resize(n);
+  const char* p = static_cast<const char*>(data);
+  for (size_t v = 0; v < n; ++v) {
+    std::memcpy(&out[v], p + v * stride, sizeof(Vec));
+    for (int c = 0; c < Vec::length(); ++c)
+      if (!std::isfinite(out[v][c])) return {Status::kInvalidMesh, name + ": vertex " + std::to_string(v) + " has a NaN or infinite value"};
+  }
+  return {};
+}
+
+// stream i of the caller's array, whose elements are `stride` bytes apart (their common size)
+Error readStream(const slod_mesh_desc& d, size_t i, uint32_t stride, const std::string& what, slod_attribute_stream& s, int& kind) {
+  const char* at = reinterpret_cast<const char*>(d.attributes) + i * stride;
+  uint32_t size;
+  std::memcpy(&size, at, sizeof size);
+  if (size != stride)
+    return {Status::kInvalidArgument, what + ": attributes[" + std::to_string(i) + "].size is " + std::to_string(size) +
+                                          ", attributes[0].size " + std::to_string(stride) +
+                                          " (fill every stream with slod_attribute_stream_init)"};
+  slod_attribute_stream_init(&s);
+  std::memcpy(&s, at, std::min<size_t>(stride, sizeof s));
+  // an enum field may hold any int a C caller stored: read as the int it is
+  static_assert(sizeof(kind) == sizeof(s.kind), "slod_attribute_kind is stored as an int");
+  std::memcpy(&kind, &s.kind, sizeof kind);
+  return {};
+}
+
+// The streams of `d` into `m` (vertex count set): one per kind and set, UV sets without gaps.
+Error readStreams(const slod_mesh_desc& d, const std::string& what, Mesh& m) {
+  if (d.attribute_count == 0) return {};
+  if (!d.attributes) return {Status::kInvalidArgument, what + ": attributes is null but attribute_count is " + std::to_string(d.attribute_count)};
+  uint32_t stride;
+  std::memcpy(&stride, d.attributes, sizeof stride);
+  if (stride < Abi<slod_attribute_stream>::min_size)
+    return {Status::kInvalidArgument, what + ": attributes[0].size is " + std::to_string(stride) + ", below its smallest size " +
+                                          std::to_string(Abi<slod_attribute_stream>::min_size) + " (fill it with slod_attribute_stream_init)"};
+  const size_t n = m.vertexCount();
+  std::vector<std::vector<glm::vec2>> uv_sets;
+  std::vector<char> uv_given;
+  char kind_given[SLOD_ATTRIBUTE_TANGENT4 + 1] = {};
+  for (size_t i = 0; i < d.attribute_count; ++i) {
+    slod_attribute_stream s;
+    int kind = 0;
+    if (Error e = readStream(d, i, stride, what, s, kind); !e.ok()) return e;
+    const std::string name = what + ": attributes[" + std::to_string(i) + "] (" + attributeKindName(kind) +
+                             (kind == SLOD_ATTRIBUTE_UV ? " set " + std::to_string(s.set) : std::string()) + ")";
+    if (kind == SLOD_ATTRIBUTE_GENERIC)
+      return {Status::kUnsupported, name + ": generic streams are not supported yet; carry them through each level's "
+                                           "source_vertex (slod_level_data)"};
+    if (kind < SLOD_ATTRIBUTE_UV || kind > SLOD_ATTRIBUTE_TANGENT4)
+      return {Status::kInvalidArgument, name + ": unknown kind " + std::to_string(kind)};
+    const uint32_t expected = kind == SLOD_ATTRIBUTE_UV ? 2 : kind == SLOD_ATTRIBUTE_TANGENT4 ? 4 : 3;
+    const bool rgba = kind == SLOD_ATTRIBUTE_COLOR && s.component_count == 4;
+    if (s.component_count != expected && !rgba)
+      return {Status::kInvalidArgument, name + ": component_count is " + std::to_string(s.component_count) + ", expected " +
+                                            std::to_string(expected) + (kind == SLOD_ATTRIBUTE_COLOR ? " or 4" : "")};
+    if (kind != SLOD_ATTRIBUTE_UV && s.set != 0)
+      return {Status::kInvalidArgument, name + ": set is " + std::to_string(s.set) + "; only UV streams have sets"};
+    if (kind == SLOD_ATTRIBUTE_UV && s.set > 64) return {Status::kInvalidArgument, name + ": more than 64 UV sets"};
+    const size_t stride_bytes = s.stride ? s.stride : s.component_count * sizeof(float);
+    if (stride_bytes < s.component_count * sizeof(float))
+      return {Status::kInvalidArgument, name + ": stride " + std::to_string(s.stride) + " is below its " +
+                                            std::to_string(s.component_count * sizeof(float)) + " bytes per vertex"};
+    if (s.count < n)
+      return {Status::kInvalidMesh, name + ": holds " + std::to_string(s.count) + " vertices for " + std::to_string(n)};
+    if (n > 0 && !s.data) return {Status::kInvalidArgument, name + ": data is null"};
+    const bool taken = kind == SLOD_ATTRIBUTE_UV ? s.set < uv_given.size() && uv_given[s.set] : kind_given[kind] != 0;
+    if (taken) return {Status::kInvalidArgument, name + ": a second stream of this kind and set"};
+    kind_given[kind] = 1;
+    Error e;
+    if (kind == SLOD_ATTRIBUTE_UV) {
+      if (s.set >= uv_sets.size()) uv_sets.resize(s.set + 1), uv_given.resize(s.set + 1, 0);
+      uv_given[s.set] = 1;
+      e = readVectors(s.data, stride_bytes, n, name, uv_sets[s.set]);
+    } else if (kind == SLOD_ATTRIBUTE_NORMAL) {
+      e = readVectors(s.data, stride_bytes, n, name, m.normals);
+    } else if (kind == SLOD_ATTRIBUTE_TANGENT4) {
+      e = readVectors(s.data, stride_bytes, n, name, m.tangents);
+    } else if (!rgba) {
+      e = readVectors(s.data, stride_bytes, n, name, m.colors);
+    } else {
+      std::vector<glm::vec4> rgba_values;
+      e = readVectors(s.data, stride_bytes, n, name, rgba_values);
+      for (size_t v = 0; v < rgba_values.size() && e.ok(); ++v) {
+        if (rgba_values[v].a != 1.0f)
+          e = {Status::kUnsupported, name + ": vertex " + std::to_string(v) + " has alpha " + std::to_string(rgba_values[v].a) +
+                                         "; colour alpha is not carried yet (pass 3 components or alpha 1)"};
+        m.colors.push_back(glm::vec3(rgba_values[v]));
+      }
+    }
+    if (!e.ok()) return e;
+  }
+  for (size_t set = 0; set < uv_given.size(); ++set)
+    if (!uv_given[set])
+      return {Status::kInvalidArgument, what + ": UV set " + std::to_string(set) + " is missing below set " +
+                                            std::to_string(uv_given.size() - 1) + " (number the sets 0, 1, ... without gaps)"};
+  if (!uv_sets.empty()) {
+    m.uvs = std::move(uv_sets[0]);
+    m.extra_uvs.assign(std::make_move_iterator(uv_sets.begin() + 1), std::make_move_iterator(uv_sets.end()));
+  }
+  return {};
+}
+
+// The skin of `d` into `m` (vertex count set): joints below joint_count, finite non-negative weights
+// summing to more than 0, the skeleton's parents (checked for range and cycles by validateMesh).
+Error readSkin(const slod_mesh_desc& d, const std::string& what, Mesh& m) {
+  if (!d.joints && !d.weights) {
+    if (d.joint_parents && d.joint_count > 0) m.joint_parents.assign(d.joint_parents, d.joint_parents + d.joint_count);
+    return {};
+  }
+  if (!d.joints || !d.weights) return {Status::kInvalidArgument, what + (d.joints ? ": joints without weights" : ": weights without joints")};
+  if (d.joint_count == 0) return {Status::kInvalidArgument, what + ": joints are given but joint_count is 0"};
+  const size_t n = m.vertexCount();
+  if (d.skin_count < n)
+    return {Status::kInvalidMesh, what + ": the skin (joints, weights) holds " + std::to_string(d.skin_count) + " vertices for " + std::to_string(n)};
+  const size_t joints_stride = d.joints_stride ? d.joints_stride : 4 * sizeof(uint16_t);
+  m.joints.resize(n);
+  for (size_t v = 0; v < n; ++v) {
+    std::memcpy(&m.joints[v], reinterpret_cast<const char*>(d.joints) + v * joints_stride, sizeof(glm::u16vec4));
+    for (int c = 0; c < 4; ++c)
+      if (m.joints[v][c] >= d.joint_count)
+        return {Status::kInvalidMesh, what + ": skin joints: vertex " + std::to_string(v) + " uses joint " +
+                                          std::to_string(m.joints[v][c]) + " but joint_count is " + std::to_string(d.joint_count)};
+  }
+  if (Error e = readVectors(d.weights, d.weights_stride ? d.weights_stride : 4 * sizeof(float), n, what + ": skin weights", m.weights); !e.ok())
+    return e;
+  for (size_t v = 0; v < n; ++v) {
+    const glm::vec4& w = m.weights[v];
+    if (!(w.x >= 0 && w.y >= 0 && w.z >= 0 && w.w >= 0) || !(w.x + w.y + w.z + w.w > 0))
+      return {Status::kInvalidMesh, what + ": skin weights: vertex " + std::to_string(v) + " has a negative weight or weights summing to 0"};
+  }
+  if (d.joint_parents) m.joint_parents.assign(d.joint_parents, d.joint_parents + d.joint_count);
+  return {};
+}
+
+std::string rangeText(size_t i, const slod_index_range& r) {
+  return "ranges[" + std::to_string(i) + "] [" + std::to_string(r.first_index) + ", " +
+         std::to_string(uint64_t(r.first_index) + r.index_count) + ")";
+}
+
+// The index ranges of `d` into m.triangle_groups (range i = group i) and each range's material:
+// multiples of 3, inside the indices, covering every index once.
+Error readRanges(const slod_mesh_desc& d, const std::string& what, Mesh& m, std::vector<uint32_t>& material_of) {
+  if (d.range_count == 0) return {};
+  if (!d.ranges) return {Status::kInvalidArgument, what + ": ranges is null but range_count is " + std::to_string(d.range_count)};
+  std::vector<uint32_t> order(d.range_count);
+  for (uint32_t i = 0; i < d.range_count; ++i) {
+    const slod_index_range& r = d.ranges[i];
+    if (r.first_index % 3 != 0 || r.index_count % 3 != 0)
+      return {Status::kInvalidMesh, what + ": " + rangeText(i, r) + " does not start and end on a triangle (multiples of 3)"};
+    if (uint64_t(r.first_index) + r.index_count > d.index_count)
+      return {Status::kInvalidMesh, what + ": " + rangeText(i, r) + " is out of bounds of the " + std::to_string(d.index_count) + " indices"};
+    order[i] = i;
+    material_of.push_back(r.material);
+  }
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return d.ranges[a].first_index < d.ranges[b].first_index; });
+  uint64_t covered = 0;  // indices [0, covered) are in a range
+  for (uint32_t i : order) {
+    const slod_index_range& r = d.ranges[i];
+    if (r.first_index < covered && r.index_count > 0) {
+      const uint32_t* other = std::find_if(order.data(), order.data() + order.size(), [&](uint32_t o) {
+        return o != i && d.ranges[o].first_index <= r.first_index && uint64_t(d.ranges[o].first_index) + d.ranges[o].index_count > r.first_index;
+      });
+      return {Status::kInvalidMesh, what + ": " + rangeText(i, r) + " overlaps " + rangeText(*other, d.ranges[*other])};
+    }
+    if (r.first_index > covered)
+      return {Status::kInvalidMesh, what + ": indices [" + std::to_string(covered) + ", " + std::to_string(r.first_index) + ") are in no range"};
+    covered = std::max<uint64_t>(covered, uint64_t(r.first_index) + r.index_count);
+  }
+  if (covered < d.index_count)
+    return {Status::kInvalidMesh, what + ": indices [" + std::to_string(covered) + ", " + std::to_string(d.index_count) + ") are in no range"};
+  m.triangle_groups.assign(d.index_count / 3, 0);
+  for (uint32_t i = 0; i < d.range_count; ++i)
+    std::fill_n(m.triangle_groups.begin() + d.ranges[i].first_index / 3, d.ranges[i].index_count / 3, i);
+  return {};
+}
+
+// Sorts a level's triangles by group (stable) and returns one range per group run: the range's
+// material is material_of[group] (the group itself when material_of is empty), its source range the
+// group. No ranges when the level has no groups.
+std::vector<slod_index_range> groupRuns(Mesh& m, const std::vector<uint32_t>& material_of) {
+  std::vector<slod_index_range> runs;
+  if (m.triangle_groups.empty()) return runs;
+  const size_t n = m.triangleCount();
+  std::vector<uint32_t> order(n), tri(m.triangles.size());
+  for (uint32_t t = 0; t < n; ++t) order[t] = t;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.triangle_groups[a] < m.triangle_groups[b]; });
+  for (size_t i = 0; i < n; ++i) std::memcpy(&tri[3 * i], &m.triangles[3 * size_t(order[i])], 3 * sizeof(uint32_t));
+  m.triangles.swap(tri);
+  std::sort(m.triangle_groups.begin(), m.triangle_groups.end());
+  for (size_t t = 0; t < n; ++t) {
+    const uint32_t g = m.triangle_groups[t];
+    if (runs.empty() || runs.back().source_range != g) {
+      const uint32_t material = material_of.empty() ? g : (g < material_of.size() ? material_of[g] : g);
+      runs.push_back(slod_index_range{static_cast<uint32_t>(3 * t), 0, material, g});
+    }
+    runs.back().index_count += 3;
+  }
+  return runs;
+}
+
+// Builds a chain and appends it at the next dense index (= its level table chain id). `material_of`
+// gives each triangle group's material (empty: the group is the material), `joint_count` the skeleton's
+// size as the caller gave it.
+Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, const std::string& what, slod_chain& handle,
+               const std::vector<uint32_t>& material_of = {}, uint32_t joint_count = 0) {
   ChainParams params;
   // a C caller may store any int in the enum field, and C++ may not load an enum holding a value
   // outside its enumerators: the field is read as the int it is
@@ -330,11 +561,17 @@ Error addChain(slod_context* ctx, const Mesh& mesh, const slod_chain_desc& d, co
   LodChain chain;
   if (Error e = buildChain(mesh, params, chain); !e.ok()) return e;
   if (chain.levels.empty()) return {Status::kInvalidMesh, what + ": the mesh is empty"};
+  ChainOutputs outputs;
+  for (LodLevel& level : chain.levels) outputs.ranges.push_back(groupRuns(level.mesh, material_of));
+  outputs.identity.resize(chain.levels[0].mesh.vertexCount());
+  for (uint32_t v = 0; v < outputs.identity.size(); ++v) outputs.identity[v] = v;
+  outputs.joint_count = joint_count;
   const Sphere bounds = scene::computeChainBounds(chain);
   ctx->objects.table.addChain(chain);
   ctx->objects.chain_bounds.push_back(bounds);
   ctx->objects.chain_names.push_back(what);
   ctx->chains.push_back(std::move(chain));
+  ctx->outputs.push_back(std::move(outputs));
   handle = ctx->chain_handles.add();
   ctx->rays_chains_dirty = true;
   return {};
@@ -348,6 +585,7 @@ void removeChain(slod_context* ctx, uint32_t c) {
   for (uint32_t& oc : s.object_chain)
     if (oc == last) oc = c;
   swapPop(ctx->chains, c);
+  swapPop(ctx->outputs, c);
   swapPop(s.chain_bounds, c);
   swapPop(s.chain_names, c);
   ctx->chain_handles.remove(c);
@@ -387,6 +625,40 @@ void recordFrame(slod_context* ctx, const selection::Camera& cam, const slod_cam
   ctx->replay.header.viewport_width_px = camera.viewport_width;
   ctx->replay.header.viewport_height_px = camera.viewport_height;
   ctx->replay.header.fov_y_deg = camera.fov_y_deg;
+}
+
+// The level `level` of chain handle `chain` (dense chain index c), or a failure naming `fn`.
+slod_status findLevel(slod_context* ctx, const char* fn, slod_chain chain, uint32_t level, uint32_t& c, const LodLevel*& out) {
+  if (!ctx->chain_handles.resolve(chain, c)) return fail(ctx, SLOD_ERROR_NOT_FOUND, std::string(fn) + ": stale or unknown chain handle");
+  const LodChain& lc = ctx->chains[c];
+  if (level >= lc.levels.size())
+    return fail(ctx, SLOD_ERROR_NOT_FOUND, std::string(fn) + ": chain '" + ctx->objects.chain_names[c] + "' has " +
+                                               std::to_string(lc.levels.size()) + " levels, not level " + std::to_string(level));
+  out = &lc.levels[level];
+  return SLOD_OK;
+}
+
+// A level's attribute streams in slod_level_attribute_get's order: normals, colours, UV sets, tangents.
+std::vector<slod_attribute_stream> levelStreams(const Mesh& m) {
+  std::vector<slod_attribute_stream> streams;
+  auto add = [&](slod_attribute_kind kind, uint32_t set, uint32_t components, const float* data) {
+    slod_attribute_stream s;
+    slod_attribute_stream_init(&s);
+    s.kind = kind;
+    s.set = set;
+    s.component_count = components;
+    s.data = data;
+    s.stride = components * sizeof(float);
+    s.count = m.vertexCount();
+    streams.push_back(s);
+  };
+  if (!m.normals.empty()) add(SLOD_ATTRIBUTE_NORMAL, 0, 3, &m.normals[0].x);
+  if (!m.colors.empty()) add(SLOD_ATTRIBUTE_COLOR, 0, 3, &m.colors[0].x);
+  if (!m.uvs.empty()) add(SLOD_ATTRIBUTE_UV, 0, 2, &m.uvs[0].x);
+  for (size_t set = 0; set < m.extra_uvs.size(); ++set)
+    if (!m.extra_uvs[set].empty()) add(SLOD_ATTRIBUTE_UV, static_cast<uint32_t>(set + 1), 2, &m.extra_uvs[set][0].x);
+  if (!m.tangents.empty()) add(SLOD_ATTRIBUTE_TANGENT4, 0, 4, &m.tangents[0].x);
+  return streams;
 }
 
 }  // namespace
@@ -467,8 +739,13 @@ slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh_in, c
                                                   mesh.position_stride ? mesh.position_stride : sizeof(float) * 3);
     view.triangles = Span<const uint32_t>(mesh.indices, mesh.index_count);
     Mesh m;
+    std::vector<uint32_t> material_of;
     if (Error e = meshFromView(view, m, what); !e.ok()) return fail(ctx, e);
-    if (Error e = addChain(ctx, m, desc, what, *out_chain); !e.ok()) return fail(ctx, e);
+    if (Error e = readStreams(mesh, what, m); !e.ok()) return fail(ctx, e);
+    if (Error e = readSkin(mesh, what, m); !e.ok()) return fail(ctx, e);
+    if (Error e = readRanges(mesh, what, m, material_of); !e.ok()) return fail(ctx, e);
+    if (Error e = validateMesh(m, what); !e.ok()) return fail(ctx, e);
+    if (Error e = addChain(ctx, m, desc, what, *out_chain, material_of, mesh.joint_count); !e.ok()) return fail(ctx, e);
     return ok(ctx);
   });
 }
@@ -481,6 +758,7 @@ slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod
     if (!path || !out_chain) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_chain_load_file: null argument");
     scene::SceneData data;
     if (Error e = scene::loadScene(path, data); !e.ok()) return fail(ctx, e);
+    scene::bakeMaterialColors(data);  // a chain of one mesh has no materials: colours carry them
     const Mesh m = scene::flattenScene(data);
     if (Error e = addChain(ctx, m, desc, path, *out_chain); !e.ok()) return fail(ctx, e);
     return ok(ctx);
@@ -517,14 +795,10 @@ slod_status slod_level_get(const slod_context* cctx, slod_chain chain, uint32_t 
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
   return guarded(ctx, [&] {
     if (slod_status s = checkSize(ctx, "slod_level_get", out)) return s;
-    uint32_t c;
-    if (!ctx->chain_handles.resolve(chain, c))
-      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: stale or unknown chain handle");
-    const LodChain& lc = ctx->chains[c];
-    if (level >= lc.levels.size())
-      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_get: chain '" + ctx->objects.chain_names[c] + "' has " +
-                                                 std::to_string(lc.levels.size()) + " levels, not level " + std::to_string(level));
-    const LodLevel& l = lc.levels[level];
+    const LodLevel* found = nullptr;
+    uint32_t c = 0;
+    if (slod_status s = findLevel(ctx, "slod_level_get", chain, level, c, found)) return s;
+    const LodLevel& l = *found;
     slod_level_data d{};
     d.cell_width = l.cell_width;
     d.max_error = l.max_error;
@@ -538,7 +812,35 @@ slod_status slod_level_get(const slod_context* cctx, slod_chain chain, uint32_t 
     d.edges = l.mesh.edges.empty() ? nullptr : l.mesh.edges.data();
     d.edge_thickness = l.mesh.edge_thickness.empty() ? nullptr : l.mesh.edge_thickness.data();
     d.points = l.mesh.points.empty() ? nullptr : l.mesh.points.data();
+    const ChainOutputs& o = ctx->outputs[c];
+    d.attribute_count = static_cast<uint32_t>(levelStreams(l.mesh).size());
+    d.range_count = static_cast<uint32_t>(o.ranges[level].size());
+    d.ranges = o.ranges[level].empty() ? nullptr : o.ranges[level].data();
+    const std::vector<uint32_t>& source = level == 0 ? o.identity : l.source_vertex;
+    d.source_vertex = source.empty() ? nullptr : source.data();
+    d.joints = l.mesh.joints.empty() ? nullptr : &l.mesh.joints[0].x;
+    d.weights = l.mesh.weights.empty() ? nullptr : &l.mesh.weights[0].x;
+    d.joint_count = o.joint_count;
+    d.joint_parents = l.mesh.joint_parents.empty() ? nullptr : l.mesh.joint_parents.data();
     writeStruct(d, out);
+    return ok(ctx);
+  });
+}
+
+slod_status slod_level_attribute_get(const slod_context* cctx, slod_chain chain, uint32_t level, uint32_t index,
+                                     slod_attribute_stream* out) {
+  slod_context* ctx = const_cast<slod_context*>(cctx);
+  if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
+  return guarded(ctx, [&] {
+    if (slod_status s = checkSize(ctx, "slod_level_attribute_get", out)) return s;
+    const LodLevel* l = nullptr;
+    uint32_t c = 0;
+    if (slod_status s = findLevel(ctx, "slod_level_attribute_get", chain, level, c, l)) return s;
+    const std::vector<slod_attribute_stream> streams = levelStreams(l->mesh);
+    if (index >= streams.size())
+      return fail(ctx, SLOD_ERROR_NOT_FOUND, "slod_level_attribute_get: level " + std::to_string(level) + " has " +
+                                                 std::to_string(streams.size()) + " attribute streams, not stream " + std::to_string(index));
+    writeStruct(streams[index], out);
     return ok(ctx);
   });
 }

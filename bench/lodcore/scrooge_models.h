@@ -47,6 +47,7 @@ inline const Mesh* loadModel(const std::string& name, std::string& error) {
     error = e.message;
     return nullptr;
   }
+  scene::bakeMaterialColors(sd);  // SCROOGE averages the material colours
   return &(cache[name] = scene::flattenScene(sd));
 }
 

@@ -25,22 +25,42 @@ bool hasAttributes(const Mesh& m) {
   return false;
 }
 
+void carryUniformGroup(const Mesh& in, Mesh& out) {
+  if (!in.triangle_groups.empty()) out.triangle_groups.assign(out.triangleCount(), in.triangle_groups[0]);
+}
+
 void makeAttributeMesh(const Mesh& in, AttributeMesh& out) {
   out.input = &in;
-  out.welded = in;
+  out.welded = Mesh();
   std::vector<uint32_t> old_to_new;
-  out.did_weld = weldVertices(out.welded, &old_to_new) > 0;
+  out.did_weld = weldedCopy(in, out.welded, &old_to_new) > 0;
   out.input_vertex.clear();
   if (out.did_weld) {
     out.input_vertex.assign(out.welded.vertexCount(), kNone);
     for (size_t i = old_to_new.size(); i-- > 0;) out.input_vertex[old_to_new[i]] = static_cast<uint32_t>(i);
-  } else {
-    out.welded = Mesh();
   }
   const Mesh& m = out.mesh();
-  const uint32_t charts = computeUvCharts(m, out.chart);
-  out.chart_group.assign(charts, 0);
-  for (size_t t = 0; t < out.chart.size(); ++t) out.chart_group[out.chart[t]] = m.triangleGroup(t);
+  // without texture coordinates there is no seam to keep: a group's pieces share their clusters'
+  // vertices, as in the plain path (BrainStem's 515 pieces would otherwise split its clusters)
+  const bool any_uvs = !m.uvs.empty() || std::any_of(m.extra_uvs.begin(), m.extra_uvs.end(),
+                                                      [](const std::vector<glm::vec2>& set) { return !set.empty(); });
+  if (any_uvs) {
+    computeUvCharts(m, out.chart);
+  } else {
+    out.chart.resize(m.triangleCount());
+    for (size_t t = 0; t < out.chart.size(); ++t) out.chart[t] = m.triangleGroup(t);
+  }
+  const size_t tn = m.triangleCount();
+  out.corner_weight.resize(tn);
+  double total = 0.0;
+  for (size_t t = 0; t < tn; ++t) {
+    const glm::vec3& a = m.positions[m.triangles[3 * t]];
+    const glm::vec3 n = glm::cross(m.positions[m.triangles[3 * t + 1]] - a, m.positions[m.triangles[3 * t + 2]] - a);
+    out.corner_weight[t] = glm::length(n) / 6.0f;
+    total += out.corner_weight[t];
+  }
+  const float floor = tn ? float(1e-6 * total / double(tn)) : 0.0f;
+  for (float& w : out.corner_weight) w = std::max(w, floor);
 }
 
 namespace {
@@ -82,32 +102,40 @@ struct Group {
 class AttributeGroups {
  public:
   AttributeGroups(const Mesh& m, uint32_t cluster_count)
-      : m_(m), layout_(m), head_(cluster_count, kNone) {}
+      : m_(m), layout_(m), head_(cluster_count, kNone) {
+    // about one group per cluster, a few more along seams: reserved, so that growth rarely doubles
+    const size_t expected = size_t(cluster_count) + size_t(cluster_count) / 8 + 16;
+    groups_.reserve(expected);
+    sums_.reserve(expected * size_t(layout_.width));
+  }
+
+  // the group of `cluster` with this key, or kNone
+  uint32_t lookup(uint32_t cluster, uint32_t chart, bool negative) const {
+    for (uint32_t g = head_[cluster]; g != kNone; g = groups_[g].next)
+      if (groups_[g].chart == chart && groups_[g].negative == negative) return g;
+    return kNone;
+  }
 
   // the group of `cluster` with this key, made when new
   uint32_t find(uint32_t cluster, uint32_t chart, bool negative) {
-    for (uint32_t g = head_[cluster]; g != kNone; g = groups_[g].next)
-      if (groups_[g].chart == chart && groups_[g].negative == negative) return g;
+    if (const uint32_t g = lookup(cluster, chart, negative); g != kNone) return g;
     groups_.push_back({cluster, chart, head_[cluster], negative});
     sums_.resize(sums_.size() + size_t(layout_.width), 0.0f);
     return head_[cluster] = static_cast<uint32_t>(groups_.size() - 1);
   }
 
-  // adds vertex v with weight w to group g
+  // adds vertex v, whose share of group g is w, to its sums; the member of the largest share (ties:
+  // the lower index) is the group's source vertex
   void add(uint32_t g, uint32_t v, float w) {
-    groups_[g].weight += w;
+    Group& x = groups_[g];
+    x.weight += w;
+    if (w > x.source_share || (w == x.source_share && v < x.source)) x.source = v, x.source_share = w;
     float* s = &sums_[size_t(g) * size_t(layout_.width)];
     if (layout_.uv >= 0) addScaled<2>(s + layout_.uv, &m_.uvs[v].x, w);
     for (size_t k = 0; k < layout_.extra.size(); ++k)
       if (layout_.extra[k] >= 0) addScaled<2>(s + layout_.extra[k], &m_.extra_uvs[k][v].x, w);
     if (layout_.color >= 0) addScaled<3>(s + layout_.color, &m_.colors[v].x, w);
     if (layout_.tangent >= 0) addScaled<3>(s + layout_.tangent, &m_.tangents[v].x, w);
-  }
-
-  // offers v, whose share of group g is `share`, as the group's source (ties: the lower index)
-  void offerSource(uint32_t g, uint32_t v, float share) {
-    Group& x = groups_[g];
-    if (share > x.source_share || (share == x.source_share && v < x.source)) x.source = v, x.source_share = share;
   }
 
   uint32_t head(uint32_t cluster) const { return head_[cluster]; }
@@ -158,25 +186,18 @@ class AttributeGroups {
   std::vector<float> sums_;     // layout_.width per group
 };
 
-// Every source triangle's corners add a third of its area (floored at a millionth of the mean
-// triangle's, so that a group of degenerate triangles takes the plain mean) to the group of their
-// own vertex; vertices no triangle uses (edges, points) make a group of their own in a cluster that
-// has none. Returns each corner's group (3 per triangle).
-std::vector<uint32_t> gatherGroups(const Mesh& m, const AttributeMesh& am, const uint32_t* cluster_of,
-                                   AttributeGroups& groups) {
+// whether vertex v's tangent sign is negative
+inline bool negativeSign(const Mesh& m, uint32_t v) { return !m.tangents.empty() && m.tangents[v].w < 0.0f; }
+
+// Every source triangle's corners add a third of its area (AttributeMesh::corner_weight) to the
+// group of their own vertex; vertices no triangle uses (edges, points) make a group of their own in a
+// cluster that has none. The corners' weights are summed per vertex first and each vertex's
+// attributes added once per group it is in (nearly always one), not once per corner.
+void gatherGroups(const Mesh& m, const AttributeMesh& am, const uint32_t* cluster_of, AttributeGroups& groups) {
   const size_t tn = m.triangleCount(), vn = m.vertexCount();
-  std::vector<float> area(tn);
-  double total = 0.0;
-  for (size_t t = 0; t < tn; ++t) {
-    const glm::vec3& a = m.positions[m.triangles[3 * t]];
-    area[t] = 0.5f * glm::length(glm::cross(m.positions[m.triangles[3 * t + 1]] - a, m.positions[m.triangles[3 * t + 2]] - a));
-    total += area[t];
-  }
-  const float floor = tn ? float(1e-6 * total / double(tn)) : 0.0f;
-  auto negative = [&](uint32_t v) { return !m.tangents.empty() && m.tangents[v].w < 0.0f; };
   // each vertex's share of its first group; shares of any other group (a vertex where charts or
   // triangle groups meet at a corner only) are listed apart
-  std::vector<uint32_t> first_group(vn, kNone);
+  std::vector<uint32_t> first_group(vn, kNone), first_chart(vn, kNone);
   std::vector<float> share(vn, 0.0f);
   struct OtherShare {
     uint32_t group, vertex;
@@ -184,16 +205,17 @@ std::vector<uint32_t> gatherGroups(const Mesh& m, const AttributeMesh& am, const
     bool operator<(const OtherShare& o) const { return group != o.group ? group < o.group : vertex < o.vertex; }
   };
   std::vector<OtherShare> others;
-  std::vector<uint32_t> corner_group(3 * tn);
   for (size_t t = 0; t < tn; ++t) {
-    const float w = std::max(area[t] / 3.0f, floor);
+    const float w = am.corner_weight[t];
     for (int k = 0; k < 3; ++k) {
-      const uint32_t v = m.triangles[3 * t + k];
-      const uint32_t g = groups.find(cluster_of[v], am.chart[t], negative(v));
-      corner_group[3 * t + k] = g;
-      groups.add(g, v, w);
-      if (first_group[v] == kNone) first_group[v] = g;
-      if (first_group[v] == g) share[v] += w;
+      const uint32_t v = m.triangles[3 * t + k], chart = am.chart[t];
+      // (the cluster and the sign are the vertex's: the chart alone tells its groups apart)
+      if (first_chart[v] == chart) {
+        share[v] += w;
+        continue;
+      }
+      const uint32_t g = groups.find(cluster_of[v], chart, negativeSign(m, v));
+      if (first_group[v] == kNone) first_group[v] = g, first_chart[v] = chart, share[v] = w;
       else others.push_back({g, v, w});
     }
   }
@@ -203,22 +225,19 @@ std::vector<uint32_t> gatherGroups(const Mesh& m, const AttributeMesh& am, const
     // (a cluster's triangle groups were all made above: any group it has by now is of this pass)
     const uint32_t h = groups.head(c);
     if (h != kNone && groups[h].chart != kNone) continue;
-    const uint32_t g = groups.find(c, kNone, negative(v));
-    groups.add(g, v, 1.0f);
-    first_group[v] = g, share[v] = 1.0f;
+    first_group[v] = groups.find(c, kNone, negativeSign(m, v)), share[v] = 1.0f;
   }
   for (uint32_t v = 0; v < vn; ++v)
-    if (first_group[v] != kNone) groups.offerSource(first_group[v], v, share[v]);
+    if (first_group[v] != kNone) groups.add(first_group[v], v, share[v]);
   std::sort(others.begin(), others.end());
   for (size_t i = 0; i < others.size();) {
     size_t j = i;
     float s = 0.0f;
     for (; j < others.size() && others[j].group == others[i].group && others[j].vertex == others[i].vertex; ++j)
       s += others[j].share;
-    groups.offerSource(others[i].group, others[i].vertex, s);
+    groups.add(others[i].group, others[i].vertex, s);
     i = j;
   }
-  return corner_group;
 }
 
 // The source triangles that survive: three distinct clusters, and the first in triangle order of
@@ -253,13 +272,17 @@ std::vector<uint32_t> survivingTriangles(const Mesh& m, const uint32_t* cluster_
 class OutputVertices {
  public:
   OutputVertices(const Mesh& m, const Representatives& r, const uint32_t* cluster_of, const AttributeGroups& groups)
-      : m_(m), r_(r), cluster_of_(cluster_of), groups_(groups), edge_vertex_(r.positions.size(), kNone) {}
+      : m_(m), r_(r), cluster_of_(cluster_of), groups_(groups), edge_vertex_(r.positions.size(), kNone) {
+    // about a vertex per group, a few more at creases
+    group_.reserve(groups.size() + groups.size() / 8 + 16);
+    normal_.reserve(group_.capacity());
+  }
 
   // the triangles `kept` (source triangles) with each corner at the vertex of its group and its
   // crease-aware normal (normals.cpp's rule: the faces of the cluster within the crease angle of
   // the corner's face), written to out.triangles and out.triangle_groups
-  void addTriangles(const std::vector<uint32_t>& kept, const std::vector<uint32_t>& corner_group,
-                    float crease_angle_deg, Mesh& out);
+  void addTriangles(const std::vector<uint32_t>& kept, const std::vector<uint32_t>& chart, float crease_angle_deg,
+                    Mesh& out);
 
   // the vertex edges and points of `cluster` use: one of its largest group, made if there is none
   uint32_t edgeVertex(uint32_t cluster) {
@@ -294,7 +317,7 @@ class OutputVertices {
   std::vector<uint32_t> edge_vertex_;
 };
 
-void OutputVertices::addTriangles(const std::vector<uint32_t>& kept, const std::vector<uint32_t>& corner_group,
+void OutputVertices::addTriangles(const std::vector<uint32_t>& kept, const std::vector<uint32_t>& chart,
                                   float crease_angle_deg, Mesh& out) {
   const size_t nc = r_.positions.size(), kn = kept.size();
   const float cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0f, 180.0f) * 3.14159265358979f / 180.0f);
@@ -309,26 +332,46 @@ void OutputVertices::addTriangles(const std::vector<uint32_t>& kept, const std::
     face[i] = l > 0.0f ? glm::vec4(n / l, l) : glm::vec4(0.0f);
   }
   // each cluster's output corners, in order (a counting sort)
+  // (each corner's cluster held in out.triangles until the corner's vertex takes its place)
   std::vector<uint32_t> offset(nc + 1, 0), corners(3 * kn);
-  for (size_t i = 0; i < 3 * kn; ++i) ++offset[cluster_of_[m_.triangles[3 * size_t(kept[i / 3]) + i % 3]] + 1];
+  uint32_t* corner_cluster = out.triangles.data();
+  for (size_t i = 0; i < kn; ++i)
+    for (int k = 0; k < 3; ++k) corner_cluster[3 * i + k] = cluster_of_[m_.triangles[3 * size_t(kept[i]) + k]];
+  for (size_t i = 0; i < 3 * kn; ++i) ++offset[corner_cluster[i] + 1];
   for (size_t c = 0; c < nc; ++c) offset[c + 1] += offset[c];
   std::vector<uint32_t> fill(offset.begin(), offset.end() - 1);
-  for (size_t i = 0; i < 3 * kn; ++i)
-    corners[fill[cluster_of_[m_.triangles[3 * size_t(kept[i / 3]) + i % 3]]]++] = static_cast<uint32_t>(i);
+  for (size_t i = 0; i < 3 * kn; ++i) corners[fill[corner_cluster[i]]++] = static_cast<uint32_t>(i);
+  // normals.cpp's sufficient test for a cluster whose faces all lie within the crease angle of each
+  // other: each face within alpha of their normalised sum, 2 alpha the crease angle less a margin
+  // for rounding; every corner's sum is then the sum of all its faces, in order (the same bits)
+  const double cos_2alpha = double(cos_crease) + 1e-4;
+  const float cos_ref = cos_2alpha < 1.0 ? float(std::cos(0.5 * std::acos(std::max(-1.0, cos_2alpha))) + 1e-5) : 2.0f;
   first_.assign(nc, 0), end_.assign(nc, 0);
   for (uint32_t c = 0; c < nc; ++c) {
     first_[c] = static_cast<uint32_t>(group_.size());
+    glm::vec3 all(0.0f);
+    for (uint32_t j = offset[c]; j < offset[c + 1]; ++j) all += glm::vec3(face[corners[j] / 3]) * face[corners[j] / 3].w;
+    const float all_length = glm::length(all);
+    bool smooth = all_length >= 1e-18f;
+    for (uint32_t j = offset[c]; j < offset[c + 1] && smooth; ++j) {
+      const glm::vec4& fj = face[corners[j] / 3];
+      smooth = fj.w >= 1e-18f && glm::dot(glm::vec3(fj), all / all_length) >= cos_ref;
+    }
     for (uint32_t i = offset[c]; i < offset[c + 1]; ++i) {
       const glm::vec3 ui(face[corners[i] / 3]);
-      glm::vec3 sum(0.0f);
-      for (uint32_t j = offset[c]; j < offset[c + 1]; ++j) {
-        const glm::vec4& fj = face[corners[j] / 3];
-        if (j == i || glm::dot(ui, glm::vec3(fj)) >= cos_crease) sum += glm::vec3(fj) * fj.w;
+      glm::vec3 sum = all;
+      if (!smooth) {
+        sum = glm::vec3(0.0f);
+        for (uint32_t j = offset[c]; j < offset[c + 1]; ++j) {
+          const glm::vec4& fj = face[corners[j] / 3];
+          if (j == i || glm::dot(ui, glm::vec3(fj)) >= cos_crease) sum += glm::vec3(fj) * fj.w;
+        }
       }
       const float l = glm::length(sum);
       const glm::vec3 n = l > 0.0f ? sum / l : r_.normals[c];
       const uint32_t corner = corners[i];
-      const uint32_t g = corner_group[3 * size_t(kept[corner / 3]) + corner % 3];
+      const uint32_t t = kept[corner / 3], source = m_.triangles[3 * size_t(t) + corner % 3];
+      const uint32_t g = groups_.lookup(c, chart[t], negativeSign(m_, source));
       uint32_t v = first_[c];
       while (v < group_.size() && !(group_[v] == g && normal_[v] == n)) ++v;
       out.triangles[corner] = v < group_.size() ? v : addVertex(g, n);
@@ -375,25 +418,43 @@ void writeSkin(const Mesh& m, const Assignment& a, const std::vector<uint32_t>& 
 
 }  // namespace
 
-Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
-                            std::vector<uint32_t>* source_vertex, ClusterStats* stats) {
-  out = Mesh();
-  if (source_vertex) source_vertex->clear();
+Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, AttributeLevelParts& parts,
+                            ClusterStats* stats) {
+  parts = AttributeLevelParts();
   if (stats) *stats = ClusterStats();
-  const Mesh& m = am.mesh();
-  Assignment a;
+  Assignment& a = parts.assignment;
   if (Error e = assign(p, params, a); !e.ok()) return e;
   splitSkinClusters(p, a);
-  Representatives r;
-  synthesize(p, a, params.synthesis, r);
-  Eliminated el;
-  eliminate(p, a, params.keep_edges, params.keep_points, true, el);
-  const uint32_t* cluster_of = a.cluster_of.data();
+  synthesize(p, a, params.synthesis, parts.representatives);
+  eliminate(p, a, params.keep_edges, params.keep_points, true, parts.eliminated);
+  std::vector<uint32_t>().swap(parts.eliminated.triangles);  // (the output pass keeps triangles per group)
+  if (stats) {
+    stats->cluster_count = a.cluster_count;
+    stats->collapsed_triangles = parts.eliminated.collapsed_triangles;
+    const Mesh& m = *p.mesh;
+    float max_d2 = 0.0f;
+    for (size_t v = 0; v < a.cluster_of.size(); ++v)
+      if (a.cluster_of[v] != kNone) {
+        const glm::vec3 d = m.positions[v] - parts.representatives.positions[a.cluster_of[v]];
+        max_d2 = std::max(max_d2, glm::dot(d, d));
+      }
+    stats->max_error = std::sqrt(max_d2);
+  }
+  return {};
+}
 
+void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
+                          std::vector<uint32_t>* source_vertex) {
+  out = Mesh();
+  if (source_vertex) source_vertex->clear();
+  const Mesh& m = am.mesh();
+  const Assignment& a = parts.assignment;
+  Eliminated& el = parts.eliminated;
+  const uint32_t* cluster_of = a.cluster_of.data();
   AttributeGroups groups(m, a.cluster_count);
-  const std::vector<uint32_t> corner_group = gatherGroups(m, am, cluster_of, groups);
-  OutputVertices vertices(m, r, cluster_of, groups);
-  vertices.addTriangles(survivingTriangles(m, cluster_of, a.cluster_count), corner_group, params.crease_angle_deg, out);
+  gatherGroups(m, am, cluster_of, groups);
+  OutputVertices vertices(m, parts.representatives, cluster_of, groups);
+  vertices.addTriangles(survivingTriangles(m, cluster_of, a.cluster_count), am.chart, params.crease_angle_deg, out);
   out.edges.resize(el.edges.size());
   for (size_t i = 0; i < el.edges.size(); ++i) out.edges[i] = vertices.edgeVertex(el.edges[i]);
   out.edge_thickness = std::move(el.edge_thickness);
@@ -402,7 +463,6 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
   for (size_t i = 0; i < el.points.size(); ++i) out.points[i] = vertices.edgeVertex(el.points[i]);
   vertices.write(out);
   if (m.skinned()) writeSkin(m, a, vertices.groupOfVertex(), groups, out);
-
   if (source_vertex) {
     const std::vector<uint32_t>& group_of = vertices.groupOfVertex();
     source_vertex->resize(group_of.size());
@@ -411,17 +471,16 @@ Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, cons
       (*source_vertex)[i] = am.did_weld ? am.input_vertex[v] : v;
     }
   }
-  if (stats) {
-    stats->cluster_count = a.cluster_count;
-    stats->collapsed_triangles = el.collapsed_triangles;
-    float max_d2 = 0.0f;
-    for (size_t v = 0; v < a.cluster_of.size(); ++v)
-      if (cluster_of[v] != kNone) {
-        const glm::vec3 d = m.positions[v] - r.positions[cluster_of[v]];
-        max_d2 = std::max(max_d2, glm::dot(d, d));
-      }
-    stats->max_error = std::sqrt(max_d2);
-  }
+  parts = AttributeLevelParts();
+}
+
+Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
+                            std::vector<uint32_t>* source_vertex, ClusterStats* stats) {
+  out = Mesh();
+  if (source_vertex) source_vertex->clear();
+  AttributeLevelParts parts;
+  if (Error e = clusterAttributeParts(p, params, parts, stats); !e.ok()) return e;
+  finishAttributeLevel(am, params, parts, out, source_vertex);
   return {};
 }
 

@@ -15,6 +15,10 @@ namespace scenelod::detail {
 // than one distinct triangle group
 bool hasAttributes(const Mesh& m);
 
+// A mesh without attributes whose triangles all carry one group (a material index other than 0,
+// as scene::flattenScene writes) keeps it: every triangle of its level `out` gets that group.
+void carryUniformGroup(const Mesh& in, Mesh& out);
+
 // A mesh made ready for attribute levels once (a chain's levels share it): welded (a non-indexed
 // input would otherwise be one UV chart per triangle) and split into UV charts.
 struct AttributeMesh {
@@ -22,14 +26,17 @@ struct AttributeMesh {
   Mesh welded;                         // used only where welding removed a vertex
   bool did_weld = false;
   std::vector<uint32_t> input_vertex;  // per welded vertex: its first vertex in the input
-  std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts)
-  std::vector<uint32_t> chart_group;   // per chart: its triangle group
+  std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts), or its
+                                       // triangle group where the mesh has no texture coordinates
+  // per triangle: what each corner adds to its group's weight, a third of the area (floored at 1e-6
+  // of the mean triangle's, so that a group of degenerate triangles takes the plain mean)
+  std::vector<float> corner_weight;
 
   // the mesh the levels cluster: the welded copy, or the input where nothing welded
   const Mesh& mesh() const { return did_weld ? welded : *input; }
 };
 
-// Welds a copy of `in` (kept only where a vertex was removed) and computes its charts. Keeps a
+// Welds a copy of `in` (made only where a vertex is removed) and computes its charts. Keeps a
 // pointer to `in`, which must outlive `out`. Precondition: validateMesh(in) passes.
 void makeAttributeMesh(const Mesh& in, AttributeMesh& out);
 
@@ -39,6 +46,19 @@ void makeAttributeMesh(const Mesh& in, AttributeMesh& out);
 // Errors: those of the assignment (cell width, method).
 Error clusterAttributeLevel(const PreparedMesh& p, const AttributeMesh& am, const ClusterParams& params, Mesh& out,
                             std::vector<uint32_t>* source_vertex, ClusterStats* stats);
+
+// clusterAttributeLevel in two steps, so that a chain can free the prepared mesh's arrays between
+// them: the first (assignment with the skin split, synthesis, elimination, the stats) reads them;
+// the second (the output pass, which frees `parts`) reads only the attribute mesh.
+struct AttributeLevelParts {
+  Assignment assignment;
+  Representatives representatives;
+  Eliminated eliminated;  // its edges and points (its triangles are freed: the output pass makes its own)
+};
+Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, AttributeLevelParts& parts,
+                            ClusterStats* stats);
+void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
+                          std::vector<uint32_t>* source_vertex);
 
 // clusterPrepared and clusterMesh for a mesh with attributes: weld, charts, and (where welding
 // removed vertices) a preparation of the welded mesh with `prepared`'s grading

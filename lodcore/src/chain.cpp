@@ -468,6 +468,7 @@ void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const Cluster
   const Clock::time_point start = Clock::now();
   LodLevel& level = out_.levels[k + 1];
   detail::finishLevel(parts, cp, level.mesh);
+  detail::carryUniformGroup(original_, level.mesh);
   level.bounds = computeBoundingSphere(level.mesh);
   stats_.level_seconds[k] = seconds + since(start);
   const size_t d = ++done_;
@@ -673,24 +674,51 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
     std::vector<Error> errors(n);
     std::atomic<size_t> done{0};
     std::mutex progress_mutex;
-    tbb::parallel_for(size_t(0), n, [&](size_t k) {
-      const Clock::time_point start = Clock::now();
+    auto levelParams = [&](size_t k) {
       ClusterParams cp = params.cluster;
       cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+      return cp;
+    };
+    // level k + 1's record once its mesh is made, and the progress
+    auto record = [&](size_t k, const ClusterStats& cs, double seconds) {
       LodLevel& level = out.levels[k + 1];
-      ClusterStats cs;
-      errors[k] = detail::clusterAttributeLevel(p, am, cp, level.mesh, &level.source_vertex, &cs);
-      level.cell_width = cp.cell_width;
+      level.cell_width = levelParams(k).cell_width;
       level.max_error = cs.max_error;
-      level.method = cp.method;
+      level.method = params.cluster.method;
       level.bounds = computeBoundingSphere(level.mesh);
-      stats.level_seconds[k] = since(start);
+      stats.level_seconds[k] = seconds;
       const size_t d = ++done;
       if (params.progress.fn) {
         std::lock_guard<std::mutex> lock(progress_mutex);
         params.progress(0.1 + 0.9 * double(d) / double(n), "clustering levels");
       }
-    });
+    };
+    // level 1, the largest, is held between its two steps while the others are built, so that its
+    // output pass, the chain's largest scratch, comes after the prepared arrays are freed
+    detail::AttributeLevelParts first;
+    ClusterStats first_stats;
+    double first_seconds = 0.0;
+    tbb::parallel_invoke(
+        [&] {
+          const Clock::time_point start = Clock::now();
+          errors[0] = detail::clusterAttributeParts(p, levelParams(0), first, &first_stats);
+          first_seconds = since(start);
+        },
+        [&] {
+          tbb::parallel_for(size_t(1), n, [&](size_t k) {
+            const Clock::time_point start = Clock::now();
+            LodLevel& level = out.levels[k + 1];
+            ClusterStats cs;
+            errors[k] = detail::clusterAttributeLevel(p, am, levelParams(k), level.mesh, &level.source_vertex, &cs);
+            record(k, cs, since(start));
+          });
+        });
+    p = PreparedMesh();
+    if (errors[0].ok()) {
+      const Clock::time_point start = Clock::now();
+      detail::finishAttributeLevel(am, levelParams(0), first, out.levels[1].mesh, &out.levels[1].source_vertex);
+      record(0, first_stats, first_seconds + since(start));
+    }
     for (const Error& e : errors)
       if (!e.ok()) {
         out.levels.clear();

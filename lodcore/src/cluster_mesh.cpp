@@ -221,6 +221,7 @@ Error clusterPreparedWith(const PreparedMesh& prepared, const ClusterParams& par
   parts.keep_heaviest = source_vertex != nullptr;
   if (Error e = detail::clusterLevelParts(prepared, params, parts, stats); !e.ok()) return e;
   detail::finishLevel(parts, params, out, source_vertex);
+  detail::carryUniformGroup(*prepared.mesh, out);
   return {};
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "scenelod/lodcore/mesh.h"
@@ -21,6 +22,9 @@ struct Face {
   bool rebuilt = false;         // changed by reconstruction (gets the §7.1 polygon constraints)
   bool inside = false;          // was wholly inside a sub-volume in some pass (may lose co-linear corners)
   bool alive = true;
+  uint32_t chart = 0;           // uv chart of the input polygon (computeUvCharts; its group without uvs);
+                                // merging stays inside one
+  uint32_t group = 0;           // triangle group (material) of the input polygon
 };
 
 struct Model {
@@ -33,6 +37,11 @@ struct Model {
   std::vector<float> edge_thickness;
   std::vector<uint32_t> point_verts;   // point primitives (never move)
   float diagonal = 0.0f;               // bbox diagonal of the input
+  // texture coordinates (set 0) of the input vertices, empty without; a point inside one chart that
+  // degradation moved gets its uv interpolated along the same segment (point_uv, where point_uv_moved)
+  std::vector<glm::vec2> vertex_uv;
+  std::vector<glm::vec2> point_uv;
+  std::vector<uint8_t> point_uv_moved;
 };
 
 constexpr uint32_t kNoPoint = 0xffffffffu;

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 
 #include "scenelod/lodcore/color_blend.h"
+#include "scenelod/lodcore/mesh_attributes.h"
 #include "scrooge_model.h"
 
 namespace scenelod::scrooge {
@@ -136,6 +137,51 @@ glm::vec3 faceMeanColor(const Mesh& in, const Model& m, const Face& f) {
   return polygonMeanColor(p.data(), c.data(), p.size());
 }
 
+namespace {
+
+// the triangle group and uv chart of each input polygon (a face, or a triangle without faces). A face
+// takes the group of its first triangle when the triangles are its triangulation (k - 2 per face of k
+// corners, in face order), else group 0; charts are those of computeUvCharts on a fan of each face
+void polygonChartsAndGroups(const Mesh& in, std::vector<uint32_t>& chart, std::vector<uint32_t>& group) {
+  if (in.faceCount() == 0) {
+    computeUvCharts(in, chart);
+    group.resize(in.triangleCount());
+    for (size_t t = 0; t < group.size(); ++t) group[t] = in.triangleGroup(t);
+    return;
+  }
+  size_t expected = 0;
+  for (size_t f = 0; f < in.faceCount(); ++f) {
+    const size_t k = in.face_offsets[f + 1] - in.face_offsets[f];
+    expected += k >= 3 ? k - 2 : 0;
+  }
+  const bool groups_match = !in.triangle_groups.empty() && expected == in.triangleCount();
+  Mesh fans;
+  fans.positions = in.positions;
+  fans.uvs = in.uvs;
+  fans.extra_uvs = in.extra_uvs;
+  group.assign(in.faceCount(), 0);
+  std::vector<uint32_t> first_fan(in.faceCount(), kNoPoint);
+  size_t triangle = 0;
+  for (size_t f = 0; f < in.faceCount(); ++f) {
+    const size_t b = in.face_offsets[f], k = in.face_offsets[f + 1] - b;
+    if (groups_match && k >= 3) group[f] = in.triangle_groups[triangle];
+    triangle += k >= 3 ? k - 2 : 0;
+    if (k < 3) continue;
+    first_fan[f] = uint32_t(fans.triangleCount());
+    for (size_t c = 1; c + 1 < k; ++c) {
+      fans.triangles.insert(fans.triangles.end(), {in.face_corners[b], in.face_corners[b + c], in.face_corners[b + c + 1]});
+      fans.triangle_groups.push_back(group[f]);
+    }
+  }
+  std::vector<uint32_t> fan_chart;
+  computeUvCharts(fans, fan_chart);
+  chart.assign(in.faceCount(), 0);
+  for (size_t f = 0; f < in.faceCount(); ++f)
+    if (first_fan[f] != kNoPoint) chart[f] = fan_chart[first_fan[f]];
+}
+
+}  // namespace
+
 void normaliseModel(const Mesh& in, const ScroogeParams& params, Model& m, ScroogeStats& stats) {
   m = Model{};
   const Aabb box = computeBounds(in);
@@ -160,6 +206,12 @@ void normaliseModel(const Mesh& in, const ScroogeParams& params, Model& m, Scroo
       canon[v] = seen.emplace(k, uint32_t(v)).first->second;
     }
   }
+
+  m.vertex_uv = in.uvs;
+  m.point_uv.assign(in.uvs.empty() ? 0 : m.points.size(), glm::vec2(0.0f));
+  m.point_uv_moved.assign(m.point_uv.size(), 0);
+  std::vector<uint32_t> poly_chart, poly_group;
+  polygonChartsAndGroups(in, poly_chart, poly_group);
 
   // polygons: the original faces when present, else the triangles
   const bool use_faces = in.faceCount() > 0;
@@ -193,6 +245,9 @@ void normaliseModel(const Mesh& in, const ScroogeParams& params, Model& m, Scroo
       continue;
     }
     face.color = faceMeanColor(in, m, face);
+    face.group = poly_group[f];
+    // without uvs, charts (exact position links) would split polygons that welding joined
+    face.chart = in.uvs.empty() ? face.group : poly_chart[f];
     m.faces.push_back(std::move(face));
   }
 

@@ -53,12 +53,17 @@ double minAngle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
 // Triangulates out's faces into out.triangles. A face convex in its Newell plane is clipped ear by
 // ear, always taking the ear with the largest smallest angle (a fan over a many-cornered curved
 // polygon makes slivers whose normals stand across the surface); other faces use the general ear
-// clipping of mesh.cpp. Cost O(k^2) per convex face of k corners.
-void triangulatePolygons(Mesh& out) {
-  Mesh general;
-  general.positions = out.positions;
-  general.face_offsets.push_back(0);
+// clipping of mesh.cpp, their triangles after the others'. With `face_group` (one per face), every
+// triangle gets its face's group in out.triangle_groups. Cost O(k^2) per convex face of k corners.
+void triangulatePolygons(Mesh& out, const std::vector<uint32_t>& face_group) {
+  std::vector<uint32_t> concave_tris, concave_groups;
   out.triangles.clear();
+  out.triangle_groups.clear();
+  auto emit = [&](std::vector<uint32_t>& tris, std::vector<uint32_t>& groups, size_t f, const uint32_t* corners,
+                  size_t count) {
+    tris.insert(tris.end(), corners, corners + count);
+    if (!face_group.empty()) groups.insert(groups.end(), count / 3, face_group[f]);
+  };
   std::vector<uint32_t> ring;
   std::vector<glm::dvec2> q;
   for (size_t f = 0; f < out.faceCount(); ++f) {
@@ -84,9 +89,14 @@ void triangulatePolygons(Mesh& out) {
         if ((c.x - a.x) * (d.y - a.y) - (c.y - a.y) * (d.x - a.x) < -1e-9 * extent * extent) convex = false;
       }
     }
-    if (!convex) {
-      general.face_corners.insert(general.face_corners.end(), ring.begin(), ring.end());
-      general.face_offsets.push_back(uint32_t(general.face_corners.size()));
+    if (!convex) {  // the general ear clipping, on this face alone
+      Mesh one;
+      for (uint32_t v : ring) one.positions.push_back(out.positions[v]);
+      one.face_offsets = {0, uint32_t(k)};
+      for (uint32_t i = 0; i < k; ++i) one.face_corners.push_back(i);
+      triangulateFaces(one);
+      for (uint32_t& v : one.triangles) v = ring[v];
+      emit(concave_tris, concave_groups, f, one.triangles.data(), one.triangles.size());
       continue;
     }
     while (ring.size() > 3) {
@@ -99,15 +109,14 @@ void triangulatePolygons(Mesh& out) {
         if (a > best_angle) { best_angle = a; best = i; }
       }
       const size_t m = ring.size();
-      out.triangles.insert(out.triangles.end(), {ring[(best + m - 1) % m], ring[best], ring[(best + 1) % m]});
+      const uint32_t ear[3] = {ring[(best + m - 1) % m], ring[best], ring[(best + 1) % m]};
+      emit(out.triangles, out.triangle_groups, f, ear, 3);
       ring.erase(ring.begin() + std::ptrdiff_t(best));
     }
-    out.triangles.insert(out.triangles.end(), ring.begin(), ring.end());
+    emit(out.triangles, out.triangle_groups, f, ring.data(), 3);
   }
-  if (general.faceCount() > 0) {
-    triangulateFaces(general);
-    out.triangles.insert(out.triangles.end(), general.triangles.begin(), general.triangles.end());
-  }
+  out.triangles.insert(out.triangles.end(), concave_tris.begin(), concave_tris.end());
+  out.triangle_groups.insert(out.triangle_groups.end(), concave_groups.begin(), concave_groups.end());
 }
 
 }  // namespace
@@ -136,15 +145,17 @@ void assembleMesh(const Mesh& in, const Model& m, const ScroogeParams& params, M
     if (it.second) {
       out.positions.push_back(m.points[point]);
       if (has_colors) out.colors.push_back(blended ? *blended : in.colors[vert]);
-      if (has_uvs) out.uvs.push_back(in.uvs[vert]);
+      if (has_uvs) out.uvs.push_back(m.point_uv_moved[point] ? m.point_uv[point] : in.uvs[vert]);
       out_vert.push_back(vert);
       out_point.push_back(point);
     }
     return it.first->second;
   };
 
+  std::vector<uint32_t> face_group;  // carried when the input has groups
   out.face_offsets.push_back(0);
   for (const Face& f : faces) {
+    if (!in.triangle_groups.empty()) face_group.push_back(f.group);
     for (size_t c = 0; c < f.pts.size(); ++c) {
       // a merged polygon's corners take its blended colour where it differs from their own
       const bool blend = f.blended && has_colors && glm::length(in.colors[f.verts[c]] - f.color) > 1e-6f;
@@ -169,14 +180,16 @@ void assembleMesh(const Mesh& in, const Model& m, const ScroogeParams& params, M
   }
 
   // triangles of the polygons, without the zero-area ones a fan over co-linear corners can make
-  triangulatePolygons(out);
-  std::vector<uint32_t> tris;
+  triangulatePolygons(out, face_group);
+  std::vector<uint32_t> tris, groups;
   for (size_t t = 0; t + 2 < out.triangles.size(); t += 3) {
     const uint32_t a = out.triangles[t], b = out.triangles[t + 1], c = out.triangles[t + 2];
     if (a == b || b == c || a == c || degenerateTriangle(out.positions[a], out.positions[b], out.positions[c])) continue;
     tris.insert(tris.end(), {a, b, c});
+    if (!out.triangle_groups.empty()) groups.push_back(out.triangle_groups[t / 3]);
   }
   out.triangles = std::move(tris);
+  out.triangle_groups = std::move(groups);
   stats.output_polygons = out.faceCount();
   if (params.triangulate_faces && out.faceCount() > 0) {
     out.face_corners = out.triangles;
@@ -201,6 +214,7 @@ void assembleMesh(const Mesh& in, const Model& m, const ScroogeParams& params, M
     }
   }
 
+  stats.source_vertex = out_vert;
   stats.vertex_origin.resize(out.positions.size());
   for (size_t v = 0; v < out.positions.size(); ++v) stats.vertex_origin[v] = m.point_source[out_point[v]];
   double worst = 0.0;
@@ -352,6 +366,7 @@ Error buildScroogeChain(const Mesh& original, const ChainParams& params, const S
     levels[k].max_error = st.max_displacement;
     levels[k].method = LodMethod::kScrooge;
     levels[k].bounds = boundingSphere(levels[k].mesh);
+    levels[k].source_vertex = std::move(st.source_vertex);
   });
   size_t done = 0;
   for (size_t k = 0; k < count; ++k) {

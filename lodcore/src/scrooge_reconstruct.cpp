@@ -123,9 +123,13 @@ size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const Scro
     if (grouped[seed] || flat[seed]) continue;
     group.assign(1, uint32_t(seed));
     grouped[seed] = 1;
+    // a group stays inside the seed's uv chart (and so its triangle group): merged corners keep
+    // their own uvs, which only fit together within one chart
+    const uint32_t chart = m.faces[live[seed]].chart;
     for (size_t q = 0; q < group.size(); ++q)
       for (uint32_t g : neighbours[group[q]])
-        if (!grouped[g] && (flat[g] || glm::dot(normal[g], normal[seed]) >= cos_tol)) {
+        if (!grouped[g] && m.faces[live[g]].chart == chart &&
+            (flat[g] || glm::dot(normal[g], normal[seed]) >= cos_tol)) {
           grouped[g] = 1;
           group.push_back(g);
         }
@@ -186,6 +190,8 @@ size_t reconstructFaces(Model& m, const std::vector<uint32_t>& faces, const Scro
     merged_face.blended = true;
     merged_face.rebuilt = true;
     merged_face.inside = true;
+    merged_face.chart = chart;
+    merged_face.group = m.faces[live[seed]].group;
     added.push_back(std::move(merged_face));
     ++merged;
   }

@@ -44,14 +44,31 @@ bool cellOfInterval(double a, double b, double s, int64_t& k) {
 
 size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vector<uint32_t>& owner, uint32_t cell,
                     double l_max, double theta_min, double theta_max, bool prevent_foldover) {
-  // directed edges of the sub-volume's polygons, sorted by start point (§6.3 step 2)
-  std::vector<std::pair<uint32_t, uint32_t>> out_edges;
+  // directed edges of the sub-volume's polygons (with the first polygon holding each), sorted by start
+  // point (§6.3 step 2)
+  struct DirectedEdge {
+    uint32_t from, to, face;
+    bool operator<(const DirectedEdge& o) const {
+      return from != o.from ? from < o.from : (to != o.to ? to < o.to : face < o.face);
+    }
+  };
+  std::vector<DirectedEdge> out_edges;
   for (uint32_t f : faces) {
     const std::vector<uint32_t>& pts = m.faces[f].pts;
-    for (size_t i = 0; i < pts.size(); ++i) out_edges.emplace_back(pts[i], pts[(i + 1) % pts.size()]);
+    for (size_t i = 0; i < pts.size(); ++i) out_edges.push_back({pts[i], pts[(i + 1) % pts.size()], f});
   }
   std::sort(out_edges.begin(), out_edges.end());
-  out_edges.erase(std::unique(out_edges.begin(), out_edges.end()), out_edges.end());
+  out_edges.erase(std::unique(out_edges.begin(), out_edges.end(),
+                              [](const DirectedEdge& a, const DirectedEdge& b) { return a.from == b.from && a.to == b.to; }),
+                  out_edges.end());
+  // the uv of a point in a polygon: the corner's own, or the point's interpolated one once it moved
+  auto uvAt = [&](uint32_t face, uint32_t point) {
+    if (m.point_uv_moved[point]) return m.point_uv[point];
+    const Face& f = m.faces[face];
+    for (size_t i = 0; i < f.pts.size(); ++i)
+      if (f.pts[i] == point) return m.vertex_uv[f.verts[i]];
+    return glm::vec2(0.0f);
+  };
   // polygons around each point, to refuse moves that would turn one over
   std::vector<std::pair<uint32_t, uint32_t>> point_faces;
   for (uint32_t f : faces)
@@ -90,17 +107,17 @@ size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vec
       const double l_d1 = glm::length(d1);
       if (!(l_d1 > 0.0)) continue;
       // the connected edge bending least (§6.3 step 3a)
-      auto range = std::equal_range(out_edges.begin(), out_edges.end(), std::make_pair(v2, 0u),
-                                    [](const auto& a, const auto& b) { return a.first < b.first; });
+      auto range = std::equal_range(out_edges.begin(), out_edges.end(), DirectedEdge{v2, 0u, 0u},
+                                    [](const DirectedEdge& a, const DirectedEdge& b) { return a.from < b.from; });
       double best_theta = 1e9;
-      uint32_t v3 = kNoPoint;
+      uint32_t v3 = kNoPoint, v3_face = 0;
       for (auto it = range.first; it != range.second; ++it) {
-        if (it->second == v1) continue;
-        const glm::dvec3 d2 = glm::dvec3(m.points[it->second]) - p2;
+        if (it->to == v1) continue;
+        const glm::dvec3 d2 = glm::dvec3(m.points[it->to]) - p2;
         const double l_d2 = glm::length(d2);
         if (!(l_d2 > 0.0)) continue;
         const double theta = std::acos(std::clamp(glm::dot(d1, d2) / (l_d1 * l_d2), -1.0, 1.0));
-        if (theta < best_theta) { best_theta = theta; v3 = it->second; }
+        if (theta < best_theta) { best_theta = theta; v3 = it->to; v3_face = it->face; }
       }
       if (v3 == kNoPoint) continue;
       // l(theta) falls linearly from l_max at theta_min to 0 at theta_max (§6.2, slope sign fixed)
@@ -117,6 +134,10 @@ size_t degradeFaces(Model& m, const std::vector<uint32_t>& faces, const std::vec
       if (glm::length(glm::dvec3(moved) - glm::dvec3(m.origin[v2])) > l_max) continue;
       if (prevent_foldover && foldsOver(v2, moved)) continue;
       m.points[v2] = moved;
+      if (!m.vertex_uv.empty()) {  // v2 is inside one chart: its uv slides along the same segment
+        m.point_uv[v2] = uvAt(f, v1) + float(r) * (uvAt(v3_face, v3) - uvAt(f, v1));
+        m.point_uv_moved[v2] = 1;
+      }
       ++moves;
     }
   }
@@ -140,6 +161,22 @@ void degradeInSubvolumes(Model& m, const ScroogeParams& params, ScroogeStats& st
   std::vector<uint8_t> pinned(m.points.size(), 0);
   for (uint32_t v : m.edge_verts) pinned[m.vertex_point[v]] = 1;
   for (uint32_t v : m.point_verts) pinned[m.vertex_point[v]] = 1;
+  // with texture coordinates, neither do points on a chart border or a uv seam (corners of several
+  // charts or uvs there): only a point inside one chart can take an interpolated uv
+  if (!m.vertex_uv.empty()) {
+    std::vector<uint32_t> first(m.points.size(), kNoPoint);  // a corner vertex at the point
+    std::vector<uint32_t> chart(m.points.size(), 0);
+    for (const Face& face : m.faces)
+      for (size_t i = 0; face.alive && i < face.pts.size(); ++i) {
+        const uint32_t p = face.pts[i], v = face.verts[i];
+        if (first[p] == kNoPoint) {
+          first[p] = v;
+          chart[p] = face.chart;
+        } else if (chart[p] != face.chart || m.vertex_uv[v] != m.vertex_uv[first[p]]) {
+          pinned[p] = 1;
+        }
+      }
+  }
 
   const int pass_count = params.overlap_passes ? 8 : 1;
   std::vector<uint32_t> owner(m.points.size());

@@ -57,6 +57,7 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
     level.method = LodMethod::kZhang;
     level.bounds = boundingSphere(meshes[i]);
     level.mesh = std::move(meshes[i]);
+    level.source_vertex = std::move(stats[i].source_vertex);
     out.levels.push_back(std::move(level));
   }
   return {};

@@ -17,6 +17,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "scenelod/lodcore/mesh_attributes.h"
 #include "scenelod/lodcore/zhang.h"
 #include "zhang_internal.h"
 
@@ -165,6 +166,9 @@ class ZhangEngine {
   // runs until at most `target` triangles remain or nothing can be collapsed
   void run(size_t target);
   void extract(Mesh& out, ZhangStats& stats);
+  // the output mesh's vertices (one per used corner key, in key order) and primitives; `present`
+  // marks the welded vertices that are in it
+  void emitMesh(Mesh& out, std::vector<uint8_t>& present);
   size_t aliveTriangles() const { return alive_tris_; }
   size_t initialTriangles() const { return initial_tris_; }
   bool stopped() const { return stopped_; }
@@ -204,7 +208,37 @@ class ZhangEngine {
   static constexpr size_t kLocalStar = 32;
   bool checkTopologyLocal(const StarEntry* entries, size_t count);
   void apply(const uint32_t* s, int s_count, uint32_t k, const glm::vec3& p, const glm::vec3& n);
-  void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
+  // position and normal of the merged vertex and the weight of each merged vertex in it
+  void interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, float* weights, bool& ok);
+
+  // attribute seams (meshes with uvs, tangents, skin or several groups; docs/ZHANG.md "Seams")
+  void initWedges(const Mesh& in, std::vector<uint32_t>& corner_wedge);
+  void weldByPosition(const Mesh& in);
+  struct SeamInfo {
+    uint32_t edges = 0;                    // seam edges around the vertex (a border edge counts)
+    uint32_t neighbour[2] = {kNone, kNone};  // the far ends of the first two
+  };
+  SeamInfo seamsAround(uint32_t v);
+  // a movable vertex with seam edges; cached until a collapse changes its fan
+  bool onSeam(uint32_t v) {
+    if (vs_[v].kept) return false;
+    if (seam_state_[v] < 0) seam_state_[v] = seamsAround(v).edges > 0 ? 1 : 0;
+    return seam_state_[v] == 1;
+  }
+  // the wedge each wedge of the merged vertices s[] != k takes, into map_; false when a surviving
+  // triangle's wedge has none or two (the collapse would carry a triangle into another chart)
+  bool mapWedges(const uint32_t* s, int s_count, uint32_t k);
+  // the seam vertices along which the popped vertex i may collapse (all neighbours when it is on no seam)
+  void seamCandidates(uint32_t i);
+  // the one wedge pair of a collapse of the popped vertex i, on no seam, onto its neighbour j
+  void onePair(uint32_t i, uint32_t j);
+  void blendWedges(const uint32_t* s, int s_count, uint32_t k);
+  void pinToSeam(const uint32_t* s, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok);
+  uint32_t wedgeFind(uint32_t w);
+  // output vertex of a triangle corner / of an input vertex, and the welded vertex giving its position
+  uint32_t cornerKey(uint32_t t, int c) const { return attr_ ? faces_[t].a[c] : faces_[t].v[c]; }
+  uint32_t inputKey(uint32_t v) { return attr_ ? wedgeFind(input_wedge_[v]) : find(v); }
+  uint32_t keyVertex(uint32_t key) { return attr_ ? find(wedge_topo_[key]) : key; }
 
   bool stepEdge();
   bool stepTriangle();
@@ -229,15 +263,32 @@ class ZhangEngine {
     uint8_t alive = 0;       // in at least one live triangle and not merged away
   };
   std::vector<VertexState> vs_;
-  // per vertex, cold: attributes blended on collapse with the area weight, union-find parent
+  // per vertex, cold: attributes blended on collapse with the area weight, union-find parent. With
+  // attributes (attr_) the attribute arrays are per wedge: one per (attribute-distinct vertex,
+  // triangle group) pair, several at one welded position along a seam
   std::vector<glm::vec3> attr_nrm_, col_;
   std::vector<glm::vec2> uv_;
   std::vector<float> weight_;
   std::vector<uint32_t> parent_;
+  bool attr_ = false;
+  std::vector<std::vector<glm::vec2>> extra_uv_;
+  std::vector<glm::vec4> tan_;
+  std::vector<uint32_t> wedge_parent_, wedge_topo_, wedge_src_, input_wedge_, face_group_;
+  std::vector<int8_t> seam_state_;  // per vertex: -1 unknown, 0 on no seam, 1 on a seam
+  struct WedgePair {
+    uint32_t from, to;
+    int s;  // index of the merged vertex in s[]
+  };
+  std::vector<WedgePair> map_, best_map_;
+  float blend_w_[3] = {0.0f, 0.0f, 0.0f}, best_w_[3] = {0.0f, 0.0f, 0.0f};
+  struct FanCorner {
+    uint32_t u, w, ai, au, aw;
+  };
+  std::vector<FanCorner> fan_corners_;
   // per triangle, one record aligned to a cache line so that walking a fan touches exactly one line per
-  // triangle (48 B used of 64; unaligned records straddled two lines on most steps):
+  // triangle (60 B used of 64; unaligned records straddled two lines on most steps):
   // vertex ids (12 B), next corner of each vertex's corner list (12 B), unit normal (12 B), area (4 B),
-  // alive flag (4 B), mark (4 B); corner c is vertex c % 3 of triangle c / 3
+  // alive flag (4 B), mark (4 B), corner wedges (12 B); corner c is vertex c % 3 of triangle c / 3
   struct alignas(64) Face {
     uint32_t v[3] = {kNone, kNone, kNone};
     uint32_t next[3] = {kNone, kNone, kNone};
@@ -245,6 +296,7 @@ class ZhangEngine {
     float area = 0.0f;
     uint32_t alive = 1;
     uint32_t mark = 0;  // generation of the last collapse whose fan held this triangle
+    uint32_t a[3] = {kNone, kNone, kNone};  // wedge of each corner (with attributes only)
   };
   std::vector<Face> faces_;
   uint32_t& cornerNext(uint32_t c) { return faces_[c / 3].next[c % 3]; }
@@ -278,16 +330,19 @@ void ZhangEngine::forStar(uint32_t v, F&& f) {
   }
 }
 
-uint32_t ZhangEngine::find(uint32_t v) {
+// union-find root with path compression
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
   uint32_t r = v;
-  while (parent_[r] != r) r = parent_[r];
-  while (parent_[v] != r) {
-    const uint32_t n = parent_[v];
-    parent_[v] = r;
+  while (parent[r] != r) r = parent[r];
+  while (parent[v] != r) {
+    const uint32_t n = parent[v];
+    parent[v] = r;
     v = n;
   }
   return r;
 }
+
+uint32_t ZhangEngine::find(uint32_t v) { return findRoot(parent_, v); }
 
 void ZhangEngine::updateTriangle(uint32_t t) {
   const glm::vec3 &a = pos_[faces_[t].v[0]], &b = pos_[faces_[t].v[1]], &c = pos_[faces_[t].v[2]];
@@ -358,6 +413,8 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     return {Status::kInvalidArgument, "zhang: max_normal_turn_deg must be in (0, 180]"};
   if (!(params.feature_angle_deg >= 0.0f) || !(params.angle_height_ratio >= 0.0f))
     return {Status::kInvalidArgument, "zhang: feature_angle_deg and angle_height_ratio must be >= 0"};
+  if (!(params.max_seam_bend_deg >= 0.0f) || !(params.max_seam_bend_deg <= 180.0f))
+    return {Status::kInvalidArgument, "zhang: max_seam_bend_deg must be in [0, 180]"};
   cos_max_turn_ = std::cos(params.max_normal_turn_deg * 3.14159265f / 180.0f);
   const size_t vn = in.vertexCount(), tn = in.triangleCount();
   if (vn >= kNone || 3 * tn >= kNone) return {Status::kUnsupported, "zhang: mesh too large for 32-bit indices"};
@@ -377,23 +434,18 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   star_.resize(vn);
   mark_gen_ = 0;
 
-  // welding: vertices at exactly the same position become one (the lowest id) for the topology
-  if (params_.weld_positions && vn > 1) {
-    std::vector<uint32_t> order(vn);
-    for (uint32_t v = 0; v < vn; ++v) order[v] = v;
-    auto less = [&](uint32_t x, uint32_t y) {
-      const glm::vec3 &a = in.positions[x], &b = in.positions[y];
-      if (a.x != b.x) return a.x < b.x;
-      if (a.y != b.y) return a.y < b.y;
-      if (a.z != b.z) return a.z < b.z;
-      return x < y;
-    };
-    std::sort(order.begin(), order.end(), less);
-    for (size_t i = 1; i < vn; ++i)
-      if (in.positions[order[i]] == in.positions[order[i - 1]]) parent_[order[i]] = parent_[order[i - 1]];
-    attr_nrm_.clear();  // split normals of hard edges do not survive a weld; geometric normals are output
-  }
+  // texture coordinates, tangents, skins and groups keep their seams on a mesh welded by position;
+  // without them, welding is the caller's choice
+  attr_ = !in.uvs.empty() || !in.extra_uvs.empty() || !in.tangents.empty() || !in.joints.empty();
+  for (size_t t = 1; t < in.triangle_groups.size() && !attr_; ++t) attr_ = in.triangle_groups[t] != in.triangle_groups[0];
+  if ((attr_ || params_.weld_positions) && vn > 1) weldByPosition(in);
+  // split normals of hard edges do not survive a plain weld; geometric normals are output
+  if (params_.weld_positions && !attr_) attr_nrm_.clear();
+  std::vector<uint32_t> corner_wedge;
+  if (attr_) initWedges(in, corner_wedge);
+  seam_state_.assign(attr_ ? vn : 0, -1);
   auto welded = [&](uint32_t v) { return parent_[v]; };
+  face_group_.clear();
 
   // triangles: drop repeated indices and repeated vertex sets (the first occurrence stays)
   for (size_t t = 0; t < tn; ++t) {
@@ -421,12 +473,15 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
       f.v[k] = v;
       f.next[k] = vhead_[v];
       vhead_[v] = 3 * id + k;
+      if (attr_) f.a[k] = corner_wedge[3 * t + k];
     }
     faces_.push_back(f);
+    if (!in.triangle_groups.empty()) face_group_.push_back(in.triangle_groups[t]);
   }
   const size_t live = faces_.size();
   alive_tris_ = initial_tris_ = live;
   stats_.input_triangles = live;
+  corner_wedge = {};
   for (uint32_t t = 0; t < live; ++t) {
     updateTriangle(t);
     for (int k = 0; k < 3; ++k) {
@@ -462,6 +517,7 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
     stats_.kept_edge_vertices += m.vertex_class == ZhangVertexClass::kEdge;
     stats_.kept_complex_vertices += m.vertex_class == ZhangVertexClass::kComplex;
     stats_.kept_angle_vertices += params_.keep_angle_vertices && m.vertex_class == ZhangVertexClass::kAngle;
+    if (attr_) stats_.seam_vertices += onSeam(v);
     if (params_.mode == ZhangMode::kEdgeCollapse && !vs_[v].kept)
       heap_.set(v, params_.influence == ZhangInfluence::kSuperHeight ? m.super_height : ca);
   }
@@ -471,9 +527,202 @@ Error ZhangEngine::init(const Mesh& in, const ZhangParams& params) {
   return {};
 }
 
+// vertices at exactly the same position become one (the lowest id) for the topology
+void ZhangEngine::weldByPosition(const Mesh& in) {
+  const size_t vn = in.vertexCount();
+  std::vector<uint32_t> order(vn);
+  for (uint32_t v = 0; v < vn; ++v) order[v] = v;
+  auto less = [&](uint32_t x, uint32_t y) {
+    const glm::vec3 &a = in.positions[x], &b = in.positions[y];
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    if (a.z != b.z) return a.z < b.z;
+    return x < y;
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (size_t i = 1; i < vn; ++i)
+    if (in.positions[order[i]] == in.positions[order[i - 1]]) parent_[order[i]] = parent_[order[i - 1]];
+}
+
+// wedges: one per (vertex equal in position and every attribute, triangle group) pair used by a
+// triangle, numbered in the order of the vertices' first occurrence; a vertex used only by edges or
+// points takes the first wedge of its attribute class, or one of its own. `corner_wedge` gets the
+// wedge of every input triangle corner.
+void ZhangEngine::initWedges(const Mesh& in, std::vector<uint32_t>& corner_wedge) {
+  Mesh attrs = in;  // welded for its vertex classes only
+  std::vector<uint32_t> cls;
+  weldVertices(attrs, &cls);
+  const size_t vn = in.vertexCount(), tn = in.triangleCount();
+  std::vector<uint32_t> first(attrs.vertexCount(), kNone);  // attribute class -> its lowest vertex
+  for (uint32_t v = static_cast<uint32_t>(vn); v-- > 0;) first[cls[v]] = v;
+  std::vector<uint64_t> keys;
+  keys.reserve(3 * tn);
+  for (size_t t = 0; t < tn; ++t)
+    for (int k = 0; k < 3; ++k) keys.push_back(uint64_t(cls[in.triangles[3 * t + k]]) << 32 | in.triangleGroup(t));
+  auto sortUnique = [](std::vector<uint64_t>& x) {
+    std::sort(x.begin(), x.end());
+    x.erase(std::unique(x.begin(), x.end()), x.end());
+  };
+  sortUnique(keys);
+  auto firstOfClass = [&](uint32_t c) {
+    const auto it = std::lower_bound(keys.begin(), keys.end(), uint64_t(c) << 32);
+    return it != keys.end() && uint32_t(*it >> 32) == c ? uint32_t(it - keys.begin()) : kNone;
+  };
+  std::vector<uint64_t> loose;
+  for (const std::vector<uint32_t>* list : {&in.edges, &in.points})
+    for (uint32_t v : *list)
+      if (firstOfClass(cls[v]) == kNone) loose.push_back(uint64_t(cls[v]) << 32 | 0xffffffffu);
+  if (!loose.empty()) {
+    keys.insert(keys.end(), loose.begin(), loose.end());
+    sortUnique(keys);
+  }
+  const size_t wn = keys.size();
+  wedge_src_.resize(wn);
+  wedge_topo_.resize(wn);
+  wedge_parent_.resize(wn);
+  for (size_t w = 0; w < wn; ++w) {
+    wedge_src_[w] = first[keys[w] >> 32];
+    wedge_topo_[w] = parent_[wedge_src_[w]];
+    wedge_parent_[w] = static_cast<uint32_t>(w);
+  }
+  input_wedge_.resize(vn);
+  for (size_t v = 0; v < vn; ++v) input_wedge_[v] = firstOfClass(cls[v]);
+  corner_wedge.resize(3 * tn);
+  for (size_t t = 0; t < tn; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint64_t key = uint64_t(cls[in.triangles[3 * t + k]]) << 32 | in.triangleGroup(t);
+      corner_wedge[3 * t + k] = uint32_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+    }
+  auto perWedge = [&](auto& dst, const auto& src) {
+    dst.clear();
+    if (src.empty()) return;
+    dst.resize(wn);
+    for (size_t w = 0; w < wn; ++w) dst[w] = src[wedge_src_[w]];
+  };
+  perWedge(attr_nrm_, in.normals);
+  perWedge(col_, in.colors);
+  perWedge(uv_, in.uvs);
+  perWedge(tan_, in.tangents);
+  extra_uv_.resize(in.extra_uvs.size());
+  for (size_t set = 0; set < in.extra_uvs.size(); ++set) perWedge(extra_uv_[set], in.extra_uvs[set]);
+}
+
+uint32_t ZhangEngine::wedgeFind(uint32_t w) { return findRoot(wedge_parent_, w); }
+
+// the seam edges around v: edges whose two triangles disagree on the wedge of either end (a UV or
+// attribute seam, a group border), and border edges
+ZhangEngine::SeamInfo ZhangEngine::seamsAround(uint32_t v) {
+  fan_corners_.clear();
+  forStar(v, [&](uint32_t t, uint32_t c) {
+    const Face& f = faces_[t];
+    fan_corners_.push_back({f.v[(c + 1) % 3], f.v[(c + 2) % 3], f.a[c], f.a[(c + 1) % 3], f.a[(c + 2) % 3]});
+  });
+  SeamInfo info;
+  for (const FanCorner& e : fan_corners_) {
+    // the triangle across the edge (v, e.w) starts its pair at e.w (a linear scan: fans are small,
+    // and the callers' fan walks are quadratic in the degree anyway)
+    const auto it = std::find_if(fan_corners_.begin(), fan_corners_.end(), [&](const FanCorner& x) { return x.u == e.w; });
+    const bool border = it == fan_corners_.end();
+    if (!border && it->ai == e.ai && it->au == e.aw) continue;
+    if (info.edges < 2) info.neighbour[info.edges] = e.w;
+    ++info.edges;
+  }
+  return info;
+}
+
+bool ZhangEngine::mapWedges(const uint32_t* s, int s_count, uint32_t k) {
+  map_.clear();
+  auto mapped = [&](uint32_t from) {
+    for (const WedgePair& m : map_)
+      if (m.from == from) return &m;
+    return static_cast<const WedgePair*>(nullptr);
+  };
+  bool ok = true;
+  for (int si = 0; si < s_count && ok; ++si) {
+    if (s[si] == k) continue;
+    // pairs from the triangles that die with k in them first, then every surviving corner needs one
+    for (int pass = 0; pass < 2 && ok; ++pass)
+      forStar(s[si], [&](uint32_t t, uint32_t c) {
+        const Face& f = faces_[t];
+        int ck = -1, others = 0;
+        for (int x = 0; x < 3; ++x) {
+          if (f.v[x] == k) ck = x;
+          for (int i = 0; i < s_count; ++i) others += f.v[x] == s[i] && s[i] != s[si];
+        }
+        const WedgePair* m = mapped(f.a[c]);
+        if (pass == 0 && ck >= 0) {
+          if (!m) map_.push_back({f.a[c], f.a[ck], si});
+          else if (m->to != f.a[ck]) ok = false;
+        } else if (pass == 1 && others == 0 && !m) {
+          ok = false;
+        }
+      });
+  }
+  return ok;
+}
+
+void ZhangEngine::onePair(uint32_t i, uint32_t j) {
+  for (const StarEntry& e : star_i_) {
+    if (e.u != j && e.w != j) continue;
+    const Face& f = faces_[e.t];
+    WedgePair pair{kNone, kNone, 0};
+    for (int c = 0; c < 3; ++c) {
+      if (f.v[c] == i) pair.from = f.a[c];
+      if (f.v[c] == j) pair.to = f.a[c];
+    }
+    map_.assign(1, pair);
+    return;
+  }
+}
+
+void ZhangEngine::seamCandidates(uint32_t i) {
+  const SeamInfo seams = seamsAround(i);
+  if (seams.edges == 0) return;  // every neighbour stays a candidate
+  tris_.clear();
+  if (seams.edges != 2) return;  // a seam end or a junction of seams stays
+  const float cos_bend = std::cos(params_.max_seam_bend_deg * 3.14159265f / 180.0f);
+  for (int x = 0; x < 2; ++x) {
+    const uint32_t j = seams.neighbour[x], other = seams.neighbour[1 - x];
+    const glm::vec3 in_dir = safeNormalize(pos_[i] - pos_[other]), out_dir = safeNormalize(pos_[j] - pos_[i]);
+    if (glm::dot(in_dir, out_dir) >= cos_bend) tris_.push_back(j);
+  }
+}
+
+// the merged vertices' wedges join their targets: attributes interpolated with the position's
+// weights (kept exactly when the position is the survivor's)
+void ZhangEngine::blendWedges(const uint32_t* s, int s_count, uint32_t k) {
+  int ks = 0;
+  for (int i = 0; i < s_count; ++i)
+    if (s[i] == k) ks = i;
+  const bool keep = blend_w_[ks] == 1.0f;
+  for (size_t m = 0; m < map_.size(); ++m) {
+    const uint32_t to = map_[m].to;
+    bool first_of_target = true;
+    for (size_t e = 0; e < m; ++e) first_of_target = first_of_target && map_[e].to != to;
+    if (keep || !first_of_target) continue;
+    auto blend = [&](auto& a) {
+      if (a.empty()) return;
+      auto acc = blend_w_[ks] * a[to];
+      for (const WedgePair& x : map_)
+        if (x.to == to) acc += blend_w_[x.s] * a[x.from];
+      a[to] = acc;
+    };
+    const float sign = tan_.empty() ? 1.0f : tan_[to].w;
+    blend(attr_nrm_);
+    blend(col_);
+    blend(uv_);
+    for (std::vector<glm::vec2>& set : extra_uv_) blend(set);
+    blend(tan_);
+    if (!tan_.empty()) tan_[to].w = sign;  // the survivor's handedness
+  }
+  for (const WedgePair& m : map_)
+    if (m.from != m.to) wedge_parent_[m.from] = m.to;
+}
+
 // position and normal of the merged vertex, interpolated by the CA of the merged vertices (§3);
 // a kept vertex never moves, and two kept vertices never merge
-void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok) {
+void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::vec3& p, glm::vec3& n, float* weights,
+                              bool& ok) {
   int kept_count = 0;
   k = s[0];
   for (int i = 0; i < s_count; ++i)
@@ -483,13 +732,10 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
     }
   ok = kept_count <= 1;
   if (!ok) return;
-  if (kept_count == 1) {
-    p = pos_[k];
-    n = nrm_[k];
-    return;
-  }
-  if (params_.placement == ZhangPlacement::kNeighbour) {  // s[s_count - 1] is the neighbour V_j
+  if (kept_count == 0 && params_.placement == ZhangPlacement::kNeighbour)  // s[s_count - 1] is V_j
     k = s[s_count - 1];
+  if (kept_count == 1 || params_.placement == ZhangPlacement::kNeighbour) {
+    for (int i = 0; i < s_count; ++i) weights[i] = s[i] == k ? 1.0f : 0.0f;
     p = pos_[k];
     n = nrm_[k];
     return;
@@ -500,6 +746,7 @@ void ZhangEngine::interpolate(const uint32_t* s, int s_count, uint32_t& k, glm::
   glm::vec3 nn(0.0f);
   for (int i = 0; i < s_count; ++i) {
     const float w = sum > 0.0f ? vs_[s[i]].ca / sum : 1.0f / static_cast<float>(s_count);
+    weights[i] = w;
     p += w * pos_[s[i]];
     nn += w * nrm_[s[i]];
   }
@@ -681,7 +928,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
     for (int i = 0; i < s_count; ++i) acc += (wsum > 0.0f ? weight_[s[i]] / wsum : 1.0f / s_count) * a[s[i]];
     a[k] = acc;
   };
-  if (!vs_[k].kept) {
+  if (!vs_[k].kept && !attr_) {
     blend3(attr_nrm_);
     blend3(col_);
     if (!uv_.empty()) {
@@ -690,6 +937,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
       uv_[k] = acc;
     }
   }
+  if (attr_) blendWedges(s, s_count, k);
   weight_[k] = wsum;
   const bool k_moved = pos_[k] != p;
   pos_[k] = p;
@@ -706,6 +954,7 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
       faces_[t].v[corner] = k;
       faces_[t].mark = mark_gen_;
       last = 3 * t + corner;
+      if (attr_) faces_[t].a[corner] = wedgeFind(faces_[t].a[corner]);
     });
     if (last != kNone) {
       cornerNext(last) = vhead_[k];
@@ -733,6 +982,10 @@ void ZhangEngine::apply(const uint32_t* s, int s_count, uint32_t k, const glm::v
       }
     }
   });
+  if (attr_) {  // the fans that changed are k's and its ring's
+    seam_state_[k] = -1;
+    for (uint32_t u : neighbours_) seam_state_[u] = -1;
+  }
   refreshAround(k);
   ++stats_.collapses;
 }
@@ -750,6 +1003,8 @@ bool ZhangEngine::stepEdge() {
         vs_[u].mark = mark_gen_;
         tris_.push_back(u);
       }
+  const bool i_on_seam = attr_ && onSeam(i);
+  if (i_on_seam) seamCandidates(i);
   float best_ca = INFINITY;
   uint32_t best_j = kNone;
   glm::vec3 best_p(0.0f), best_n(0.0f);
@@ -758,8 +1013,19 @@ bool ZhangEngine::stepEdge() {
     uint32_t k;
     glm::vec3 p, n;
     bool ok;
-    interpolate(s, 2, k, p, n, ok);
+    interpolate(s, 2, k, p, n, blend_w_, ok);
     if (!ok) continue;
+    if (attr_) {
+      // off the seams, i has one wedge and both triangles on the edge agree on j's: one pair
+      if (!i_on_seam) onePair(i, j);
+      else if (!mapWedges(s, 2, j)) continue;
+      if (i_on_seam || onSeam(j)) {  // a seam vertex never moves off its seam: onto V_j
+        p = pos_[j];
+        n = nrm_[j];
+        blend_w_[0] = 0.0f;
+        blend_w_[1] = 1.0f;
+      }
+    }
     // surviving triangles: those of V_i without V_j and those of V_j without V_i
     union_.clear();
     bool any_removed = false;
@@ -781,6 +1047,8 @@ bool ZhangEngine::stepEdge() {
       best_j = j;
       best_p = p;
       best_n = n;
+      best_map_.swap(map_);
+      std::copy(blend_w_, blend_w_ + 2, best_w_);
     }
   }
   if (best_j == kNone) {  // blocked until a neighbour's collapse changes its fan
@@ -788,6 +1056,8 @@ bool ZhangEngine::stepEdge() {
     return true;
   }
   const uint32_t s[2] = {i, best_j};
+  map_.swap(best_map_);
+  std::copy(best_w_, best_w_ + 2, blend_w_);
   apply(s, 2, best_j, best_p, best_n);
   return true;
 }
@@ -816,6 +1086,26 @@ void ZhangEngine::refreshTrianglesAround(uint32_t k) {
   for (uint32_t u : neighbours_) forStar(u, touch);
 }
 
+// with attributes, a contracted triangle keeps a vertex on a seam where it is (at most one may be)
+void ZhangEngine::pinToSeam(const uint32_t* s, uint32_t& k, glm::vec3& p, glm::vec3& n, bool& ok) {
+  int pinned = -1;
+  for (int i = 0; i < 3; ++i)
+    if (vs_[s[i]].kept || onSeam(s[i])) {
+      if (pinned >= 0) {
+        ok = false;
+        return;
+      }
+      pinned = i;
+    }
+  if (pinned >= 0) {
+    k = s[pinned];
+    p = pos_[k];
+    n = nrm_[k];
+    for (int i = 0; i < 3; ++i) blend_w_[i] = i == pinned ? 1.0f : 0.0f;
+  }
+  ok = mapWedges(s, 3, k);
+}
+
 bool ZhangEngine::stepTriangle() {
   if (heap_.empty()) return false;
   const uint32_t t = heap_.pop();
@@ -826,8 +1116,9 @@ bool ZhangEngine::stepTriangle() {
   uint32_t k;
   glm::vec3 p, n;
   bool ok;
-  interpolate(s, 3, k, p, n, ok);
+  interpolate(s, 3, k, p, n, blend_w_, ok);
   if (ok && !vs_[k].kept) k = s[2];  // survivor: the vertex with the largest CA
+  if (ok && attr_) pinToSeam(s, k, p, n, ok);
   if (!ok) {  // re-queued when its neighbourhood changes
     ++stats_.blocked;
     return true;
@@ -866,58 +1157,90 @@ void ZhangEngine::run(size_t target) {
   }
 }
 
-void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
+// a unit tangent perpendicular to n, as near to t as possible (any perpendicular when t is along n)
+glm::vec3 orthonormalTangent(const glm::vec3& t, const glm::vec3& n) {
+  glm::vec3 x = safeNormalize(t - n * glm::dot(n, t));
+  if (glm::dot(x, x) > 0.0f) return x;
+  x = safeNormalize(glm::cross(n, std::fabs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
+  return glm::dot(x, x) > 0.0f ? x : glm::vec3(1, 0, 0);
+}
+
+void ZhangEngine::emitMesh(Mesh& out, std::vector<uint8_t>& present) {
   const Mesh& in = *in_;
-  const size_t vn = in.vertexCount();
+  const size_t kn = attr_ ? wedge_src_.size() : in.vertexCount();
   out = Mesh{};
-  std::vector<uint32_t> remap(vn, kNone);
-  uint32_t next_id = 0;
-  auto use = [&](uint32_t v) {
-    if (remap[v] == kNone) remap[v] = 0;  // mark; ids assigned in vertex order below
-  };
+  std::vector<uint32_t> remap(kn, kNone);
+  auto use = [&](uint32_t key) { remap[key] = 0; };  // mark; ids assigned in key order below
   for (size_t t = 0; t < faces_.size(); ++t)
     if (faces_[t].alive)
-      for (int c = 0; c < 3; ++c) use(faces_[t].v[c]);
+      for (int c = 0; c < 3; ++c) use(cornerKey(uint32_t(t), c));
   for (size_t e = 0; e < in.edgeCount(); ++e) {
-    const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
-    if (a != b) {
+    const uint32_t a = inputKey(in.edges[2 * e]), b = inputKey(in.edges[2 * e + 1]);
+    if (keyVertex(a) != keyVertex(b)) {
       use(a);
       use(b);
     }
   }
-  for (uint32_t p : in.points) use(find(p));
-  for (size_t v = 0; v < vn; ++v)
-    if (remap[v] != kNone) remap[v] = next_id++;
+  for (uint32_t p : in.points) use(inputKey(p));
+  uint32_t next_id = 0;
+  for (size_t key = 0; key < kn; ++key)
+    if (remap[key] != kNone) remap[key] = next_id++;
   out.positions.resize(next_id);
   out.normals.resize(next_id);
   if (!col_.empty()) out.colors.resize(next_id);
   if (!uv_.empty()) out.uvs.resize(next_id);
-  for (size_t v = 0; v < vn; ++v) {
-    if (remap[v] == kNone) continue;
-    const uint32_t o = remap[v];
+  out.extra_uvs.assign(extra_uv_.size(), std::vector<glm::vec2>(next_id));
+  if (!tan_.empty()) out.tangents.resize(next_id);
+  if (attr_ && in.skinned()) {
+    out.joints.resize(next_id);
+    out.weights.resize(next_id);
+    out.joint_parents = in.joint_parents;
+  }
+  stats_.source_vertex.resize(next_id);
+  present.assign(in.vertexCount(), 0);
+  for (size_t key = 0; key < kn; ++key) {
+    if (remap[key] == kNone) continue;
+    const uint32_t o = remap[key], v = keyVertex(uint32_t(key)), src = attr_ ? wedge_src_[key] : uint32_t(key);
+    present[v] = 1;
+    stats_.source_vertex[o] = src;
     out.positions[o] = pos_[v];
-    glm::vec3 nrm = attr_nrm_.empty() ? nrm_[v] : safeNormalize(attr_nrm_[v]);
+    glm::vec3 nrm = attr_nrm_.empty() ? nrm_[v] : safeNormalize(attr_nrm_[key]);
     out.normals[o] = glm::dot(nrm, nrm) > 0.0f ? nrm : glm::vec3(0.0f, 0.0f, 1.0f);
-    if (!col_.empty()) out.colors[o] = col_[v];
-    if (!uv_.empty()) out.uvs[o] = uv_[v];
+    if (!col_.empty()) out.colors[o] = col_[key];
+    if (!uv_.empty()) out.uvs[o] = uv_[key];
+    for (size_t set = 0; set < extra_uv_.size(); ++set) out.extra_uvs[set][o] = extra_uv_[set][key];
+    if (!tan_.empty()) out.tangents[o] = glm::vec4(orthonormalTangent(glm::vec3(tan_[key]), out.normals[o]), tan_[key].w);
+    if (!out.joints.empty()) {
+      out.joints[o] = in.joints[src];
+      out.weights[o] = in.weights[src];
+    }
   }
   out.triangles.reserve(3 * alive_tris_);
-  for (size_t t = 0; t < faces_.size(); ++t)
-    if (faces_[t].alive)
-      for (int c = 0; c < 3; ++c) out.triangles.push_back(remap[faces_[t].v[c]]);
+  for (size_t t = 0; t < faces_.size(); ++t) {
+    if (!faces_[t].alive) continue;
+    for (int c = 0; c < 3; ++c) out.triangles.push_back(remap[cornerKey(uint32_t(t), c)]);
+    if (!face_group_.empty()) out.triangle_groups.push_back(face_group_[t]);
+  }
   for (size_t e = 0; e < in.edgeCount(); ++e) {
-    const uint32_t a = find(in.edges[2 * e]), b = find(in.edges[2 * e + 1]);
-    if (a == b) continue;
+    const uint32_t a = inputKey(in.edges[2 * e]), b = inputKey(in.edges[2 * e + 1]);
+    if (keyVertex(a) == keyVertex(b)) continue;
     out.edges.push_back(remap[a]);
     out.edges.push_back(remap[b]);
     if (!in.edge_thickness.empty()) out.edge_thickness.push_back(in.edge_thickness[e]);
   }
-  for (uint32_t p : in.points) out.points.push_back(remap[find(p)]);
+  for (uint32_t p : in.points) out.points.push_back(remap[inputKey(p)]);
+}
+
+void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
+  const Mesh& in = *in_;
+  const size_t vn = in.vertexCount();
+  std::vector<uint8_t> present;
+  emitMesh(out, present);
   // measured error: the largest distance an input vertex moved to its representative
   float max_d2 = 0.0f;
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t r = find(static_cast<uint32_t>(v));
-    if (remap[r] == kNone) continue;
+    if (!present[r]) continue;
     const glm::vec3 d = in.positions[v] - pos_[r];
     max_d2 = std::max(max_d2, glm::dot(d, d));
   }
@@ -928,7 +1251,7 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   float max_s2 = 0.0f;
   for (size_t v = 0; v < vn; ++v) {
     uint32_t c = find(static_cast<uint32_t>(v));
-    if (remap[c] == kNone) continue;
+    if (!present[c]) continue;
     const glm::vec3& q = in.positions[v];
     float best = glm::dot(q - pos_[c], q - pos_[c]);
     // best only falls during the walk, so a vertex already within the running max cannot raise it

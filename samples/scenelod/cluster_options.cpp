@@ -66,6 +66,7 @@ bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error)
 Error loadWorldMesh(const std::string& path, Mesh& out) {
   scene::SceneData s;
   if (Error e = scene::loadScene(path, s); !e.ok()) return e;
+  scene::bakeMaterialColors(s);  // levels written as meshes alone carry the material colours
   out = scene::flattenScene(s);
   return validateMesh(out, path);
 }

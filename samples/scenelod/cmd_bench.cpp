@@ -20,6 +20,7 @@
 #include <sys/resource.h>
 
 #include "args.h"
+#include "bench_textured.h"
 #include "command.h"
 #include "eval_support.h"
 #include "progress.h"
@@ -36,6 +37,7 @@ namespace fs = std::filesystem;
 
 const char* kUsage =
     "usage: scenelod bench [--models DIR] [--out DIR] [--quick] [--runs N] [--no-bunny]\n"
+    "       scenelod bench --textured --models DIR [--only A,B,..] [--out DIR] [--quick] [--samples N]\n"
     "\n"
     "For the Stanford bunny and every model in DIR (each subfolder's .glb or .gltf, or model files\n"
     "directly in DIR; the whole model flattened in world space, exact duplicate positions welded,\n"
@@ -56,7 +58,15 @@ const char* kUsage =
     "  --quick        targets 10 % and 2 % only, 20k samples, 128-pixel views, 2 runs\n"
     "  --runs N       timing runs per method and target (default 5)\n"
     "  --samples N    area samples per surface for the distances (default 100000)\n"
-    "  --no-bunny     leave the bunny out\n";
+    "  --no-bunny     leave the bunny out\n"
+    "\n"
+    "With --textured, untimed: for every model in DIR (or those whose file name stem is listed in\n"
+    "--only), at 20 and 10 % of the triangles (--quick: 10 %, 128-pixel views, 20k samples), the\n"
+    "textured image error of scenelod's floating-cell level, of the same level with its UVs dropped,\n"
+    "and of meshopt_simplifySloppy and meshopt_simplify run per material (each output vertex keeps\n"
+    "its own UVs), all drawn with the model's materials and textures: the share of co-covered pixels\n"
+    "off by more than 16/255, the mean absolute difference, the silhouette mismatch and the\n"
+    "Hausdorff distance. Writes textured.md and textured.json into --out.\n";
 
 using Clock = std::chrono::steady_clock;
 
@@ -408,8 +418,39 @@ std::string nowUtc() {
   return b;
 }
 
+// --textured: the untimed textured comparison of bench_textured.h over the chosen models
+int runTexturedBench(const std::vector<std::string>& paths, const std::string& only, bool quick, size_t samples,
+                     const std::string& out_dir, const std::string& command) {
+  TexturedSettings ts;
+  ts.samples = samples;
+  if (quick) {
+    ts.targets_pct = {10};
+    ts.resolution = 128;
+  }
+  std::vector<TexturedModel> models;
+  for (const std::string& path : paths) {
+    const std::string stem = fs::path(path).stem().string();
+    if (!only.empty() && ("," + only + ",").find("," + stem + ",") == std::string::npos) continue;
+    std::fprintf(stderr, "textured: %s\n", stem.c_str());
+    TexturedModel m;
+    if (Error e = benchTexturedModel(path, ts, m); !e.ok()) return runError("bench", e.message);
+    models.push_back(std::move(m));
+  }
+  if (models.empty()) return runError("bench", "--only '" + only + "' names none of the models found");
+  const std::string date = nowUtc();
+  for (const auto& [name, text] : {std::make_pair(std::string("textured.md"), texturedMarkdown(models, ts, command, date)),
+                                   std::make_pair(std::string("textured.json"), texturedJson(models, ts, command, date))}) {
+    std::ofstream f(out_dir + "/" + name);
+    f << text;
+    if (!f) return runError("bench", out_dir + "/" + name + ": cannot write");
+  }
+  std::printf("wrote %s/textured.md and %s/textured.json (%zu models)\n", out_dir.c_str(), out_dir.c_str(),
+              models.size());
+  return 0;
+}
+
 int runBench(const std::vector<std::string>& argv) {
-  Args args(argv, {"--quick", "--no-bunny"}, {"--models", "--out", "--runs", "--samples"});
+  Args args(argv, {"--quick", "--no-bunny", "--textured"}, {"--models", "--out", "--runs", "--samples", "--only"});
   Settings s;
   const bool quick = args.has("--quick");
   if (quick) {
@@ -425,12 +466,15 @@ int runBench(const std::vector<std::string>& argv) {
   if (!args.positional().empty()) return usageError("bench", "takes no positional arguments");
   if (runs < 1 || runs > 100) return usageError("bench", "--runs must be in [1, 100]");
   if (samples < 100) return usageError("bench", "--samples must be at least 100");
+  const bool textured = args.has("--textured");
+  if (textured && !args.has("--models")) return usageError("bench", "--textured needs --models DIR");
+  if (args.has("--only") && !textured) return usageError("bench", "--only goes with --textured");
   s.runs = static_cast<int>(runs);
   s.samples = static_cast<size_t>(samples);
   const std::string out_dir = args.get("--out", "docs/bench");
 
   std::vector<std::string> paths;
-  if (!args.has("--no-bunny")) paths.push_back(SCENELOD_DEFAULT_MODEL);
+  if (!args.has("--no-bunny") && !textured) paths.push_back(SCENELOD_DEFAULT_MODEL);
   if (args.has("--models")) {
     std::string err;
     auto found = findModels(args.get("--models"), err);
@@ -444,6 +488,7 @@ int runBench(const std::vector<std::string>& argv) {
 
   std::string command = "scenelod bench";
   for (const auto& a : argv) command += " " + a;
+  if (textured) return runTexturedBench(paths, args.get("--only"), quick, s.samples, out_dir, command);
   const std::string date = nowUtc();
   Machine machine;
   machine.cpu = cpuModel();

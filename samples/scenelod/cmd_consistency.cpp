@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "scenelod/eval/consistency.h"
+#include "scenelod/scene/scene_data.h"
 
 #include "args.h"
 #include "cluster_options.h"
@@ -64,6 +65,9 @@ int runConsistency(const std::vector<std::string>& argv) {
     if (!scene.normals.empty()) scene.normals.resize(scene.positions.size(), glm::vec3(0, 0, 1));
     if (!scene.colors.empty()) scene.colors.resize(scene.positions.size(), glm::vec3(1.0f));
     if (!scene.uvs.empty()) scene.uvs.resize(scene.positions.size(), glm::vec2(0.0f));
+    for (std::vector<glm::vec2>& set : scene.extra_uvs) set.resize(scene.positions.size(), glm::vec2(0.0f));
+    if (!scene.tangents.empty()) scene.tangents.resize(scene.positions.size(), glm::vec4(1, 0, 0, 1));
+    if (!scene.triangle_groups.empty()) scene.triangle_groups.resize(scene.triangleCount(), scene::kNoMaterial);
     if (!scene.face_offsets.empty()) {
       for (size_t t = model.triangleCount(); t < scene.triangleCount(); ++t) {
         for (int k = 0; k < 3; ++k) scene.face_corners.push_back(scene.triangles[3 * t + k]);

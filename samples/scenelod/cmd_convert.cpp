@@ -44,6 +44,7 @@ int runConvert(const std::vector<std::string>& argv) {
   bar.update(0.0, "reading");
   scene::SceneData s;
   if (Error e = scene::loadScene(in, s); !e.ok()) return runError("convert", e.message);
+  scene::bakeMaterialColors(s);  // the GLB writer keeps colours, not textures
   bar.update(0.5, "writing");
   if (ext == ".glb") {
     if (Error e = scene::exportGlb(out, s); !e.ok()) return runError("convert", e.message);

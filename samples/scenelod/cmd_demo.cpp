@@ -9,6 +9,7 @@
 
 #include "args.h"
 #include "demo_scene_options.h"
+#include "demo_textured.h"
 #include "command.h"
 #include "progress.h"
 #include "replay_demo.h"
@@ -222,9 +223,17 @@ int run(const std::vector<std::string>& argv) {
               "per-object table with the triangles of every level is [demo_objects.csv](demo_objects.csv).\n\n"
            << objects_md;
   }
+  TexturedLevelsResult textured;
+  {
+    std::printf("measuring the textured levels (Embree, 14 views per level)...\n");
+    if (Error e = writeTexturedLevels(data, lods, out, 128, textured); !e.ok()) return runError("demo", e.message);
+    std::ofstream report(result.report_path, std::ios::app);
+    report << textured.markdown;
+  }
   appendScreenshots(out, result.report_path);
   std::printf("report: %s\n", result.report_path.c_str());
   for (const auto& l : result.summary_lines) std::printf("  %s\n", l.c_str());
+  std::printf("  %s\n", textured.summary_line.c_str());
   return 0;
 }
 

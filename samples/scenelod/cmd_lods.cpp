@@ -47,6 +47,7 @@ const std::string kUsage = std::string(
 int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
   scene::SceneData s;
   if (Error e = scene::loadScene(in, s); !e.ok()) return runError("lods", e.message);
+  scene::bakeMaterialColors(s);  // the GLB writer keeps colours, not textures
   scene::LodBuildParams params;
   params.chain = cp;
   params.chain.first_cell_width = cell;

@@ -99,6 +99,8 @@ int runPack(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "%s\n", info.note.c_str());
   } else if (Error e = scene::loadScene(in, s); !e.ok()) {
     return runError("pack", e.message);
+  } else {
+    scene::bakeMaterialColors(s);  // packs hold no materials: vertex colours carry them
   }
   ProgressBar bar("pack");
   params.progress = bar.callback();

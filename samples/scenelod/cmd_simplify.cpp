@@ -50,8 +50,10 @@ int runZhangSimplify(const std::string& in, const std::string& out, const Mesh& 
               zhangStopReasonName(st.stop_reason), double(st.max_displacement), double(st.max_surface_distance));
   std::printf("rejected: %zu fold-over, %zu topology; dropped input triangles: %zu degenerate, %zu duplicate\n",
               st.rejected_fold, st.rejected_topology, st.dropped_degenerate, st.dropped_duplicate);
-  std::printf("kept vertices: %zu edge (border or seam), %zu complex, %zu corner; %zu movable vertices left\n",
-              st.kept_edge_vertices, st.kept_complex_vertices, st.kept_angle_vertices, st.free_vertices_left);
+  std::printf("kept vertices: %zu edge (border), %zu complex, %zu corner; %zu movable vertices left; "
+              "%zu seam vertices\n",
+              st.kept_edge_vertices, st.kept_complex_vertices, st.kept_angle_vertices, st.free_vertices_left,
+              st.seam_vertices);
   std::printf("time: %.1f ms\n", ms);
   return 0;
 }

@@ -12,13 +12,20 @@
 
 namespace scenelod::tool {
 
-// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene).
-inline Error loadFlatMesh(const std::string& path, Mesh& out) {
+// Loads OBJ, glTF or GLB (scene::loadScene), saying plainly when the path is missing or a folder.
+inline Error loadSceneFile(const std::string& path, scene::SceneData& out) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) return {Status::kIoError, path + ": no such file"};
   if (S_ISDIR(st.st_mode)) return {Status::kIoError, path + ": is a folder, not a model file"};
+  return scene::loadScene(path, out);
+}
+
+// Loads OBJ, glTF or GLB and flattens every object into one world-space mesh (scene::flattenScene),
+// material colours baked into the vertex colours (scene::bakeMaterialColors).
+inline Error loadFlatMesh(const std::string& path, Mesh& out) {
   scene::SceneData scene;
-  if (Error e = scene::loadScene(path, scene); !e.ok()) return e;
+  if (Error e = loadSceneFile(path, scene); !e.ok()) return e;
+  scene::bakeMaterialColors(scene);  // the renderer shades by vertex colour
   out = scene::flattenScene(scene);
   return validateMesh(out, path);
 }

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   if (!std::strcmp(argv[1], "--version")) {
-    std::printf("scenelod 1.0.0\n");
+    std::printf("scenelod 1.1.0\n");
     return 0;
   }
   for (const auto& c : commandRegistry()) {

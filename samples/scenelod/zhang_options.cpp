@@ -11,8 +11,9 @@ const char kZhangOptionsHelp[] =
     "  --keep-corners B     yes keeps angle vertices (corners) fixed; no (default) processes them\n"
     "  --zhang-ring B       yes (default) scores a candidate collapse by the CA it gives the merged vertex\n"
     "                       and the ring vertices of the changed triangles (Fig. 6); no: the merged one only\n"
-    "  --weld B             yes joins vertices at the same position first, so that glTF attribute seams\n"
-    "                       are simplified too (texture seams are not kept); no (default) keeps seams\n";
+    "  --weld B             yes joins vertices at the same position first, for meshes without texture\n"
+    "                       coordinates, tangents, a skin or several groups; those are always welded\n"
+    "                       with their seams kept (docs/ZHANG.md); no (default)\n";
 
 bool parseZhangOptions(const Args& args, ZhangParams& p, std::string& error) {
   p = ZhangParams();

@@ -2,6 +2,7 @@
 // simplification using vertex-clustering": mechanical parts with thin features) and bunny instances.
 #include "scenelod/scene/demo_scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -9,6 +10,8 @@
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+
+#include <stb_image_write.h>
 
 #include "scenelod/lodcore/obj_io.h"
 
@@ -223,6 +226,89 @@ uint32_t hashMix(uint32_t x) {
   return x;
 }
 
+// Texture coordinates from the position alone: the projection along (1, 1, 1) onto its plane, so
+// every face of the axis-aligned parts shows the texture alike (sheared, never degenerate), at
+// `per_unit` texture repeats per object unit, v running down the parts as images do. Vertices at one
+// position get one uv, so no UV seam is added: the parts' UV charts, and so their chains, stay what
+// they were without texture coordinates. Round parts show a streak where their side turns parallel
+// to the projection; fine for a demo.
+void addProjectedUvs(Mesh& m, float per_unit) {
+  const glm::vec3 e1 = glm::vec3(1.0f, 0.0f, -1.0f) / std::sqrt(2.0f);
+  const glm::vec3 e2 = glm::vec3(1.0f, -2.0f, 1.0f) / std::sqrt(6.0f);
+  m.uvs.resize(m.positions.size());
+  for (size_t v = 0; v < m.positions.size(); ++v)
+    m.uvs[v] = per_unit * glm::vec2(glm::dot(m.positions[v], e1), glm::dot(m.positions[v], e2));
+}
+
+// 3 x 5 pixel glyphs of the label's letters, rows top to bottom, bit 2 the left column
+struct Glyph {
+  char c;
+  uint8_t rows[5];
+};
+constexpr Glyph kGlyphs[] = {{'S', {7, 4, 7, 1, 7}}, {'C', {7, 4, 4, 4, 7}}, {'E', {7, 4, 6, 4, 7}},
+                             {'N', {7, 5, 5, 5, 5}}, {'L', {4, 4, 4, 4, 7}}, {'O', {7, 5, 5, 5, 7}},
+                             {'D', {6, 5, 5, 5, 6}}};
+
+ImageData rgbaImage(const std::string& name, int w, int h, std::vector<uint8_t> rgba) {
+  ImageData img;
+  img.name = name;
+  img.mime_type = "image/png";
+  img.width = w;
+  img.height = h;
+  img.rgba8 = std::move(rgba);
+  // the encoded bytes too, as an imported image has them, so exporters can write the file's image
+  auto append = [](void* context, void* data, int size) {
+    auto* bytes = static_cast<std::vector<uint8_t>*>(context);
+    bytes->insert(bytes->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+  };
+  stbi_write_png_to_func(append, &img.encoded, w, h, 4, img.rgba8.data(), w * 4);
+  return img;
+}
+
+// 64 x 64 texels: 8 x 8 blocks of white and light grey, so the part's vertex colour tints it
+ImageData checkerImage() {
+  std::vector<uint8_t> px;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const uint8_t v = ((x / 8 + y / 8) % 2) ? 255 : 150;
+      px.insert(px.end(), {v, v, v, 255});
+    }
+  return rgbaImage("checker", 64, 64, std::move(px));
+}
+
+// 128 x 32 texels: "SCENELOD" in dark letters on a white plate with a dark border
+ImageData labelImage() {
+  const int w = 128, h = 32, scale = 3;
+  std::vector<uint8_t> px(static_cast<size_t>(w) * h * 4, 255);
+  auto dark = [&](int x, int y) {
+    uint8_t* p = px.data() + (static_cast<size_t>(y) * w + x) * 4;
+    p[0] = 30, p[1] = 30, p[2] = 40;
+  };
+  for (int x = 0; x < w; ++x) dark(x, 1), dark(x, h - 2);
+  for (int y = 1; y < h - 1; ++y) dark(1, y), dark(w - 2, y);
+  const std::string text = "SCENELOD";
+  const int x0 = (w - static_cast<int>(text.size()) * 4 * scale + scale) / 2, y0 = (h - 5 * scale) / 2;
+  for (size_t i = 0; i < text.size(); ++i)
+    for (const Glyph& g : kGlyphs)
+      if (g.c == text[i])
+        for (int r = 0; r < 5 * scale; ++r)
+          for (int c = 0; c < 3 * scale; ++c)
+            if (g.rows[r / scale] & (4 >> (c / scale))) dark(x0 + static_cast<int>(i) * 4 * scale + c, y0 + r);
+  return rgbaImage("label", w, h, std::move(px));
+}
+
+// mean linear colour of an image (MaterialData::average_texel_color)
+glm::vec3 averageTexel(const ImageData& img) {
+  glm::dvec3 sum(0.0);
+  auto linear = [](uint8_t b) {
+    const double c = b / 255.0;
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+  };
+  for (size_t i = 0; i + 3 < img.rgba8.size(); i += 4)
+    sum += glm::dvec3(linear(img.rgba8[i]), linear(img.rgba8[i + 1]), linear(img.rgba8[i + 2]));
+  return glm::vec3(sum / std::max<double>(1.0, static_cast<double>(img.rgba8.size() / 4)));
+}
+
 }  // namespace
 
 Mesh makeBlobMesh(int subdivisions) {
@@ -281,14 +367,27 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   if (p.gearbox_count == 0) return {Status::kInvalidArgument, "demo scene: gearbox_count must be >= 1"};
   out = SceneData{};
   const size_t seg = p.segments;
-  auto material = [&](const char* name, glm::vec3 c) {
+  // two generated textures; the parts' colours stay in their vertex colours (COLOR_0), which tint
+  // the white materials' textures
+  out.images = {checkerImage(), labelImage()};
+  out.textures = {TextureData{0, 10497, 10497}, TextureData{1, 10497, 10497}};
+  auto material = [&](const char* name, int32_t texture) {
     MaterialData m;
     m.name = name;
-    m.base_color = glm::vec4(c, 1.0f);
+    if (texture < 0) {
+      out.materials.push_back(m);
+      return static_cast<int32_t>(out.materials.size() - 1);
+    }
+    m.textured = true;
+    m.base_color_texture = texture;
+    m.average_texel_color = averageTexel(out.images[static_cast<size_t>(texture)]);
+    // the label's texels are 4:1: one label per object unit across, four up
+    if (texture == 1) m.base_color_transform.scale = glm::vec2(0.5f, 2.0f);
     out.materials.push_back(m);
     return static_cast<int32_t>(out.materials.size() - 1);
   };
   auto mesh = [&](const char* name, Mesh m, int32_t mat) {
+    if (out.materials[static_cast<size_t>(mat)].textured && m.uvs.empty()) addProjectedUvs(m, 2.0f);
     MeshData d;
     d.name = name;
     d.mesh = std::move(m);
@@ -298,18 +397,23 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
   };
   const glm::vec3 steel(0.55f, 0.56f, 0.58f), brass(0.78f, 0.57f, 0.11f), paint(0.1f, 0.25f, 0.6f),
       copper(0.72f, 0.35f, 0.2f), alu(0.85f, 0.86f, 0.88f), dark(0.1f, 0.1f, 0.1f);
-  const int32_t m_steel = material("steel", steel), m_brass = material("brass", brass), m_paint = material("paint", paint),
-                m_copper = material("copper", copper), m_alu = material("aluminium", alu), m_dark = material("rubber", dark);
+  const int32_t m_steel = material("steel", 0), m_brass = material("brass", 0), m_paint = material("paint", 1),
+                m_alu = material("aluminium", 0), m_dark = material("rubber", 0);
+  // The shafts, pipes and rods are extruded in bands whose seam rings repeat each vertex exactly:
+  // with texture coordinates the clustering would weld those copies first (a mesh with attributes
+  // is welded, #37) and their chains, and so the demo's selection, would change. They stay
+  // untextured, coloured by their vertex colours alone.
+  const int32_t m_plain = material("plain", -1);
 
   const int32_t base = mesh("base_plate", box({6.0f, 0.2f, 4.0f}, paint), m_paint);
   const int32_t gear_big = mesh("gear_24", gear(24, 0.5f, 0.6f, 0.12f, 0.12f, seg, brass), m_brass);
   const int32_t gear_small = mesh("gear_12", gear(12, 0.25f, 0.33f, 0.12f, 0.08f, seg, brass), m_brass);
-  const int32_t shaft = mesh("shaft", cylinder(0.06f, 1.0f, seg, steel), m_steel);
+  const int32_t shaft = mesh("shaft", cylinder(0.06f, 1.0f, seg, steel), m_plain);
   const int32_t boltm = mesh("bolt", bolt(seg, steel), m_steel);
   const int32_t brack = mesh("bracket", bracket(paint), m_paint);
-  const int32_t pipem = mesh("pipe", pipe(0.15f, 0.12f, 2.5f, seg, copper), m_copper);
+  const int32_t pipem = mesh("pipe", pipe(0.15f, 0.12f, 2.5f, seg, copper), m_plain);
   const int32_t fin = mesh("fin", box({0.01f, 0.5f, 0.8f}, alu), m_alu);            // thin plate
-  const int32_t rod = mesh("rod", cylinder(0.008f, 1.6f, 8, dark), m_dark);          // thin wire
+  const int32_t rod = mesh("rod", cylinder(0.008f, 1.6f, 8, dark), m_plain);         // thin wire
   const int32_t hexm = mesh("hex_prism", prism(6, 0.2f, 0.3f, steel), m_steel);
   const int32_t trim = mesh("tri_prism", prism(3, 0.25f, 0.6f, paint), m_paint);
 
@@ -327,6 +431,8 @@ Error makeDemoScene(SceneData& out, const DemoSceneParams& p, DemoSceneInfo* inf
                                                  "; bunny instances use a generated organic blob instead";
   }
   const Aabb ob = computeBounds(organic);
+  // about four checker repeats across the organic mesh, whatever its units
+  if (!organic.positions.empty()) addProjectedUvs(organic, 4.0f / std::max(ob.diagonal(), 1e-6f));
   // no mesh without an instance: unused meshes would only surprise exporters and tables
   const int32_t bunny = p.bunny_count == 0 ? -1 : mesh(local_info.bunny_loaded ? "bunny" : "organic_blob", std::move(organic), m_dark);
 

@@ -19,6 +19,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -41,8 +42,8 @@ namespace {
 struct LoadContext {
   std::string folder;       // realpath of the file's folder, no trailing slash
   std::string refused;      // message for the first refused URI
-  std::vector<glm::vec3> image_average;  // linear mean colour per image
-  std::vector<char> image_decoded;
+  std::vector<std::vector<uint8_t>> image_bytes;  // encoded bytes per image, as tinygltf read them
+  std::vector<char> image_loaded;                 // whether tinygltf delivered image i's bytes
 };
 
 bool readFileBytes(const std::string& path, std::vector<unsigned char>& out, std::string& err) {
@@ -145,39 +146,49 @@ bool fsWriteWholeFile(std::string* err, const std::string&, const std::vector<un
 
 float srgbToLinear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
-// decodes an image only to average its texels (sRGB -> linear first); the pixels are not kept
-bool averageImage(tinygltf::Image* image, const int image_idx, std::string*, std::string* warn, int, int,
-                  const unsigned char* bytes, int size, void* user) {
+// keeps every image's encoded bytes; decoding waits until the materials say which images need it
+bool keepImageBytes(tinygltf::Image*, const int image_idx, std::string*, std::string*, int, int, const unsigned char* bytes,
+                    int size, void* user) {
   LoadContext& ctx = *static_cast<LoadContext*>(user);
-  if (image_idx < 0) return true;
-  if (static_cast<size_t>(image_idx) >= ctx.image_average.size()) {
-    ctx.image_average.resize(static_cast<size_t>(image_idx) + 1, glm::vec3(1.0f));
-    ctx.image_decoded.resize(static_cast<size_t>(image_idx) + 1, 0);
+  if (image_idx < 0 || size < 0) return true;
+  if (static_cast<size_t>(image_idx) >= ctx.image_bytes.size()) {
+    ctx.image_bytes.resize(static_cast<size_t>(image_idx) + 1);
+    ctx.image_loaded.resize(static_cast<size_t>(image_idx) + 1, 0);
   }
+  ctx.image_bytes[static_cast<size_t>(image_idx)].assign(bytes, bytes + size);
+  ctx.image_loaded[static_cast<size_t>(image_idx)] = 1;
+  return true;
+}
+
+// the mime type of encoded image bytes: PNG and JPEG by their signatures, else what the file says
+std::string imageMimeType(const std::vector<uint8_t>& bytes, const std::string& declared) {
+  static const unsigned char kPng[] = {0x89, 'P', 'N', 'G'};
+  if (bytes.size() >= 4 && std::memcmp(bytes.data(), kPng, 4) == 0) return "image/png";
+  if (bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff) return "image/jpeg";
+  return declared;
+}
+
+// decodes to RGBA8 (anything stb_image reads) and returns the linear mean RGB, or false when the
+// bytes do not decode (the image then keeps no pixels)
+bool decodeImage(ImageData& image, glm::vec3& mean) {
   int w = 0, h = 0, comp = 0;
-  unsigned char* px = stbi_load_from_memory(bytes, size, &w, &h, &comp, 3);
-  if (!px) {
-    if (warn) *warn += "image " + std::to_string(image_idx) + " could not be decoded\n";
-    return true;  // the material keeps a white average; geometry is unaffected
-  }
+  if (image.encoded.empty() || image.encoded.size() > static_cast<size_t>(INT_MAX)) return false;
+  unsigned char* px = stbi_load_from_memory(image.encoded.data(), static_cast<int>(image.encoded.size()), &w, &h, &comp, 4);
+  if (!px) return false;
+  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+  image.width = w;
+  image.height = h;
+  image.rgba8.assign(px, px + 4 * n);
+  stbi_image_free(px);
   static const std::array<float, 256> lut = [] {
     std::array<float, 256> t{};
     for (int i = 0; i < 256; ++i) t[static_cast<size_t>(i)] = srgbToLinear(static_cast<float>(i) / 255.0f);
     return t;
   }();
   double sum[3] = {0.0, 0.0, 0.0};
-  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
   for (size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) sum[k] += lut[px[3 * i + static_cast<size_t>(k)]];
-  stbi_image_free(px);
-  if (n > 0)
-    ctx.image_average[static_cast<size_t>(image_idx)] =
-        glm::vec3(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n), static_cast<float>(sum[2] / n));
-  ctx.image_decoded[static_cast<size_t>(image_idx)] = 1;
-  image->width = w;
-  image->height = h;
-  image->component = comp;
-  image->bits = 8;
+    for (size_t k = 0; k < 3; ++k) sum[k] += lut[image.rgba8[4 * i + k]];
+  if (n > 0) mean = glm::vec3(float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n)));
   return true;
 }
 
@@ -271,6 +282,50 @@ double readComponent(const unsigned char* p, int type, bool normalized) {
 // an accessor without a buffer view (zeros, maybe sparse) holds no data to bound its size: at most
 // this many values (128 MiB as doubles), whatever its type
 constexpr size_t kMaxUnbackedValues = size_t(1) << 24;
+
+// a unit vector perpendicular to unit `n`
+glm::vec3 anyPerpendicular(const glm::vec3& n) {
+  const glm::vec3 axis = std::fabs(n.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+  const glm::vec3 t = glm::cross(n, axis);
+  const float len = glm::length(t);
+  return len > 0.0f ? t / len : glm::vec3(1.0f, 0.0f, 0.0f);
+}
+
+// tangents for the vertices without one (has[v] == 0): from the UV gradient of their triangles
+// (Lengyel 2001), orthogonalised against the normal, w from the bitangent's side; without UVs or
+// with degenerate ones, any unit vector perpendicular to the normal, w = +1
+void fillTangents(Mesh& m, const std::vector<char>& has) {
+  if (std::find(has.begin(), has.end(), 0) == has.end()) return;
+  const size_t n = m.vertexCount();
+  std::vector<glm::vec3> tan(n, glm::vec3(0.0f)), bit(n, glm::vec3(0.0f));
+  if (!m.uvs.empty())
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+      const uint32_t i0 = m.triangles[3 * t], i1 = m.triangles[3 * t + 1], i2 = m.triangles[3 * t + 2];
+      const glm::vec3 e1 = m.positions[i1] - m.positions[i0], e2 = m.positions[i2] - m.positions[i0];
+      const glm::vec2 d1 = m.uvs[i1] - m.uvs[i0], d2 = m.uvs[i2] - m.uvs[i0];
+      const float r = d1.x * d2.y - d2.x * d1.y;
+      if (!(std::fabs(r) > 1e-20f)) continue;
+      const glm::vec3 tu = (e1 * d2.y - e2 * d1.y) / r, tv = (e2 * d1.x - e1 * d2.x) / r;
+      for (uint32_t v : {i0, i1, i2}) tan[v] += tu, bit[v] += tv;
+    }
+  for (size_t v = 0; v < n; ++v) {
+    if (has[v]) continue;
+    const glm::vec3 nrm = m.normals.empty() || glm::length(m.normals[v]) == 0.0f ? glm::vec3(0.0f, 0.0f, 1.0f)
+                                                                                  : glm::normalize(m.normals[v]);
+    glm::vec3 t = tan[v] - nrm * glm::dot(nrm, tan[v]);
+    const float len = glm::length(t);
+    t = len > 1e-12f && std::isfinite(len) ? t / len : anyPerpendicular(nrm);
+    m.tangents[v] = glm::vec4(t, glm::dot(glm::cross(nrm, t), bit[v]) < 0.0f ? -1.0f : 1.0f);
+  }
+}
+
+bool numberField(const tinygltf::Value& obj, const char* key, float& out) {
+  if (!obj.IsObject() || !obj.Has(key)) return false;
+  const tinygltf::Value& v = obj.Get(key);
+  if (!v.IsNumber()) return false;
+  out = static_cast<float>(v.GetNumberAsDouble());
+  return true;
+}
 
 class GltfReader {
  public:
@@ -399,61 +454,143 @@ class GltfReader {
     return {};
   }
 
-  glm::vec3 materialColor(int material, bool& has_material) const {
-    has_material = material >= 0;
-    if (material < 0) return glm::vec3(1.0f);
-    const MaterialData& m = materials_[static_cast<size_t>(material)];
-    return glm::vec3(m.base_color) * (m.textured ? m.average_texel_color : glm::vec3(1.0f));
+  // images (encoded bytes kept), textures with their samplers' wrap modes
+  Error readImagesAndTextures(SceneData& out) const {
+    out.images.assign(model_.images.size(), ImageData{});
+    for (size_t i = 0; i < model_.images.size(); ++i) {
+      const tinygltf::Image& src = model_.images[i];
+      ImageData& img = out.images[i];
+      img.name = src.name;
+      if (i < ctx_.image_loaded.size() && ctx_.image_loaded[i])
+        img.encoded = ctx_.image_bytes[i];
+      else if (!src.uri.empty())
+        return fail(Status::kIoError, "image " + std::to_string(i) + ": cannot read '" + src.uri + "' (missing or unreadable)");
+      img.mime_type = imageMimeType(img.encoded, src.mimeType);
+    }
+    out.textures.assign(model_.textures.size(), TextureData{});
+    for (size_t t = 0; t < model_.textures.size(); ++t) {
+      const tinygltf::Texture& src = model_.textures[t];
+      const std::string what = "texture " + std::to_string(t);
+      if (src.source < -1 || src.source >= static_cast<int>(model_.images.size()))
+        return fail(Status::kInvalidMesh, what + ": image " + std::to_string(src.source) + " out of range (the file has " +
+                                              std::to_string(model_.images.size()) + ")");
+      if (src.sampler < -1 || src.sampler >= static_cast<int>(model_.samplers.size()))
+        return fail(Status::kInvalidMesh, what + ": sampler " + std::to_string(src.sampler) + " out of range (the file has " +
+                                              std::to_string(model_.samplers.size()) + ")");
+      TextureData& tex = out.textures[t];
+      tex.image = src.source;
+      if (src.sampler >= 0) {
+        tex.wrap_s = model_.samplers[static_cast<size_t>(src.sampler)].wrapS;
+        tex.wrap_t = model_.samplers[static_cast<size_t>(src.sampler)].wrapT;
+      }
+    }
+    return {};
   }
 
-  Error readMaterials(std::vector<MaterialData>& out) {
-    out.clear();
+  // KHR_texture_transform of a texture reference (identity without the extension)
+  Error readTextureTransform(const tinygltf::ExtensionMap& ext, const std::string& what, TextureTransform& out) const {
+    out = TextureTransform{};
+    const auto it = ext.find("KHR_texture_transform");
+    if (it == ext.end() || !it->second.IsObject()) return {};
+    const tinygltf::Value& v = it->second;
+    auto pair = [&](const char* key, glm::vec2& dst) {
+      if (!v.Has(key) || !v.Get(key).IsArray() || v.Get(key).ArrayLen() != 2) return;
+      for (int k = 0; k < 2; ++k)
+        if (v.Get(key).Get(k).IsNumber()) dst[k] = static_cast<float>(v.Get(key).Get(k).GetNumberAsDouble());
+    };
+    pair("offset", out.offset);
+    pair("scale", out.scale);
+    numberField(v, "rotation", out.rotation);
+    float texcoord = -1.0f;
+    if (numberField(v, "texCoord", texcoord)) out.texcoord = static_cast<int32_t>(texcoord);
+    if (!std::isfinite(out.offset.x) || !std::isfinite(out.offset.y) || !std::isfinite(out.scale.x) ||
+        !std::isfinite(out.scale.y) || !std::isfinite(out.rotation) || out.texcoord < -1 || out.texcoord > 255)
+      return fail(Status::kInvalidMesh, what + ": KHR_texture_transform has a non-finite value or a bad texCoord");
+    return {};
+  }
+
+  // materials; the images their base colour textures use are decoded and averaged
+  Error readMaterials(SceneData& out) {
+    out.materials.clear();
+    std::vector<char> decoded(out.images.size(), 0);
+    std::vector<glm::vec3> mean(out.images.size(), glm::vec3(1.0f));
     for (size_t i = 0; i < model_.materials.size(); ++i) {
       const tinygltf::Material& src = model_.materials[i];
+      const std::string what = "material " + std::to_string(i);
       MaterialData m;
       m.name = src.name;
       const auto& f = src.pbrMetallicRoughness.baseColorFactor;
       if (f.size() == 4) m.base_color = glm::vec4(float(f[0]), float(f[1]), float(f[2]), float(f[3]));
-      const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
-      if (tex >= 0) {
-        if (static_cast<size_t>(tex) >= model_.textures.size())
-          return fail(Status::kInvalidMesh, "material " + std::to_string(i) + ": texture " + std::to_string(tex) +
-                                                " out of range (the file has " + std::to_string(model_.textures.size()) + ")");
-        const int img = model_.textures[static_cast<size_t>(tex)].source;
-        if (img >= static_cast<int>(model_.images.size()))
-          return fail(Status::kInvalidMesh, "texture " + std::to_string(tex) + ": image " + std::to_string(img) + " out of range");
+      const tinygltf::TextureInfo& info = src.pbrMetallicRoughness.baseColorTexture;
+      if (info.index >= 0) {
+        if (static_cast<size_t>(info.index) >= out.textures.size())
+          return fail(Status::kInvalidMesh, what + ": texture " + std::to_string(info.index) + " out of range (the file has " +
+                                                std::to_string(out.textures.size()) + ")");
         m.textured = true;
-        if (img >= 0 && static_cast<size_t>(img) < ctx_.image_decoded.size() && ctx_.image_decoded[static_cast<size_t>(img)])
-          m.average_texel_color = ctx_.image_average[static_cast<size_t>(img)];
+        m.base_color_texture = info.index;
+        m.base_color_texcoord = static_cast<uint32_t>(std::max(info.texCoord, 0));
+        if (Error e = readTextureTransform(info.extensions, what + " baseColorTexture", m.base_color_transform); !e.ok())
+          return e;
+        const int img = out.textures[static_cast<size_t>(info.index)].image;
+        if (img >= 0 && !decoded[static_cast<size_t>(img)])
+          decoded[static_cast<size_t>(img)] = decodeImage(out.images[static_cast<size_t>(img)], mean[static_cast<size_t>(img)]) ? 1 : 2;
+        if (img >= 0) m.average_texel_color = mean[static_cast<size_t>(img)];
       }
       if (!std::isfinite(m.base_color.x) || !std::isfinite(m.base_color.y) || !std::isfinite(m.base_color.z))
-        return fail(Status::kInvalidMesh, "material " + std::to_string(i) + ": non-finite base colour factor");
-      out.push_back(m);
+        return fail(Status::kInvalidMesh, what + ": non-finite base colour factor");
+      out.materials.push_back(m);
     }
-    materials_ = out;
+    material_count_ = out.materials.size();
     return {};
   }
 
-  // what readMesh gathers over a mesh's primitives before it sets the mesh's optional attributes
+  // what readMesh gathers over a mesh's primitives before it sets the mesh's optional attributes;
+  // the per-vertex arrays grow with the positions, holding defaults where a primitive lacks one
   struct MeshBuild {
     struct Vertices {
-      uint32_t offset, count;
+      uint32_t offset, count, joint_end;
     };
-    std::map<std::tuple<int, int, int, int, int>, Vertices> shared;  // attribute accessors + material -> vertices
-    std::vector<char> has_normal;
-    bool any_normal = false, any_uv = false, any_color = false, any_thickness = false;
-    std::vector<glm::vec3> vertex_color;
+    std::map<std::vector<int>, Vertices> shared;  // attribute accessors + material -> vertices
+    std::vector<char> has_normal, has_tangent;
+    bool any_normal = false, any_color = false, any_tangent = false, any_skin = false, any_thickness = false;
+    std::vector<std::vector<glm::vec2>> uvs;  // one array per TEXCOORD set
+    std::vector<glm::vec3> colors;
+    std::vector<glm::vec4> tangents;
+    std::vector<glm::u16vec4> joints;
+    std::vector<glm::vec4> weights;
     std::vector<float> edge_thickness;  // one per edge, from its own primitive's _THICKNESS
   };
   // a primitive's attribute accessors, -1 when absent
   struct Attributes {
-    int position, normal, uv, color, thickness;
+    int position = -1, normal = -1, tangent = -1, color = -1, joints = -1, weights = -1, thickness = -1;
+    std::vector<int> uv;  // TEXCOORD_0, TEXCOORD_1, ... up to the first missing set
+
+    std::vector<int> key(int material) const {
+      std::vector<int> k{position, normal, tangent, color, joints, weights, material};
+      k.insert(k.end(), uv.begin(), uv.end());
+      return k;
+    }
   };
 
-  // appends the vertices of one primitive's attributes (POSITION, NORMAL, TEXCOORD_0, COLOR_0 times
-  // the material colour) to `m`, from `base` on; `count` is their number
-  Error readVertices(const tinygltf::Primitive& p, const Attributes& a, const std::string& what, const std::string& mesh_what,
-                     Mesh& m, MeshBuild& b, uint32_t& base, uint32_t& count) const {
+  // reads vertex attribute `semantic`: min_c..max_c components, `count` elements, all finite
+  Error readAttribute(int accessor, const std::string& what, const std::string& semantic, int min_c, int max_c,
+                      uint32_t count, std::vector<double>& v, int& comps) const {
+    if (Error e = readVec(accessor, what, semantic.c_str(), min_c, max_c, v, comps); !e.ok()) return e;
+    const size_t n = v.size() / static_cast<size_t>(comps);
+    if (n != count)
+      return fail(Status::kInvalidMesh, what + ": " + semantic + " has " + std::to_string(n) + " elements, POSITION " +
+                                            std::to_string(count));
+    for (size_t i = 0; i < v.size(); ++i)
+      if (!std::isfinite(v[i]))
+        return fail(Status::kInvalidMesh, what + " " + semantic + ": element " + std::to_string(i / static_cast<size_t>(comps)) +
+                                              " is NaN or infinite");
+    return {};
+  }
+
+  // appends the vertices of one primitive's POSITION, NORMAL, TEXCOORD_n and COLOR_0 to `m` and
+  // `b`, from `base` on; `count` is their number
+  Error readVertices(const Attributes& a, const std::string& what, const std::string& mesh_what, Mesh& m, MeshBuild& b,
+                     uint32_t& base, uint32_t& count) const {
     std::vector<double> v;
     int comps = 0;
     if (Error e = readVec(a.position, what, "POSITION", 3, 3, v, comps); !e.ok()) return e;
@@ -467,46 +604,79 @@ class GltfReader {
                                               std::to_string(i) + " has a NaN or infinite coordinate");
       m.positions.push_back(q);
     }
-    m.normals.resize(m.positions.size(), glm::vec3(0.0f));
-    b.has_normal.resize(m.positions.size(), 0);
+    const size_t n = m.positions.size();
+    m.normals.resize(n, glm::vec3(0.0f));
+    b.has_normal.resize(n, 0);
+    b.has_tangent.resize(n, 0);
+    b.colors.resize(n, glm::vec3(1.0f));
+    b.tangents.resize(n, glm::vec4(1.0f, 0.0f, 0.0f, 1.0f));
+    b.joints.resize(n, glm::u16vec4(0));
+    b.weights.resize(n, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+    if (b.uvs.size() < a.uv.size()) b.uvs.resize(a.uv.size());
+    for (std::vector<glm::vec2>& set : b.uvs) set.resize(n, glm::vec2(0.0f));
     if (a.normal >= 0) {
-      if (Error e = readVec(a.normal, what, "NORMAL", 3, 3, v, comps); !e.ok()) return e;
-      if (v.size() / 3 != count)
-        return fail(Status::kInvalidMesh, what + ": NORMAL has " + std::to_string(v.size() / 3) + " elements, POSITION " +
-                                              std::to_string(count));
+      if (Error e = readAttribute(a.normal, what, "NORMAL", 3, 3, count, v, comps); !e.ok()) return e;
       for (uint32_t i = 0; i < count; ++i) {
-        const glm::vec3 n{float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2])};
-        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
-          return fail(Status::kInvalidMesh, what + " NORMAL: element " + std::to_string(i) + " is NaN or infinite");
-        m.normals[base + i] = n;
+        m.normals[base + i] = glm::vec3(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
         b.has_normal[base + i] = 1;
       }
       b.any_normal = true;
     }
-    m.uvs.resize(m.positions.size(), glm::vec2(0.0f));
-    if (a.uv >= 0) {
-      if (Error e = readVec(a.uv, what, "TEXCOORD_0", 2, 2, v, comps); !e.ok()) return e;
-      if (v.size() / 2 != count)
-        return fail(Status::kInvalidMesh, what + ": TEXCOORD_0 has " + std::to_string(v.size() / 2) + " elements, POSITION " +
-                                              std::to_string(count));
-      for (uint32_t i = 0; i < count; ++i) m.uvs[base + i] = glm::vec2(float(v[2 * i]), float(v[2 * i + 1]));
-      b.any_uv = true;
+    for (size_t set = 0; set < a.uv.size(); ++set) {
+      if (Error e = readAttribute(a.uv[set], what, "TEXCOORD_" + std::to_string(set), 2, 2, count, v, comps); !e.ok()) return e;
+      for (uint32_t i = 0; i < count; ++i) b.uvs[set][base + i] = glm::vec2(float(v[2 * i]), float(v[2 * i + 1]));
     }
-    bool has_material = false;
-    const glm::vec3 mat_color = materialColor(p.material, has_material);
-    b.vertex_color.resize(m.positions.size(), mat_color);
-    if (has_material) b.any_color = true;
     if (a.color >= 0) {
-      if (Error e = readVec(a.color, what, "COLOR_0", 3, 4, v, comps); !e.ok()) return e;
-      if (v.size() / static_cast<size_t>(comps) != count)
-        return fail(Status::kInvalidMesh, what + ": COLOR_0 has " + std::to_string(v.size() / static_cast<size_t>(comps)) +
-                                              " elements, POSITION " + std::to_string(count));
+      if (Error e = readAttribute(a.color, what, "COLOR_0", 3, 4, count, v, comps); !e.ok()) return e;
       for (uint32_t i = 0; i < count; ++i) {
         const size_t o = static_cast<size_t>(i) * static_cast<size_t>(comps);
-        b.vertex_color[base + i] = mat_color * glm::vec3(float(v[o]), float(v[o + 1]), float(v[o + 2]));
+        b.colors[base + i] = glm::vec3(float(v[o]), float(v[o + 1]), float(v[o + 2]));
       }
       b.any_color = true;
     }
+    return {};
+  }
+
+  // reads one primitive's TANGENT, JOINTS_0 and WEIGHTS_0 into `b` at `base`; `joint_end` is one
+  // more than the largest joint index the primitive uses (0 without JOINTS_0)
+  Error readTangentsAndSkin(const Attributes& a, const std::string& what, uint32_t base, uint32_t count, MeshBuild& b,
+                            uint32_t& joint_end) const {
+    std::vector<double> v;
+    int comps = 0;
+    joint_end = 0;
+    if (a.tangent >= 0) {
+      if (Error e = readAttribute(a.tangent, what, "TANGENT", 4, 4, count, v, comps); !e.ok()) return e;
+      for (uint32_t i = 0; i < count; ++i) {
+        // w is +1 or -1 in the spec; a file's rounding is snapped to the sign
+        b.tangents[base + i] = glm::vec4(float(v[4 * i]), float(v[4 * i + 1]), float(v[4 * i + 2]), v[4 * i + 3] < 0.0 ? -1.0f : 1.0f);
+        b.has_tangent[base + i] = 1;
+      }
+      b.any_tangent = true;
+    }
+    if ((a.joints >= 0) != (a.weights >= 0))
+      return fail(Status::kInvalidMesh, what + (a.joints >= 0 ? ": JOINTS_0 without WEIGHTS_0" : ": WEIGHTS_0 without JOINTS_0"));
+    if (a.joints < 0) return {};
+    if (Error e = readAttribute(a.joints, what, "JOINTS_0", 4, 4, count, v, comps); !e.ok()) return e;
+    const tinygltf::Accessor& ja = model_.accessors[static_cast<size_t>(a.joints)];
+    if ((ja.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ja.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) ||
+        ja.normalized)
+      return fail(Status::kInvalidMesh, what + " JOINTS_0: accessor " + std::to_string(a.joints) +
+                                            " must hold unsigned bytes or shorts, not normalized");
+    for (uint32_t i = 0; i < count; ++i)
+      for (int c = 0; c < 4; ++c) {
+        const double j = v[4 * i + static_cast<size_t>(c)];
+        b.joints[base + i][c] = static_cast<uint16_t>(j);
+        joint_end = std::max(joint_end, static_cast<uint32_t>(j) + 1);
+      }
+    if (Error e = readAttribute(a.weights, what, "WEIGHTS_0", 4, 4, count, v, comps); !e.ok()) return e;
+    for (uint32_t i = 0; i < count; ++i) {
+      const glm::vec4 w(float(v[4 * i]), float(v[4 * i + 1]), float(v[4 * i + 2]), float(v[4 * i + 3]));
+      if (w.x < 0.0f || w.y < 0.0f || w.z < 0.0f || w.w < 0.0f || !(w.x + w.y + w.z + w.w > 0.0f))
+        return fail(Status::kInvalidMesh, what + " WEIGHTS_0: element " + std::to_string(i) +
+                                              " has a negative weight or weights summing to 0");
+      b.weights[base + i] = w;
+    }
+    b.any_skin = true;
     return {};
   }
 
@@ -572,10 +742,80 @@ class GltfReader {
     return {};
   }
 
-  Error readMesh(size_t mesh_index, MeshData& out) const {
+  // a primitive's attribute accessors by semantic
+  static Attributes primitiveAttributes(const tinygltf::Primitive& p) {
+    auto attr = [&](const std::string& name) {
+      auto it = p.attributes.find(name);
+      return it == p.attributes.end() ? -1 : it->second;
+    };
+    Attributes a;
+    a.position = attr("POSITION");
+    a.normal = attr("NORMAL");
+    a.tangent = attr("TANGENT");
+    a.color = attr("COLOR_0");
+    a.joints = attr("JOINTS_0");
+    a.weights = attr("WEIGHTS_0");
+    a.thickness = attr("_THICKNESS");
+    for (int set = 0; attr("TEXCOORD_" + std::to_string(set)) >= 0; ++set) a.uv.push_back(attr("TEXCOORD_" + std::to_string(set)));
+    return a;
+  }
+
+  // a primitive's _THICKNESS per vertex (empty without it)
+  Error readThickness(const Attributes& a, const std::string& what, uint32_t count, std::vector<double>& thickness) const {
+    thickness.clear();
+    if (a.thickness < 0) return {};
+    int comps = 0;
+    if (Error e = readVec(a.thickness, what, "_THICKNESS", 1, 1, thickness, comps); !e.ok()) return e;
+    if (thickness.size() != count)
+      return fail(Status::kInvalidMesh, what + ": _THICKNESS has " + std::to_string(thickness.size()) + " elements, POSITION " +
+                                            std::to_string(count));
+    for (uint32_t i = 0; i < count; ++i)
+      if (!std::isfinite(thickness[i]) || thickness[i] < 0.0)
+        return fail(Status::kInvalidMesh, what + " _THICKNESS: element " + std::to_string(i) + " is negative or not finite");
+    return {};
+  }
+
+  // sets the mesh's optional attributes from what its primitives had; a primitive lacking one
+  // that others have gets normals computed from the faces, tangents from its UVs (fillTangents),
+  // UV 0, colour white, and joint 0 with weight 1
+  static void finishMesh(MeshBuild& b, Mesh& m) {
+    if (b.any_thickness) m.edge_thickness = std::move(b.edge_thickness);
+    if (!b.uvs.empty()) {
+      m.uvs = std::move(b.uvs[0]);
+      m.extra_uvs.assign(std::make_move_iterator(b.uvs.begin() + 1), std::make_move_iterator(b.uvs.end()));
+    } else {
+      m.uvs.clear();
+    }
+    if (b.any_color) m.colors = std::move(b.colors);
+    if (!b.any_normal) {
+      m.normals.clear();
+    } else if (std::find(b.has_normal.begin(), b.has_normal.end(), 0) != b.has_normal.end()) {
+      Mesh tmp;
+      tmp.positions = m.positions;
+      tmp.triangles = m.triangles;
+      computeVertexNormals(tmp);
+      for (size_t i = 0; i < b.has_normal.size(); ++i)
+        if (!b.has_normal[i]) m.normals[i] = tmp.normals[i];
+    }
+    if (b.any_tangent) {
+      m.tangents = std::move(b.tangents);
+      fillTangents(m, b.has_tangent);
+    }
+    if (b.any_skin) {
+      m.joints = std::move(b.joints);
+      m.weights = std::move(b.weights);
+    }
+    // one primitive: no groups (the convention for "all in group 0")
+    if (std::all_of(m.triangle_groups.begin(), m.triangle_groups.end(), [](uint32_t g) { return g == 0; }))
+      m.triangle_groups.clear();
+  }
+
+  // `joint_end[p]`: one more than the largest joint primitive p uses (0 without JOINTS_0)
+  Error readMesh(size_t mesh_index, MeshData& out, std::vector<uint32_t>& joint_end) const {
     const tinygltf::Mesh& src = model_.meshes[mesh_index];
     out = MeshData{};
     out.name = src.name;
+    joint_end.clear();
     Mesh& m = out.mesh;
     const std::string mesh_what = "mesh " + std::to_string(mesh_index) + (src.name.empty() ? "" : " '" + src.name + "'");
     MeshBuild b;
@@ -585,59 +825,34 @@ class GltfReader {
       const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
       if (mode > TINYGLTF_MODE_TRIANGLE_FAN)
         return fail(Status::kUnsupported, what + ": unsupported primitive mode " + std::to_string(mode));
-      if (p.material >= static_cast<int>(materials_.size()))
+      if (p.material >= static_cast<int>(material_count_))
         return fail(Status::kInvalidMesh, what + ": material " + std::to_string(p.material) + " out of range (the file has " +
-                                              std::to_string(materials_.size()) + ")");
+                                              std::to_string(material_count_) + ")");
       if (p.extensions.count("KHR_draco_mesh_compression"))
         return fail(Status::kUnsupported, what + ": Draco-compressed primitives (KHR_draco_mesh_compression) are not supported");
-      auto attr = [&](const char* name) {
-        auto it = p.attributes.find(name);
-        return it == p.attributes.end() ? -1 : it->second;
-      };
-      const Attributes a{attr("POSITION"), attr("NORMAL"), attr("TEXCOORD_0"), attr("COLOR_0"), attr("_THICKNESS")};
+      const Attributes a = primitiveAttributes(p);
       if (a.position < 0) return fail(Status::kInvalidMesh, what + " has no POSITION attribute");
       out.primitive_materials.push_back(p.material);
 
-      const auto key = std::make_tuple(a.position, a.normal, a.uv, a.color, p.material);
-      uint32_t base = 0, count = 0;
+      const std::vector<int> key = a.key(p.material);
+      MeshBuild::Vertices vs{0, 0, 0};
       auto found = b.shared.find(key);
       if (found != b.shared.end()) {
-        base = found->second.offset;
-        count = found->second.count;
+        vs = found->second;
       } else {
-        if (Error e = readVertices(p, a, what, mesh_what, m, b, base, count); !e.ok()) return e;
-        b.shared.emplace(key, MeshBuild::Vertices{base, count});
+        if (Error e = readVertices(a, what, mesh_what, m, b, vs.offset, vs.count); !e.ok()) return e;
+        if (Error e = readTangentsAndSkin(a, what, vs.offset, vs.count, b, vs.joint_end); !e.ok()) return e;
+        b.shared.emplace(key, vs);
       }
-      std::vector<double> thickness;  // per vertex of this primitive, when it has _THICKNESS
-      if (a.thickness >= 0) {
-        int comps = 0;
-        if (Error e = readVec(a.thickness, what, "_THICKNESS", 1, 1, thickness, comps); !e.ok()) return e;
-        if (thickness.size() != count)
-          return fail(Status::kInvalidMesh, what + ": _THICKNESS has " + std::to_string(thickness.size()) + " elements, POSITION " +
-                                                std::to_string(count));
-        for (uint32_t i = 0; i < count; ++i) {
-          if (!std::isfinite(thickness[i]) || thickness[i] < 0.0)
-            return fail(Status::kInvalidMesh, what + " _THICKNESS: element " + std::to_string(i) + " is negative or not finite");
-        }
-      }
+      joint_end.push_back(vs.joint_end);
+      std::vector<double> thickness;
+      if (Error e = readThickness(a, what, vs.count, thickness); !e.ok()) return e;
       std::vector<uint32_t> idx;
-      if (Error e = readPrimitiveIndices(p, count, what, idx); !e.ok()) return e;
-      if (Error e = addPrimitive(mode, idx, base, thickness, a.thickness >= 0, what, m, b); !e.ok()) return e;
+      if (Error e = readPrimitiveIndices(p, vs.count, what, idx); !e.ok()) return e;
+      if (Error e = addPrimitive(mode, idx, vs.offset, thickness, a.thickness >= 0, what, m, b); !e.ok()) return e;
+      m.triangle_groups.resize(m.triangleCount(), static_cast<uint32_t>(pi));
     }
-    if (b.any_thickness) m.edge_thickness = std::move(b.edge_thickness);
-    if (!b.any_uv) m.uvs.clear();
-    if (b.any_color) m.colors = std::move(b.vertex_color);
-    if (!b.any_normal) {
-      m.normals.clear();
-    } else if (std::find(b.has_normal.begin(), b.has_normal.end(), 0) != b.has_normal.end()) {
-      // primitives without NORMAL next to ones with: area-weighted normals for the missing ones
-      Mesh tmp;
-      tmp.positions = m.positions;
-      tmp.triangles = m.triangles;
-      computeVertexNormals(tmp);
-      for (size_t i = 0; i < b.has_normal.size(); ++i)
-        if (!b.has_normal[i]) m.normals[i] = tmp.normals[i];
-    }
+    finishMesh(b, m);
     return {};
   }
 
@@ -653,6 +868,10 @@ class GltfReader {
         return fail(Status::kInvalidMesh, what + ": mesh " + std::to_string(src.mesh) + " out of range (the file has " +
                                               std::to_string(model_.meshes.size()) + ")");
       node.mesh = src.mesh < 0 ? -1 : src.mesh;
+      if (src.skin >= static_cast<int>(model_.skins.size()))
+        return fail(Status::kInvalidMesh, what + ": skin " + std::to_string(src.skin) + " out of range (the file has " +
+                                              std::to_string(model_.skins.size()) + ")");
+      node.skin = src.skin < 0 ? -1 : src.skin;
       if (src.matrix.size() == 16) {
         float v[16];
         for (int k = 0; k < 16; ++k) v[k] = static_cast<float>(src.matrix[static_cast<size_t>(k)]);
@@ -703,11 +922,115 @@ class GltfReader {
     return {};
   }
 
+  // skins: joints must be nodes; inverse bind matrices MAT4 floats, at least one per joint
+  Error readSkins(SceneData& out) const {
+    out.skins.assign(model_.skins.size(), SkinData{});
+    for (size_t k = 0; k < model_.skins.size(); ++k) {
+      const tinygltf::Skin& src = model_.skins[k];
+      SkinData& skin = out.skins[k];
+      const std::string what = "skin " + std::to_string(k);
+      skin.name = src.name;
+      for (int j : src.joints) {
+        if (j < 0 || static_cast<size_t>(j) >= model_.nodes.size())
+          return fail(Status::kInvalidMesh, what + ": joint " + std::to_string(j) + " is not a node (the file has " +
+                                                std::to_string(model_.nodes.size()) + ")");
+        skin.joints.push_back(j);
+      }
+      if (src.skeleton < -1 || src.skeleton >= static_cast<int>(model_.nodes.size()))
+        return fail(Status::kInvalidMesh, what + ": skeleton node " + std::to_string(src.skeleton) + " out of range");
+      skin.skeleton = src.skeleton;
+      skin.inverse_bind.assign(skin.joints.size(), glm::mat4(1.0f));
+      if (src.inverseBindMatrices < 0) continue;
+      std::vector<double> v;
+      int comps = 0;
+      if (Error e = readVec(src.inverseBindMatrices, what, "inverseBindMatrices", 16, 16, v, comps); !e.ok()) return e;
+      if (v.size() / 16 < skin.joints.size())
+        return fail(Status::kInvalidMesh, what + ": " + std::to_string(v.size() / 16) + " inverse bind matrices for " +
+                                              std::to_string(skin.joints.size()) + " joints");
+      for (size_t j = 0; j < skin.joints.size(); ++j)
+        for (int c = 0; c < 16; ++c) {
+          const double x = v[16 * j + static_cast<size_t>(c)];
+          if (!std::isfinite(x)) return fail(Status::kInvalidMesh, what + ": inverse bind matrix " + std::to_string(j) + " is not finite");
+          skin.inverse_bind[j][c / 4][c % 4] = static_cast<float>(x);  // column-major, as glm
+        }
+    }
+    return {};
+  }
+
+  // one animation sampler: increasing finite key times, values (1, 3 or 4 components) per key
+  Error readSampler(const tinygltf::AnimationSampler& src, const std::string& what, AnimationData::Sampler& out,
+                    int& comps) const {
+    std::vector<double> v;
+    if (Error e = readVec(src.input, what, "input", 1, 1, v, comps); !e.ok()) return e;
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (!std::isfinite(v[i]) || (i > 0 && v[i] < v[i - 1]))
+        return fail(Status::kInvalidMesh, what + " input: key time " + std::to_string(i) + " is not finite or decreases");
+      out.times.push_back(static_cast<float>(v[i]));
+    }
+    if (src.interpolation == "STEP") out.interpolation = AnimationData::Interpolation::kStep;
+    else if (src.interpolation == "CUBICSPLINE") out.interpolation = AnimationData::Interpolation::kCubicSpline;
+    else if (src.interpolation.empty() || src.interpolation == "LINEAR") out.interpolation = AnimationData::Interpolation::kLinear;
+    else return fail(Status::kInvalidMesh, what + ": unknown interpolation '" + src.interpolation + "'");
+    if (Error e = readVec(src.output, what, "output", 1, 4, v, comps); !e.ok()) return e;
+    const size_t per_key = out.interpolation == AnimationData::Interpolation::kCubicSpline ? 3 : 1;
+    const size_t values = v.size() / static_cast<size_t>(comps);
+    if (comps == 2 || values % std::max<size_t>(out.times.size() * per_key, 1) != 0 || (comps > 1 && values != out.times.size() * per_key))
+      return fail(Status::kInvalidMesh, what + ": " + std::to_string(values) + " output values of " + std::to_string(comps) +
+                                            " components for " + std::to_string(out.times.size()) + " keys");
+    out.values.assign(values, glm::vec4(0.0f));
+    for (size_t i = 0; i < values; ++i)
+      for (int c = 0; c < comps; ++c) {
+        const double x = v[i * static_cast<size_t>(comps) + static_cast<size_t>(c)];
+        if (!std::isfinite(x)) return fail(Status::kInvalidMesh, what + " output: value " + std::to_string(i) + " is not finite");
+        out.values[i][c] = static_cast<float>(x);
+      }
+    return {};
+  }
+
+  // animations; channels with a path scenelod does not model (KHR_animation_pointer) are skipped
+  Error readAnimations(SceneData& out) const {
+    out.animations.assign(model_.animations.size(), AnimationData{});
+    for (size_t k = 0; k < model_.animations.size(); ++k) {
+      const tinygltf::Animation& src = model_.animations[k];
+      AnimationData& anim = out.animations[k];
+      anim.name = src.name;
+      std::vector<int> comps(src.samplers.size(), 0);
+      anim.samplers.resize(src.samplers.size());
+      for (size_t i = 0; i < src.samplers.size(); ++i)
+        if (Error e = readSampler(src.samplers[i], "animation " + std::to_string(k) + " sampler " + std::to_string(i),
+                                  anim.samplers[i], comps[i]); !e.ok())
+          return e;
+      for (size_t c = 0; c < src.channels.size(); ++c) {
+        const tinygltf::AnimationChannel& ch = src.channels[c];
+        const std::string what = "animation " + std::to_string(k) + " channel " + std::to_string(c);
+        static const std::pair<const char*, std::pair<AnimationData::Path, int>> kPaths[] = {
+            {"translation", {AnimationData::Path::kTranslation, 3}},
+            {"rotation", {AnimationData::Path::kRotation, 4}},
+            {"scale", {AnimationData::Path::kScale, 3}},
+            {"weights", {AnimationData::Path::kWeights, 1}}};
+        const auto path = std::find_if(std::begin(kPaths), std::end(kPaths),
+                                       [&](const auto& p) { return ch.target_path == p.first; });
+        if (path == std::end(kPaths) || ch.target_node < 0) continue;
+        if (static_cast<size_t>(ch.target_node) >= model_.nodes.size())
+          return fail(Status::kInvalidMesh, what + " targets node " + std::to_string(ch.target_node) + ", which does not exist (the file has " +
+                                                std::to_string(model_.nodes.size()) + " nodes)");
+        if (ch.sampler < 0 || static_cast<size_t>(ch.sampler) >= src.samplers.size())
+          return fail(Status::kInvalidMesh, what + ": sampler " + std::to_string(ch.sampler) + " out of range");
+        if (comps[static_cast<size_t>(ch.sampler)] != path->second.second)
+          return fail(Status::kInvalidMesh, what + ": '" + ch.target_path + "' needs " + std::to_string(path->second.second) +
+                                                " components, sampler " + std::to_string(ch.sampler) + " has " +
+                                                std::to_string(comps[static_cast<size_t>(ch.sampler)]));
+        anim.channels.push_back({ch.target_node, path->second.first, ch.sampler});
+      }
+    }
+    return {};
+  }
+
  private:
   std::string path_;
   const tinygltf::Model& model_;
   const LoadContext& ctx_;
-  std::vector<MaterialData> materials_;
+  size_t material_count_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -804,7 +1127,7 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
   fs.WriteWholeFile = &fsWriteWholeFile;
   fs.user_data = &ctx;
   loader.SetFsCallbacks(fs);
-  loader.SetImageLoader(&averageImage, &ctx);
+  loader.SetImageLoader(&keepImageBytes, &ctx);
   std::string warn;
   err.clear();
   const std::string base = ctx.folder.empty() ? "/" : ctx.folder;
@@ -834,25 +1157,59 @@ Error loadModel(const std::string& path, tinygltf::Model& model, LoadContext& ct
   return {};
 }
 
-Error readScene(const std::string& path, const tinygltf::Model& model, const LoadContext& ctx, SceneData& out) {
-  GltfReader reader(path, model, ctx);
-  SceneData s;
-  if (Error e = reader.readMaterials(s.materials); !e.ok()) return e;
-  s.meshes.resize(model.meshes.size());
-  for (size_t m = 0; m < model.meshes.size(); ++m)
-    if (Error e = reader.readMesh(m, s.meshes[m]); !e.ok()) return e;
-  if (Error e = reader.readNodes(s); !e.ok()) return e;
-  if (Error e = validateSceneData(s, path); !e.ok()) return e;
-  out = std::move(s);
+// each skinned node's mesh uses joints its skin has, named by primitive; a mesh used by exactly one
+// skin gets that skin's hierarchy as joint_parents
+Error checkSkinnedMeshes(const std::string& path, const std::vector<std::vector<uint32_t>>& joint_end, SceneData& s) {
+  std::vector<int32_t> skin_of(s.meshes.size(), -1);  // -2: used by several skins
+  for (size_t i = 0; i < s.nodes.size(); ++i) {
+    const NodeData& node = s.nodes[i];
+    if (node.mesh < 0 || node.skin < 0) continue;
+    const size_t m = static_cast<size_t>(node.mesh);
+    const size_t count = s.skins[static_cast<size_t>(node.skin)].joints.size();
+    for (size_t p = 0; p < joint_end[m].size(); ++p)
+      if (joint_end[m][p] > count)
+        return {Status::kInvalidMesh, path + ": mesh " + std::to_string(m) + (s.meshes[m].name.empty() ? "" : " '" + s.meshes[m].name + "'") +
+                                          " primitive " + std::to_string(p) + " JOINTS_0: joint " + std::to_string(joint_end[m][p] - 1) +
+                                          " is not below the " + std::to_string(count) + " joints of skin " +
+                                          std::to_string(node.skin) + " (node " + std::to_string(i) + ")"};
+    skin_of[m] = skin_of[m] == -1 || skin_of[m] == node.skin ? node.skin : -2;
+  }
+  std::vector<int32_t> joint_index(s.nodes.size(), -1);
+  for (size_t m = 0; m < s.meshes.size(); ++m) {
+    if (skin_of[m] < 0 || !s.meshes[m].mesh.skinned()) continue;
+    const SkinData& skin = s.skins[static_cast<size_t>(skin_of[m])];
+    std::fill(joint_index.begin(), joint_index.end(), -1);
+    for (size_t j = 0; j < skin.joints.size(); ++j) joint_index[static_cast<size_t>(skin.joints[j])] = static_cast<int32_t>(j);
+    std::vector<int32_t>& parents = s.meshes[m].mesh.joint_parents;
+    parents.assign(skin.joints.size(), -1);
+    for (size_t j = 0; j < skin.joints.size(); ++j) {
+      // the nearest ancestor that is a joint of the same skin; bounded, as the hierarchy is only
+      // checked for cycles afterwards
+      int32_t a = s.nodes[static_cast<size_t>(skin.joints[j])].parent;
+      for (size_t steps = 0; a >= 0 && joint_index[static_cast<size_t>(a)] < 0 && steps < s.nodes.size(); ++steps)
+        a = s.nodes[static_cast<size_t>(a)].parent;
+      parents[j] = a >= 0 && joint_index[static_cast<size_t>(a)] >= 0 ? joint_index[static_cast<size_t>(a)] : -1;
+    }
+  }
   return {};
 }
 
-bool numberField(const tinygltf::Value& obj, const char* key, float& out) {
-  if (!obj.IsObject() || !obj.Has(key)) return false;
-  const tinygltf::Value& v = obj.Get(key);
-  if (!v.IsNumber()) return false;
-  out = static_cast<float>(v.GetNumberAsDouble());
-  return true;
+Error readScene(const std::string& path, const tinygltf::Model& model, const LoadContext& ctx, SceneData& out) {
+  GltfReader reader(path, model, ctx);
+  SceneData s;
+  if (Error e = reader.readImagesAndTextures(s); !e.ok()) return e;
+  if (Error e = reader.readMaterials(s); !e.ok()) return e;
+  s.meshes.resize(model.meshes.size());
+  std::vector<std::vector<uint32_t>> joint_end(model.meshes.size());
+  for (size_t m = 0; m < model.meshes.size(); ++m)
+    if (Error e = reader.readMesh(m, s.meshes[m], joint_end[m]); !e.ok()) return e;
+  if (Error e = reader.readNodes(s); !e.ok()) return e;
+  if (Error e = reader.readSkins(s); !e.ok()) return e;
+  if (Error e = reader.readAnimations(s); !e.ok()) return e;
+  if (Error e = checkSkinnedMeshes(path, joint_end, s); !e.ok()) return e;
+  if (Error e = validateSceneData(s, path); !e.ok()) return e;
+  out = std::move(s);
+  return {};
 }
 
 void readLevelExtras(const tinygltf::Node& node, LodLevel& level) {
@@ -865,6 +1222,28 @@ void readLevelExtras(const tinygltf::Node& node, LodLevel& level) {
     for (int k = 0; k <= static_cast<int>(LodMethod::kScrooge); ++k)
       if (name == lodMethodName(static_cast<LodMethod>(k))) level.method = static_cast<LodMethod>(k);
   }
+}
+
+// skins and animations of `raw` for the scene without its MSFT_lod level nodes (node_map: -1 for a
+// level node); a level node cannot be a joint, and channels animating one are dropped
+Error remapSkinsAndAnimations(const std::string& path, const SceneData& raw, const std::vector<int32_t>& node_map, SceneData& s) {
+  s.skins = raw.skins;
+  for (size_t k = 0; k < s.skins.size(); ++k) {
+    for (int32_t& j : s.skins[k].joints) {
+      if (node_map[static_cast<size_t>(j)] < 0)
+        return {Status::kUnsupported, path + ": skin " + std::to_string(k) + ": joint node " + std::to_string(j) + " is an MSFT_lod level"};
+      j = node_map[static_cast<size_t>(j)];
+    }
+    if (s.skins[k].skeleton >= 0) s.skins[k].skeleton = node_map[static_cast<size_t>(s.skins[k].skeleton)];
+  }
+  s.animations = raw.animations;
+  for (AnimationData& a : s.animations) {
+    std::vector<AnimationData::Channel> kept;
+    for (AnimationData::Channel c : a.channels)
+      if (node_map[static_cast<size_t>(c.node)] >= 0) c.node = node_map[static_cast<size_t>(c.node)], kept.push_back(c);
+    a.channels = std::move(kept);
+  }
+  return {};
 }
 
 // runs `read`, turning what tinygltf and the standard library may throw into errors naming the file
@@ -935,7 +1314,9 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
       if (raw.nodes[i].mesh >= 0) (is_level[i] ? used_by_level : used_by_kept)[static_cast<size_t>(raw.nodes[i].mesh)] = 1;
     std::vector<int32_t> mesh_map(raw.meshes.size(), -1), node_map(n, -1);
     SceneData s;
-    s.materials = raw.materials;
+    s.materials = std::move(raw.materials);
+    s.textures = std::move(raw.textures);
+    s.images = std::move(raw.images);
     for (size_t m = 0; m < raw.meshes.size(); ++m)
       if (used_by_kept[m] || !used_by_level[m]) {
         mesh_map[m] = static_cast<int32_t>(s.meshes.size());
@@ -950,6 +1331,7 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
     }
     for (int32_t r : raw.roots)
       if (!is_level[static_cast<size_t>(r)]) s.roots.push_back(node_map[static_cast<size_t>(r)]);
+    if (Error e = remapSkinsAndAnimations(path, raw, node_map, s); !e.ok()) return e;
 
     std::vector<LodChain> c(s.meshes.size());
     std::vector<char> defined(s.meshes.size(), 0);

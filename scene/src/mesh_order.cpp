@@ -159,12 +159,29 @@ double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cac
   return double(misses) / double(tri_count);
 }
 
-void optimizeMeshOrder(Mesh& m) {
+void optimizeMeshOrder(Mesh& m, std::vector<uint32_t>* vertex_remap) {
   const size_t n = m.vertexCount();
   if (!m.triangles.empty()) {
-    std::vector<uint32_t> tri(m.triangles.size());
-    optimizeVertexCache(Span<uint32_t>(tri.data(), tri.size()),
-                        Span<const uint32_t>(m.triangles.data(), m.triangles.size()), n);
+    // each triangle group (primitive) on its own, groups in increasing order, so that a group stays
+    // one contiguous range of triangles
+    std::vector<uint32_t> order(m.triangleCount());
+    for (size_t t = 0; t < order.size(); ++t) order[t] = static_cast<uint32_t>(t);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.triangleGroup(a) < m.triangleGroup(b); });
+    std::vector<uint32_t> grouped(m.triangles.size()), tri(m.triangles.size());
+    for (size_t t = 0; t < order.size(); ++t)
+      for (size_t k = 0; k < 3; ++k) grouped[3 * t + k] = m.triangles[3 * size_t(order[t]) + k];
+    for (size_t begin = 0; begin < order.size();) {
+      size_t end = begin + 1;
+      while (end < order.size() && m.triangleGroup(order[end]) == m.triangleGroup(order[begin])) ++end;
+      optimizeVertexCache(Span<uint32_t>(tri.data() + 3 * begin, 3 * (end - begin)),
+                          Span<const uint32_t>(grouped.data() + 3 * begin, 3 * (end - begin)), n);
+      begin = end;
+    }
+    if (!m.triangle_groups.empty()) {
+      std::vector<uint32_t> groups(order.size());
+      for (size_t t = 0; t < order.size(); ++t) groups[t] = m.triangle_groups[order[t]];
+      m.triangle_groups.swap(groups);
+    }
     m.triangles.swap(tri);
   }
   // first use across triangles, then edges, then points
@@ -185,10 +202,15 @@ void optimizeMeshOrder(Mesh& m) {
   permute(m.normals);
   permute(m.colors);
   permute(m.uvs);
+  for (std::vector<glm::vec2>& set : m.extra_uvs) permute(set);
+  permute(m.tangents);
+  permute(m.joints);
+  permute(m.weights);
   for (uint32_t& i : m.triangles) i = remap[i];
   for (uint32_t& i : m.edges) i = remap[i];
   for (uint32_t& i : m.points) i = remap[i];
   for (uint32_t& i : m.face_corners) i = remap[i];
+  if (vertex_remap) vertex_remap->swap(remap);
 }
 
 }  // namespace scenelod::scene

@@ -51,8 +51,11 @@ constexpr size_t kChecksumOffset = 24;
 
 enum SectionKind : uint32_t {
   kNodes = 1, kChildren = 2, kRoots = 3, kObjects = 4, kChains = 5, kLevels = 6, kNames = 7, kData = 8,
+  kLevelAttributes = 9,
 };
-constexpr uint32_t kSectionKindCount = 8;
+constexpr uint32_t kSectionKindCount = 9;
+// sections every pack has; later kinds are optional (a pack written before them has none)
+constexpr uint32_t kRequiredSectionKinds = 8;
 
 struct SectionEntry {
   uint32_t kind;
@@ -104,8 +107,27 @@ struct LevelRecord {
 };
 static_assert(sizeof(LevelRecord) == 112, "level record is 112 bytes");
 
+// the attributes beyond LevelRecord's, one record per level record (same order); written only when
+// some level has one, so packs of meshes without them are the bytes they were before this section
+struct LevelAttributesRecord {
+  uint32_t extra_uv_set_count;  // texture coordinate sets after set 0
+  uint32_t joint_count;         // entries of joint_parents
+  uint32_t reserved[2];
+  // absolute byte offsets into the data section; 0 = absent
+  uint64_t extra_uvs;        // extra_uv_set_count x vertex_count x 2 f32, set after set
+  uint64_t tangents;         // vertex_count x 4 f32
+  uint64_t joints;           // vertex_count x 4 u16
+  uint64_t weights;          // vertex_count x 4 f32
+  uint64_t joint_parents;    // joint_count x i32
+  uint64_t triangle_groups;  // triangle_count x u32
+  uint64_t source_vertex;    // vertex_count x u32, vertices of the chain's level 0
+  uint64_t reserved_offset;
+};
+static_assert(sizeof(LevelAttributesRecord) == 80, "level attributes record is 80 bytes");
+
 constexpr uint32_t kElementBytes[kSectionKindCount + 1] = {0, sizeof(NodeRecord), 4, 4, sizeof(ObjectRecord),
-                                                           sizeof(ChainRecord), sizeof(LevelRecord), 1, 1};
+                                                           sizeof(ChainRecord), sizeof(LevelRecord), 1, 1,
+                                                           sizeof(LevelAttributesRecord)};
 
 size_t align16(size_t x) { return (x + 15) & ~size_t(15); }
 
@@ -129,6 +151,56 @@ class Writer {
     return data_base + at;
   }
 };
+
+bool hasExtraAttributes(const LodLevel& l) {
+  const Mesh& m = l.mesh;
+  return !m.extra_uvs.empty() || !m.tangents.empty() || !m.joints.empty() || !m.joint_parents.empty() ||
+         !m.triangle_groups.empty() || !l.source_vertex.empty();
+}
+
+// what the pack needs beyond validateMesh: every extra texture set one value per vertex (a set is
+// stored by position), source_vertex empty or one vertex of level 0 (`original_vertices` of them)
+// per vertex
+Error checkLevelExtras(const LodLevel& l, size_t original_vertices, const std::string& what) {
+  for (size_t s = 0; s < l.mesh.extra_uvs.size(); ++s)
+    if (l.mesh.extra_uvs[s].size() != l.mesh.vertexCount())
+      return {Status::kInvalidMesh, what + ": texture coordinate set " + std::to_string(s + 1) + " has " +
+                                        std::to_string(l.mesh.extra_uvs[s].size()) + " values for " +
+                                        std::to_string(l.mesh.vertexCount()) + " vertices"};
+  const std::vector<uint32_t>& sv = l.source_vertex;
+  if (sv.empty()) return {};
+  if (sv.size() != l.mesh.vertexCount())
+    return {Status::kInvalidMesh, what + ": " + std::to_string(sv.size()) + " source vertices for " +
+                                      std::to_string(l.mesh.vertexCount()) + " vertices"};
+  for (size_t v = 0; v < sv.size(); ++v)
+    if (sv[v] >= original_vertices)
+      return {Status::kInvalidMesh, what + ": vertex " + std::to_string(v) + " has source vertex " + std::to_string(sv[v]) +
+                                        " but level 0 has " + std::to_string(original_vertices) + " vertices"};
+  return {};
+}
+
+// the attribute record of a level (its arrays written to `w`), its source vertices renumbered by
+// level 0's reordering `original_remap` (empty: not reordered) and its own `remap`
+LevelAttributesRecord writeAttributes(Writer& w, uint64_t data_base, const Mesh& m, const std::vector<uint32_t>& source,
+                                      const std::vector<uint32_t>& remap, const std::vector<uint32_t>& original_remap) {
+  LevelAttributesRecord r;
+  std::memset(&r, 0, sizeof r);
+  r.extra_uv_set_count = static_cast<uint32_t>(m.extra_uvs.size());
+  r.joint_count = static_cast<uint32_t>(m.joint_parents.size());
+  std::vector<glm::vec2> sets;
+  for (const std::vector<glm::vec2>& set : m.extra_uvs) sets.insert(sets.end(), set.begin(), set.end());
+  r.extra_uvs = w.array(sets, data_base);
+  r.tangents = w.array(m.tangents, data_base);
+  r.joints = w.array(m.joints, data_base);
+  r.weights = w.array(m.weights, data_base);
+  r.joint_parents = w.array(m.joint_parents, data_base);
+  r.triangle_groups = w.array(m.triangle_groups, data_base);
+  std::vector<uint32_t> sv(source.size());
+  for (size_t v = 0; v < source.size(); ++v)
+    sv[remap.empty() ? v : remap[v]] = original_remap.empty() ? source[v] : original_remap[source[v]];
+  r.source_vertex = w.array(sv, data_base);
+  return r;
+}
 
 uint32_t addName(std::vector<char>& names, const std::string& s) {
   const uint32_t at = static_cast<uint32_t>(names.size());
@@ -200,7 +272,10 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   }
 
   // fixed layout up to the data section
-  const uint32_t section_count = kSectionKindCount;
+  bool attributes = false;
+  for (const LodChain& chain : chains)
+    for (const LodLevel& l : chain.levels) attributes = attributes || hasExtraAttributes(l);
+  const uint32_t section_count = attributes ? kSectionKindCount : kRequiredSectionKinds;
   std::vector<ChainRecord> chain_records(chains.size());
   std::vector<LevelRecord> levels;
   for (size_t c = 0; c < chains.size(); ++c) {
@@ -232,19 +307,25 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   place(kChains, chain_records.size());
   place(kLevels, levels.size());
   place(kNames, names.size());
+  std::vector<LevelAttributesRecord> level_attributes(attributes ? levels.size() : 0);
+  if (attributes) place(kLevelAttributes, level_attributes.size());
   const size_t data_base = at;
 
   Writer w;
   double acmr_before = 0.0, acmr_after = 0.0, weight = 0.0;
+  std::vector<uint32_t> remap, original_remap;
   for (size_t c = 0; c < chains.size(); ++c) {
     for (uint32_t l = 0; l < chain_records[c].level_count; ++l) {
       const LodLevel& src = chains[c].levels[l];
       const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
       if (Error e = validateMesh(src.mesh, level_name); !e.ok()) return e;
+      if (Error e = checkLevelExtras(src, chains[c].levels[0].mesh.vertexCount(), level_name); !e.ok()) return e;
       Mesh m = src.mesh;
       const double tris = double(m.triangleCount());
       if (tris > 0) acmr_before += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
-      if (opt.optimize_order) optimizeMeshOrder(m);
+      remap.clear();
+      if (opt.optimize_order) optimizeMeshOrder(m, &remap);
+      if (l == 0) original_remap = remap;
       if (tris > 0) {
         acmr_after += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
         weight += tris;
@@ -270,6 +351,8 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
       r.edges = w.array(m.edges, data_base);
       r.thickness = w.array(m.edge_thickness, data_base);
       r.points = w.array(m.points, data_base);
+      if (attributes)
+        level_attributes[chain_records[c].first_level + l] = writeAttributes(w, data_base, m, src.source_vertex, remap, original_remap);
     }
   }
   place(kData, w.data.size());
@@ -297,7 +380,8 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   put(placed[4].offset, chain_records.data(), chain_records.size() * sizeof(ChainRecord));
   put(placed[5].offset, levels.data(), levels.size() * sizeof(LevelRecord));
   put(placed[6].offset, names.data(), names.size());
-  put(placed[7].offset, w.data.data(), w.data.size());
+  if (attributes) put(placed[7].offset, level_attributes.data(), level_attributes.size() * sizeof(LevelAttributesRecord));
+  put(placed.back().offset, w.data.data(), w.data.size());
   const uint32_t crc = crc32(out.data(), out.size());
   std::memcpy(out.data() + kChecksumOffset, &crc, 4);
   if (stats) {
@@ -356,6 +440,41 @@ T read(const std::vector<uint8_t>& b, uint64_t offset) {
   return t;
 }
 
+// A level record r's attribute record a: arrays inside the data section and consistent with the
+// level's counts, joint parents a forest; with check_indices, joints below the joint count and
+// source vertices below level 0's vertex count. Returns the problem after the record's name.
+Error checkAttributes(const std::vector<uint8_t>& bytes, const LevelAttributesRecord& a, const LevelRecord& r,
+                      uint32_t original_vertices, size_t data_begin, size_t data_end, bool check_indices) {
+  auto arrayOk = [&](uint64_t at, uint64_t n, uint64_t elem) {
+    return at == 0 || (at % 4 == 0 && at >= data_begin && at <= data_end && n <= (data_end - at) / elem);
+  };
+  const uint64_t v = r.vertex_count;
+  // first, so that a set count of 0 never divides below
+  if ((a.extra_uv_set_count == 0) != (a.extra_uvs == 0) || (a.joints == 0) != (a.weights == 0) ||
+      (a.joint_count == 0) != (a.joint_parents == 0))
+    return {Status::kCorrupt, " has texture coordinate sets, skin joints and weights or joint parents without their arrays"};
+  if (!arrayOk(a.extra_uvs, v, 8ull * a.extra_uv_set_count) || !arrayOk(a.tangents, v, 16) || !arrayOk(a.joints, v, 8) ||
+      !arrayOk(a.weights, v, 16) || !arrayOk(a.joint_parents, a.joint_count, 4) ||
+      !arrayOk(a.triangle_groups, r.triangle_count, 4) || !arrayOk(a.source_vertex, v, 4))
+    return {Status::kCorrupt, " has an attribute array outside the data section"};
+  const int32_t* parents = reinterpret_cast<const int32_t*>(bytes.data() + a.joint_parents);
+  for (uint32_t j = 0; j < a.joint_count; ++j)
+    if (parents[j] < -1 || parents[j] >= int64_t(a.joint_count)) return {Status::kCorrupt, " has a joint parent out of range"};
+  if (a.joint_count > 0 && firstParentCycle(Span<const int32_t>(parents, a.joint_count)) < a.joint_count)
+    return {Status::kCorrupt, " has joint parents that form a cycle"};
+  if (!check_indices) return {};
+  const glm::u16vec4* joints = reinterpret_cast<const glm::u16vec4*>(bytes.data() + a.joints);
+  if (a.joints != 0 && a.joint_count > 0)
+    for (uint64_t i = 0; i < v; ++i)
+      for (int c = 0; c < 4; ++c)
+        if (joints[i][c] >= a.joint_count) return {Status::kCorrupt, " has a skin joint out of range"};
+  const uint32_t* source = reinterpret_cast<const uint32_t*>(bytes.data() + a.source_vertex);
+  if (a.source_vertex != 0)
+    for (uint64_t i = 0; i < v; ++i)
+      if (source[i] >= original_vertices) return {Status::kCorrupt, " has a source vertex out of range"};
+  return {};
+}
+
 }  // namespace
 
 Error Pack::parse(const std::string& what, bool check_indices) {
@@ -400,7 +519,7 @@ Error Pack::parse(const std::string& what, bool check_indices) {
     count[e.kind] = e.count;
     seen[e.kind] = true;
   }
-  for (uint32_t k = 1; k <= kSectionKindCount; ++k)
+  for (uint32_t k = 1; k <= kRequiredSectionKinds; ++k)
     if (!seen[k]) return corrupt("section " + std::to_string(k) + " is missing");
   nodes_ = offset[kNodes]; node_count_ = count[kNodes];
   children_ = offset[kChildren]; children_count_ = count[kChildren];
@@ -409,6 +528,10 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   chains_ = offset[kChains]; chain_count_ = count[kChains];
   levels_ = offset[kLevels]; level_count_ = count[kLevels];
   names_ = offset[kNames]; names_size_ = count[kNames];
+  attributes_ = seen[kLevelAttributes] ? offset[kLevelAttributes] : 0;
+  if (seen[kLevelAttributes] && count[kLevelAttributes] != level_count_)
+    return corrupt("section 9 has " + std::to_string(count[kLevelAttributes]) + " level attribute records for " +
+                   std::to_string(level_count_) + " level records");
   if (names_size_ > 0 && bytes_[names_ + names_size_ - 1] != 0) return corrupt("names section is not terminated");
   auto nameOk = [&](uint32_t n) { return names_size_ > 0 && n < names_size_; };
   std::vector<int32_t> parents(node_count_);
@@ -429,20 +552,24 @@ Error Pack::parse(const std::string& what, bool check_indices) {
     const ObjectRecord o = read<ObjectRecord>(bytes_, objects_ + i * sizeof(ObjectRecord));
     if (o.node >= node_count_ || o.chain >= chain_count_) return corrupt("object " + std::to_string(i) + " has an index out of range");
   }
+  // per level record: the vertex count of its chain's level 0 (what source vertices index)
+  std::vector<uint32_t> original_vertices(level_count_, 0);
   for (size_t c = 0; c < chain_count_; ++c) {
     const ChainRecord r = read<ChainRecord>(bytes_, chains_ + c * sizeof(ChainRecord));
     if (uint64_t(r.first_level) + r.level_count > level_count_ || !nameOk(r.name))
       return corrupt("chain " + std::to_string(c) + " has a level range out of bounds");
     if (r.level_count == 0) return corrupt("chain " + std::to_string(c) + " has no levels (level 0 is the original)");
+    const uint32_t v0 = read<LevelRecord>(bytes_, levels_ + size_t(r.first_level) * sizeof(LevelRecord)).vertex_count;
+    for (uint32_t l = 0; l < r.level_count; ++l) original_vertices[r.first_level + l] = v0;
   }
   const size_t data_begin = offset[kData], data_end = offset[kData] + count[kData];
+  auto arrayOk = [&](uint64_t at, uint64_t n, uint64_t elem, bool optional) {
+    if (at == 0) return optional || n == 0;
+    return at % 4 == 0 && at >= data_begin && at <= data_end && n <= (data_end - at) / elem;
+  };
   for (size_t l = 0; l < level_count_; ++l) {
     const LevelRecord r = read<LevelRecord>(bytes_, levels_ + l * sizeof(LevelRecord));
     const std::string where = "level record " + std::to_string(l);
-    auto arrayOk = [&](uint64_t at, uint64_t n, size_t elem, bool optional) {
-      if (at == 0) return optional || n == 0;
-      return at % 4 == 0 && at >= data_begin && at <= data_end && n <= (data_end - at) / elem;
-    };
     const uint64_t v = r.vertex_count;
     if (!arrayOk(r.positions, v, 12, false) || !arrayOk(r.normals, v, 12, true) || !arrayOk(r.colors, v, 12, true) ||
         !arrayOk(r.uvs, v, 8, true) || !arrayOk(r.triangles, 3ull * r.triangle_count, 4, false) ||
@@ -461,6 +588,11 @@ Error Pack::parse(const std::string& what, bool check_indices) {
           !indicesOk(r.points, r.point_count))
         return corrupt(where + " has a vertex index out of range");
     }
+    if (attributes_ != 0)
+      if (Error e = checkAttributes(bytes_, read<LevelAttributesRecord>(bytes_, attributes_ + l * sizeof(LevelAttributesRecord)), r,
+                                    original_vertices[l], data_begin, data_end, check_indices);
+          !e.ok())
+        return corrupt(where + e.message);
   }
   return {};
 }
@@ -522,6 +654,17 @@ PackLevelView Pack::level(size_t chain, size_t level) const {
   v.edges = span((uint32_t*)nullptr, r.edges, 2 * size_t(r.edge_count));
   v.edge_thickness = span((float*)nullptr, r.thickness, r.edge_count);
   v.points = span((uint32_t*)nullptr, r.points, r.point_count);
+  if (attributes_ == 0) return v;
+  const LevelAttributesRecord a =
+      read<LevelAttributesRecord>(bytes_, attributes_ + (c.first_level + level) * sizeof(LevelAttributesRecord));
+  v.extra_uv_set_count = a.extra_uvs == 0 ? 0 : a.extra_uv_set_count;
+  v.extra_uvs = span((glm::vec2*)nullptr, a.extra_uvs, v.extra_uv_set_count * r.vertex_count);
+  v.tangents = span((glm::vec4*)nullptr, a.tangents, r.vertex_count);
+  v.joints = span((glm::u16vec4*)nullptr, a.joints, r.vertex_count);
+  v.weights = span((glm::vec4*)nullptr, a.weights, r.vertex_count);
+  v.joint_parents = span((int32_t*)nullptr, a.joint_parents, a.joint_count);
+  v.triangle_groups = span((uint32_t*)nullptr, a.triangle_groups, r.triangle_count);
+  v.source_vertex = span((uint32_t*)nullptr, a.source_vertex, r.vertex_count);
   return v;
 }
 
@@ -536,6 +679,14 @@ Mesh meshFromLevel(const PackLevelView& v) {
   m.edges.assign(v.edges.begin(), v.edges.end());
   m.edge_thickness.assign(v.edge_thickness.begin(), v.edge_thickness.end());
   m.points.assign(v.points.begin(), v.points.end());
+  const size_t n = v.positions.size();
+  m.extra_uvs.resize(v.extra_uv_set_count);
+  for (size_t s = 0; s < v.extra_uv_set_count; ++s) m.extra_uvs[s].assign(v.extra_uvs.begin() + s * n, v.extra_uvs.begin() + (s + 1) * n);
+  m.tangents.assign(v.tangents.begin(), v.tangents.end());
+  m.joints.assign(v.joints.begin(), v.joints.end());
+  m.weights.assign(v.weights.begin(), v.weights.end());
+  m.joint_parents.assign(v.joint_parents.begin(), v.joint_parents.end());
+  m.triangle_groups.assign(v.triangle_groups.begin(), v.triangle_groups.end());
   return m;
 }
 }  // namespace
@@ -575,6 +726,7 @@ void Pack::toChains(std::vector<LodChain>& chains, std::vector<Sphere>& spheres)
       dst.max_error = v.max_error;
       dst.method = v.method;
       dst.bounds = v.bounds;
+      dst.source_vertex.assign(v.source_vertex.begin(), v.source_vertex.end());
     }
   }
 }

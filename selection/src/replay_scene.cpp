@@ -456,6 +456,7 @@ Error loadReplayScene(const std::string& path, ReplayScene& out) {
     bool have_levels = !chains.empty();
     for (const LodChain& c : chains) have_levels = have_levels && c.levelCount() > 1;
     if (!have_levels) {
+      scene::bakeMaterialColors(data);  // the viewer draws levels by vertex colour
       scene::SceneLods lods;
       if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, path); !e.ok()) return e;
       return replaySceneFromSceneData(data, lods.chains, path, out, &lods.chain_spheres);

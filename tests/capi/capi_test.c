@@ -80,6 +80,70 @@ static int checkChainLifecycle(slod_context* ctx, slod_chain used, const slod_me
   return failures == before_failures;
 }
 
+/* A textured sphere with two materials (northern and southern half as two index ranges): level 0
+ * gives back the input's UVs and ranges, every level streams of its vertex count and ranges that
+ * cover its triangles, with their materials; the GENERIC kind is refused as not supported. */
+static int checkAttributes(slod_context* ctx, const slod_mesh_desc* sphere) {
+  const size_t vertex_count = sphere->vertex_count, index_count = sphere->index_count;
+  float* uv = (float*)malloc(vertex_count * 2 * sizeof(float));
+  slod_attribute_stream stream;
+  slod_index_range ranges[2];
+  slod_mesh_desc md;
+  slod_chain_desc chd;
+  slod_chain chain = SLOD_NULL_CHAIN;
+  slod_level_data ld;
+  slod_attribute_stream out;
+  uint32_t l, r, covered;
+  size_t v;
+  for (v = 0; v < vertex_count; ++v) { /* the sphere's rings of 49 vertices: u along, v down */
+    uv[2 * v] = (float)(v % 49) / 48.0f;
+    uv[2 * v + 1] = (float)(v / 49) / 24.0f;
+  }
+  slod_attribute_stream_init(&stream);
+  stream.kind = SLOD_ATTRIBUTE_UV;
+  stream.set = 0;
+  stream.component_count = 2;
+  stream.data = uv;
+  stream.count = vertex_count;
+  ranges[0].first_index = 0;
+  ranges[0].index_count = (uint32_t)(index_count / 2);
+  ranges[0].material = 10;
+  ranges[1].first_index = ranges[0].index_count;
+  ranges[1].index_count = (uint32_t)(index_count - index_count / 2);
+  ranges[1].material = 20;
+  md = *sphere;
+  md.name = "textured sphere";
+  md.attributes = &stream;
+  md.attribute_count = 1;
+  md.ranges = ranges;
+  md.range_count = 2;
+  slod_chain_desc_init(&chd);
+  chd.level_count = 3;
+  CHECK(slod_chain_build(ctx, &md, &chd, &chain) == SLOD_OK);
+  for (l = 0; l < slod_chain_level_count(ctx, chain); ++l) {
+    slod_level_data_init(&ld);
+    CHECK(slod_level_get(ctx, chain, l, &ld) == SLOD_OK);
+    for (r = 0; r < ld.attribute_count; ++r) {
+      slod_attribute_stream_init(&out);
+      CHECK(slod_level_attribute_get(ctx, chain, l, r, &out) == SLOD_OK);
+      CHECK(out.count == ld.vertex_count && out.data != NULL);
+      if (l == 0) CHECK(out.kind == SLOD_ATTRIBUTE_UV && memcmp(out.data, uv, vertex_count * 2 * sizeof(float)) == 0);
+    }
+    for (r = 0, covered = 0; r < ld.range_count; ++r) {
+      CHECK(ld.ranges[r].first_index == covered);
+      CHECK(ld.ranges[r].material == (ld.ranges[r].source_range == 0 ? 10u : 20u));
+      covered += ld.ranges[r].index_count;
+    }
+    CHECK(ld.range_count == 0 || covered == 3 * ld.triangle_count);
+    if (l == 0) CHECK(ld.attribute_count == 1 && ld.range_count == 2 && ld.source_vertex[5] == 5);
+  }
+  stream.kind = SLOD_ATTRIBUTE_GENERIC;
+  CHECK(slod_chain_build(ctx, &md, &chd, &chain) == SLOD_ERROR_UNSUPPORTED);
+  CHECK(strstr(slod_last_error_message(ctx), "textured sphere: attributes[0] (GENERIC)") != NULL);
+  free(uv);
+  return 1;
+}
+
 int main(int argc, char** argv) {
   slod_context_desc cd;
   slod_context* ctx = NULL;
@@ -234,6 +298,7 @@ int main(int argc, char** argv) {
   for (i = 0; i < 39; ++i) CHECK(sel[i].object != objects[3]);
 
   CHECK(checkChainLifecycle(ctx, chain, &md, &cam, &fp, objects[0]));
+  CHECK(checkAttributes(ctx, &md));
 
   slod_context_destroy(ctx);
   free(positions);

@@ -5,6 +5,7 @@
  * struct is read as far as the library knows it. A size of 0 (no _init) or one that does not cover
  * the first field is refused with a message naming the struct. Exits non-zero when a check failed,
  * with a message per failed check. */
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -33,6 +34,21 @@ typedef struct old_frame_result { uint32_t size; uint64_t frame; float predicted
 typedef struct old_pick_result { uint32_t size; slod_object object; int32_t level; } old_pick_result;
 typedef struct old_selection { slod_object object; uint64_t user_data; } old_selection;
 
+/* the 1.0 header's mesh and level structs: everything before the fields 1.1 appended (attributes) */
+typedef struct v10_mesh_desc {
+  old_mesh_desc old; /* the oldest caller's fields */
+  const char* name;
+} v10_mesh_desc;
+typedef struct v10_level_data {
+  uint32_t size;
+  float cell_width, max_error;
+  uint32_t vertex_count, triangle_count, edge_count, point_count;
+  const float *positions, *normals;
+  const uint32_t *triangles, *edges;
+  const float* edge_thickness;
+  const uint32_t* points;
+} v10_level_data;
+
 /* a newer header's versions: one more field each */
 typedef struct new_object_desc { slod_object_desc d; double future; } new_object_desc;
 typedef struct new_selection { slod_selection s; uint64_t future; } new_selection;
@@ -49,6 +65,8 @@ static struct { old_object_desc v; unsigned char tail[64]; } object_in;
 static struct { old_camera v; unsigned char tail[64]; } camera_in;
 static struct { old_frame_params v; unsigned char tail[64]; } params_in;
 static struct { old_level_data v; unsigned char tail[64]; } level_out;
+static struct { v10_mesh_desc v; unsigned char tail[64]; } v10_mesh_in;
+static struct { v10_level_data v; unsigned char tail[64]; } v10_level_out;
 static struct { old_frame_result v; unsigned char tail[64]; } result_out;
 static struct { old_pick_result v; unsigned char tail[64]; } pick_out;
 static struct { old_selection v[OBJECTS]; unsigned char tail[64]; } selection_out;
@@ -162,6 +180,34 @@ static void checkOldCaller(slod_context* ctx, slod_chain chain, const slod_objec
   CHECK(untouched(pick_out.tail, sizeof pick_out.tail));
 }
 
+/* a 1.0 caller (no attribute fields; the bytes after its structs all ones) builds a chain without
+ * attributes and reads its levels without anything written past its level struct */
+static void checkVersion10Caller(slod_context* ctx, size_t vertex_count) {
+  slod_chain_desc cd;
+  slod_chain chain = SLOD_NULL_CHAIN;
+  slod_level_data ld;
+  CHECK(sizeof(v10_mesh_desc) == offsetof(slod_mesh_desc, attributes));
+  CHECK(sizeof(v10_level_data) == offsetof(slod_level_data, attribute_count));
+  memset(&v10_mesh_in, 0xff, sizeof v10_mesh_in);
+  v10_mesh_in.v.old = mesh_in.v; /* oldCallerScene's mesh */
+  v10_mesh_in.v.old.size = sizeof(v10_mesh_desc);
+  v10_mesh_in.v.name = "1.0 sphere";
+  slod_chain_desc_init(&cd);
+  cd.level_count = 2;
+  CHECK(slod_chain_build(ctx, (const slod_mesh_desc*)&v10_mesh_in, &cd, &chain) == SLOD_OK);
+  memset(&v10_level_out, GUARD, sizeof v10_level_out);
+  v10_level_out.v.size = sizeof(v10_level_data);
+  CHECK(slod_level_get(ctx, chain, 0, (slod_level_data*)&v10_level_out) == SLOD_OK);
+  CHECK(v10_level_out.v.vertex_count == vertex_count && v10_level_out.v.positions != NULL);
+  CHECK(untouched(v10_level_out.tail, sizeof v10_level_out.tail));
+  /* the same level through the current struct: no streams, ranges or skin were read from the tail */
+  slod_level_data_init(&ld);
+  CHECK(slod_level_get(ctx, chain, 0, &ld) == SLOD_OK);
+  CHECK(ld.attribute_count == 0 && ld.range_count == 0 && ld.ranges == NULL && ld.joints == NULL && ld.joint_count == 0);
+  CHECK(ld.source_vertex != NULL && ld.source_vertex[vertex_count - 1] == vertex_count - 1);
+  CHECK(slod_chain_destroy(ctx, chain) == SLOD_OK);
+}
+
 /* a newer caller's longer structs: the fields past the library's are ignored on input and left
  * alone on output */
 static void checkNewerCaller(slod_context* ctx, slod_chain chain) {
@@ -199,6 +245,7 @@ static void checkRefused(slod_context* ctx, slod_chain chain) {
   slod_frame_result fr;
   slod_level_data ld;
   slod_pick_result pr;
+  slod_attribute_stream as;
   slod_selection sel[OBJECTS];
 
   slod_context_desc_init(&cd);
@@ -243,6 +290,9 @@ static void checkRefused(slod_context* ctx, slod_chain chain) {
   slod_pick_result_init(&pr);
   pr.size = 0;
   CHECK(slod_pick(ctx, &cam, 1.0f, 1.0f, &pr) == SLOD_ERROR_INVALID_ARGUMENT && mentions(ctx, "slod_pick_result"));
+  slod_attribute_stream_init(&as);
+  as.size = 4;
+  CHECK(slod_level_attribute_get(ctx, chain, 0, 0, &as) == SLOD_ERROR_INVALID_ARGUMENT && mentions(ctx, "slod_attribute_stream"));
 }
 
 int main(void) {
@@ -259,6 +309,7 @@ int main(void) {
     checkOldCaller(ctx, chain, objects);
     checkNewerCaller(ctx, chain);
     checkRefused(ctx, chain);
+    checkVersion10Caller(ctx, vertex_count);
   }
   slod_context_destroy(ctx);
   free(positions);

@@ -1,7 +1,9 @@
 // The C API driven by the input: a context with a bounded capacity, then a sequence of calls chosen
-// and filled from the bytes (chain builds from a small mesh with arbitrary floats and indices,
+// and filled from the bytes (chain builds from a small mesh with arbitrary floats and indices and
+// optional attribute streams, skin and index ranges of arbitrary kinds, counts, strides and values,
 // object add/move/remove with arbitrary numbers and handles, selections with arbitrary cameras,
-// frame params, strides and capacities, chain destruction). Every call must return a known status.
+// frame params, strides and capacities, levels and their streams read back and walked, chain
+// destruction). Every call must return a known status.
 #include <cstdlib>
 #include <cstring>
 #include <vector>
@@ -40,6 +42,62 @@ uint32_t structSize(Cursor& in, uint32_t right) {
   return b % 2 ? static_cast<uint32_t>(b % 16) : right + 8;
 }
 
+// Caller memory for a mesh's attributes: every stream holds the count it claims at its stride.
+struct Attributes {
+  std::vector<slod_attribute_stream> streams;
+  std::vector<std::vector<float>> stream_data;
+  std::vector<uint16_t> joints;
+  std::vector<float> weights;
+  std::vector<int32_t> parents;
+  std::vector<slod_index_range> ranges;
+};
+
+void fillAttributes(Cursor& in, size_t vertex_count, size_t index_count, Attributes& a, slod_mesh_desc& mesh) {
+  const size_t stream_count = in.byte() % 5;
+  a.streams.resize(stream_count);
+  a.stream_data.resize(stream_count);
+  for (size_t i = 0; i < stream_count; ++i) {
+    slod_attribute_stream& s = a.streams[i];
+    slod_attribute_stream_init(&s);
+    int kind = in.byte() % 6;  // 5 is none of the kinds
+    std::memcpy(&s.kind, &kind, sizeof kind);
+    s.set = in.byte() % 3;
+    s.component_count = 1 + in.byte() % 4;
+    s.stride = in.byte() < 200 ? 0 : (s.component_count + in.byte() % 2) * sizeof(float);
+    s.count = vertex_count - (in.byte() < 240 ? 0 : 1);
+    const size_t floats_per_vertex = s.stride ? s.stride / sizeof(float) : s.component_count;
+    a.stream_data[i].resize(floats_per_vertex * s.count + 1);
+    for (float& f : a.stream_data[i]) f = in.byte() < 224 ? static_cast<float>(in.byte() % 3) : in.f32();
+    s.data = a.stream_data[i].data();
+  }
+  mesh.attributes = stream_count ? a.streams.data() : nullptr;
+  mesh.attribute_count = static_cast<uint32_t>(stream_count);
+  if (in.byte() < 128) {
+    mesh.joint_count = in.byte() % 5;
+    a.joints.resize(4 * vertex_count);
+    a.weights.resize(4 * vertex_count);
+    for (uint16_t& j : a.joints) j = in.byte() % 6;
+    for (float& w : a.weights) w = in.byte() < 240 ? static_cast<float>(in.byte() % 3) : in.f32();
+    mesh.joints = a.joints.data();
+    mesh.weights = a.weights.data();
+    mesh.skin_count = vertex_count;
+    a.parents.resize(mesh.joint_count);
+    for (int32_t& p : a.parents) p = static_cast<int32_t>(in.byte() % 6) - 1;
+    mesh.joint_parents = in.byte() < 128 ? a.parents.data() : nullptr;
+  }
+  if (in.byte() < 128) {
+    a.ranges.resize(1 + in.byte() % 3);
+    for (slod_index_range& r : a.ranges) {
+      r.first_index = in.byte() < 240 ? 3u * (in.byte() % 8) : in.u32();
+      r.index_count = in.byte() < 240 ? 3u * (in.byte() % 8) : in.u32();
+      r.material = in.u32();
+    }
+    if (index_count >= 3) a.ranges[0] = slod_index_range{0, static_cast<uint32_t>(index_count / 3 * 3), 1, 0};
+    mesh.ranges = a.ranges.data();
+    mesh.range_count = static_cast<uint32_t>(a.ranges.size());
+  }
+}
+
 struct State {
   slod_context* ctx = nullptr;
   std::vector<uint64_t> chains;
@@ -67,6 +125,8 @@ void buildChain(Cursor& in, State& st) {
   mesh.indices = indices.data();
   mesh.index_count = indices.size() - (in.byte() < 240 ? 0 : 1);
   mesh.name = "fuzz";
+  Attributes attributes;
+  if (in.byte() < 160) fillAttributes(in, vertex_count, mesh.index_count, attributes, mesh);
   slod_chain_desc desc;
   slod_chain_desc_init(&desc);
   desc.size = structSize(in, desc.size);
@@ -143,13 +203,43 @@ void select(Cursor& in, State& st) {
   if (s == SLOD_OK && with_result) check(slod_report_frame_time(st.ctx, result.frame, in.f32()));
 }
 
+// a level and all its streams read back, every array walked as an engine uploading it would
+void readLevel(Cursor& in, State& st) {
+  const uint64_t chain = pickHandle(in, st.chains);
+  const uint32_t level = in.byte() % 6;
+  slod_level_data d;
+  slod_level_data_init(&d);
+  d.size = structSize(in, d.size);
+  slod_status s = slod_level_get(st.ctx, chain, level, &d);
+  check(s);
+  if (s != SLOD_OK || d.size < sizeof d) return;
+  volatile float sum = 0.0f;
+  for (uint32_t r = 0; r < d.range_count; ++r)
+    for (uint32_t i = d.ranges[r].first_index; i < d.ranges[r].first_index + d.ranges[r].index_count; ++i)
+      sum = sum + d.positions[3 * d.triangles[i]];
+  for (uint32_t v = 0; v < d.vertex_count; ++v) {
+    if (d.source_vertex) sum = sum + static_cast<float>(d.source_vertex[v] % 7);
+    for (int k = 0; k < 4 && d.joints; ++k) sum = sum + d.weights[4 * v + k] + (d.joints[4 * v + k] < d.joint_count ? 0.0f : 1.0f);
+  }
+  for (uint32_t j = 0; j < d.joint_count && d.joint_parents; ++j) sum = sum + static_cast<float>(d.joint_parents[j]);
+  for (uint32_t i = 0; i <= d.attribute_count; ++i) {
+    slod_attribute_stream a;
+    slod_attribute_stream_init(&a);
+    s = slod_level_attribute_get(st.ctx, chain, level, i, &a);
+    check(s);
+    if (s != SLOD_OK) continue;
+    for (size_t v = 0; v < a.count * a.component_count; ++v) sum = sum + a.data[v];
+  }
+}
+
 void step(Cursor& in, State& st) {
-  switch (in.byte() % 6) {
+  switch (in.byte() % 7) {
     case 0: buildChain(in, st); break;
     case 1: addObject(in, st); break;
     case 2: moveObject(in, st); break;
     case 3: check(slod_object_remove(st.ctx, pickHandle(in, st.objects))); break;
     case 4: select(in, st); break;
+    case 5: readLevel(in, st); break;
     default: check(slod_chain_destroy(st.ctx, pickHandle(in, st.chains))); break;
   }
 }

@@ -1,8 +1,8 @@
 // Pack::fromBytes on arbitrary bytes, as given and again with the CRC-32 at byte 24 recomputed (most
 // mutations would otherwise stop at the checksum, never reaching the section and index checks: a
 // hand-edited pack is re-checksummed just as easily). A pack it accepts is then used the way an
-// engine would: every root, node, object, chain sphere, mesh name and level view read, every index
-// followed, and the owned copies made (toSceneData, toChains, toScene).
+// engine would: every root, node, object, chain sphere, mesh name and level view (with its attribute
+// arrays) read, every index followed, and the owned copies made (toSceneData, toChains, toScene).
 #include <cstring>
 #include <vector>
 
@@ -30,7 +30,9 @@ float walkLevels(const Pack& pack) {
     for (size_t l = 0; l < pack.levelCount(c); ++l) {
       scenelod::scene::PackLevelView v = pack.level(c, l);
       sum += v.cell_width + touch(v.positions) + touch(v.normals) + touch(v.colors) + touch(v.uvs);
-      sum += touch(v.edge_thickness);
+      sum += touch(v.edge_thickness) + touch(v.extra_uvs) + touch(v.tangents) + touch(v.weights) + touch(v.triangle_groups);
+      for (const glm::u16vec4& j : v.joints) sum += j.x < v.joint_parents.size() ? float(v.joint_parents[j.x]) : 1.0f;
+      for (uint32_t s : v.source_vertex) sum += float(s % 3);
       size_t n = v.positions.size();
       for (uint32_t i : v.triangles) sum += i < n ? v.positions[i].x : 1.0f;
       for (uint32_t i : v.edges) sum += i < n ? v.positions[i].y : 1.0f;

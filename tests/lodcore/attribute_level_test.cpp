@@ -437,3 +437,39 @@ TEST(AttributeLevel, SourceVerticesOfSingleLevels) {
     }
   }
 }
+
+TEST(AttributeLevel, OneGroupOtherThanZeroIsKeptByThePlainPath) {
+  Mesh in = test::makeSphere(glm::vec3(0.0f), 1.0f, 16, 32);
+  in.triangle_groups.assign(in.triangleCount(), 5u);
+  Mesh out;
+  ASSERT_TRUE(clusterMesh(in, params(LodMethod::kFloatingNearest, 0.3f), out).ok());
+  ASSERT_GT(out.triangleCount(), 0u);
+  EXPECT_EQ(out.triangle_groups, std::vector<uint32_t>(out.triangleCount(), 5u));
+  EXPECT_TRUE(out.uvs.empty());
+  ChainParams cp;
+  cp.level_count = 3;
+  LodChain chain;
+  ASSERT_TRUE(buildChain(in, cp, chain).ok());
+  for (size_t k = 1; k < chain.levelCount(); ++k)
+    EXPECT_EQ(chain.levels[k].mesh.triangle_groups, std::vector<uint32_t>(chain.levels[k].mesh.triangleCount(), 5u));
+}
+
+TEST(AttributeLevel, SkinWithoutTextureSplitsNoClusterByPiece) {
+  // a part of several disconnected pieces, all bound to one joint: no UV seam, no bone to tell
+  // apart, so the level's vertices are the plain path's (pieces sharing a cluster share its vertex)
+  Mesh plain = test::makeCadPart();
+  computeVertexNormals(plain);  // (the box's faces' own normals: nothing to weld, as in the plain path)
+  Mesh skinned = plain;
+  skinned.joints.assign(skinned.vertexCount(), glm::u16vec4(0));
+  skinned.weights.assign(skinned.vertexCount(), glm::vec4(1, 0, 0, 0));
+  Mesh welded = skinned;
+  ASSERT_EQ(weldVertices(welded), 0u);
+  for (LodMethod method : kMethods) {
+    Mesh a, b;
+    ASSERT_TRUE(clusterMesh(plain, params(method, 0.25f), a).ok());
+    ASSERT_TRUE(clusterMesh(skinned, params(method, 0.25f), b).ok());
+    EXPECT_EQ(a.vertexCount(), b.vertexCount()) << lodMethodName(method);
+    EXPECT_EQ(a.triangleCount(), b.triangleCount()) << lodMethodName(method);
+    EXPECT_EQ(positionSet(a), positionSet(b)) << lodMethodName(method);
+  }
+}

@@ -1,11 +1,13 @@
 #include "scenelod/scene/demo_scene.h"
 
+#include <algorithm>
 #include <map>
 #include <tuple>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "scenelod/lodcore/chain.h"
 #include "test_support.h"
 
 using namespace scenelod;
@@ -133,4 +135,95 @@ TEST(DemoScene, BadParametersAreRefused) {
   p = DemoSceneParams{};
   p.gearbox_count = 0;
   EXPECT_EQ(makeDemoScene(s, p).status, Status::kInvalidArgument);
+}
+
+// the parts are textured: uvs on every vertex, a material with a texture whose image is decoded
+// (RGBA8 of its size) and encoded (PNG bytes, for exporters); a checker and a label made in code
+TEST(DemoScene, PartsCarryUvsAndGeneratedTextures) {
+  DemoSceneParams p;
+  p.bunny_path = "";
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  ASSERT_EQ(s.images.size(), 2u);
+  for (const ImageData& img : s.images) {
+    ASSERT_EQ(img.rgba8.size(), static_cast<size_t>(img.width) * img.height * 4) << img.name;
+    ASSERT_GE(img.encoded.size(), 8u) << img.name;
+    EXPECT_EQ(img.encoded[1], 'P');
+    EXPECT_EQ(img.encoded[2], 'N');
+    EXPECT_EQ(img.encoded[3], 'G');
+    EXPECT_EQ(img.mime_type, "image/png");
+    // two kinds of texel at least: a checker's two greys, a label's ink and plate
+    bool light = false, dark = false;
+    for (size_t i = 0; i < img.rgba8.size(); i += 4) (img.rgba8[i] > 200 ? light : dark) = true;
+    EXPECT_TRUE(light && dark) << img.name;
+  }
+  size_t textured = 0;
+  for (const MaterialData& m : s.materials) {
+    EXPECT_EQ(m.base_color, glm::vec4(1.0f)) << m.name;  // the colour is in the vertex colours
+    if (!m.textured) {
+      EXPECT_EQ(m.base_color_texture, -1) << m.name;
+      continue;
+    }
+    ++textured;
+    ASSERT_GE(m.base_color_texture, 0) << m.name;
+    ASSERT_LT(static_cast<size_t>(m.base_color_texture), s.textures.size()) << m.name;
+    const TextureData& t = s.textures[static_cast<size_t>(m.base_color_texture)];
+    ASSERT_GE(t.image, 0);
+    ASSERT_LT(static_cast<size_t>(t.image), s.images.size());
+    EXPECT_LT(m.average_texel_color.x, 1.0f);
+    EXPECT_GT(m.average_texel_color.x, 0.2f);
+  }
+  EXPECT_GE(textured, 4u);
+  int labelled = 0;
+  for (const MaterialData& m : s.materials) labelled += m.textured && s.textures[m.base_color_texture].image == 1;
+  EXPECT_GE(labelled, 1);
+  size_t textured_meshes = 0;
+  for (const MeshData& md : s.meshes) {
+    // untextured parts (the banded round ones) carry no uvs, so their chains are as before
+    if (!s.materials[static_cast<size_t>(md.primitive_materials[0])].textured) {
+      EXPECT_TRUE(md.mesh.uvs.empty()) << md.name;
+      continue;
+    }
+    ++textured_meshes;
+    ASSERT_EQ(md.mesh.uvs.size(), md.mesh.vertexCount()) << md.name;
+    EXPECT_TRUE(validateMesh(md.mesh, md.name).ok());
+    // the texture repeats over the part: its uvs span more than a single texel
+    glm::vec2 lo(1e30f), hi(-1e30f);
+    for (const glm::vec2& uv : md.mesh.uvs) lo = glm::min(lo, uv), hi = glm::max(hi, uv);
+    EXPECT_GT(std::max(hi.x - lo.x, hi.y - lo.y), 0.02f) << md.name;
+    // a vertex's uv follows from its position alone: copies of a vertex never become a UV seam
+    for (size_t i = 0; i < md.mesh.vertexCount(); ++i)
+      for (size_t j = i + 1; j < std::min(md.mesh.vertexCount(), i + 40); ++j)
+        if (md.mesh.positions[i] == md.mesh.positions[j]) EXPECT_EQ(md.mesh.uvs[i], md.mesh.uvs[j]) << md.name;
+  }
+  EXPECT_GE(textured_meshes, 8u);
+}
+
+// the texture coordinates change no chain: every mesh clusters into the same levels with and
+// without them (what keeps the demo's selection and its recorded runs as they were)
+TEST(DemoScene, TextureCoordinatesLeaveTheChainsAsTheyWere) {
+  DemoSceneParams p;
+  p.bunny_path = "";
+  SceneData s;
+  ASSERT_TRUE(makeDemoScene(s, p).ok());
+  size_t compared = 0;
+  for (const MeshData& md : s.meshes) {
+    if (md.mesh.uvs.empty()) continue;
+    Mesh plain = md.mesh;
+    plain.uvs.clear();
+    LodChain with, without;
+    ASSERT_TRUE(buildChain(md.mesh, ChainParams(), with).ok()) << md.name;
+    ASSERT_TRUE(buildChain(plain, ChainParams(), without).ok()) << md.name;
+    ASSERT_EQ(with.levelCount(), without.levelCount()) << md.name;
+    for (size_t k = 0; k < with.levelCount(); ++k) {
+      const Mesh &a = with.levels[k].mesh, &b = without.levels[k].mesh;
+      EXPECT_EQ(with.levels[k].cell_width, without.levels[k].cell_width) << md.name << " level " << k;
+      EXPECT_EQ(a.triangleCount(), b.triangleCount()) << md.name << " level " << k;
+      EXPECT_EQ(a.edgeCount(), b.edgeCount()) << md.name << " level " << k;
+      EXPECT_EQ(a.pointCount(), b.pointCount()) << md.name << " level " << k;
+      if (k > 0 && a.triangleCount()) EXPECT_EQ(a.uvs.size(), a.vertexCount()) << md.name << " keeps its uvs";
+    }
+    ++compared;
+  }
+  EXPECT_GE(compared, 8u);
 }

@@ -14,20 +14,15 @@
 #include <gtest/gtest.h>
 
 #include "scenelod/lodcore/obj_io.h"
-#include "test_support.h"
+#include "gltf_test_support.h"
 
 using namespace scenelod;
 using namespace scenelod::scene;
 
 namespace {
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
-
-std::string makeDir(const std::string& name) {
-  const std::string d = test::scratchDir() + "/" + name;
-  ::mkdir(d.c_str(), 0755);
-  return d;
-}
+using test::contains;
+using test::makeDir;
 
 void writeBytes(const std::string& path, const std::vector<unsigned char>& bytes) {
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
@@ -244,11 +239,16 @@ TEST(GltfImport, AnyIndexTypeNormalizedColoursAndMaterialFactor) {
   ASSERT_TRUE(e.ok()) << e.message;
   const Mesh& m = s.meshes[0].mesh;
   EXPECT_EQ(m.triangles, (std::vector<uint32_t>{0, 1, 2}));
+  // COLOR_0 as read; the material's factor only in the baked colours
   ASSERT_EQ(m.colors.size(), 3u);
-  EXPECT_NEAR(m.colors[0].r, 0.5f, 1e-6f);  // factor 0.5 x 1
-  EXPECT_NEAR(m.colors[1].g, 1.0f, 1e-6f);
-  EXPECT_NEAR(m.colors[2].r, 0.5f * 51.0f / 255.0f, 1e-6f);
-  EXPECT_NEAR(m.colors[2].g, 102.0f / 255.0f, 1e-6f);
+  EXPECT_NEAR(m.colors[0].r, 1.0f, 1e-6f);
+  EXPECT_NEAR(m.colors[2].r, 51.0f / 255.0f, 1e-6f);
+  const std::vector<glm::vec3> baked = bakedMaterialColors(s, s.meshes[0]);
+  ASSERT_EQ(baked.size(), 3u);
+  EXPECT_NEAR(baked[0].r, 0.5f, 1e-6f);  // factor 0.5 x 1
+  EXPECT_NEAR(baked[1].g, 1.0f, 1e-6f);
+  EXPECT_NEAR(baked[2].r, 0.5f * 51.0f / 255.0f, 1e-6f);
+  EXPECT_NEAR(baked[2].g, 102.0f / 255.0f, 1e-6f);
   ASSERT_EQ(s.materials.size(), 1u);
   EXPECT_EQ(s.materials[0].name, "half");
   // T * R(90 deg about z) * S(2): (1,0,0) -> (0,2,0) + (1,2,3)
@@ -279,10 +279,24 @@ TEST(GltfImport, AveragesTheBaseColourTextureInLinearSpace) {
   const float mean = 0.5f * (1.0f + lin128);
   EXPECT_NEAR(s.materials[0].average_texel_color.r, mean, 1e-5f);
   EXPECT_NEAR(s.materials[0].average_texel_color.b, mean, 1e-5f);
+  EXPECT_TRUE(s.meshes[0].mesh.colors.empty());  // no COLOR_0: the material is kept, not baked in
+  bakeMaterialColors(s);
   const Mesh& m = s.meshes[0].mesh;
   ASSERT_EQ(m.colors.size(), 4u);
   EXPECT_NEAR(m.colors[3].r, mean, 1e-5f);
   EXPECT_NEAR(m.colors[3].g, 0.5f * mean, 1e-5f);
+  // the image is kept (bytes) and decoded to 2 x 2 RGBA (each row: a white texel, then sRGB 128)
+  ASSERT_EQ(s.images.size(), 1u);
+  EXPECT_EQ(s.images[0].encoded, bmp);
+  EXPECT_EQ(s.images[0].width, 2);
+  EXPECT_EQ(s.images[0].height, 2);
+  ASSERT_EQ(s.images[0].rgba8.size(), 16u);
+  EXPECT_EQ(s.images[0].rgba8[0], 255);
+  EXPECT_EQ(s.images[0].rgba8[4], 128);
+  EXPECT_EQ(s.images[0].rgba8[7], 255);
+  ASSERT_EQ(s.textures.size(), 1u);
+  EXPECT_EQ(s.textures[0].image, 0);
+  EXPECT_EQ(s.materials[0].base_color_texture, 0);
 }
 
 TEST(GltfImport, WithoutScenesEveryParentlessNodeIsARootInOrder) {

@@ -154,10 +154,10 @@ TEST(Pack, UnoptimisedRoundTripGivesTheSameChainsAndScene) {
   EXPECT_EQ(back_scene.meshes[1].name, "bump");
 }
 
-TEST(Pack, RewritingALoadedPackIsBitExact) {
-  const std::vector<uint8_t> bytes = makePack(true);
-  Pack p;
-  ASSERT_TRUE(Pack::fromBytes(bytes.data(), bytes.size(), p, "mem").ok());
+namespace {
+
+// a loaded pack written again from its owned copies, in the order it has
+std::vector<uint8_t> rewritten(const Pack& p) {
   SceneData s;
   std::vector<LodChain> chains;
   std::vector<Sphere> spheres;
@@ -171,8 +171,41 @@ TEST(Pack, RewritingALoadedPackIsBitExact) {
     o.user_data.push_back(p.object(k).user_data);
   }
   std::vector<uint8_t> again;
-  ASSERT_TRUE(writePackBytes(again, s, chains, spheres, o).ok());
-  EXPECT_EQ(again, bytes);
+  const Error e = writePackBytes(again, s, chains, spheres, o);
+  EXPECT_TRUE(e.ok()) << e.message;
+  return again;
+}
+
+}  // namespace
+
+TEST(Pack, RewritingALoadedPackIsBitExact) {
+  const std::vector<uint8_t> bytes = makePack(true);
+  Pack p;
+  ASSERT_TRUE(Pack::fromBytes(bytes.data(), bytes.size(), p, "mem").ok());
+  EXPECT_EQ(rewritten(p), bytes);
+}
+
+TEST(Pack, PackWrittenBeforeAttributesLoadsAndRewritesToTheSameBytes) {
+  // written by the version-1 writer before texture sets, tangents, skins, groups and source
+  // vertices were stored (section 9)
+  const std::string path = test::testDataDir() + "/pack/v1_before_attributes.slodpack";
+  Pack p;
+  const Error e = Pack::load(path, p);
+  ASSERT_TRUE(e.ok()) << e.message;
+  ASSERT_GE(p.chainCount(), 1u);
+  std::vector<LodChain> chains;
+  std::vector<Sphere> spheres;
+  p.toChains(chains, spheres);
+  size_t triangles = 0;
+  for (const LodChain& c : chains)
+    for (const LodLevel& l : c.levels) {
+      EXPECT_TRUE(l.mesh.extra_uvs.empty() && l.mesh.tangents.empty() && l.mesh.joints.empty() &&
+                  l.mesh.triangle_groups.empty() && l.source_vertex.empty());
+      triangles += l.mesh.triangleCount();
+    }
+  EXPECT_GT(triangles, 0u);
+  // without attributes the writer makes the bytes the writer made before section 9 existed
+  EXPECT_EQ(rewritten(p), std::vector<uint8_t>(p.bytes(), p.bytes() + p.byteSize()));
 }
 
 TEST(Pack, OptimisedLevelsHoldTheSameGeometry) {

@@ -2,6 +2,7 @@
 // folder's README.md table (made there by an independent JSON script), which this test parses.
 #include <dirent.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -123,5 +124,96 @@ TEST(SharedModels, TexturedModelsGetAnAverageTexelColour) {
   EXPECT_GT(c.g, 1.5f * c.b);
   EXPECT_LE(c.r, 1.0f);
   EXPECT_GE(c.b, 0.0f);
-  ASSERT_EQ(s.meshes[0].mesh.colors.size(), s.meshes[0].mesh.vertexCount());
+  EXPECT_EQ(bakedMaterialColors(s, s.meshes[0]).size(), s.meshes[0].mesh.vertexCount());
+}
+
+namespace {
+
+SceneData importShared(const std::string& relative) {
+  SceneData s;
+  const std::string file = test::sharedModelsDir() + "/" + relative;
+  const Error e = importGltf(file, s);
+  EXPECT_TRUE(e.ok()) << e.message;
+  return s;
+}
+
+// every material's base colour texture has its image decoded, and every mesh has UVs
+void expectTexturedAndDecoded(const SceneData& s) {
+  size_t textured = 0;
+  for (const MaterialData& m : s.materials) {
+    if (m.base_color_texture < 0) continue;
+    ++textured;
+    const ImageData& img = s.images[static_cast<size_t>(s.textures[static_cast<size_t>(m.base_color_texture)].image)];
+    EXPECT_FALSE(img.encoded.empty());
+    EXPECT_TRUE(img.mime_type == "image/png" || img.mime_type == "image/jpeg") << img.mime_type;
+    EXPECT_GT(img.width, 0);
+    EXPECT_EQ(img.rgba8.size(), size_t(img.width) * size_t(img.height) * 4);
+  }
+  EXPECT_GT(textured, 0u);
+  for (const MeshData& md : s.meshes) EXPECT_EQ(md.mesh.uvs.size(), md.mesh.vertexCount()) << md.name;
+}
+
+// skinned: joints and weights on every vertex, one skin, animations, a skeleton, the skinned node
+// drawn in its bind pose (identity world transform)
+void expectSkinnedAndAnimated(const SceneData& s) {
+  ASSERT_EQ(s.skins.size(), 1u);
+  EXPECT_FALSE(s.animations.empty());
+  for (const AnimationData& a : s.animations) EXPECT_FALSE(a.channels.empty());
+  const std::vector<glm::mat4> world = worldTransforms(s);
+  size_t skinned_nodes = 0;
+  for (size_t i = 0; i < s.nodes.size(); ++i) {
+    if (s.nodes[i].skin < 0 || s.nodes[i].mesh < 0) continue;
+    ++skinned_nodes;
+    EXPECT_EQ(world[i], glm::mat4(1.0f));
+    const Mesh& m = s.meshes[static_cast<size_t>(s.nodes[i].mesh)].mesh;
+    EXPECT_EQ(m.joints.size(), m.vertexCount());
+    EXPECT_EQ(m.weights.size(), m.vertexCount());
+    EXPECT_EQ(m.joint_parents.size(), s.skins[0].joints.size());
+    EXPECT_EQ(std::count(m.joint_parents.begin(), m.joint_parents.end(), -1), 1);  // one root joint
+  }
+  EXPECT_GT(skinned_nodes, 0u);
+}
+
+}  // namespace
+
+TEST(SharedModels, DuckAndHelmetHaveUvsAndDecodedTextures) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  for (const char* file : {"Duck/Duck.glb", "DamagedHelmet/DamagedHelmet.glb"}) {
+    SCOPED_TRACE(file);
+    const SceneData s = importShared(file);
+    expectTexturedAndDecoded(s);
+    EXPECT_TRUE(s.meshes[0].mesh.colors.empty());  // no COLOR_0: the material is kept, not baked
+  }
+}
+
+TEST(SharedModels, SheenClothHasTangents) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const SceneData s = importShared("SheenCloth/SheenCloth.gltf");
+  expectTexturedAndDecoded(s);
+  for (const MeshData& md : s.meshes) {
+    ASSERT_EQ(md.mesh.tangents.size(), md.mesh.vertexCount()) << md.name;
+    for (const glm::vec4& t : md.mesh.tangents) ASSERT_NEAR(glm::length(glm::vec3(t)), 1.0f, 1e-2f);
+  }
+}
+
+TEST(SharedModels, FoxAndBrainStemHaveSkinsAndAnimations) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  for (const char* file : {"Fox/Fox.glb", "BrainStem/BrainStem.glb"}) {
+    SCOPED_TRACE(file);
+    expectSkinnedAndAnimated(importShared(file));
+  }
+  EXPECT_EQ(importShared("Fox/Fox.glb").animations.size(), 3u);
+}
+
+TEST(SharedModels, SheenChairHasTextureTransformsAndTwoUvSets) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const SceneData s = importShared("SheenChair/SheenChair.gltf");
+  expectTexturedAndDecoded(s);
+  size_t transformed = 0, second_set = 0;
+  for (const MaterialData& m : s.materials)
+    transformed += m.base_color_transform.scale != glm::vec2(1.0f) || m.base_color_transform.offset != glm::vec2(0.0f) ||
+                   m.base_color_transform.rotation != 0.0f;
+  for (const MeshData& md : s.meshes) second_set += md.mesh.extra_uvs.size() == 1 && md.mesh.extra_uvs[0].size() == md.mesh.vertexCount();
+  EXPECT_GT(transformed, 0u);
+  EXPECT_GT(second_set, 0u);
 }

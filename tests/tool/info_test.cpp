@@ -177,6 +177,25 @@ TEST(ToolConvert, RefusesUnknownOutputAndBadInput) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+TEST(ToolInfo, ListsMaterialsSkinsAndAttributesPerObject) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  // the Fox: one skinned mesh with one textured material and three animations (Survey, Walk, Run)
+  const RunResult r = runTool({"info", test::sharedModelsDir() + "/Fox/Fox.glb", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(jsonInt(r.out, "objects"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "materials"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "textures"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "images"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "skins"), 1) << r.out;
+  EXPECT_EQ(jsonInt(r.out, "animations"), 3) << r.out;
+  EXPECT_TRUE(contains(r.out, "\"attributes\": [\"uv0\", \"skin_weights\"]")) << r.out;
+  EXPECT_TRUE(contains(r.out, "\"skin\": 0")) << r.out;
+  const RunResult text = runTool({"info", test::sharedModelsDir() + "/Fox/Fox.glb"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_TRUE(contains(text.out, "skin:       0 ")) << text.out;
+  EXPECT_TRUE(contains(text.out, "levels:     1 (576 triangles)")) << text.out;
+}
+
 TEST(ToolInfo, ListsTheLevelsScenelodLodsWrote) {
   SCENELOD_REQUIRE_SHARED_MODELS();
   const std::string out = ::testing::TempDir() + "info_duck_lods.glb";

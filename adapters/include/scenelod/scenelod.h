@@ -27,9 +27,11 @@
  *   through *_init) is refused with SLOD_ERROR_INVALID_ARGUMENT and a message naming the struct;
  * - arrays of structs the library writes (slod_select's output) come with their element stride in
  *   bytes (the caller's sizeof); the library writes only min(stride, its own sizeof) bytes per element;
- * - slod_allocator is nested in slod_context_desc and never grows.
+ * - arrays of size-tagged structs the caller passes (slod_mesh_desc.attributes) are stepped by their
+ *   elements' size, which must be the same for all; each element is read as a single struct is;
+ * - slod_allocator (nested in slod_context_desc) and slod_index_range never grow.
  * A binary built against a newer header needs a library at least as new (as for any shared library).
- * docs/INTEGRATION.md ("Migration") lists what changed between major versions. */
+ * docs/INTEGRATION.md ("Migration") lists what changed between versions. */
 #ifndef SCENELOD_SCENELOD_H
 #define SCENELOD_SCENELOD_H
 
@@ -49,7 +51,7 @@ extern "C" {
 
 /* the library's version; the major version is the SONAME's (libscenelod.so.1) */
 #define SLOD_VERSION_MAJOR 1
-#define SLOD_VERSION_MINOR 0
+#define SLOD_VERSION_MINOR 1
 #define SLOD_VERSION_PATCH 0
 
 typedef enum slod_status {
@@ -122,6 +124,39 @@ typedef enum slod_method {
   SLOD_METHOD_SCROOGE = 3     /* SCROOGE perceptual reduction */
 } slod_method;
 
+/* The kind of a vertex attribute stream; every stream holds floats. */
+typedef enum slod_attribute_kind {
+  SLOD_ATTRIBUTE_UV = 0,       /* texture coordinates, 2 per vertex; set 0, 1, ... (glTF TEXCOORD_n) */
+  SLOD_ATTRIBUTE_COLOR = 1,    /* linear RGB, 3 per vertex, or 4 whose alpha is 1 (alpha is not carried) */
+  SLOD_ATTRIBUTE_NORMAL = 2,   /* 3 per vertex */
+  SLOD_ATTRIBUTE_TANGENT4 = 3, /* 4 per vertex: a unit tangent, w = +1 or -1 (the bitangent's sign) */
+  SLOD_ATTRIBUTE_GENERIC = 4   /* not supported yet: refused with SLOD_ERROR_UNSUPPORTED. Carry such data
+                                  through slod_level_data.source_vertex (copy each level vertex's value
+                                  from its source vertex) */
+} slod_attribute_kind;
+
+/* One vertex attribute stream: as input in slod_mesh_desc.attributes (caller memory, copied), as
+ * output from slod_level_attribute_get (library memory). */
+typedef struct slod_attribute_stream {
+  uint32_t size;               /* sizeof(slod_attribute_stream), set by slod_attribute_stream_init */
+  slod_attribute_kind kind;
+  uint32_t set;                /* the UV set (0 = TEXCOORD_0); 0 for the other kinds */
+  uint32_t component_count;    /* floats per vertex (see slod_attribute_kind) */
+  const float* data;
+  size_t stride;               /* bytes between vertices; 0 = component_count floats */
+  size_t count;                /* vertices data holds: at least vertex_count (output: the level's vertex_count) */
+} slod_attribute_stream;
+
+/* A run of triangles drawn with one material: an index range of slod_mesh_desc.indices on input, of
+ * slod_level_data.triangles on output. This struct never grows. */
+typedef struct slod_index_range {
+  uint32_t first_index;        /* a multiple of 3 */
+  uint32_t index_count;        /* a multiple of 3 */
+  uint32_t material;           /* the caller's material id, returned untouched */
+  uint32_t source_range;       /* output: the input range (index into slod_mesh_desc.ranges) these
+                                  triangles come from; ignored on input */
+} slod_index_range;
+
 typedef struct slod_mesh_desc {
   uint32_t size;               /* sizeof(slod_mesh_desc), set by slod_mesh_desc_init */
   const float* positions;      /* 3 floats per vertex */
@@ -130,6 +165,23 @@ typedef struct slod_mesh_desc {
   const uint32_t* indices;     /* 3 per triangle */
   size_t index_count;
   const char* name;            /* for messages; may be null */
+  /* since 1.1 (all optional; a 1.0 caller's struct ends above and gets none) */
+  const slod_attribute_stream* attributes; /* an array of attribute_count streams, each filled by
+                                  slod_attribute_stream_init (the library steps through it by their
+                                  common size); at most one per kind and set, UV sets numbered 0, 1,
+                                  ... without gaps */
+  uint32_t attribute_count;
+  uint32_t joint_count;        /* joints of the skeleton; > 0 when joints are given */
+  const uint16_t* joints;      /* 4 joint indices per vertex (glTF JOINTS_0), each < joint_count */
+  size_t joints_stride;        /* bytes; 0 = 8 */
+  const float* weights;        /* 4 weights per vertex (WEIGHTS_0): finite, >= 0, summing to more than 0 */
+  size_t weights_stride;       /* bytes; 0 = 16 */
+  size_t skin_count;           /* vertices joints and weights hold: at least vertex_count */
+  const int32_t* joint_parents;/* optional: joint_count entries, the parent joint or -1 (no cycles);
+                                  lets the simplifiers tell neighbouring bones from unrelated limbs */
+  const slod_index_range* ranges; /* optional: one per material or primitive, together covering
+                                  every index once (no overlap, no gap) */
+  uint32_t range_count;
 } slod_mesh_desc;
 
 typedef struct slod_chain_desc {
@@ -144,6 +196,12 @@ static inline void slod_mesh_desc_init(slod_mesh_desc* desc) {
   memset(desc, 0, sizeof *desc);
   desc->size = (uint32_t)sizeof *desc;
 }
+static inline void slod_attribute_stream_init(slod_attribute_stream* stream) {
+  if (!stream) return;
+  memset(stream, 0, sizeof *stream);
+  stream->size = (uint32_t)sizeof *stream;
+  stream->kind = SLOD_ATTRIBUTE_UV;
+}
 static inline void slod_chain_desc_init(slod_chain_desc* desc) {
   if (!desc) return;
   memset(desc, 0, sizeof *desc);
@@ -151,10 +209,18 @@ static inline void slod_chain_desc_init(slod_chain_desc* desc) {
   desc->method = SLOD_METHOD_FLOATING;
   desc->level_count = 8;
 }
-/* Builds a chain from caller memory (copied). Writes its handle to *out_chain. Not thread-safe on ctx. */
+/* Builds a chain from caller memory (copied): positions and indices, and the mesh's attribute streams,
+ * skin and index ranges when given (every level then carries them as far as its generator keeps
+ * them; read them back with slod_level_get and slod_level_attribute_get). Writes its handle to
+ * *out_chain. Errors name the mesh and the field or stream: a stream, skin array or range shorter
+ * than or outside what it must cover, a NaN or infinite value, a joint >= joint_count, weights
+ * summing to 0, overlapping ranges (SLOD_ERROR_INVALID_MESH); a GENERIC stream
+ * (SLOD_ERROR_UNSUPPORTED). Not thread-safe on ctx. */
 SLOD_API slod_status slod_chain_build(slod_context* ctx, const slod_mesh_desc* mesh, const slod_chain_desc* desc,
                                       slod_chain* out_chain);
-/* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space). */
+/* Builds a chain from a file: OBJ, glTF or GLB (the whole file flattened into one mesh in world space).
+ * Its levels' index ranges are the flattened mesh's triangle groups, its materials: material and
+ * source_range are both the file's material index (0xffffffff for none). */
 SLOD_API slod_status slod_chain_load_file(slod_context* ctx, const char* path, const slod_chain_desc* desc,
                                           slod_chain* out_chain);
 /* Destroys a chain and frees its levels; its handle becomes stale, and so do the pointers
@@ -178,6 +244,19 @@ typedef struct slod_level_data {
   const uint32_t* edges;       /* 2 per edge */
   const float* edge_thickness; /* 1 per edge (object space), or null */
   const uint32_t* points;      /* 1 per point */
+  /* since 1.1 */
+  uint32_t attribute_count;    /* streams: read stream i with slod_level_attribute_get */
+  uint32_t range_count;        /* index ranges; 0 when the mesh had none or the level's generator did
+                                  not keep them */
+  const slod_index_range* ranges; /* range_count, in triangle order, one per input range that still
+                                  has triangles in this level */
+  const uint32_t* source_vertex; /* 1 per vertex: the vertex of level 0 (the input) whose attributes
+                                  it mainly stands for; level 0: the identity. Null when the level's
+                                  generator does not record it */
+  const uint16_t* joints;      /* 4 per vertex, or null */
+  const float* weights;        /* 4 per vertex, or null */
+  uint32_t joint_count;        /* the input's joint_count */
+  const int32_t* joint_parents;/* joint_count entries, or null when the input had none */
 } slod_level_data;
 
 static inline void slod_level_data_init(slod_level_data* data) {
@@ -189,6 +268,13 @@ static inline void slod_level_data_init(slod_level_data* data) {
  * context's memory (valid until the chain or the context is destroyed), for upload to the GPU. Not
  * thread-safe with chain building or destruction on the same ctx. */
 SLOD_API slod_status slod_level_get(const slod_context* ctx, slod_chain chain, uint32_t level, slod_level_data* out);
+/* Fills *out (its size set by slod_attribute_stream_init) with attribute stream `index` (below the
+ * level's slod_level_data.attribute_count) of a level: its kind, set, component count and a pointer
+ * into the context's memory (valid as slod_level_get's), stride = component_count floats, count = the
+ * level's vertex count. Streams come in this order: NORMAL, COLOR (3 components), UV sets 0, 1, ...,
+ * TANGENT4; each one the level has. Thread safety as slod_level_get. */
+SLOD_API slod_status slod_level_attribute_get(const slod_context* ctx, slod_chain chain, uint32_t level, uint32_t index,
+                                              slod_attribute_stream* out);
 
 /* ---- objects ---- */
 

@@ -304,6 +304,7 @@ RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, flo
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
   out.hit = true;
   out.t = rh.ray.tfar;
+  out.prim = rh.hit.primID;
   if (rh.hit.geomID == tri_geom_) {
     glm::vec3 n(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     const float len = glm::length(n);
@@ -313,6 +314,8 @@ RayHit EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& dir, flo
     out.shading = out.normal;
     const size_t k = static_cast<size_t>(rh.hit.primID) * 3;
     const float u = rh.hit.u, v = rh.hit.v;
+    out.u = u;
+    out.v = v;
     if (mesh_->normals.size() == mesh_->vertexCount()) {
       const glm::vec3 s = (1.0f - u - v) * mesh_->normals[mesh_->triangles[k]] +
                           u * mesh_->normals[mesh_->triangles[k + 1]] + v * mesh_->normals[mesh_->triangles[k + 2]];

@@ -29,6 +29,8 @@ struct RayHit {
   glm::vec3 shading{0.0f}; // unit, facing the ray origin: interpolated vertex normal when present
   glm::vec3 color{0.0f};   // linear RGB from vertex colours, or the kind's default
   int kind = 0;            // 0 triangle, 1 edge, 2 point
+  uint32_t prim = 0;       // triangle index (kind 0), else the edge/point's index in rounds_
+  float u = 0.0f, v = 0.0f;  // barycentrics of a triangle hit: weights of its corners 1 and 2
 };
 
 class EmbreeScene {

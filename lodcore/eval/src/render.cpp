@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "embree_scene.h"
+#include "shader.h"
 
 namespace scenelod::eval {
 
@@ -37,18 +38,14 @@ struct OrthoCamera {
     t_max = 8.0f * r;
   }
   float pixelSize() const { return 2.0f * half_h / static_cast<float>(height); }
+  // the ray direction and the world-space steps of one pixel across and down the image
+  detail::PixelFootprint footprint() const { return {dir, right * pixelSize(), -up * pixelSize()}; }
   glm::vec3 rayOrigin(int x, int y) const {
     const float sx = ((static_cast<float>(x) + 0.5f) / static_cast<float>(width) * 2.0f - 1.0f) * half_w;
     const float sy = (1.0f - (static_cast<float>(y) + 0.5f) / static_cast<float>(height) * 2.0f) * half_h;
     return origin0 + sx * right + sy * up;
   }
 };
-
-uint8_t toSrgb8(float c) {
-  c = std::clamp(c, 0.0f, 1.0f);
-  const float s = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-  return static_cast<uint8_t>(std::lround(s * 255.0f));
-}
 
 }  // namespace
 
@@ -87,13 +84,17 @@ Error renderMesh(const Mesh& mesh, const RenderParams& params, Image& out) {
     return {Status::kInvalidArgument, "render: image size " + std::to_string(params.width) + "x" +
                                           std::to_string(params.height) + " is not in [1, 16384]"};
   if (Error e = validateMesh(mesh, "render"); !e.ok()) return e;
+  if (Error e = validateMaterials(params.materials, "render"); !e.ok()) return e;
   const Sphere frame = params.frame.radius > 0.0f ? params.frame : boundingSphere(mesh);
   if (!(frame.radius > 0.0f)) return {Status::kInvalidMesh, "render: the mesh is empty or a single point, nothing to frame"};
   const OrthoCamera cam(params.view, frame, params.width, params.height);
   detail::EmbreeScene scene;
   if (Error e = scene.build(mesh, params.min_radius_px * cam.pixelSize()); !e.ok()) return e;
+  const detail::Shader shader(mesh, params.materials);
   out = Image(params.width, params.height);
-  const uint8_t bg[3] = {toSrgb8(params.background.x), toSrgb8(params.background.y), toSrgb8(params.background.z)};
+  const detail::PixelFootprint fp = cam.footprint();
+  const uint8_t bg[3] = {detail::toSrgb8(params.background.x), detail::toSrgb8(params.background.y),
+                         detail::toSrgb8(params.background.z)};
   tbb::parallel_for(0, params.height, [&](int y) {
     for (int x = 0; x < params.width; ++x) {
       uint8_t* px = out.pixel(x, y);
@@ -102,12 +103,7 @@ Error renderMesh(const Mesh& mesh, const RenderParams& params, Image& out) {
         std::copy_n(bg, 3, px);
         continue;
       }
-      const glm::vec3 n = params.smooth ? h.shading : h.normal;
-      const float lambert = std::max(0.0f, glm::dot(n, -cam.dir));
-      const glm::vec3 c = h.color * (params.ambient + (1.0f - params.ambient) * lambert);
-      px[0] = toSrgb8(c.x);
-      px[1] = toSrgb8(c.y);
-      px[2] = toSrgb8(c.z);
+      shader.shade(h, fp, params.ambient, params.smooth, px);
     }
   });
   return {};
@@ -120,6 +116,8 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
     return {Status::kInvalidArgument, "image error: resolution " + std::to_string(params.resolution) + " is not in [1, 8192]"};
   if (Error e = validateMesh(original, "original mesh"); !e.ok()) return e;
   if (Error e = validateMesh(simplified, "simplified mesh"); !e.ok()) return e;
+  if (Error e = validateMaterials(params.original_materials, "original mesh"); !e.ok()) return e;
+  if (Error e = validateMaterials(params.simplified_materials, "simplified mesh"); !e.ok()) return e;
   const Sphere frame = params.frame.radius > 0.0f ? params.frame : boundingSphere(original);
   if (!(frame.radius > 0.0f))
     return {Status::kInvalidMesh, "image error: the original is empty or a single point, nothing to frame"};
@@ -130,14 +128,18 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
   if (Error e = a.build(original, params.min_radius_px * pixel); !e.ok()) return e;
   if (Error e = b.build(simplified, params.min_radius_px * pixel); !e.ok()) return e;
 
+  const detail::Shader shade_a(original, params.original_materials), shade_b(simplified, params.simplified_materials);
+  const RenderParams look;  // the default shading of renderMesh
+
   struct RowSum {
-    size_t either = 0, one = 0, both = 0;
-    double angle_deg = 0.0;
+    size_t either = 0, one = 0, both = 0, color_off = 0;
+    double angle_deg = 0.0, color_abs = 0.0;
   };
   std::vector<RowSum> rows(static_cast<size_t>(kStandardViewCount) * res);
   tbb::parallel_for(size_t(0), rows.size(), [&](size_t row) {
     const int view = static_cast<int>(row / res), y = static_cast<int>(row % res);
     const OrthoCamera cam(standardView(view), frame, res, res);
+    const detail::PixelFootprint fp = cam.footprint();
     RowSum s;
     for (int x = 0; x < res; ++x) {
       const glm::vec3 o = cam.rayOrigin(x, y);
@@ -150,20 +152,41 @@ Error measureImageError(const Mesh& original, const Mesh& simplified, const Imag
         // atan2 keeps small angles accurate where acos of a float dot product does not
         const glm::dvec3 na(ha.normal), nb(hb.normal);
         s.angle_deg += std::atan2(glm::length(glm::cross(na, nb)), glm::dot(na, nb)) * kRadToDeg;
+        uint8_t pa[3], pb[3];
+        shade_a.shade(ha, fp, look.ambient, look.smooth, pa);
+        shade_b.shade(hb, fp, look.ambient, look.smooth, pb);
+        int worst = 0;
+        for (int c = 0; c < 3; ++c) {
+          const int d = std::abs(int(pa[c]) - int(pb[c]));
+          worst = std::max(worst, d);
+          s.color_abs += d;
+        }
+        s.color_off += worst > kColorTolerance;
       }
     }
     rows[row] = s;
   });
-  double angle = 0.0;
+  double angle = 0.0, color_abs = 0.0;
   for (const RowSum& s : rows) {  // fixed order: deterministic sums
     out.either_px += s.either;
     out.one_px += s.one;
     out.both_px += s.both;
+    out.color_off_px += s.color_off;
     angle += s.angle_deg;
+    color_abs += s.color_abs;
   }
   out.silhouette = out.either_px ? static_cast<double>(out.one_px) / static_cast<double>(out.either_px) : 0.0;
   out.normal_deg = out.both_px ? angle / static_cast<double>(out.both_px) : 0.0;
+  out.color_off = out.both_px ? static_cast<double>(out.color_off_px) / static_cast<double>(out.both_px) : 0.0;
+  out.color_mad = out.both_px ? color_abs / (3.0 * static_cast<double>(out.both_px)) : 0.0;
   return {};
+}
+
+int switchResolution(const Sphere& frame, float cell_width, float pixels_per_cell, int min_resolution,
+                     int max_resolution) {
+  const double px = 2.0 * frame.radius * pixels_per_cell / cell_width;
+  if (!(px >= min_resolution)) return min_resolution;  // NaN too
+  return px >= max_resolution ? max_resolution : static_cast<int>(std::lround(px));
 }
 
 Error measurePopping(const LodChain& chain, const PoppingParams& params, std::vector<PoppingTransition>& out) {
@@ -181,9 +204,7 @@ Error measurePopping(const LodChain& chain, const PoppingParams& params, std::ve
     t.from_level = k;
     t.to_level = k + 1;
     t.cell_width = w;
-    const double px = 2.0 * frame.radius * params.pixels_per_cell / w;
-    t.resolution = static_cast<int>(std::clamp(std::lround(px), static_cast<long>(params.min_resolution),
-                                               static_cast<long>(params.max_resolution)));
+    t.resolution = switchResolution(frame, w, params.pixels_per_cell, params.min_resolution, params.max_resolution);
     ImageErrorParams ip;
     ip.resolution = t.resolution;
     ip.frame = frame;

@@ -28,6 +28,11 @@ struct ChainParams {
 // its cell width, its measured maximum vertex displacement and a bounding sphere (centre of the
 // level's vertex box, radius to the farthest vertex). Levels that come out identical in counts to
 // the previous one are kept, so level indices always match cell widths.
+// A mesh with attributes (texture coordinates, tangents, a skin or more than one triangle group)
+// is welded, split into UV charts and prepared once, and each clustering level carries its texture
+// coordinates, tangents, joint weights and triangle groups and records LodLevel::source_vertex in
+// the original's indices (docs/CLUSTERING.md, "Attributes"); its levels are built in parallel,
+// level 1's output pass last, after the preparation is freed (no speculation as described below).
 // Errors: invalid mesh (as validateMesh), first_cell_width negative or not finite, growth not finite
 // or <= 1, a method that is not a generator. An empty mesh, or level_count 0, gives a chain with only
 // level 0. Cost: one O(V log V) grading sort, then O(V + T) per level; allocates; uses TBB. With

@@ -53,13 +53,18 @@ struct ScroogeStats {
   float max_displacement = 0.0f;   // largest distance an output vertex lies from where it started
   // one per output vertex: the input vertex whose (welded) position this vertex started from
   std::vector<uint32_t> vertex_origin;
+  // one per output vertex: the input vertex whose attributes it carries (its corner's vertex)
+  std::vector<uint32_t> source_vertex;
 };
 
 // Reduces `in` with SCROOGE at one sub-volume size into `out`. `out` gets the rebuilt polygons in
 // face_offsets/face_corners, their triangulation in triangles, the input's edges and points (whose
 // vertices never move), colours (merged polygons take the area-weighted mean colour of their parts,
-// §7.3), uvs copied from a source corner, and normals recomputed from the faces when the input had
-// normals. Unused vertices are dropped (§4 step 4).
+// §7.3), uvs (set 0) copied from a source corner, and normals recomputed from the faces when the input
+// had normals; triangle groups are carried. With uvs, coplanar polygons merge only inside one uv chart
+// and one group (computeUvCharts), points on a chart border or uv seam never move, and a point that
+// moves inside its chart takes the uv interpolated along the segment it moved onto, so a planar
+// linear uv map stays exact. Unused vertices are dropped (§4 step 4).
 // Guarantee: no output vertex lies farther than |subvolume_size| (the sub-volume diagonal, l_max)
 // from its starting position, and a polygon never wholly inside one sub-volume of any pass keeps
 // its corners.
@@ -92,9 +97,9 @@ glm::vec3 scroogeSubvolumeForDivisions(const Aabb& bounds, int divisions);
 // Builds level 0 (a copy of `original`) and params.level_count SCROOGE levels with cubic sub-volumes
 // of edge length w_k = w_1 * growth^(k-1); w_1 = params.first_cell_width, or when 0 the longest bbox
 // edge / growth^(level_count-1) so that the last level's sub-volume holds the whole model. Each level
-// records cell_width = w_k (the sub-volume edge length) and max_error = its measured largest vertex
-// displacement (<= w_k * sqrt(3)). params.cluster is ignored; `scrooge` gives the other options (its
-// subvolume_size is ignored). Errors: as scroogeMesh, growth <= 1 with more than one level, negative
+// records cell_width = w_k (the sub-volume edge length), max_error = its measured largest vertex
+// displacement (<= w_k * sqrt(3)) and source_vertex (ScroogeStats::source_vertex). params.cluster is
+// ignored; `scrooge` gives the other options (its subvolume_size is ignored). Errors: as scroogeMesh, growth <= 1 with more than one level, negative
 // first width. An empty mesh gives only level 0. Allocates; levels are built in parallel (TBB).
 Error buildScroogeChain(const Mesh& original, const ChainParams& params, const ScroogeParams& scrooge,
                         LodChain& out);

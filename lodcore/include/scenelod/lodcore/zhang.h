@@ -19,7 +19,7 @@ namespace scenelod {
 enum class ZhangVertexClass : uint8_t {
   kSimple,     // C(V) = 0, smooth neighbourhood (largest normal angle <= feature angle)
   kComplex,    // C(V) > 2 or a pinched (non-disk) neighbourhood: kept
-  kEdge,       // C(V) = 2, on a boundary (or an attribute seam): kept
+  kEdge,       // C(V) = 2, on a boundary (or an attribute split of an unwelded mesh): kept
   kInnerEdge,  // C(V) = 0, on a crease: normalised super height <= angle_height_ratio
   kAngle,      // C(V) = 0, a corner: normalised super height > angle_height_ratio
   kIsolated,   // in no triangle
@@ -72,8 +72,13 @@ struct ZhangParams {
   // treat vertices at exactly the same position as one vertex, so that attribute seams (glTF splits a
   // vertex per distinct normal / uv) stop being borders that are never simplified. The merged
   // vertex keeps the attributes of its lowest id and input normals are replaced by geometric ones,
-  // so texture seams are not preserved.
+  // so texture seams are not preserved. Only for meshes without texture coordinates, tangents,
+  // skins and with one triangle group: those are always welded with their seams kept (below).
   bool weld_positions = false;
+  // meshes with texture coordinates, tangents, skin or several triangle groups: a seam vertex (its
+  // position has vertices with different attributes, or triangles of different groups meet there)
+  // collapses only along its seam, and only where the seam bends by at most this angle there
+  float max_seam_bend_deg = 30.0f;
 };
 
 // Per-vertex measures of definitions 5-9 on the input mesh (not updated by simplification).
@@ -108,8 +113,9 @@ struct ZhangStats {
   size_t blocked = 0;           // vertices (triangles) popped with no valid collapse, re-queued later
   size_t dropped_degenerate = 0;  // input triangles with a repeated index
   size_t dropped_duplicate = 0;   // input triangles with the vertex set of an earlier one
-  // vertices that never move, by their class on the (welded) input: edge (borders and attribute
-  // seams), complex (non-manifold), angle (only with keep_angle_vertices)
+  // vertices that never move, by their class on the (welded) input: edge (borders, and the
+  // attribute splits of an unwelded mesh without uvs), complex (non-manifold), angle (only with
+  // keep_angle_vertices)
   size_t kept_edge_vertices = 0;
   size_t kept_complex_vertices = 0;
   size_t kept_angle_vertices = 0;
@@ -119,12 +125,24 @@ struct ZhangStats {
   // vertex measured against the triangles around its representative
   float max_surface_distance = 0.0f;
   ZhangStopReason stop_reason = ZhangStopReason::kTargetReached;
+  // (welded) input vertices on a seam: texture / attribute seams and triangle group borders; 0 for a
+  // mesh without texture coordinates, tangents, skin and with one group
+  size_t seam_vertices = 0;
+  // one per output vertex: the input vertex whose attributes it carries (the collapse survivor)
+  std::vector<uint32_t> source_vertex;
 };
 
 // Simplifies the triangles of `in` to at most `target_triangles` (or as close as the checks allow)
 // into `out`: positions and normals (carried by the paper's CA interpolation), colours and uvs
 // (area-weighted) of the surviving vertices; the input's edges and points are carried through the
-// collapse map. Boundary, seam and complex vertices never move. Unreferenced vertices are dropped.
+// collapse map. Boundary and complex vertices never move. Unreferenced vertices are dropped.
+// A mesh with texture coordinates (any set), tangents, a skin or several triangle groups is welded by
+// position for the collapse, and keeps its seams: a seam vertex collapses only along its seam onto
+// the next seam vertex (a half-edge collapse keeping that vertex's attributes), each triangle keeps
+// its own chart's attributes and its group (carried to out.triangle_groups), merged vertices off the
+// seams interpolate every attribute with the position's weights, tangents are re-orthonormalised
+// against the output normal with their sign kept, and joints / weights are the survivor's. Without
+// such attributes the output is that of the plain algorithm (unwelded unless weld_positions).
 // Errors: invalid mesh. A target at or above the triangle count gives a cleaned copy.
 // Cost: O(T log T) time, O(V + T) memory, no allocation per collapse after warm-up.
 Error simplifyZhang(const Mesh& in, size_t target_triangles, const ZhangParams& params, Mesh& out,
@@ -144,7 +162,8 @@ float zhangEquivalentCellWidth(float max_distance);
 
 // Builds level 0 (a copy of `original`) and up to params.level_count levels at triangle targets
 // halving each level (T / 2, T / 4, ...), from one recorded run of simplifyZhang. Each level gets
-// method kZhang, its measured max_error (max vertex displacement), bounds, and cell_width =
+// method kZhang, its source_vertex (ZhangStats::source_vertex), its measured max_error (max vertex
+// displacement), bounds, and cell_width =
 // zhangEquivalentCellWidth(ZhangStats::max_surface_distance) (the bound of the input vertices'
 // distance to the level, much tighter than the displacement for edge collapse; docs/ZHANG.md),
 // raised where needed so widths strictly increase. Stops early

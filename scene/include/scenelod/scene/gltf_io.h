@@ -58,11 +58,17 @@ Error exportGlb(const std::string& path, const SceneData& scene,
                 const std::vector<const LodChain*>* chains = nullptr);
 
 // Merges every object of the scene (one copy per node instance) into one world-space mesh, as used
-// to simplify or measure a whole model: positions by the world transform, normals by its inverse
-// transpose (renormalised), triangle and face winding reversed under a mirroring transform, edge
-// thickness scaled by the cube root of the transform's determinant. Attributes missing on some
-// objects are filled (normals 0, colours white, uv 0); triangles become 3-corner faces when another
-// object has polygon faces. Cost: allocates the result, linear in the drawn size.
+// to simplify or measure a whole model: positions by the world transform (worldTransforms: skinned
+// mesh nodes in their bind pose), normals by its inverse transpose (renormalised), tangents by its
+// linear part (renormalised; w kept, flipped under a mirroring transform), triangle and face
+// winding reversed under a mirroring transform, edge thickness scaled by the cube root of the
+// transform's determinant. UV sets, colours (as the meshes hold them: bakeMaterialColors first for
+// material colours) and tangents are carried; attributes missing on some objects are filled
+// (normals 0, colours white, UVs 0, tangents (1,0,0,+1)). Joints and weights are dropped (each
+// object's joints index its own skin). triangle_groups holds each triangle's MATERIAL index into
+// scene.materials (kNoMaterial for none), so a renderer can shade the result with the scene's
+// materials; it is empty when the scene has no materials (an OBJ). Triangles become 3-corner faces when another object has polygon faces.
+// Cost: allocates the result, linear in the drawn size.
 Mesh flattenScene(const SceneData& scene);
 
 }  // namespace scenelod::scene

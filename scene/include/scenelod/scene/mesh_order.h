@@ -3,6 +3,7 @@
 // speed optimiser), vertices in order of first use for vertex fetch, and the ACMR measure.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "scenelod/lodcore/mesh.h"
 #include "scenelod/lodcore/span.h"
@@ -27,10 +28,13 @@ size_t vertexFetchRemap(Span<uint32_t> remap, Span<const uint32_t> indices, size
 // Same model as meshopt_analyzeVertexCache(..., cache_size, 0, 0). Cost: O(index_count).
 double computeAcmr(Span<const uint32_t> indices, size_t vertex_count, size_t cache_size = 16);
 
-// Reorders one mesh in place: triangles with optimizeVertexCache, then every vertex attribute in
+// Reorders one mesh in place: triangles sorted by triangle group (stable) and each group's
+// triangles with optimizeVertexCache (triangle_groups follow their triangles, so each group is one
+// contiguous range), then every vertex attribute (UV sets, colours, tangents, joints, weights) in
 // order of first use by triangles, then edges, then points; indices of triangles, edges, points and
-// polygon faces are rewritten. Edges and points keep their order. Vertex count is unchanged.
-// Cost: O(vertices + indices); allocates.
-void optimizeMeshOrder(Mesh& mesh);
+// polygon faces are rewritten. Edges and points keep their order. Vertex count is unchanged. When
+// `vertex_remap` is given it receives each old vertex's new index (for arrays kept beside the mesh,
+// such as LodLevel::source_vertex). Cost: O(vertices + triangles log triangles); allocates.
+void optimizeMeshOrder(Mesh& mesh, std::vector<uint32_t>* vertex_remap = nullptr);
 
 }  // namespace scenelod::scene

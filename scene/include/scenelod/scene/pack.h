@@ -10,6 +10,8 @@
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <glm/ext/vector_uint4_sized.hpp>
 
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/span.h"
@@ -67,6 +69,15 @@ struct PackLevelView {
   Span<const uint32_t> edges;
   Span<const float> edge_thickness;  // empty when absent
   Span<const uint32_t> points;
+  // the level attributes section (all empty when absent, as in packs written before it)
+  size_t extra_uv_set_count = 0;
+  Span<const glm::vec2> extra_uvs;  // texture coordinate sets 1, 2, ...: set s at [(s - 1) x V, s x V)
+  Span<const glm::vec4> tangents;
+  Span<const glm::u16vec4> joints;
+  Span<const glm::vec4> weights;
+  Span<const int32_t> joint_parents;     // the skeleton; every joint index is below its size
+  Span<const uint32_t> triangle_groups;  // one per triangle; each group one contiguous run when ordered
+  Span<const uint32_t> source_vertex;    // LodLevel::source_vertex: vertices of the chain's level 0
 };
 
 struct PackNodeView {
@@ -90,7 +101,7 @@ class Pack {
  public:
   // Reads `path` with one read into one buffer and checks magic, version, size, checksum and that
   // every section and array lies inside the file; with `check_indices` also that every index is in
-  // range (one pass over the index arrays). Errors name the file: kIoError (missing, unreadable),
+  // range (one pass over the index arrays, skin joints and source vertices). Errors name the file: kIoError (missing, unreadable),
   // kCorrupt (truncated, bad checksum, bad offsets), kUnsupported (other version). Allocates once.
   static Error load(const std::string& path, Pack& out, bool check_indices = true);
   // The same from bytes already in memory (copied into the pack's buffer); `what` names the source.
@@ -125,6 +136,7 @@ class Pack {
   size_t nodes_ = 0, node_count_ = 0, children_ = 0, children_count_ = 0, roots_ = 0, root_count_ = 0;
   size_t objects_ = 0, object_count_ = 0, chains_ = 0, chain_count_ = 0, levels_ = 0, level_count_ = 0;
   size_t names_ = 0, names_size_ = 0;
+  size_t attributes_ = 0;  // the level attributes section, 0 when absent
 };
 
 }  // namespace scenelod::scene

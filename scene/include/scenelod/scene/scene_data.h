@@ -15,6 +15,9 @@
 
 namespace scenelod::scene {
 
+// The material of triangles that have none, in flattenScene's triangle groups (gltf_io.h).
+constexpr uint32_t kNoMaterial = 0xffffffffu;
+
 // An image as the file holds it (encoded bytes, kept for export) and decoded to 8-bit RGBA rows
 // (top row first; empty when the bytes are not PNG or JPEG or failed to decode).
 struct ImageData {
@@ -23,6 +26,7 @@ struct ImageData {
   std::vector<uint8_t> encoded;      // the file's bytes
   int32_t width = 0, height = 0;
   std::vector<uint8_t> rgba8;        // width x height x 4, sRGB as stored
+  // importGltf decodes the images a base colour texture uses; the others keep rgba8 empty
 };
 
 // A glTF texture: an image and the sampler's wrap modes (GL enums: 10497 REPEAT, 33071
@@ -74,7 +78,8 @@ struct AnimationData {
   struct Sampler {
     std::vector<float> times;             // seconds, increasing
     std::vector<glm::vec4> values;        // xyz (translation, scale), xyzw (rotation quaternion);
-                                          // cubic splines hold in-tangent, value, out-tangent per key
+                                          // cubic splines hold in-tangent, value, out-tangent per key;
+                                          // morph weights one scalar per element in x (targets per key)
     Interpolation interpolation = Interpolation::kLinear;
   };
   struct Channel {
@@ -94,6 +99,8 @@ struct NodeData {
   glm::mat4 local{1.0f};              // local transform (TRS composed, or the node's matrix)
   int32_t mesh = -1;                  // index into SceneData::meshes, -1 for none
   int32_t skin = -1;                  // index into SceneData::skins, -1 for none
+  // a node with a mesh and a skin is drawn by its joints alone: glTF ignores its own transform, so
+  // worldTransforms gives it the identity (its bind-pose positions are POSITION as stored)
 };
 
 struct SceneData {
@@ -108,8 +115,9 @@ struct SceneData {
 };
 
 // Checks parent/child links agree, there are no cycles, every node is reachable at most once from the
-// roots, mesh and material indices are in range, and every mesh is valid (validateMesh). `what`
-// names the source in messages.
+// roots, mesh, material, texture, image, skin and joint node indices are in range, every mesh is
+// valid (validateMesh), the JOINTS_0 of a skinned node's mesh are below its skin's joint count,
+// and animation channels target nodes in range. `what` names the source in messages.
 Error validateSceneData(const SceneData& scene, const std::string& what);
 
 // The objects of a scene: nodes that have a mesh, numbered depth-first in pre-order from the roots,
@@ -117,7 +125,20 @@ Error validateSceneData(const SceneData& scene, const std::string& what);
 std::vector<int32_t> objectNodes(const SceneData& scene);
 
 // World transform of every node (identity parent for roots); nodes not reachable from the roots get
-// their chain of parents applied all the same.
+// their chain of parents applied all the same. A node with a mesh and a skin gets the identity
+// (glTF 2.0, "Skins": the skinned mesh node's own transform is ignored); its children do not.
 std::vector<glm::mat4> worldTransforms(const SceneData& scene);
+
+// The colours the importer baked before materials were kept, for consumers that draw a mesh by
+// vertex colour alone (SCROOGE's texture averaging, the GL viewer, OBJ output): per vertex, the
+// material's base colour factor x its base colour texture's mean texel (linear, when decoded) x
+// COLOR_0 (white when absent), the material being that of a triangle group using the vertex
+// (the first primitive's for vertices of edges and points alone). A mesh gets colours when it has
+// COLOR_0 or any primitive a material; the others are returned empty. Cost: linear in the mesh.
+std::vector<glm::vec3> bakedMaterialColors(const SceneData& scene, const MeshData& mesh);
+
+// Replaces every mesh's colours by bakedMaterialColors: the scene as the importer gave it before
+// materials were kept (the material references stay).
+void bakeMaterialColors(SceneData& scene);
 
 }  // namespace scenelod::scene
