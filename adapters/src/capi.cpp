@@ -123,6 +123,7 @@ struct slod_context {
   std::vector<glm::vec3> centers;
   std::vector<float> radii, scales;
   std::vector<int8_t> levels;
+  std::vector<selection::View> views;  // slod_select_views' (capacity kept: no allocation after the first frame)
   bool spheres_dirty = true;
 
   selection::SelectorContext* selector = nullptr;
@@ -216,6 +217,7 @@ SLOD_ABI(slod_frame_params, budget_ms);
 SLOD_ABI(slod_frame_result, frame);
 SLOD_ABI(slod_pick_result, object);
 SLOD_ABI(slod_attribute_stream, kind);
+SLOD_ABI(slod_view, eye);
 #undef SLOD_ABI
 constexpr size_t kSelectionMinStride = offsetof(slod_selection, object) + sizeof(slod_object);
 
@@ -292,6 +294,7 @@ Error ensureSelector(slod_context* ctx) {
   cfg.max_object_count = std::max<size_t>(ctx->desc.max_objects, 1);
   cfg.max_levels_per_chain = std::max<size_t>(levels, 1);
   cfg.max_level_rows = std::max<size_t>(rows, 1);
+  cfg.max_view_groups = ctx->desc.max_view_groups;
   cfg.allocator.allocate = ctx->desc.allocator.allocate;
   cfg.allocator.free = ctx->desc.allocator.free;
   cfg.allocator.user = ctx->desc.allocator.user;
@@ -672,6 +675,9 @@ slod_status slod_context_create(const slod_context_desc* desc, slod_context** ou
     slod_context_desc d;
     if (slod_status s = readStruct(nullptr, "slod_context_create", desc, slod_context_desc_init, d)) return s;
     if (d.max_objects == 0) return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: max_objects is 0");
+    if (d.max_view_groups > selection::kMaxViews)
+      return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: max_view_groups is " +
+                                                            std::to_string(d.max_view_groups) + ", above 8");
     if ((d.allocator.allocate == nullptr) != (d.allocator.free == nullptr))
       return fail(nullptr, SLOD_ERROR_INVALID_ARGUMENT, "slod_context_create: allocator has only one of allocate and free");
     auto ctx = std::make_unique<slod_context>();
@@ -943,6 +949,106 @@ slod_status slod_object_set_importance(slod_context* ctx, slod_object h, float i
 
 uint32_t slod_object_count(const slod_context* ctx) { return ctx ? static_cast<uint32_t>(ctx->objects.objectCount()) : 0; }
 
+namespace {
+
+// out, out_stride and capacity of a selection for the context's n objects; SLOD_OK when usable.
+slod_status checkOut(slod_context* ctx, const char* fn, const void* out, size_t out_stride, size_t capacity, size_t n) {
+  if (n > 0 && !out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": out is null");
+  if (out_stride < kSelectionMinStride)
+    return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": out_stride " + std::to_string(out_stride) +
+                                                      " is below slod_selection's smallest size " +
+                                                      std::to_string(kSelectionMinStride) + " (pass sizeof(slod_selection))");
+  if (capacity < n)
+    return fail(ctx, SLOD_ERROR_CAPACITY, std::string(fn) + ": out holds " + std::to_string(capacity) + " entries for " +
+                                              std::to_string(n) + " objects");
+  return SLOD_OK;
+}
+
+// A job over the context's objects (spheres brought up to date), without camera or views.
+selection::SelectionJob objectsJob(slod_context* ctx, const slod_frame_params& params) {
+  if (ctx->spheres_dirty) updateSpheres(ctx);
+  const size_t n = ctx->objects.objectCount();
+  selection::SelectionJob job;
+  job.params.pixels_per_cell = params.pixels_per_cell;
+  const bool budget = params.budget_ms > 0.0f;
+  job.params.mode = budget ? selection::SelectionMode::kBudget : selection::SelectionMode::kDistance;
+  job.params.budget_ms = budget ? params.budget_ms : 1.0f;
+  job.levels = ctx->objects.table.view();
+  job.centers = Span<const glm::vec3>(ctx->centers.data(), n);
+  job.radii = Span<const float>(ctx->radii.data(), n);
+  job.max_scales = Span<const float>(ctx->scales.data(), n);
+  job.chains = Span<const uint32_t>(ctx->objects.object_chain.data(), n);
+  job.importance = Span<const float>(ctx->objects.importance.data(), n);
+  job.must_draw = Span<const uint8_t>(ctx->objects.must_draw.data(), n);
+  job.levels_out = Span<int8_t>(ctx->levels.data(), n);
+  job.context = ctx->selector;
+  return job;
+}
+
+// After a run: the selections to out and the frame's result (when asked for).
+void writeFrame(slod_context* ctx, const selection::SelectionStats& st, void* out, size_t out_stride,
+                slod_frame_result* result) {
+  writeSelections(ctx, out, out_stride);
+  if (!result) return;
+  slod_frame_result r{};
+  r.frame = st.frame;
+  r.predicted_ms = static_cast<float>(st.predicted_ms);
+  r.drawn_count = st.drawn_count;
+  r.culled_count = st.culled_count;
+  r.dropped_count = st.dropped_count;
+  r.switch_count = st.switch_count;
+  r.over_budget = (st.flags & selection::kFlagOverBudget) ? 1 : 0;
+  r.group_count = st.group_count;
+  writeStruct(r, result);
+}
+
+// The caller's views (stepped by views[0].size) as the selector's; SLOD_OK when every one is readable.
+slod_status readViews(slod_context* ctx, const slod_view* views, size_t count, std::vector<selection::View>& out) {
+  const char* fn = "slod_select_views";
+  if (count == 0 || count > selection::kMaxViews)
+    return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": view_count is " + std::to_string(count) + ", not 1..8");
+  if (slod_status s = checkSize(ctx, fn, views)) return s;
+  const uint32_t stride = views[0].size;
+  for (size_t i = 0; i < count; ++i) {
+    const char* at = reinterpret_cast<const char*>(views) + i * stride;
+    slod_view v;
+    slod_view_init(&v);
+    uint32_t size;
+    std::memcpy(&size, at, sizeof size);
+    if (size != stride)
+      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": views[" + std::to_string(i) + "].size is " +
+                                                        std::to_string(size) + ", views[0].size " + std::to_string(stride));
+    std::memcpy(&v, at, std::min<size_t>(stride, sizeof v));
+    if (v.kind < SLOD_VIEW_PRIMARY || v.kind > SLOD_VIEW_SECONDARY)
+      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": views[" + std::to_string(i) + "].kind is " +
+                                                        std::to_string(v.kind) + ", not a slod_view_kind");
+    selection::View sv;
+    slod_camera c;
+    slod_camera_init(&c);
+    std::copy(v.eye, v.eye + 3, c.eye);
+    std::copy(v.target, v.target + 3, c.target);
+    std::copy(v.up, v.up + 3, c.up);
+    c.fov_y_deg = v.fov_y_deg;
+    c.viewport_width = v.viewport_width;
+    c.viewport_height = v.viewport_height;
+    sv.camera = toCamera(c);
+    sv.camera.near_plane = v.near_plane;
+    sv.camera.far_plane = v.far_plane;
+    if (v.ortho_height > 0.0f) {
+      sv.camera.projection = selection::Projection::kOrthographic;
+      sv.camera.ortho_height = v.ortho_height;
+    }
+    sv.kind = static_cast<selection::ViewKind>(v.kind);
+    sv.group = v.group;
+    sv.pixels_per_cell = v.pixels_per_cell;
+    sv.lod_bias = v.lod_bias;
+    out.push_back(sv);
+  }
+  return SLOD_OK;
+}
+
+}  // namespace
+
 slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const slod_frame_params* params_in, void* out,
                         size_t out_stride, size_t capacity, slod_frame_result* result) {
   if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
@@ -953,15 +1059,7 @@ slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const s
     if (slod_status s = readStruct(ctx, "slod_select", params_in, slod_frame_params_init, params)) return s;
     if (result)
       if (slod_status s = checkSize(ctx, "slod_select", result)) return s;
-    const size_t n = ctx->objects.objectCount();
-    if (n > 0 && !out) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: out is null");
-    if (out_stride < kSelectionMinStride)
-      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: out_stride " + std::to_string(out_stride) +
-                                                        " is below slod_selection's smallest size " +
-                                                        std::to_string(kSelectionMinStride) + " (pass sizeof(slod_selection))");
-    if (capacity < n)
-      return fail(ctx, SLOD_ERROR_CAPACITY, "slod_select: out holds " + std::to_string(capacity) + " entries for " +
-                                                std::to_string(n) + " objects");
+    if (slod_status s = checkOut(ctx, "slod_select", out, out_stride, capacity, ctx->objects.objectCount())) return s;
     if (!finite(camera.eye, 3) || !finite(camera.target, 3) || !finite(camera.up, 3) || !(camera.fov_y_deg > 0.0f) ||
         !(camera.fov_y_deg < 180.0f) || camera.viewport_width == 0 || camera.viewport_height == 0)
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: camera has a non-finite value, a field of view outside "
@@ -969,39 +1067,54 @@ slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const s
     if (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.budget_ms))
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: pixels_per_cell must be > 0 and budget_ms finite");
     if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
-    if (ctx->spheres_dirty) updateSpheres(ctx);
     const selection::Camera cam = toCamera(camera);
-    selection::SelectionJob job;
+    selection::SelectionJob job = objectsJob(ctx, params);
     job.camera = &cam;
-    job.params.pixels_per_cell = params.pixels_per_cell;
-    const bool budget = params.budget_ms > 0.0f;
-    job.params.mode = budget ? selection::SelectionMode::kBudget : selection::SelectionMode::kDistance;
-    job.params.budget_ms = budget ? params.budget_ms : 1.0f;
-    job.levels = ctx->objects.table.view();
-    job.centers = Span<const glm::vec3>(ctx->centers.data(), n);
-    job.radii = Span<const float>(ctx->radii.data(), n);
-    job.max_scales = Span<const float>(ctx->scales.data(), n);
-    job.chains = Span<const uint32_t>(ctx->objects.object_chain.data(), n);
-    job.importance = Span<const float>(ctx->objects.importance.data(), n);
-    job.must_draw = Span<const uint8_t>(ctx->objects.must_draw.data(), n);
-    job.levels_out = Span<int8_t>(ctx->levels.data(), n);
     selection::SelectionStats st;
     job.stats = &st;
-    job.context = ctx->selector;
     if (!job.run()) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: the selector refused the frame (degenerate camera?)");
-    writeSelections(ctx, out, out_stride);
-    if (result) {
-      slod_frame_result r{};
-      r.frame = st.frame;
-      r.predicted_ms = static_cast<float>(st.predicted_ms);
-      r.drawn_count = st.drawn_count;
-      r.culled_count = st.culled_count;
-      r.dropped_count = st.dropped_count;
-      r.switch_count = st.switch_count;
-      r.over_budget = (st.flags & selection::kFlagOverBudget) ? 1 : 0;
-      writeStruct(r, result);
-    }
+    writeFrame(ctx, st, out, out_stride, result);
     if (ctx->recording) recordFrame(ctx, cam, camera, params, st.frame);
+    return ok(ctx);
+  });
+}
+
+slod_status slod_select_views(slod_context* ctx, const slod_view* views, size_t view_count,
+                              const slod_frame_params* params_in, void* out, size_t out_stride, size_t capacity,
+                              int8_t* levels, size_t levels_capacity, slod_frame_result* result) {
+  if (!ctx) return SLOD_ERROR_INVALID_ARGUMENT;
+  return guarded(ctx, [&] {
+    const char* fn = "slod_select_views";
+    slod_frame_params params;
+    if (slod_status s = readStruct(ctx, fn, params_in, slod_frame_params_init, params)) return s;
+    if (result)
+      if (slod_status s = checkSize(ctx, fn, result)) return s;
+    const size_t n = ctx->objects.objectCount();
+    if (slod_status s = checkOut(ctx, fn, out, out_stride, capacity, n)) return s;
+    if (ctx->recording) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": a recording takes slod_select frames only");
+    if (!std::isfinite(params.budget_ms)) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": budget_ms must be finite");
+    std::vector<selection::View>& sv = ctx->views;
+    sv.clear();
+    sv.reserve(selection::kMaxViews);
+    if (slod_status s = readViews(ctx, views, view_count, sv)) return s;
+    size_t groups = 0;
+    for (size_t v = 0; v < sv.size(); ++v) {
+      bool first = true;
+      for (size_t u = 0; u < v; ++u) first &= sv[u].group != sv[v].group;
+      groups += first ? 1 : 0;
+    }
+    if (levels_capacity < groups * n || (n > 0 && !levels))
+      return fail(ctx, SLOD_ERROR_CAPACITY, std::string(fn) + ": levels holds " + std::to_string(levels_capacity) +
+                                                " entries for " + std::to_string(groups) + " groups of " + std::to_string(n) + " objects");
+    if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
+    selection::SelectionJob job = objectsJob(ctx, params);
+    job.views = Span<const selection::View>(sv.data(), sv.size());
+    job.group_levels_out = Span<int8_t>(levels, groups * n);
+    selection::SelectionStats st;
+    job.stats = &st;
+    if (const char* e = job.error()) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": " + e);
+    job.run();
+    writeFrame(ctx, st, out, out_stride, result);
     return ok(ctx);
   });
 }

@@ -1,6 +1,7 @@
 // Replay files: JSON lines (docs/REPLAY.md), read with nlohmann-json.
 #include "scenelod/selection/replay.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -56,6 +57,19 @@ bool vec3(const json& j, const char* key, bool required, glm::vec3& out, std::st
   return true;
 }
 
+// the optional "viewport" [width, height] into w and h (unchanged when absent); false when malformed
+bool viewport(const json& j, uint32_t& w, uint32_t& h) {
+  auto vp = j.find("viewport");
+  if (vp == j.end()) return true;
+  int64_t width = 0, height = 0;
+  if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, width) ||
+      !jsonWholeNumber((*vp)[1], 1, 65536, height))
+    return false;
+  w = static_cast<uint32_t>(width);
+  h = static_cast<uint32_t>(height);
+  return true;
+}
+
 std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.9g", v);
@@ -79,19 +93,13 @@ std::string parseHeader(const json& j, ReplayHeader& h) {
   auto v = j.find("scenelod_replay");
   if (v == j.end()) return "the first line must be the header with \"scenelod_replay\"";
   int64_t version = 0;
-  if (!jsonWholeNumber(*v, 1, 1, version)) return "unsupported replay version (this reader knows version 1)";
+  if (!jsonWholeNumber(*v, 1, 2, version)) return "unsupported replay version (this reader knows versions 1 and 2)";
+  h.version = static_cast<int>(version);
   auto s = j.find("scene");
   if (s == j.end() || !s->is_string() || s->get<std::string>().empty()) return "missing key \"scene\" (a path)";
   h.scene = s->get<std::string>();
-  auto vp = j.find("viewport");
-  if (vp != j.end()) {
-    int64_t w = 0, ht = 0;
-    if (!vp->is_array() || vp->size() != 2 || !jsonWholeNumber((*vp)[0], 1, 65536, w) ||
-        !jsonWholeNumber((*vp)[1], 1, 65536, ht))
-      return "\"viewport\" must be [width, height] in whole pixels, 1..65536";
-    h.viewport_width_px = static_cast<uint32_t>(w);
-    h.viewport_height_px = static_cast<uint32_t>(ht);
-  }
+  if (!viewport(j, h.viewport_width_px, h.viewport_height_px))
+    return "\"viewport\" must be [width, height] in whole pixels, 1..65536";
   h.fov_y_deg = number(j, "fov_y_deg", false, 60.0, err);
   if (!err.empty()) return err;
   if (!(h.fov_y_deg > 0.0 && h.fov_y_deg < 180.0)) return "\"fov_y_deg\" must be in (0, 180)";
@@ -108,8 +116,61 @@ std::string parseHeader(const json& j, ReplayHeader& h) {
   return {};
 }
 
+const char* const kViewKindNames[kViewKindCount] = {"primary", "shadow", "eye", "secondary"};
+
+// one entry of a frame's "views" into `v` (camera defaults from the header); empty when valid
+std::string parseView(const json& j, const ReplayHeader& h, ReplayView& v) {
+  if (!j.is_object()) return "each view must be an object";
+  std::string err;
+  auto k = j.find("kind");
+  if (k == j.end() || !k->is_string()) return "a view needs \"kind\": \"primary\", \"shadow\", \"eye\" or \"secondary\"";
+  const auto* name = std::find(kViewKindNames, kViewKindNames + kViewKindCount, k->get<std::string>());
+  if (name == kViewKindNames + kViewKindCount) return "unknown view kind \"" + k->get<std::string>() + "\"";
+  v.kind = static_cast<ViewKind>(name - kViewKindNames);
+  auto g = j.find("group");
+  int64_t group = 0;
+  if (g == j.end() || !jsonWholeNumber(*g, 0, UINT32_MAX, group)) return "a view needs \"group\": a whole number";
+  v.group = static_cast<uint32_t>(group);
+  Camera& c = v.camera;
+  vec3(j, "eye", true, c.eye, err);
+  if (err.empty()) vec3(j, "target", true, c.target, err);
+  if (err.empty()) vec3(j, "up", false, c.up, err);
+  if (!err.empty()) return "view: " + err;
+  const bool has_fov = j.contains("fov_y_deg"), has_ortho = j.contains("ortho_height");
+  if (has_fov == has_ortho) return "a view needs exactly one of \"fov_y_deg\" and \"ortho_height\"";
+  if (has_fov) c.fov_y_rad = static_cast<float>(number(j, "fov_y_deg", true, 60.0, err) * 3.14159265358979 / 180.0);
+  if (has_ortho) {
+    c.projection = Projection::kOrthographic;
+    c.ortho_height = static_cast<float>(number(j, "ortho_height", true, 1.0, err));
+  }
+  c.near_plane = static_cast<float>(number(j, "near", false, 0.05, err));
+  if (err.empty()) c.far_plane = static_cast<float>(number(j, "far", false, 1.0e6, err));
+  if (err.empty()) v.pixels_per_cell = static_cast<float>(number(j, "pixels_per_cell", false, h.pixels_per_cell, err));
+  if (err.empty()) v.lod_bias = static_cast<float>(number(j, "lod_bias", false, 1.0, err));
+  if (!err.empty()) return "view: " + err;
+  c.viewport_width_px = h.viewport_width_px;
+  c.viewport_height_px = h.viewport_height_px;
+  if (!viewport(j, c.viewport_width_px, c.viewport_height_px))
+    return "a view's \"viewport\" must be [width, height] in whole pixels, 1..65536";
+  if (!cameraValid(c)) return "a view's camera is degenerate (eye = target, up along the view, fov, near/far or ortho_height)";
+  if (!(v.pixels_per_cell > 0.0f) || !(v.lod_bias > 0.0f)) return "a view's pixels_per_cell and lod_bias must be > 0";
+  return {};
+}
+
+// a frame's "views" into f.views; empty when valid
+std::string parseViews(const json& views, const ReplayHeader& h, ReplayFrame& f) {
+  if (h.version < 2) return "\"views\" needs a version 2 replay (\"scenelod_replay\": 2)";
+  if (!views.is_array() || views.empty() || views.size() > kMaxViews) return "\"views\" must be a list of 1 to 8 views";
+  for (const json& e : views) {
+    ReplayView v;
+    if (std::string err = parseView(e, h, v); !err.empty()) return err;
+    f.views.push_back(v);
+  }
+  return {};
+}
+
 // a frame line's keys into `f`; an empty string when they are valid, else what is wrong
-std::string parseFrame(const json& j, ReplayFrame& f) {
+std::string parseFrame(const json& j, const ReplayHeader& h, ReplayFrame& f) {
   std::string err;
   auto fr = j.find("frame");
   if (fr == j.end()) return "missing key \"frame\"";
@@ -118,9 +179,14 @@ std::string parseFrame(const json& j, ReplayFrame& f) {
   f.frame = static_cast<uint64_t>(frame);
   f.time_s = number(j, "time_s", false, 0.0, err);
   if (!err.empty()) return err;
-  vec3(j, "eye", true, f.eye, err);
+  auto views = j.find("views");
+  if (views != j.end() && !views->is_null())
+    if (std::string verr = parseViews(*views, h, f); !verr.empty()) return verr;
+  // a frame with views may leave out the single camera
+  const bool camera_required = f.views.empty();
+  vec3(j, "eye", camera_required, f.eye, err);
   if (!err.empty()) return err;
-  vec3(j, "target", true, f.target, err);
+  vec3(j, "target", camera_required, f.target, err);
   if (!err.empty()) return err;
   vec3(j, "up", false, f.up, err);
   if (!err.empty()) return err;
@@ -204,7 +270,7 @@ bool ReplayReader::next(ReplayFrame& frame, Error& error) {
   json j;
   frame = ReplayFrame();
   std::string err = parseObject(line, j);
-  if (err.empty()) err = parseFrame(j, frame);
+  if (err.empty()) err = parseFrame(j, header_, frame);
   if (err.empty() && frames_read_ > 0 && frame.frame <= last_frame_) err = "frames must be in increasing order";
   if (!err.empty()) {
     error = lineError(err);
@@ -238,20 +304,48 @@ static Error readReplayImpl(const std::string& path, Replay& out) {
   return e;
 }
 
+namespace {
+
+std::string v3(const glm::vec3& v) { return "[" + fmt(v.x) + ", " + fmt(v.y) + ", " + fmt(v.z) + "]"; }
+
+// a frame's "views" as JSON
+std::string viewsText(const std::vector<ReplayView>& views) {
+  std::ostringstream o;
+  o << "[";
+  for (size_t i = 0; i < views.size(); ++i) {
+    const ReplayView& v = views[i];
+    const Camera& c = v.camera;
+    o << (i ? ", " : "") << "{\"kind\": \"" << kViewKindNames[static_cast<size_t>(v.kind)] << "\", \"group\": " << v.group
+      << ", \"eye\": " << v3(c.eye) << ", \"target\": " << v3(c.target) << ", \"up\": " << v3(c.up);
+    if (c.projection == Projection::kOrthographic)
+      o << ", \"ortho_height\": " << fmt(c.ortho_height);
+    else
+      o << ", \"fov_y_deg\": " << fmt(static_cast<double>(c.fov_y_rad) * 180.0 / 3.14159265358979);
+    o << ", \"near\": " << fmt(c.near_plane) << ", \"far\": " << fmt(c.far_plane) << ", \"viewport\": ["
+      << c.viewport_width_px << ", " << c.viewport_height_px << "], \"pixels_per_cell\": " << fmt(v.pixels_per_cell)
+      << ", \"lod_bias\": " << fmt(v.lod_bias) << "}";
+  }
+  o << "]";
+  return o.str();
+}
+
+}  // namespace
+
 static Error writeReplayImpl(const std::string& path, const Replay& r) {
   std::ostringstream out;
   const ReplayHeader& h = r.header;
+  const bool with_views = std::any_of(r.frames.begin(), r.frames.end(), [](const ReplayFrame& f) { return !f.views.empty(); });
   std::ostringstream s;
-  s << "{\"scenelod_replay\": 1, \"scene\": " << json(h.scene).dump() << ", \"viewport\": [" << h.viewport_width_px
+  s << "{\"scenelod_replay\": " << (with_views ? 2 : 1) << ", \"scene\": " << json(h.scene).dump() << ", \"viewport\": [" << h.viewport_width_px
     << ", " << h.viewport_height_px << "], \"fov_y_deg\": " << fmt(h.fov_y_deg)
     << ", \"budget_ms\": " << (h.has_budget ? fmt(h.budget_ms) : std::string("null"))
     << ", \"pixels_per_cell\": " << fmt(h.pixels_per_cell) << "}\n";
   out << s.str();
   for (const ReplayFrame& f : r.frames) {
     std::ostringstream l;
-    auto v3 = [](const glm::vec3& v) { return "[" + fmt(v.x) + ", " + fmt(v.y) + ", " + fmt(v.z) + "]"; };
     l << "{\"frame\": " << f.frame << ", \"time_s\": " << fmt(f.time_s) << ", \"eye\": " << v3(f.eye)
       << ", \"target\": " << v3(f.target) << ", \"up\": " << v3(f.up);
+    if (!f.views.empty()) l << ", \"views\": " << viewsText(f.views);
     if (f.has_measured) l << ", \"measured_ms\": " << fmt(f.measured_ms);
     if (f.has_pick) l << ", \"pick\": [" << fmt(f.pick_px[0]) << ", " << fmt(f.pick_px[1]) << "]";
     if (!f.moves.empty()) {

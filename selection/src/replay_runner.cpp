@@ -5,6 +5,7 @@
 #include "scenelod/selection/replay_visibility.h"
 #include "scenelod/lodcore/atomic_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -54,6 +55,24 @@ class Gaussian {
   double spare_ = 0.0;
 };
 
+// A frame's views as the selector takes them (empty for a frame with the one camera); returns the
+// number of groups they make.
+size_t frameViews(const ReplayFrame& f, std::vector<View>& views) {
+  views.clear();
+  std::vector<uint32_t> groups;
+  for (const ReplayView& rv : f.views) {
+    View v;
+    v.camera = rv.camera;
+    v.kind = rv.kind;
+    v.group = rv.group;
+    v.pixels_per_cell = rv.pixels_per_cell;
+    v.lod_bias = rv.lod_bias;
+    views.push_back(v);
+    if (std::find(groups.begin(), groups.end(), rv.group) == groups.end()) groups.push_back(rv.group);
+  }
+  return groups.size();
+}
+
 struct ContextDeleter {
   SelectorContext* c;
   ~ContextDeleter() { destroySelectorContext(c); }
@@ -80,6 +99,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
   cfg.max_object_count = std::max<size_t>(n, 1);
   cfg.max_levels_per_chain = std::max<size_t>(scene.table.maxLevelsPerChain(), 1);
   cfg.initial_cost = options.initial_cost;
+  cfg.max_view_groups = h.version >= 2 ? kMaxViews : 0;
   ContextDeleter ctx{createSelectorContext(cfg)};
   if (!ctx.c) return Error(Status::kOutOfMemory, scene.name + ": cannot create the selector context");
 
@@ -111,6 +131,8 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
 
   ReplayFrame f;
   Error read_error;
+  std::vector<View> views;
+  std::vector<int8_t> group_levels;
   while (next_frame(f, read_error)) {
     const std::string where = scene.name + ": replay frame " + std::to_string(f.frame);
     if (!f.moves.empty()) {
@@ -121,7 +143,9 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     cam.eye = f.eye;
     cam.target = f.target;
     cam.up = f.up;
-    if (!cameraValid(cam)) return Error(Status::kInvalidArgument, where + ": degenerate camera (eye equals target, or up along the view)");
+    if (!f.views.empty() && options.visibility)
+      return Error(Status::kInvalidArgument, where + ": visibility estimates are for one camera, not for a frame with views");
+    if (f.views.empty() && !cameraValid(cam)) return Error(Status::kInvalidArgument, where + ": degenerate camera (eye equals target, or up along the view)");
     ReplayLogFrame out;
     out.levels.assign(n, -1);
     SelectionStats st;
@@ -138,10 +162,16 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     job.levels_out = Span<int8_t>(out.levels.data(), n);
     job.stats = &st;
     job.context = ctx.c;
+    const size_t groups = frameViews(f, views);
+    group_levels.assign(groups * n, -1);
+    job.views = Span<const View>(views.data(), views.size());
+    job.group_levels_out = Span<int8_t>(group_levels.data(), group_levels.size());
     if (options.visibility)
       if (Error e = options.visibility->beforeSelect(scene, cam, f, job); !e.ok()) return Error(e.status, where + ": " + e.message);
     if (!job.run()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame's input");
     if (options.visibility) options.visibility->afterSelect(job, out);
+    for (size_t g = 0; g < groups; ++g)
+      out.view_levels.emplace_back(group_levels.begin() + g * n, group_levels.begin() + (g + 1) * n);
     out.frame = f.frame;
     out.time_s = f.time_s;
     out.has_budget = budget;
@@ -199,7 +229,17 @@ std::string replayLogLine(const ReplayLogFrame& f) {
   else std::snprintf(buf, sizeof(buf), ", \"measured_ms\": null");
   o << buf << ", \"levels\": [";
   for (size_t i = 0; i < f.levels.size(); ++i) o << (i ? "," : "") << static_cast<int>(f.levels[i]);
-  o << "], \"switches\": " << f.switches << ", \"drawn\": " << f.drawn << ", \"culled\": " << f.culled
+  o << "]";
+  if (!f.view_levels.empty()) {
+    o << ", \"view_levels\": [";
+    for (size_t g = 0; g < f.view_levels.size(); ++g) {
+      o << (g ? ", [" : "[");
+      for (size_t i = 0; i < f.view_levels[g].size(); ++i) o << (i ? "," : "") << static_cast<int>(f.view_levels[g][i]);
+      o << "]";
+    }
+    o << "]";
+  }
+  o << ", \"switches\": " << f.switches << ", \"drawn\": " << f.drawn << ", \"culled\": " << f.culled
     << ", \"dropped\": " << f.dropped << ", \"flags\": " << f.flags;
   std::snprintf(buf, sizeof(buf), ", \"triangles\": %.0f", f.triangles);
   o << buf;

@@ -540,45 +540,57 @@ CostFeatures frameFeatures(const FrameInput& in, const SlotSums& sums) {
 
 }  // namespace
 
-bool SelectionJob::validate() const {
-  if (!context || !camera || !cameraValid(*camera)) return false;
+const char* SelectionJob::error() const {
+  if (!context) return "no selector context";
+  const bool with_views = views.count > 0;
+  if (!with_views && (!camera || !cameraValid(*camera))) return "no camera, or an invalid one";
   const size_t n = centers.count;
-  if (n > context->max_objects) return false;
-  if (levels.cell_width.count > context->max_rows) return false;
-  if (radii.count != n || max_scales.count != n || chains.count != n || levels_out.count != n) return false;
-  if ((n > 0 && (!centers.data || !radii.data || !max_scales.data || !chains.data || !levels_out.data))) return false;
+  if (n > context->max_objects) return "more objects than the context holds";
+  if (levels.cell_width.count > context->max_rows) return "more level rows than the context holds";
+  if (radii.count != n || max_scales.count != n || chains.count != n || levels_out.count != n)
+    return "radii, max_scales, chains and levels_out need one entry per object";
+  if ((n > 0 && (!centers.data || !radii.data || !max_scales.data || !chains.data || !levels_out.data)))
+    return "a null per-object column";
   auto optional = [n](size_t count, const void* data) { return count == 0 || (count == n && data); };
   if (!optional(importance.count, importance.data) || !optional(must_draw.count, must_draw.data) ||
       !optional(visible_fraction.count, visible_fraction.data) || !optional(focus.count, focus.data) ||
-      !optional(motion.count, motion.data) || !optional(cost_ms_out.count, cost_ms_out.data))
-    return false;
-  if (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.pixels_per_cell)) return false;
-  if (!(params.hysteresis >= 0.0f) || !std::isfinite(params.hysteresis)) return false;
-  if (params.mode == SelectionMode::kBudget && !(params.budget_ms > 0.0f)) return false;
+      !optional(motion.count, motion.data) || !optional(cost_ms_out.count, cost_ms_out.data) ||
+      !optional(forced_levels.count, forced_levels.data))
+    return "an optional per-object column is neither empty nor one per object";
+  if (!with_views && (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.pixels_per_cell)))
+    return "pixels_per_cell must be positive and finite";
+  if (!(params.hysteresis >= 0.0f) || !std::isfinite(params.hysteresis)) return "hysteresis must be >= 0 and finite";
+  if (params.mode == SelectionMode::kBudget && !(params.budget_ms > 0.0f)) return "budget_ms must be positive";
   // level table
   const size_t rows = levels.cell_width.count;
-  if (levels.chain_level_offset.count < 1 || !levels.chain_level_offset.data) return false;
+  if (levels.chain_level_offset.count < 1 || !levels.chain_level_offset.data) return "no chain_level_offset";
   if (levels.triangle_count.count != rows || levels.vertex_count.count != rows || levels.line_point_count.count != rows)
-    return false;
+    return "level table columns of different lengths";
   if (rows > 0 && (!levels.cell_width.data || !levels.triangle_count.data || !levels.vertex_count.data ||
                    !levels.line_point_count.data))
-    return false;
+    return "a null level table column";
   const size_t chain_count = levels.chainCount();
-  if (levels.chain_level_offset[0] != 0 || levels.chain_level_offset[chain_count] != rows) return false;
+  if (levels.chain_level_offset[0] != 0 || levels.chain_level_offset[chain_count] != rows)
+    return "chain_level_offset must start at 0 and end at the row count";
   for (size_t c = 0; c < chain_count; ++c) {
     const uint32_t b = levels.chain_level_offset[c], e = levels.chain_level_offset[c + 1];
-    if (e < b || e - b > context->hull_stride - 1) return false;
+    if (e < b || e - b > context->hull_stride - 1) return "a chain with decreasing offsets or more levels than max_levels_per_chain";
     for (uint32_t r = b; r < e; ++r) {
       const float w = levels.cell_width[r];
-      if (!(w >= 0.0f) || !std::isfinite(w)) return false;
-      if (r > b && w < levels.cell_width[r - 1]) return false;
+      if (!(w >= 0.0f) || !std::isfinite(w)) return "a cell width negative or not finite";
+      if (r > b && w < levels.cell_width[r - 1]) return "cell widths decreasing within a chain";
     }
   }
   // no early exit: an OR over the whole column vectorises (the valid case reads it all anyway)
-  if (n > 0 && chain_count == 0) return false;
+  if (n > 0 && chain_count == 0) return "objects but no chain";
   const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
-  return (context->use_avx2 ? chainsAboveAvx2 : chainsAboveSse2)(chains.data, n, last_chain) == 0;
+  if ((context->use_avx2 ? chainsAboveAvx2 : chainsAboveSse2)(chains.data, n, last_chain) != 0)
+    return "a chain index out of range";
+  if (with_views || forced_levels.count) return viewsError(*this);
+  return nullptr;
 }
+
+bool SelectionJob::validate() const { return error() == nullptr; }
 
 bool SelectionJob::run() {
   if (!validate()) return false;
@@ -586,6 +598,10 @@ bool SelectionJob::run() {
   const CostCoefficients coef = takeReportedFrameTime(ctx, params.calibrate);
   priceRows(ctx, levels, coef);
   ctx.h1 = 1.0f + params.hysteresis;
+  if (views.count || forced_levels.count) {
+    runViews(*this, coef);  // selector_views.cpp
+    return true;
+  }
   const FrameInput in = frameInput(*this, coef);
 
   SlotSums sums{};

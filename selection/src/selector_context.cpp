@@ -34,6 +34,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   if (config.max_object_count == 0 || config.max_object_count > 0x7fffffffu) return nullptr;
   if (config.max_levels_per_chain < 1 || config.max_levels_per_chain > 64) return nullptr;
   if (config.bracket_capacity < 1 || config.max_level_rows < 1 || config.max_level_rows > (size_t(1) << 31)) return nullptr;
+  if (config.max_view_groups > kMaxViews) return nullptr;
   if (!(config.calibration.forgetting > 0.0 && config.calibration.forgetting <= 1.0) ||
       !(config.calibration.prior_weight > 0.0))
     return nullptr;
@@ -101,12 +102,17 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
   for (size_t i = 0; i < kRingSize; ++i) c->ring_frame[i] = ~uint64_t(0);
+  if (config.max_view_groups > 0 && !allocateViewScratch(*c, config.max_view_groups)) {
+    destroySelectorContext(c);
+    return nullptr;
+  }
   resetSelectorHistory(c);
   return c;
 }
 
 void destroySelectorContext(SelectorContext* c) {
   if (!c) return;
+  freeViewScratch(*c);
   const Allocator alloc = c->allocator;
   c->~SelectorContext();
   alloc.free(alloc.user, c);
@@ -115,6 +121,7 @@ void destroySelectorContext(SelectorContext* c) {
 void resetSelectorHistory(SelectorContext* c) {
   if (!c) return;
   std::memset(c->prev_level, 0xFF, c->max_objects);  // all -1
+  if (c->views.prev) std::memset(c->views.prev, 0xFF, c->max_objects * c->views.max_groups);
   c->last_lambda = 0.0;
   c->predict_width = kPredictWidthStart;
   c->has_history = false;

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "scenelod/selection/camera.h"
 #include "scenelod/selection/selector.h"
@@ -64,6 +65,58 @@ struct BracketEntry {
   float ratio;
   uint32_t slot;
   uint32_t step;  // upgrade from hull point `step` to `step + 1`
+};
+
+// A step along one object's hull of level tuples in a frame with views (budget_views.cpp): the
+// upgrade to the hull point of cost `cost` and benefit `benefit` whose levels are `tuple` (byte g =
+// the level in group g + 1, 0 = not drawn there). `order` = slot << 8 | step index: the tie-break
+// after the ratio (a total order, so the selection is deterministic).
+struct ViewStep {
+  float ratio;
+  float dcost;  // cost - the previous hull point's cost
+  float cost;
+  float benefit;
+  uint64_t order;
+  uint64_t tuple;
+};
+// One object in one group: its level-independent cost a (the views that see it, kind-weighted),
+// the geometry multiplier m (a level costs a + m * row cost), its benefit b at accuracy 1, the
+// accuracy term q (X R / scale of the view needing the finest level), and the kind-weighted object
+// and pixel features it adds when drawn.
+struct GroupTerms {
+  float a = 0.0f, m = 0.0f, b = 0.0f;
+  float q = std::numeric_limits<float>::infinity();
+  float feature_objects = 0.0f, feature_pixels = 0.0f;
+  int finest = 0;  // the coarsest level of accuracy 1 (finestLevel)
+};
+// A point of a tuple hull: cost, benefit, levels (byte g = level in group g + 1, 0 = not drawn).
+// No member initialisers: the hull code's arrays of them are scratch, not to be zeroed per object.
+struct TuplePoint {
+  float c, b;
+  uint64_t t;
+};
+// The points one object's joint hull may gather: per level of the primary group (and not drawn),
+// a chain summed over the groups of at most levels + 2 points each.
+constexpr size_t kTuplePoolCap = (kMaxViewLevels + 1) * kMaxViews * (kMaxViewLevels + 2);
+// Steps kept per group of an object's tuple hull (its cheaper end; docs/SELECTION.md, "Views").
+constexpr size_t kViewStepsPerGroup = 8;
+
+// The memory of frames with views (SelectorConfig::max_view_groups > 0): one allocation of its own.
+struct ViewScratch {
+  size_t max_groups = 0;
+  int8_t* prev = nullptr;          // max_objects * max_groups: last frame's level per object and group
+  uint32_t* slot_object = nullptr; // per slot (object in some view), in object order
+  uint8_t* slot_groups = nullptr;  // per slot: bit g = some view of group g sees the object
+  GroupTerms* slot_terms = nullptr; // per slot, max_groups: its terms in each group (the write-out's)
+  float* base_cost = nullptr;      // per slot: the hull's first point (not drawn, or the cheapest
+  float* base_benefit = nullptr;   // tuple of a must-draw or forced object)
+  uint64_t* base_tuple = nullptr;
+  uint32_t* best = nullptr;        // per slot: 1 + index of the chosen step, 0 = the base
+  uint8_t* best_step = nullptr;
+  ViewStep* steps = nullptr;
+  size_t step_capacity = 0;
+  TuplePoint* pool = nullptr;      // kTuplePoolCap: one object's joint hull's points
+  void* block = nullptr;
 };
 
 class SelectorContext {
@@ -126,6 +179,8 @@ class SelectorContext {
   // per-frame constants, valid during run() and until the next one
   float h1 = 1.0f;
 
+  ViewScratch views;  // frames with views (selector_views.cpp)
+
   // cost of drawing slot `s` at level `l` (-1: not drawn)
   float pointCost(size_t s, int l) const {
     if (l < 0) return 0.0f;
@@ -155,6 +210,17 @@ class SelectorContext {
 CostCoefficients takeReportedFrameTime(SelectorContext& ctx, bool calibrate);
 // Keeps this frame's features for a later time report and advances the context's history.
 void recordFrame(SelectorContext& ctx, const CostFeatures& features, bool budget, size_t slot_count);
+
+// ---- frames with views or forced levels (selector_views.cpp)
+
+// Null when the job's views, groups and forced levels are usable, else what is wrong.
+const char* viewsError(const SelectionJob& job);
+// Selects one level per object and group (job.views, or the job's camera as one primary view when
+// only forced levels are given) and writes the outputs and statistics.
+void runViews(const SelectionJob& job, const CostCoefficients& coef);
+// Allocates / frees the context's ViewScratch for max_view_groups groups. False when the allocator fails.
+bool allocateViewScratch(SelectorContext& ctx, size_t max_view_groups);
+void freeViewScratch(SelectorContext& ctx);
 
 // ---- SIMD passes (selector_simd.cpp): each in an SSE2 and an AVX2 form giving the same bits
 
@@ -326,6 +392,12 @@ PriceBracket predictedBracket(const SelectorContext& ctx);
 // rebuilds them.
 BudgetChoice lagrangianChoice(SelectorContext& ctx, const BudgetFrame& frame, const PriceBracket* predicted,
                               HullSums* hulls);
+
+// Frames with views (budget_views.cpp): the greedy on the tuple hulls' steps[0, count) by falling
+// ratio (ViewStep::order on ties) while they fit `avail`, stopping at the first that does not:
+// reorders the steps so that the taken ones come first and returns their count; *split = the
+// index of the first that did not fit, or count when all fit.
+size_t viewGreedy(ViewStep* steps, size_t count, double avail, size_t* split);
 
 // The heap greedy (budget_greedy.cpp): upgrades by decreasing marginal ratio until one does not
 // fit (stop) or all were tried; returns the first that did not fit.

@@ -144,6 +144,93 @@ static int checkAttributes(slod_context* ctx, const slod_mesh_desc* sphere) {
   return 1;
 }
 
+/* Several views: two eyes in one group and a shadow cascade in another, on a context with room for
+ * two groups; then the errors of bad views. Returns whether every check in it passed. */
+static int checkViews(const slod_mesh_desc* md, const slod_chain_desc* chd) {
+  const int before = failures;
+  slod_context_desc cd;
+  slod_context* vc = NULL;
+  slod_chain ch = SLOD_NULL_CHAIN;
+  slod_object_desc od;
+  slod_object obj;
+  slod_view views[9];
+  slod_frame_params fp;
+  slod_frame_result fr;
+  slod_selection sel[16];
+  int8_t levels[32];
+  int i, shadow_drawn = 0;
+  slod_context_desc_init(&cd);
+  cd.max_objects = 16;
+  cd.max_view_groups = 2;
+  CHECK(slod_context_create(&cd, &vc) == SLOD_OK);
+  CHECK(slod_chain_build(vc, md, chd, &ch) == SLOD_OK);
+  for (i = 0; i < 16; ++i) {
+    slod_object_desc_init(&od);
+    od.chain = ch;
+    od.translation[0] = 3.0f * (float)(i % 4) - 4.5f;
+    od.translation[2] = -3.0f - 6.0f * (float)(i / 4);
+    CHECK(slod_object_add(vc, &od, &obj) == SLOD_OK);
+  }
+  for (i = 0; i < 9; ++i) slod_view_init(&views[i]);
+  for (i = 0; i < 2; ++i) {
+    views[i].kind = SLOD_VIEW_EYE;
+    views[i].eye[0] = views[i].target[0] = i ? 0.032f : -0.032f;
+  }
+  views[2].kind = SLOD_VIEW_SHADOW;
+  views[2].group = 1;
+  views[2].eye[0] = 0.0f; views[2].eye[1] = 50.0f; views[2].eye[2] = -10.0f;
+  views[2].target[2] = -10.0f;
+  views[2].up[1] = 0.0f; views[2].up[2] = -1.0f;
+  views[2].ortho_height = 40.0f;
+  views[2].near_plane = 1.0f;
+  views[2].far_plane = 100.0f;
+  views[2].viewport_width = views[2].viewport_height = 1024;
+  views[2].pixels_per_cell = 0.25f; /* would want finer levels than the eyes */
+  slod_frame_params_init(&fp);
+  fp.budget_ms = 0.0f;
+  slod_frame_result_init(&fr);
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_OK);
+  CHECK(fr.group_count == 2);
+  for (i = 0; i < 16; ++i) {
+    CHECK(levels[i] == sel[i].level);
+    if (levels[16 + i] >= 0) {
+      CHECK(levels[i] >= 0 && levels[16 + i] >= levels[i]);
+      ++shadow_drawn;
+    }
+  }
+  CHECK(shadow_drawn > 0);
+  /* bad input */
+  CHECK(slod_select_views(vc, views, 9, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(vc), "view_count") != NULL);
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 16, &fr) == SLOD_ERROR_CAPACITY);
+  views[2].group = 0;
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(vc), "mixing kinds") != NULL);
+  views[2].group = 1;
+  views[2].viewport_width = 0;
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(vc), "zero viewport") != NULL);
+  views[2].viewport_width = 1024;
+  views[1].kind = 7;
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  slod_context_destroy(vc);
+  /* a context without room for view groups refuses views */
+  cd.max_view_groups = 0;
+  CHECK(slod_context_create(&cd, &vc) == SLOD_OK);
+  CHECK(slod_chain_build(vc, md, chd, &ch) == SLOD_OK);
+  slod_object_desc_init(&od);
+  od.chain = ch;
+  od.translation[2] = -3.0f;
+  CHECK(slod_object_add(vc, &od, &obj) == SLOD_OK);
+  views[1].kind = SLOD_VIEW_EYE;
+  CHECK(slod_select_views(vc, views, 3, &fp, sel, sizeof sel[0], 16, levels, 32, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(vc), "max_view_groups") != NULL);
+  slod_context_destroy(vc);
+  cd.max_view_groups = 9;
+  CHECK(slod_context_create(&cd, &vc) == SLOD_ERROR_INVALID_ARGUMENT);
+  return failures == before;
+}
+
 int main(int argc, char** argv) {
   slod_context_desc cd;
   slod_context* ctx = NULL;
@@ -299,6 +386,7 @@ int main(int argc, char** argv) {
 
   CHECK(checkChainLifecycle(ctx, chain, &md, &cam, &fp, objects[0]));
   CHECK(checkAttributes(ctx, &md));
+  CHECK(checkViews(&md, &chd));
 
   slod_context_destroy(ctx);
   free(positions);

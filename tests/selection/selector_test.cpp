@@ -216,6 +216,52 @@ TEST(Selector, RunAllocatesNothingAfterCreation) {
   EXPECT_EQ(counter.frees, 1u);
 }
 
+TEST(Selector, FramesWithViewsAllocateNothingAfterCreation) {
+  SyntheticScene s = makeScene(3, 2000, 10, 8, 200.0f, true);
+  CountingAllocator counter;
+  SelectorConfig cfg;
+  cfg.max_object_count = 2000;
+  cfg.max_view_groups = 2;
+  cfg.allocator.allocate = CountingAllocator::allocate;
+  cfg.allocator.free = CountingAllocator::release;
+  cfg.allocator.user = &counter;
+  SelectorContext* ctx = createSelectorContext(cfg);
+  ASSERT_NE(ctx, nullptr);
+  EXPECT_EQ(counter.allocations, 2u);  // the context and its view memory
+  std::vector<int8_t> levels, group_levels(2 * s.centers.size()), forced(s.centers.size(), -1);
+  for (size_t i = 0; i < forced.size(); i += 11) forced[i] = 2;
+  SelectionStats st;
+  SelectionJob job = makeJob(s, ctx, nullptr, levels, &st);
+  View views[3];
+  views[2].kind = ViewKind::kShadow;
+  views[2].group = 1;
+  views[2].pixels_per_cell = 4.0f;
+  views[2].camera.projection = Projection::kOrthographic;
+  views[2].camera.eye = glm::vec3(0.0f, 300.0f, -100.0f);
+  views[2].camera.target = glm::vec3(0.0f, 0.0f, -100.0f);
+  views[2].camera.up = glm::vec3(0.0f, 0.0f, -1.0f);
+  views[2].camera.ortho_height = 150.0f;
+  views[2].camera.far_plane = 1000.0f;
+  job.views = Span<const View>(views, 3);
+  job.group_levels_out = Span<int8_t>(group_levels.data(), group_levels.size());
+  job.forced_levels = Span<const int8_t>(forced.data(), forced.size());
+  const size_t before = g_heap_allocations.load();
+  for (int frame = 0; frame < 20; ++frame) {
+    for (int e = 0; e < 2; ++e) {
+      views[e].camera = makeCamera(glm::vec3(0.1f * frame + 0.06f * e, 0.0f, -0.5f * frame));
+      views[e].kind = ViewKind::kEye;
+    }
+    job.params.mode = frame % 3 == 2 ? SelectionMode::kDistance : SelectionMode::kBudget;
+    job.params.budget_ms = 2.0f + frame;
+    reportFrameTime(ctx, st.frame, 5.0f);
+    ASSERT_TRUE(job.run()) << job.error();
+  }
+  EXPECT_EQ(g_heap_allocations.load(), before);
+  EXPECT_EQ(counter.allocations, 2u);
+  destroySelectorContext(ctx);
+  EXPECT_EQ(counter.frees, 2u);
+}
+
 TEST(Selector, DistanceModePicksCoarsestAccurateEnoughLevel) {
   SyntheticScene s = makeScene(3, 500, 7, 8, 150.0f, true);
   Owned o(makeContext(500));

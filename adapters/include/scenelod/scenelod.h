@@ -94,6 +94,8 @@ typedef struct slod_context_desc {
   slod_allocator allocator;        /* memory of the per-frame selector state (default: C library) */
   slod_error_callback error_callback; /* optional */
   void* error_user;
+  uint32_t max_view_groups;        /* view groups slod_select_views may use, 0..8 (default 0: none,
+                                      and no memory for them; each costs about 285 bytes per object) */
 } slod_context_desc;
 
 static inline void slod_context_desc_init(slod_context_desc* desc) {
@@ -335,6 +337,7 @@ typedef struct slod_frame_result {
   float predicted_ms;          /* predicted cost of the chosen levels */
   uint32_t drawn_count, culled_count, dropped_count, switch_count;
   int over_budget;             /* nonzero when even the mandatory levels did not fit */
+  uint32_t group_count;        /* view groups of the frame (1 for slod_select) */
 } slod_frame_result;
 
 static inline void slod_camera_init(slod_camera* camera) {
@@ -365,6 +368,53 @@ static inline void slod_frame_result_init(slod_frame_result* result) {
  * No heap allocation after the first frame (unless recording); one thread at a time per context. */
 SLOD_API slod_status slod_select(slod_context* ctx, const slod_camera* camera, const slod_frame_params* params,
                                  void* out, size_t out_stride, size_t capacity, slod_frame_result* result);
+/* ---- several views per frame: shadow cascades, stereo eyes, split screens (docs/SELECTION.md) ---- */
+
+typedef enum slod_view_kind {
+  SLOD_VIEW_PRIMARY = 0,
+  SLOD_VIEW_SHADOW = 1,        /* an orthographic light camera, viewport in texels */
+  SLOD_VIEW_EYE = 2,           /* both eyes of a stereo pair in one group */
+  SLOD_VIEW_SECONDARY = 3      /* a mirror, a split screen */
+} slod_view_kind;
+
+typedef struct slod_view {
+  uint32_t size;               /* sizeof(slod_view), set by slod_view_init */
+  float eye[3], target[3], up[3]; /* defaults as slod_camera's */
+  float fov_y_deg;             /* perspective field of view (default 60), when ortho_height is 0 */
+  float ortho_height;          /* > 0: orthographic, the view's world-space height (default 0) */
+  float near_plane, far_plane; /* default 0.05 and 1e6 */
+  uint32_t viewport_width, viewport_height; /* pixels or texels, default 1280 x 720 */
+  int kind;                    /* slod_view_kind, default SLOD_VIEW_PRIMARY */
+  uint32_t group;              /* views with the same group get one level per object (default 0) */
+  float pixels_per_cell;       /* X of this view (default 1); shadows may be coarser, e.g. 4 */
+  float lod_bias;              /* multiplies X (default 1) */
+} slod_view;
+
+static inline void slod_view_init(slod_view* view) {
+  if (!view) return;
+  memset(view, 0, sizeof *view);
+  view->size = (uint32_t)sizeof *view;
+  view->eye[2] = 5.0f;
+  view->up[1] = 1.0f;
+  view->fov_y_deg = 60.0f;
+  view->near_plane = 0.05f;
+  view->far_plane = 1.0e6f;
+  view->viewport_width = 1280;
+  view->viewport_height = 720;
+  view->pixels_per_cell = 1.0f;
+  view->lod_bias = 1.0f;
+}
+/* Selects one level per object and view group for up to 8 views (stepped by views[0].size, the same
+ * for all). Groups are numbered in order of first appearance; levels[group * object_count + object]
+ * gets the level of the object written at index `object` of out (-1 where no view of the group sees
+ * it), levels_capacity entries being available; out gets the primary group's levels as slod_select
+ * writes them. A shadow group is never finer than the primary group where that sees the object.
+ * params->budget_ms as for slod_select (params->pixels_per_cell is not read: each view has its own).
+ * Needs slod_context_desc.max_view_groups >= the groups used; refused while recording. No heap
+ * allocation after the first frame; one thread at a time per context. */
+SLOD_API slod_status slod_select_views(slod_context* ctx, const slod_view* views, size_t view_count,
+                                       const slod_frame_params* params, void* out, size_t out_stride, size_t capacity,
+                                       int8_t* levels, size_t levels_capacity, slod_frame_result* result);
 /* Reports how long frame `frame` really took, to calibrate the cost model. May be called from one
  * other thread while slod_select runs (lock-free hand-over). */
 SLOD_API slod_status slod_report_frame_time(slod_context* ctx, uint64_t frame, float measured_ms);

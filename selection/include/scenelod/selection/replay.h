@@ -1,7 +1,7 @@
 #pragma once
-// Replay files (JSON lines, docs/REPLAY.md): a header line, then one line per frame with the camera,
-// optionally the measured frame time, a pick point and object moves. Offline code: allocates,
-// returns Error naming the file and line.
+// Replay files (JSON lines, docs/REPLAY.md): a header line, then one line per frame with the camera
+// (or, in version 2, a list of views), optionally the measured frame time, a pick point and object
+// moves. Offline code: allocates, returns Error naming the file and line.
 #include <cstdint>
 #include <fstream>
 #include <string>
@@ -11,6 +11,7 @@
 #include <glm/vec3.hpp>
 
 #include "scenelod/lodcore/status.h"
+#include "scenelod/selection/selector.h"
 
 namespace scenelod::selection {
 
@@ -19,7 +20,8 @@ namespace scenelod::selection {
 constexpr double kMaxReplayCoordinate = 1e18;
 
 struct ReplayHeader {
-  int version = 1;               // "scenelod_replay"
+  int version = 1;               // "scenelod_replay": 1, or 2 when frames carry "views" (writeReplay
+                                 // sets it from the frames)
   std::string scene;             // glTF/GLB, pack, level-scene JSON or "builtin:NAME"; relative to the replay file
   uint32_t viewport_width_px = 1280;
   uint32_t viewport_height_px = 720;
@@ -37,6 +39,17 @@ struct ReplayMove {
   float scale = 1.0f;
 };
 
+// One view of a version-2 frame ("views": [{kind, group, eye, target, up, fov_y_deg | ortho_height,
+// near, far, viewport, pixels_per_cell, lod_bias}]); kind is "primary", "shadow", "eye" or
+// "secondary". The camera's viewport and X default to the header's.
+struct ReplayView {
+  ViewKind kind = ViewKind::kPrimary;
+  uint32_t group = 0;
+  Camera camera;             // fov_y_rad or ortho_height by camera.projection
+  float pixels_per_cell = 1.0f;
+  float lod_bias = 1.0f;
+};
+
 struct ReplayFrame {
   uint64_t frame = 0;
   double time_s = 0.0;
@@ -48,6 +61,7 @@ struct ReplayFrame {
   bool has_pick = false;
   float pick_px[2] = {0.0f, 0.0f};
   std::vector<ReplayMove> moves;
+  std::vector<ReplayView> views;   // version 2: empty = the one camera above; else eye/target unused
 };
 
 struct Replay {
@@ -56,7 +70,9 @@ struct Replay {
 };
 
 // Reads a replay. Errors: missing file, a line that is not JSON, a missing or mistyped key, a
-// version other than 1, frames out of order, a non-finite number; each names the file and line.
+// version other than 1 or 2, "views" in a version-1 file, a bad view (unknown kind, both or neither
+// of fov_y_deg and ortho_height, more than 8), frames out of order, a non-finite number; each names
+// the file and line.
 Error readReplay(const std::string& path, Replay& out);
 
 // Reads a replay one frame at a time, for runs whose memory must not grow with their length

@@ -45,7 +45,9 @@ struct ReplayLogFrame {
   bool has_measured = false;
   double measured_ms = 0.0;
   bool measured_from_file = false;
-  std::vector<int8_t> levels;
+  std::vector<int8_t> levels;       // with views: the primary group's (selector.h, SelectionJob::views)
+  std::vector<std::vector<int8_t>> view_levels;  // frames with views: one per group, in order of
+                                                 // first appearance (logged as "view_levels")
   uint32_t switches = 0;
   uint32_t drawn = 0;
   uint32_t culled = 0;
@@ -65,7 +67,9 @@ struct ReplayLogFrame {
 };
 
 // Runs every frame of `replay` on `scene` (moves change the scene). Errors: an invalid scene, a move
-// naming a missing object, a frame whose camera is degenerate (eye == target), each naming the frame.
+// naming a missing object, a frame whose camera is degenerate (eye == target), views together with
+// ReplayRunOptions::visibility (occlusion is estimated for one camera), each naming the frame.
+// Version-2 replays get a context with room for 8 view groups (about 2 KB per object).
 Error runReplay(const Replay& replay, ReplayScene& scene, const ReplayRunOptions& options,
                 std::vector<ReplayLogFrame>& log);
 
@@ -78,7 +82,7 @@ Error runReplayStream(const ReplayHeader& header, const ReplayFrameSource& next_
                       const ReplayRunOptions& options, const ReplayLogSink& sink);
 
 // One log line (no newline): {"frame", "time_s", "budget_ms", "predicted_ms", "measured_ms",
-// "levels", "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
+// "levels", ["view_levels",] "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
 // fixed precision so logs compare exactly.
 std::string replayLogLine(const ReplayLogFrame& frame);
 Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log);

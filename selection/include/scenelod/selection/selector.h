@@ -59,6 +59,43 @@ enum class BudgetAlgorithm : uint8_t {
   kGreedy,      // upgrades by decreasing marginal ratio from a heap (Mason & Blake)
 };
 
+// What a view draws (SelectionParams::view_kinds weighs each kind; docs/SELECTION.md, "Views").
+enum class ViewKind : uint8_t {
+  kPrimary,    // the main camera
+  kShadow,     // a shadow map (cascade): an orthographic light camera, viewport in texels
+  kEye,        // one eye of a stereo pair (both eyes in one group)
+  kSecondary,  // a mirror, a split screen, a picture in picture
+};
+constexpr size_t kViewKindCount = 4;
+constexpr size_t kMaxViews = 8;
+// Chains longer than this are refused by a job with views or forced levels.
+constexpr size_t kMaxViewLevels = 16;
+
+// One view of a frame. Views with the same group value form one group: they get one level per
+// object, chosen for the union of their frusta, with the pixel size of the view that needs the
+// finest level (the nearest one when the views share X). A group's views share one kind.
+struct View {
+  Camera camera;                        // perspective or orthographic (cameraValid)
+  ViewKind kind = ViewKind::kPrimary;
+  uint32_t group = 0;                   // any value; groups are numbered in order of first appearance
+  float pixels_per_cell = 1.0f;         // X of this view (> 0); shadows may be coarser, e.g. 4
+  float lod_bias = 1.0f;                // > 0, multiplies X: 2 = twice as coarse (Unity's lodBias inverted)
+  Span<const float> visible_fraction;   // empty = 1, else one per object in [0, 1]: occlusion
+                                        // estimated for this view's camera, and only applied to it
+};
+
+// How a kind of view is priced and valued: the cost model's per-object, per-pixel and geometry
+// (triangles, vertices, line points) coefficients are multiplied by the first three when an object
+// is drawn in a view of that kind; its benefit there by `benefit`. The cost model's coefficients
+// stay shared: the calibration fits them on the scaled features, the scales themselves are not
+// learnt (one frame time cannot tell the passes apart).
+struct ViewKindWeights {
+  float object_cost = 1.0f;
+  float pixel_cost = 1.0f;
+  float geometry_cost = 1.0f;
+  float benefit = 1.0f;
+};
+
 enum SelectionFlag : uint32_t {
   kFlagOverBudget = 1u << 0,       // even the mandatory levels (must-draw at coarsest) exceed the budget
   kFlagObjectsDropped = 1u << 1,   // some objects in view were not drawn to fit the budget
@@ -77,6 +114,10 @@ struct SelectionParams {
   bool half_approximation = true;   // compare with the first non-fitting upgrade alone (1/2 bound)
   BudgetAlgorithm algorithm = BudgetAlgorithm::kLagrangian;
   bool calibrate = true;            // fit the cost model from reported frame times
+  // per ViewKind (primary, shadow, eye, secondary), for jobs with views: a shadow pass draws depth
+  // only (cheaper pixels, position-only vertices) and is worth less than what the camera shows
+  ViewKindWeights view_kinds[kViewKindCount] = {
+      {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 0.25f, 0.5f, 0.25f}, {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 1.0f, 1.0f, 1.0f}};
 };
 
 struct SelectionStats {
@@ -93,6 +134,7 @@ struct SelectionStats {
   uint32_t switch_count = 0;       // objects whose level changed since last frame (to/from -1 included)
   uint32_t search_passes = 0;      // linear passes of the price search
   uint32_t flags = 0;              // SelectionFlag bits
+  uint32_t group_count = 0;        // view groups of the frame (1 without views)
 };
 
 class SelectorContext;
@@ -107,6 +149,9 @@ struct SelectorConfig {
   Allocator allocator;               // null functions = defaultAllocator()
   bool sse2_only = false;            // true: the SSE2 code paths even where the CPU has AVX2 (both
                                      // give the same bits; tests compare them)
+  size_t max_view_groups = 0;        // 0..8: view groups a job may use (views, forced levels); 0 keeps
+                                     // no memory for them. Each costs 285 bytes per object, plus 26
+                                     // per object and 39 KB for any (docs/SELECTION.md, "Views").
 };
 
 // Creates a context: all memory for max_object_count objects in one allocation. Returns null on a bad
@@ -132,7 +177,7 @@ void reportFrameTime(SelectorContext* context, uint64_t frame, float measured_ms
 
 // Predicted cost and benefit (hysteresis included) the last run() gave `object` at `level` (-1 = not
 // drawn) in budget mode. Returns false when the object was culled, the level is out of range, or
-// the last run was not in budget mode. Needs nothing of the last run's inputs. For tests and tools.
+// the last run was not a single-view budget frame (no views, no forced levels). Needs nothing of the last run's inputs. For tests and tools.
 bool selectorLastPoint(const SelectorContext* context, size_t object, int level, double* cost_ms,
                        double* benefit);
 
@@ -150,16 +195,34 @@ struct SelectionJob {
   Span<const float> visible_fraction;   // empty = 1 (visibility helper), else in [0, 1]
   Span<const float> focus;              // empty = 1, else >= 0
   Span<const float> motion;             // empty = 1, else in [0, 1] (lower for fast-moving objects)
+  // Several views (up to kMaxViews): empty = the one view of `camera` with params.pixels_per_cell.
+  // With views, `camera` and params.pixels_per_cell are not read, visible_fraction must be empty
+  // (each view has its own) and the context needs max_view_groups >= the groups used.
+  // Rules: a shadow group never gets an object finer than the primary group (the first group of
+  // kind primary, else of kind eye, else of kind secondary) unless the object is outside the
+  // primary group's views; an object outside every view of a group is -1 there and costs nothing.
+  Span<const View> views;
+  Span<const int8_t> forced_levels;     // empty = all free, else one per object: -1 free, or the level
+                                        // drawn in every group that sees the object (must be < its
+                                        // chain's level count); needs max_view_groups >= 1
   // outputs
-  Span<int8_t> levels_out;              // one per object: chosen level, -1 = not drawn
-  Span<float> cost_ms_out;              // empty or one per object: predicted cost of its level
+  Span<int8_t> levels_out;              // one per object: chosen level, -1 = not drawn; with views,
+                                        // the primary group's (else the first group's)
+  Span<int8_t> group_levels_out;        // empty, or with views group_count * objects: the level of
+                                        // object i in group g (order of first appearance) at g * n + i
+  Span<float> cost_ms_out;              // empty or one per object: predicted cost of its level(s)
   SelectionStats* stats = nullptr;      // may be null
   SelectorContext* context = nullptr;
 
-  // False on a null context or camera, an invalid camera, spans of the wrong size, more objects or
-  // level rows than the context holds, a malformed level table (offsets, more levels than max_levels_per_chain,
-  // decreasing or non-finite widths), a chain id out of range, non-positive budget in budget mode or
-  // non-positive pixels_per_cell. Cost: O(objects + rows).
+  // Null when the job can run, else what is wrong with it (a static string): a null context or
+  // camera, an invalid camera, spans of the wrong size, more objects or level rows than the context
+  // holds, a malformed level table (offsets, more levels than max_levels_per_chain, decreasing or
+  // non-finite widths), a chain id out of range, non-positive budget in budget mode or non-positive
+  // pixels_per_cell; with views: more than kMaxViews, a group mixing kinds, a view with a zero
+  // viewport or an invalid camera, X or bias not positive, more groups than max_view_groups, a
+  // wrong-sized output; a forced level out of its chain's range. Cost: O(objects + rows).
+  const char* error() const;
+  // error() == nullptr.
   bool validate() const;
   // validate(), then selects. Returns false (outputs untouched) when validation fails.
   // Cost: O(objects * levels) per frame plus a few linear passes; no allocation.
