@@ -19,13 +19,6 @@ uint16_t dominantJoint(const Mesh& m, size_t v) {
   return m.joints[v][best];
 }
 
-// whether joints a and b are equal or parent and child (only equal without a skeleton)
-bool compatible(const std::vector<int32_t>& parents, uint32_t a, uint32_t b) {
-  if (a == b) return true;
-  if (parents.empty()) return false;
-  return parents[a] == int32_t(b) || parents[b] == int32_t(a);
-}
-
 }  // namespace
 
 void clusterMembers(const Assignment& a, std::vector<uint32_t>& offset, std::vector<uint32_t>& members) {
@@ -55,23 +48,9 @@ void splitSkinClusters(const PreparedMesh& p, Assignment& a) {
     const uint32_t* end = members.data() + offset[c + 1];
     const uint16_t centre = dominant[a.heaviest[c]];
     if (std::all_of(begin, end, [&](uint32_t v) { return dominant[v] == centre; })) continue;
-    // the centre's joint keeps the related joint (its parent or a child) with the most members
-    // (ties: the lower joint); any two of centre, partner are then compatible
-    std::vector<uint16_t> related;
-    for (const uint32_t* v = begin; v != end; ++v)
-      if (dominant[*v] != centre && compatible(m.joint_parents, centre, dominant[*v])) related.push_back(dominant[*v]);
-    std::sort(related.begin(), related.end());
-    uint32_t partner = centre;
-    size_t most = 0;
-    for (size_t i = 0; i < related.size();) {
-      size_t j = i;
-      while (j < related.size() && related[j] == related[i]) ++j;
-      if (j - i > most) most = j - i, partner = related[i];
-      i = j;
-    }
     rest.clear();
     for (const uint32_t* v = begin; v != end; ++v)
-      if (dominant[*v] != centre && dominant[*v] != partner) rest.push_back({dominant[*v], *v});
+      if (dominant[*v] != centre) rest.push_back({dominant[*v], *v});
     // the others: one new cluster per dominant joint, its heaviest vertex as its centre
     std::sort(rest.begin(), rest.end());
     for (size_t i = 0; i < rest.size(); ++i) {

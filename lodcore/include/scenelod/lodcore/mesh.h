@@ -41,8 +41,8 @@ struct Mesh {
   // summing to more than 0; unused slots weight 0); both empty or both one per vertex
   std::vector<glm::u16vec4> joints;
   std::vector<glm::vec4> weights;
-  // the skeleton, optional: the parent of each joint (-1 for a root), so that clustering can tell
-  // neighbouring bones from unrelated limbs; when given, every joint index is below its size
+  // the skeleton, optional: the parent of each joint (-1 for a root), carried into levels, packs and
+  // the C API for engines; when given, every joint index is below its size
   std::vector<int32_t> joint_parents;
 
   // primitives, as indices into the vertex arrays
