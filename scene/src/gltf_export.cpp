@@ -553,7 +553,7 @@ class FallbackMaterials {
 
 // one level's mesh: its vertices shared by one TRIANGLES primitive per triangle group still
 // present (the source primitive's material and KHR_materials_variants mappings), LINES and POINTS
-// with the first primitive's material
+// one per edge and point group, with that group's source primitive's material
 int addLevelMesh(GlbWriter& w, FallbackMaterials& fallback, const Mesh& level, const tinygltf::Mesh& src,
                  const std::string& name) {
   tinygltf::Mesh out;
@@ -586,9 +586,26 @@ int addLevelMesh(GlbWriter& w, FallbackMaterials& fallback, const Mesh& level, c
     return p;
   };
   for (const auto& [group, indices] : by_group) add(sharing(indices), TINYGLTF_MODE_TRIANGLES, group);
-  if (!level.edges.empty())
-    add(level.edge_thickness.empty() ? sharing(level.edges) : w.addThickLines(level, shared), TINYGLTF_MODE_LINE, 0);
-  if (!level.points.empty()) add(sharing(level.points), TINYGLTF_MODE_POINTS, 0);
+  // thick edges and points in their own group's material (a thin part collapsed into edges keeps
+  // its material): one LINES and one POINTS primitive per group present
+  std::map<uint32_t, std::vector<size_t>> edges_by_group;
+  for (size_t e = 0; e < level.edgeCount(); ++e) edges_by_group[level.edgeGroup(e)].push_back(e);
+  for (const auto& [group, list] : edges_by_group) {
+    if (edges_by_group.size() == 1) {
+      add(level.edge_thickness.empty() ? sharing(level.edges) : w.addThickLines(level, shared), TINYGLTF_MODE_LINE, group);
+      continue;
+    }
+    Mesh part = level;  // (levels with edges in several groups are rare and their edges few)
+    part.edges.clear(), part.edge_thickness.clear(), part.edge_groups.clear();
+    for (size_t e : list) {
+      part.edges.insert(part.edges.end(), {level.edges[2 * e], level.edges[2 * e + 1]});
+      if (!level.edge_thickness.empty()) part.edge_thickness.push_back(level.edge_thickness[e]);
+    }
+    add(part.edge_thickness.empty() ? sharing(part.edges) : w.addThickLines(part, shared), TINYGLTF_MODE_LINE, group);
+  }
+  std::map<uint32_t, std::vector<uint32_t>> points_by_group;
+  for (size_t i = 0; i < level.pointCount(); ++i) points_by_group[level.pointGroup(i)].push_back(level.points[i]);
+  for (const auto& [group, indices] : points_by_group) add(sharing(indices), TINYGLTF_MODE_POINTS, group);
   w.write_skin = false;
   w.model.meshes.push_back(std::move(out));
   return static_cast<int>(w.model.meshes.size() - 1);

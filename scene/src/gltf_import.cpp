@@ -802,8 +802,8 @@ class GltfReader {
       m.weights = std::move(b.weights);
     }
     // one primitive: no groups (the convention for "all in group 0")
-    if (std::all_of(m.triangle_groups.begin(), m.triangle_groups.end(), [](uint32_t g) { return g == 0; }))
-      m.triangle_groups.clear();
+    for (std::vector<uint32_t>* groups : {&m.triangle_groups, &m.edge_groups, &m.point_groups})
+      if (std::all_of(groups->begin(), groups->end(), [](uint32_t g) { return g == 0; })) groups->clear();
   }
 
   // `joint_end[p]`: one more than the largest joint primitive p uses (0 without JOINTS_0)
@@ -847,6 +847,8 @@ class GltfReader {
       if (Error e = readPrimitiveIndices(p, vs.count, what, idx); !e.ok()) return e;
       if (Error e = addPrimitive(mode, idx, vs.offset, thickness, a.thickness >= 0, what, m, b); !e.ok()) return e;
       m.triangle_groups.resize(m.triangleCount(), static_cast<uint32_t>(pi));
+      m.edge_groups.resize(m.edgeCount(), static_cast<uint32_t>(pi));
+      m.point_groups.resize(m.pointCount(), static_cast<uint32_t>(pi));
     }
     finishMesh(b, m);
     return {};

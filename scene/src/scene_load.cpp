@@ -123,12 +123,15 @@ Mesh flattenScene(const SceneData& scene) {
     const float thickness_scale = std::cbrt(std::fabs(det));
     const uint32_t base = static_cast<uint32_t>(out.positions.size());
     appendVertices(m, w, any, out);
+    // each primitive's group becomes its material's index
+    auto material = [&](uint32_t group) {
+      const int32_t mat = group < md.primitive_materials.size() ? md.primitive_materials[group] : -1;
+      return mat >= 0 ? static_cast<uint32_t>(mat) : kNoMaterial;
+    };
     for (size_t t = 0; t + 2 < m.triangles.size(); t += 3) {
       const uint32_t a = m.triangles[t], b = m.triangles[t + 1], c = m.triangles[t + 2];
       out.triangles.insert(out.triangles.end(), {base + a, base + (mirrored ? c : b), base + (mirrored ? b : c)});
-      const uint32_t group = m.triangleGroup(t / 3);
-      const int32_t mat = group < md.primitive_materials.size() ? md.primitive_materials[group] : -1;
-      if (!scene.materials.empty()) out.triangle_groups.push_back(mat >= 0 ? static_cast<uint32_t>(mat) : kNoMaterial);
+      if (!scene.materials.empty()) out.triangle_groups.push_back(material(m.triangleGroup(t / 3)));
     }
     if (any.faces) {
       auto addFace = [&](const uint32_t* corners, size_t k) {
@@ -146,6 +149,10 @@ Mesh flattenScene(const SceneData& scene) {
     if (any.thick)
       for (size_t e = 0; e < m.edgeCount(); ++e) out.edge_thickness.push_back(m.edgeThickness(e) * thickness_scale);
     for (uint32_t p : m.points) out.points.push_back(base + p);
+    if (!scene.materials.empty()) {
+      for (size_t e = 0; e < m.edgeCount(); ++e) out.edge_groups.push_back(material(m.edgeGroup(e)));
+      for (size_t i = 0; i < m.pointCount(); ++i) out.point_groups.push_back(material(m.pointGroup(i)));
+    }
   }
   return out;
 }

@@ -199,6 +199,45 @@ TEST(GltfImport, LinePrimitivesSharingVerticesKeepTheirOwnThickness) {
   EXPECT_EQ(m.edge_thickness, (std::vector<float>{0.5f, 0.5f}));  // (0.5+0.5)/2 and (0.25+0.75)/2
 }
 
+// a triangle (material 0), a line (material 1) and a point (no material) in one mesh: each keeps
+// its primitive as its group, and a flattened scene gives each its material
+TEST(GltfImport, EdgesAndPointsKeepTheirPrimitivesMaterial) {
+  const std::string dir = makeDir("prim_groups");
+  Bin bin;
+  const float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const uint16_t tri[] = {0, 1, 2, 0}, line[] = {0, 1}, point[] = {2, 0};
+  const size_t o0 = bin.add(pos, sizeof(pos)), o1 = bin.add(tri, 8), o2 = bin.add(line, 4), o3 = bin.add(point, 4);
+  writeBytes(dir + "/g.bin", bin.bytes);
+  std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"uri":"g.bin","byteLength":@LEN@}],
+    "bufferViews":[{"buffer":0,"byteOffset":@O0@,"byteLength":36},{"buffer":0,"byteOffset":@O1@,"byteLength":6},
+                   {"buffer":0,"byteOffset":@O2@,"byteLength":4},{"buffer":0,"byteOffset":@O3@,"byteLength":2}],
+    "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},
+                 {"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"},
+                 {"bufferView":2,"componentType":5123,"count":2,"type":"SCALAR"},
+                 {"bufferView":3,"componentType":5123,"count":1,"type":"SCALAR"}],
+    "materials":[{"name":"a"},{"name":"b"}],
+    "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0},
+                             {"attributes":{"POSITION":0},"indices":2,"mode":1,"material":1},
+                             {"attributes":{"POSITION":0},"indices":3,"mode":0}]}],
+    "nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  json = replaceAll(json, "@LEN@", std::to_string(bin.bytes.size()));
+  json = replaceAll(json, "@O0@", std::to_string(o0));
+  json = replaceAll(json, "@O1@", std::to_string(o1));
+  json = replaceAll(json, "@O2@", std::to_string(o2));
+  json = replaceAll(json, "@O3@", std::to_string(o3));
+  writeText(dir + "/g.gltf", json);
+  SceneData s;
+  const Error e = importGltf(dir + "/g.gltf", s);
+  ASSERT_TRUE(e.ok()) << e.message;
+  const Mesh& m = s.meshes[0].mesh;
+  EXPECT_EQ(m.edge_groups, (std::vector<uint32_t>{1}));
+  EXPECT_EQ(m.point_groups, (std::vector<uint32_t>{2}));
+  const Mesh flat = flattenScene(s);
+  EXPECT_EQ(flat.triangle_groups, (std::vector<uint32_t>{0}));
+  EXPECT_EQ(flat.edge_groups, (std::vector<uint32_t>{1}));
+  EXPECT_EQ(flat.point_groups, (std::vector<uint32_t>{kNoMaterial}));
+}
+
 TEST(GltfImport, NonIndexedPrimitiveUsesVerticesInOrder) {
   SquareGltf g;
   g.pos_count = "3";
