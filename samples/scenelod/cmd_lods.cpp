@@ -40,7 +40,10 @@ const std::string kUsage = std::string(
     "  --cell W1     first cell width, object space (default: level 1 has about half the triangles)\n"
     "  --cell-rel F  first cell width as F x the bounding-box diagonal\n"
     "  --split       one file per level (the whole model in world space)\n"
-    "  --flatten     OUT.glb holds one chain of the whole model in world space\n") +
+    "  --flatten     OUT.glb holds one chain of the whole model in world space\n"
+    "  --thick-edges prisms|lines  glTF input: a level's thick edges as 3-sided prisms and its points\n"
+    "                as octahedra, triangles any viewer draws (prisms, the default), or as LINES with\n"
+    "                _THICKNESS and POINTS, for engines drawing through scenelod's adapter (lines)\n") +
     kClusterOptionsHelp + kZhangOptionsHelp +
     "  zhang levels halve the triangle count; their cell width is 2 x d / sqrt(3), d a bound of the\n"
     "  original vertices' distance to the level (docs/ZHANG.md)\n" +
@@ -48,7 +51,8 @@ const std::string kUsage = std::string(
     "  scrooge levels in OUT.glb without --split/--flatten are per mesh in object space: --cell-rel only\n";
 
 // every unique mesh's chain in object space, written as one GLB with MSFT_lod per mesh node
-int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel) {
+int runSceneLods(const std::string& in, const std::string& out, const ChainParams& cp, float cell, float rel,
+                 scene::ThickEdges thick_edges) {
   scene::SceneData s;
   if (Error e = scene::loadScene(in, s); !e.ok()) return runError("lods", e.message);
   const std::string in_ext = scene::lowerExtension(in);
@@ -68,7 +72,8 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
   std::vector<const LodChain*> chains;
   for (const LodChain& c : lods.chains) chains.push_back(&c);
   std::vector<std::string> notes;
-  const Error written = pass_through ? scene::exportGltfLods(in, out, s, chains, &notes) : scene::exportGlb(out, s, &chains);
+  const Error written =
+      pass_through ? scene::exportGltfLods(in, out, s, chains, &notes, thick_edges) : scene::exportGlb(out, s, &chains);
   if (!written.ok()) return runError("lods", written.message);
   for (const std::string& note : notes) std::printf("%s: %s\n", in.c_str(), note.c_str());
 
@@ -122,7 +127,7 @@ int runSceneLods(const std::string& in, const std::string& out, const ChainParam
 
 int runLods(const std::vector<std::string>& argv) {
   std::vector<std::string> options = clusterOptionNames();
-  for (const char* o : {"--out", "--levels", "--cell", "--cell-rel"}) options.push_back(o);
+  for (const char* o : {"--out", "--levels", "--cell", "--cell-rel", "--thick-edges"}) options.push_back(o);
   for (const std::string& o : zhangOptionNames()) options.push_back(o);
   for (const std::string& o : scroogeOptionNames()) options.push_back(o);
   Args args(argv, {"--split", "--flatten"}, options);
@@ -161,6 +166,10 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell-rel") && (!args.getDouble("--cell-rel", rel) || !(rel > 0.0)))
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
+  const std::string thick = args.get("--thick-edges", "prisms");
+  if (thick != "prisms" && thick != "lines")
+    return usageError("lods", "--thick-edges takes prisms or lines, not '" + thick + "'");
+  const scene::ThickEdges thick_edges = thick == "lines" ? scene::ThickEdges::kLines : scene::ThickEdges::kPrisms;
   if (ext != ".obj" && !args.has("--split") && !args.has("--flatten")) {
     for (const std::string& o : zhangOptionNames())  // per-mesh chains go through buildChain's defaults
       if (args.has(o)) return usageError("lods", o + " needs --flatten or --split (per-mesh chains use the zhang defaults)");
@@ -168,7 +177,7 @@ int runLods(const std::vector<std::string>& argv) {
       return usageError("lods", "per-mesh scrooge chains take --cell or --cell-rel; use --flatten or --split for "
                                 "--subvolume and --theta-max");
     // scrooge: --cell-rel F is the sub-volume diagonal, so the cube edge is F / sqrt(3) x the diagonal
-    return runSceneLods(in, out, cp, float(cell), float(scrooge ? rel / std::sqrt(3.0) : rel));
+    return runSceneLods(in, out, cp, float(cell), float(scrooge ? rel / std::sqrt(3.0) : rel), thick_edges);
   }
 
   Mesh mesh;

@@ -648,20 +648,135 @@ tinygltf::Node levelNode(const tinygltf::Model& m, size_t i, int mesh, const Lod
   return node;
 }
 
+// a copy of vertex `from` of `m` (every attribute) at `p` with normal `n`, appended to `m`
+uint32_t copyVertex(Mesh& m, uint32_t from, const glm::vec3& p, const glm::vec3& n) {
+  auto copy = [from](auto& v) {
+    if (!v.empty()) v.push_back(v[from]);
+  };
+  m.positions.push_back(p);
+  if (!m.normals.empty()) m.normals.push_back(n);
+  copy(m.colors), copy(m.uvs), copy(m.tangents), copy(m.joints), copy(m.weights);
+  for (std::vector<glm::vec2>& set : m.extra_uvs) copy(set);
+  return static_cast<uint32_t>(m.positions.size() - 1);
+}
+
+// Thick edges and points as triangles any viewer draws (glTF viewers draw LINES one pixel wide and
+// ignore _THICKNESS): each edge of thickness t > 0 a 3-sided prism of circumradius t / 2 along it
+// (6 vertices, 8 triangles), each point an octahedron of circumradius half the level's cell width
+// (6 vertices, 8 triangles), in the edge's or point's group, their vertices copies of its own
+// (texture coordinates, colour, skin) with radial normals. Hairline edges (thickness 0) stay edges.
+// Returns the triangles added.
+size_t thickPrimitivesAsTriangles(Mesh& m, float cell_width) {
+  const size_t before = m.triangleCount();
+  if (m.triangle_groups.empty()) m.triangle_groups.assign(before, 0u);
+  if (m.normals.empty() && !m.positions.empty()) m.normals.assign(m.positions.size(), glm::vec3(0.0f, 0.0f, 1.0f));
+  auto addTriangle = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t group) {
+    m.triangles.insert(m.triangles.end(), {a, b, c});
+    m.triangle_groups.push_back(group);
+  };
+  std::vector<uint32_t> edges;
+  std::vector<float> thickness;
+  std::vector<uint32_t> edge_groups;
+  const size_t edge_count = m.edgeCount();
+  for (size_t e = 0; e < edge_count; ++e) {
+    const uint32_t ia = m.edges[2 * e], ib = m.edges[2 * e + 1];
+    const float r = 0.5f * m.edgeThickness(e);
+    const glm::vec3 a = m.positions[ia], b = m.positions[ib];
+    const float len = glm::length(b - a);
+    if (!(r > 0.0f) || !(len > 0.0f)) {  // hairlines (and zero-length edges) stay edges
+      edges.insert(edges.end(), {ia, ib});
+      thickness.push_back(m.edgeThickness(e));
+      edge_groups.push_back(m.edgeGroup(e));
+      continue;
+    }
+    const glm::vec3 d = (b - a) / len;
+    const glm::vec3 helper = std::fabs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 u = glm::normalize(glm::cross(d, helper)), v = glm::cross(d, u);
+    uint32_t ra[3], rb[3];
+    for (int k = 0; k < 3; ++k) {
+      const float angle = 2.0943951f * float(k);
+      const glm::vec3 radial = std::cos(angle) * u + std::sin(angle) * v;
+      ra[k] = copyVertex(m, ia, a + r * radial, radial);
+      rb[k] = copyVertex(m, ib, m.positions[ib] + r * radial, radial);
+    }
+    const uint32_t g = m.edgeGroup(e);
+    for (int k = 0; k < 3; ++k) {
+      const int k1 = (k + 1) % 3;
+      addTriangle(ra[k], ra[k1], rb[k1], g);
+      addTriangle(ra[k], rb[k1], rb[k], g);
+    }
+    addTriangle(ra[0], ra[2], ra[1], g);
+    addTriangle(rb[0], rb[1], rb[2], g);
+  }
+  const float pr = 0.5f * cell_width;
+  std::vector<uint32_t> points, point_groups;
+  for (size_t i = 0; i < m.pointCount(); ++i) {
+    if (!(pr > 0.0f)) {
+      points.push_back(m.points[i]);
+      point_groups.push_back(m.pointGroup(i));
+      continue;
+    }
+    static const glm::vec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    uint32_t c[6];
+    for (int k = 0; k < 6; ++k) c[k] = copyVertex(m, m.points[i], m.positions[m.points[i]] + pr * kAxes[k], kAxes[k]);
+    const uint32_t g = m.pointGroup(i);
+    // the eight faces (+-x, +-y, +-z), each wound counter-clockwise seen from outside
+    for (int sx = 0; sx < 2; ++sx)
+      for (int sy = 0; sy < 2; ++sy)
+        for (int sz = 0; sz < 2; ++sz) {
+          const uint32_t x = c[sx], y = c[2 + sy], z = c[4 + sz];
+          if ((sx + sy + sz) % 2 == 0) addTriangle(x, y, z, g);
+          else addTriangle(x, z, y, g);
+        }
+  }
+  m.edges.swap(edges);
+  m.edge_thickness.swap(thickness);
+  m.edge_groups.swap(edge_groups);
+  m.points.swap(points);
+  m.point_groups.swap(point_groups);
+  if (std::all_of(m.edge_thickness.begin(), m.edge_thickness.end(), [](float t) { return t == 0.0f; }))
+    m.edge_thickness.clear();
+  return m.triangleCount() - before;
+}
+
 // appends every chain's level meshes (shared by the mesh's instances) and level nodes, and
 // MSFT_lod with the coverage values on every node that draws a mesh with levels
 void addLodLevels(GlbWriter& w, const SceneData& scene, const std::vector<const LodChain*>& chains,
-                  std::vector<std::string>* notes) {
+                  ThickEdges thick_edges, std::vector<std::string>* notes) {
   const size_t mesh_count = w.model.meshes.size(), node_count = w.model.nodes.size();
   FallbackMaterials fallback(w.model, scene);
   std::vector<std::vector<int>> level_meshes(mesh_count);
+  struct PrismCount {
+    size_t meshes = 0, edges = 0, points = 0, triangles = 0;
+  };
+  std::vector<PrismCount> prisms;  // per level, summed over meshes, for the notes
   for (size_t m = 0; m < mesh_count; ++m) {
     const LodChain* c = chains[m];
     if (!c || c->levelCount() < 2) continue;
     const tinygltf::Mesh src = w.model.meshes[m];
     const std::string base = src.name.empty() ? "mesh" + std::to_string(m) : src.name;
-    for (size_t l = 1; l < c->levelCount(); ++l)
-      level_meshes[m].push_back(addLevelMesh(w, fallback, c->levels[l].mesh, src, base + "_LOD" + std::to_string(l)));
+    for (size_t l = 1; l < c->levelCount(); ++l) {
+      const LodLevel& level = c->levels[l];
+      const std::string name = base + "_LOD" + std::to_string(l);
+      if (thick_edges == ThickEdges::kLines || (level.mesh.edges.empty() && level.mesh.points.empty())) {
+        level_meshes[m].push_back(addLevelMesh(w, fallback, level.mesh, src, name));
+        continue;
+      }
+      Mesh drawn = level.mesh;
+      if (prisms.size() < l + 1) prisms.resize(l + 1);
+      prisms[l].meshes += 1;
+      prisms[l].edges += drawn.edgeCount();
+      prisms[l].points += drawn.pointCount();
+      prisms[l].triangles += thickPrimitivesAsTriangles(drawn, level.cell_width);
+      level_meshes[m].push_back(addLevelMesh(w, fallback, drawn, src, name));
+    }
+  }
+  for (size_t l = 0; notes && l < prisms.size(); ++l) {
+    const PrismCount& p = prisms[l];
+    if (p.triangles == 0) continue;
+    notes->push_back("level " + std::to_string(l) + ": " + std::to_string(p.edges) + " thick edge(s) and " +
+                     std::to_string(p.points) + " point(s) in " + std::to_string(p.meshes) + " mesh(es) drawn as " +
+                     std::to_string(p.triangles) + " triangles (--thick-edges lines keeps LINES and POINTS)");
   }
   bool any = false;
   for (size_t i = 0; i < node_count; ++i) {
@@ -777,7 +892,8 @@ std::vector<char> infiniteCameras(const tinygltf::Model& m) {
 }  // namespace
 
 Error exportGltfLods(const std::string& input, const std::string& output, const SceneData& scene,
-                     const std::vector<const LodChain*>& chains, std::vector<std::string>* notes) {
+                     const std::vector<const LodChain*>& chains, std::vector<std::string>* notes,
+                     ThickEdges thick_edges) {
   const std::string ext = lowerExtension(output);
   if (ext != ".glb" && ext != ".gltf")
     return {Status::kInvalidArgument, output + ": the output must end in .glb or .gltf"};
@@ -796,7 +912,7 @@ Error exportGltfLods(const std::string& input, const std::string& output, const 
     w.model = std::move(file.model);
     mergeBuffers(w.model);
     placeImages(w, file.image_bytes, glb, prefix, files);
-    addLodLevels(w, scene, chains, notes);
+    addLodLevels(w, scene, chains, thick_edges, notes);
     // a .gltf output writes several files: none of them may replace a file the input is read from
     if (!glb) {
       std::vector<std::string> written{output, bin_path};

@@ -35,6 +35,17 @@ std::string triangleGltf(const std::string& required = "") {
     "scenes":[{"nodes":[0,1]}],"scene":0})";
 }
 
+// the triangles a level has in a file written with prisms (the default): its own, plus 8 per thick
+// edge of non-zero length and 8 per point of a level with a cell width
+size_t drawnTriangles(const LodLevel& level) {
+  const Mesh& m = level.mesh;
+  size_t n = m.triangleCount();
+  for (size_t e = 0; e < m.edgeCount(); ++e)
+    if (m.edgeThickness(e) > 0.0f && m.positions[m.edges[2 * e]] != m.positions[m.edges[2 * e + 1]]) n += 8;
+  if (level.cell_width > 0.0f) n += 8 * m.pointCount();
+  return n;
+}
+
 std::string writeText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
   return path;
@@ -221,18 +232,19 @@ TEST(GltfPassThrough, SharedModelsRoundTrip) {
       ASSERT_EQ(chains[m].levelCount(), lods.chains[m].levelCount()) << "mesh " << m;
       EXPECT_EQ(chains[m].levels[0].mesh.positions, sa.meshes[m].mesh.positions) << "mesh " << m;
       for (size_t l = 1; l < chains[m].levelCount(); ++l)
-        EXPECT_EQ(chains[m].levels[l].mesh.triangleCount(), lods.chains[m].levels[l].mesh.triangleCount());
+        EXPECT_EQ(chains[m].levels[l].mesh.triangleCount(), drawnTriangles(lods.chains[m].levels[l]));
     }
   }
 }
 
 // the Fox's levels from buildLods carry weights: every level node keeps the skin, and every
-// primitive of its mesh (thick lines with their own vertices included) has JOINTS_0 and WEIGHTS_0
+// primitive of its mesh (thick lines with their own vertices included, written as lines) has
+// JOINTS_0 and WEIGHTS_0
 TEST(GltfPassThrough, EveryPrimitiveOfASkinnedLevelIsSkinned) {
   SCENELOD_REQUIRE_SHARED_MODELS();
   const std::string out = makeDir("pass_fox_levels") + "/fox.glb";
   SceneLods lods;
-  const Error e = test::writeLods(test::sharedModelsDir() + "/Fox/Fox.glb", out, 8, lods);
+  const Error e = test::writeLods(test::sharedModelsDir() + "/Fox/Fox.glb", out, 8, lods, ThickEdges::kLines);
   ASSERT_TRUE(e.ok()) << e.message;
   const nlohmann::json j = test::readGltfJson(out);
   const nlohmann::json& ids = j["nodes"][1]["extensions"]["MSFT_lod"]["ids"];
@@ -247,4 +259,48 @@ TEST(GltfPassThrough, EveryPrimitiveOfASkinnedLevelIsSkinned) {
     }
   }
   EXPECT_GT(primitives, ids.size());  // some levels have thick lines or points beside their triangles
+}
+
+// the Fox's thin legs become thick edges at its coarser levels: written as prisms (the default) no
+// level has LINES and each edge adds 8 triangles; written as lines they stay LINES
+TEST(GltfPassThrough, ThickEdgesArePrismsUnlessLinesAreAskedFor) {
+  SCENELOD_REQUIRE_SHARED_MODELS();
+  const std::string in = test::sharedModelsDir() + "/Fox/Fox.glb";
+  SceneData s;
+  ASSERT_TRUE(importGltf(in, s).ok());
+  LodBuildParams params;
+  params.chain.level_count = 8;
+  SceneLods lods;
+  ASSERT_TRUE(buildLods(s, params, lods, nullptr, in).ok());
+  const std::vector<const LodChain*> chains{&lods.chains[0]};
+  size_t edges = 0;
+  for (const LodLevel& level : lods.chains[0].levels) edges += level.mesh.edgeCount();
+  ASSERT_GT(edges, 0u) << "the Fox's levels should have thick edges";
+  const std::string dir = makeDir("pass_prisms");
+  for (ThickEdges mode : {ThickEdges::kPrisms, ThickEdges::kLines}) {
+    const std::string out = dir + (mode == ThickEdges::kPrisms ? "/prisms.glb" : "/lines.glb");
+    std::vector<std::string> notes;
+    ASSERT_TRUE(exportGltfLods(in, out, s, chains, &notes, mode).ok());
+    size_t lines = 0;
+    const nlohmann::json j = test::readGltfJson(out);
+    for (size_t m = 1; m < j["meshes"].size(); ++m)
+      for (const nlohmann::json& p : j["meshes"][m]["primitives"]) lines += p.value("mode", 4) == 1;
+    SceneData back;
+    std::vector<LodChain> read;
+    ASSERT_TRUE(importGltfLods(out, back, read).ok());
+    ASSERT_EQ(read.size(), 1u);
+    ASSERT_EQ(read[0].levelCount(), lods.chains[0].levelCount());
+    if (mode == ThickEdges::kPrisms) {
+      EXPECT_EQ(lines, 0u);
+      EXPECT_FALSE(notes.empty());  // the triangles the prisms add, per level
+      for (size_t l = 1; l < read[0].levelCount(); ++l) {
+        EXPECT_EQ(read[0].levels[l].mesh.triangleCount(), drawnTriangles(lods.chains[0].levels[l])) << "level " << l;
+        EXPECT_EQ(read[0].levels[l].mesh.edgeCount(), 0u) << "level " << l;
+      }
+    } else {
+      EXPECT_GT(lines, 0u);
+      for (size_t l = 1; l < read[0].levelCount(); ++l)
+        EXPECT_EQ(read[0].levels[l].mesh.edgeCount(), lods.chains[0].levels[l].mesh.edgeCount()) << "level " << l;
+    }
+  }
 }

@@ -52,7 +52,8 @@ inline std::vector<std::string> sharedGltfModels() {
 
 // `levels` levels of every mesh of the glTF `in` (buildLods, as `scenelod lods` builds them) written
 // to `out` with exportGltfLods; `lods` receives the chains
-inline Error writeLods(const std::string& in, const std::string& out, size_t levels, scene::SceneLods& lods) {
+inline Error writeLods(const std::string& in, const std::string& out, size_t levels, scene::SceneLods& lods,
+                       scene::ThickEdges thick_edges = scene::ThickEdges::kPrisms) {
   scene::SceneData s;
   if (Error e = scene::importGltf(in, s); !e.ok()) return e;
   scene::LodBuildParams params;
@@ -60,7 +61,7 @@ inline Error writeLods(const std::string& in, const std::string& out, size_t lev
   if (Error e = scene::buildLods(s, params, lods, nullptr, in); !e.ok()) return e;
   std::vector<const LodChain*> chains;
   for (const LodChain& c : lods.chains) chains.push_back(&c);
-  return scene::exportGltfLods(in, out, s, chains);
+  return scene::exportGltfLods(in, out, s, chains, nullptr, thick_edges);
 }
 
 }  // namespace scenelod::test

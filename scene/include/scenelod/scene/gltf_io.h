@@ -76,8 +76,8 @@ Error exportGlb(const std::string& path, const SceneData& scene,
 // one TRIANGLES primitive per triangle group the level still has (group g = source primitive g:
 // its material and KHR_materials_variants mappings; when the level lacks the UV sets the material's
 // textures read, or the tangents its normal map had, an untextured copy of the material appended
-// to the file, base colour factor x the texture's mean from `scene`), LINES with _THICKNESS for
-// edges and POINTS,
+// to the file, base colour factor x the texture's mean from `scene`), thick edges and points as
+// `thick_edges` says (below), one primitive per group,
 // with every attribute the level mesh has (POSITION, NORMAL, TANGENT, COLOR_0, TEXCOORD_n,
 // JOINTS_0 / WEIGHTS_0). Each node drawing such a mesh gets MSFT_lod ids of new parentless level
 // nodes (as exportGlb writes them) and extras.MSFT_screencoverage; a level node of a skinned node
@@ -91,8 +91,15 @@ Error exportGlb(const std::string& path, const SceneData& scene,
 // outside the material and texture ones, KHR_mesh_quantization and KHR_lights_punctual (named in
 // the message), and an input that already has MSFT_lod. Never throws.
 // `scene` is importGltf's reading of `input` (for the texture means).
+// `thick_edges`: kPrisms (the default) writes each thick edge of a level as a 3-sided prism of
+// circumradius half its thickness and each point as an octahedron of circumradius half the level's
+// cell width, triangles in the edge's or point's material that any viewer draws (glTF viewers draw
+// LINES one pixel wide and ignore _THICKNESS); hairline edges stay LINES. kLines keeps LINES with
+// _THICKNESS and POINTS, for engines that draw them through scenelod's adapter.
+enum class ThickEdges : uint8_t { kPrisms, kLines };
 Error exportGltfLods(const std::string& input, const std::string& output, const SceneData& scene,
-                     const std::vector<const LodChain*>& chains, std::vector<std::string>* notes = nullptr);
+                     const std::vector<const LodChain*>& chains, std::vector<std::string>* notes = nullptr,
+                     ThickEdges thick_edges = ThickEdges::kPrisms);
 
 // Merges every object of the scene (one copy per node instance) into one world-space mesh, as used
 // to simplify or measure a whole model: positions by the world transform (worldTransforms: skinned
