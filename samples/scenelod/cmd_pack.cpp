@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,8 @@ const std::string kUsage = std::string(
     "\n"
     "Builds the LOD chain of every unique mesh of IN (.obj, .gltf, .glb) in parallel, each level from\n"
     "the original with cell widths doubling, and writes a LOD pack: the scene's nodes, objects and\n"
-    "transforms and every chain, ordered for the vertex cache and vertex fetch (docs/SCENE.md).\n"
+    "transforms and every chain, ordered for the vertex cache and vertex fetch (docs/SCENE.md), and\n"
+    "each level's material of every triangle group, edge and point, the materials referring to IN.\n"
     "Prints a table per mesh, the totals, and the time to load the pack back.\n"
     "\n"
     "  -o, --out FILE  the pack to write\n"
@@ -66,6 +68,11 @@ int runCheck(const std::string& path) {
   if (!e.ok()) return runError("pack", e.message);
   std::printf("%s: %zu bytes, %zu nodes, %zu objects, %zu chains, %zu levels, %zu triangles over all levels\n",
               path.c_str(), p.byteSize(), p.nodeCount(), p.objectCount(), p.chainCount(), levels, tris);
+  if (p.materialCount() > 0) {
+    std::printf("%zu materials of %s:", p.materialCount(), p.material(0).source);
+    for (size_t i = 0; i < p.materialCount(); ++i) std::printf("%s '%s'", i ? "," : "", p.material(i).name);
+    std::printf("\n");
+  }
   std::printf("load (one read + checks, best of 5): %.2f ms\n", ms);
   return 0;
 }
@@ -99,8 +106,6 @@ int runPack(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "%s\n", info.note.c_str());
   } else if (Error e = scene::loadScene(in, s); !e.ok()) {
     return runError("pack", e.message);
-  } else {
-    scene::bakeMaterialColors(s);  // packs hold no materials: vertex colours carry them
   }
   ProgressBar bar("pack");
   params.progress = bar.callback();
@@ -110,6 +115,13 @@ int runPack(const std::vector<std::string>& argv) {
 
   scene::PackWriteOptions wo;
   wo.optimize_order = !args.has("--no-order");
+  if (!demo) {
+    // where the full materials (textures, ...) are, as seen from the pack's folder
+    std::error_code ec;
+    const std::filesystem::path pack_dir = std::filesystem::absolute(out, ec).lexically_normal().parent_path();
+    const std::filesystem::path rel = std::filesystem::absolute(in, ec).lexically_normal().lexically_relative(pack_dir);
+    wo.material_source = rel.empty() ? in : rel.generic_string();
+  }
   scene::PackWriteStats stats;
   const auto t_write = std::chrono::steady_clock::now();
   if (Error e = scene::writePack(out, s, lods.chains, lods.chain_spheres, wo, &stats); !e.ok()) return runError("pack", e.message);

@@ -51,9 +51,9 @@ constexpr size_t kChecksumOffset = 24;
 
 enum SectionKind : uint32_t {
   kNodes = 1, kChildren = 2, kRoots = 3, kObjects = 4, kChains = 5, kLevels = 6, kNames = 7, kData = 8,
-  kLevelAttributes = 9,
+  kLevelAttributes = 9, kMaterials = 10, kLevelGroups = 12,  // kind 11: geomorph data
 };
-constexpr uint32_t kSectionKindCount = 9;
+constexpr uint32_t kSectionKindCount = 12;
 // sections every pack has; later kinds are optional (a pack written before them has none)
 constexpr uint32_t kRequiredSectionKinds = 8;
 
@@ -125,9 +125,40 @@ struct LevelAttributesRecord {
 };
 static_assert(sizeof(LevelAttributesRecord) == 80, "level attributes record is 80 bytes");
 
+// What scenelod reads of a material (MaterialData), and where the full material is: material
+// `index` of the glTF file `source`. One record per material, in the scene's order; written only
+// when the scene has materials.
+struct MaterialRecord {
+  uint32_t name;    // offset in the names section
+  uint32_t source;  // offset in the names section: the file the material comes from ("" = unknown)
+  int32_t index;    // its index in that file's materials
+  uint32_t flags;   // bit 0: has a base colour texture
+  float base_color[4];
+  float average_texel_color[3];
+  int32_t base_color_texture;  // texture index in the source file, -1 for none
+  uint32_t base_color_texcoord;
+  float transform[5];  // KHR_texture_transform: offset x, y, rotation, scale x, y
+  int32_t transform_texcoord;
+  uint32_t reserved;
+};
+static_assert(sizeof(MaterialRecord) == 80, "material record is 80 bytes");
+
+// The material of every group of a level, and the groups of its edges and points; one record per
+// level record (same order), written when a mesh has materials or groups.
+struct LevelGroupsRecord {
+  uint32_t group_count;     // entries of group_materials
+  uint32_t reserved;
+  uint64_t group_materials;  // group_count x i32: material record index, -1 for none
+  uint64_t edge_groups;      // edge_count x u32; 0 = every edge in group 0
+  uint64_t point_groups;     // point_count x u32; 0 = every point in group 0
+};
+static_assert(sizeof(LevelGroupsRecord) == 32, "level groups record is 32 bytes");
+
+// element sizes by kind; 0 = a kind this build does not read (skipped)
 constexpr uint32_t kElementBytes[kSectionKindCount + 1] = {0, sizeof(NodeRecord), 4, 4, sizeof(ObjectRecord),
                                                            sizeof(ChainRecord), sizeof(LevelRecord), 1, 1,
-                                                           sizeof(LevelAttributesRecord)};
+                                                           sizeof(LevelAttributesRecord), sizeof(MaterialRecord), 0,
+                                                           sizeof(LevelGroupsRecord)};
 
 size_t align16(size_t x) { return (x + 15) & ~size_t(15); }
 
@@ -272,10 +303,34 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   }
 
   // fixed layout up to the data section
-  bool attributes = false;
+  bool attributes = false, groups = !scene.materials.empty();
   for (const LodChain& chain : chains)
-    for (const LodLevel& l : chain.levels) attributes = attributes || hasExtraAttributes(l);
-  const uint32_t section_count = attributes ? kSectionKindCount : kRequiredSectionKinds;
+    for (const LodLevel& l : chain.levels) {
+      attributes = attributes || hasExtraAttributes(l);
+      groups = groups || !l.mesh.edge_groups.empty() || !l.mesh.point_groups.empty();
+    }
+  for (const MeshData& m : scene.meshes) groups = groups || !m.primitive_materials.empty();  // in range: validateSceneData
+  const bool materials = !scene.materials.empty();
+  const uint32_t section_count = kRequiredSectionKinds + uint32_t(attributes) + uint32_t(materials) + uint32_t(groups);
+  std::vector<MaterialRecord> material_records(scene.materials.size());
+  const uint32_t source_name = materials ? addName(names, opt.material_source) : 0;
+  for (size_t i = 0; i < scene.materials.size(); ++i) {
+    const MaterialData& md = scene.materials[i];
+    MaterialRecord& r = material_records[i];
+    std::memset(&r, 0, sizeof r);
+    r.name = addName(names, md.name);
+    r.source = source_name;
+    r.index = static_cast<int32_t>(i);
+    r.flags = md.textured ? 1u : 0u;
+    std::memcpy(r.base_color, &md.base_color[0], sizeof r.base_color);
+    std::memcpy(r.average_texel_color, &md.average_texel_color[0], sizeof r.average_texel_color);
+    r.base_color_texture = md.base_color_texture;
+    r.base_color_texcoord = md.base_color_texcoord;
+    const TextureTransform& t = md.base_color_transform;
+    const float tf[5] = {t.offset.x, t.offset.y, t.rotation, t.scale.x, t.scale.y};
+    std::memcpy(r.transform, tf, sizeof tf);
+    r.transform_texcoord = t.texcoord;
+  }
   std::vector<ChainRecord> chain_records(chains.size());
   std::vector<LevelRecord> levels;
   for (size_t c = 0; c < chains.size(); ++c) {
@@ -309,12 +364,17 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   place(kNames, names.size());
   std::vector<LevelAttributesRecord> level_attributes(attributes ? levels.size() : 0);
   if (attributes) place(kLevelAttributes, level_attributes.size());
+  if (materials) place(kMaterials, material_records.size());
+  std::vector<LevelGroupsRecord> level_groups(groups ? levels.size() : 0);
+  if (groups) place(kLevelGroups, level_groups.size());
   const size_t data_base = at;
 
   Writer w;
   double acmr_before = 0.0, acmr_after = 0.0, weight = 0.0;
   std::vector<uint32_t> remap, original_remap;
   for (size_t c = 0; c < chains.size(); ++c) {
+    const std::vector<int32_t>& group_materials = scene.meshes[c].primitive_materials;
+    const uint64_t group_materials_at = groups ? w.array(group_materials, data_base) : 0;
     for (uint32_t l = 0; l < chain_records[c].level_count; ++l) {
       const LodLevel& src = chains[c].levels[l];
       const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
@@ -353,6 +413,14 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
       r.points = w.array(m.points, data_base);
       if (attributes)
         level_attributes[chain_records[c].first_level + l] = writeAttributes(w, data_base, m, src.source_vertex, remap, original_remap);
+      if (groups) {
+        LevelGroupsRecord& g = level_groups[chain_records[c].first_level + l];
+        std::memset(&g, 0, sizeof g);
+        g.group_count = static_cast<uint32_t>(group_materials.size());
+        g.group_materials = group_materials_at;
+        g.edge_groups = w.array(m.edge_groups, data_base);
+        g.point_groups = w.array(m.point_groups, data_base);
+      }
     }
   }
   place(kData, w.data.size());
@@ -372,16 +440,22 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
     SectionEntry e{placed[s].kind, kElementBytes[placed[s].kind], placed[s].offset, placed[s].count, 0};
     std::memcpy(out.data() + table_at + s * sizeof(SectionEntry), &e, sizeof e);
   }
-  auto put = [&](size_t offset, const void* src, size_t bytes) { if (bytes) std::memcpy(out.data() + offset, src, bytes); };
-  put(placed[0].offset, nodes.data(), nodes.size() * sizeof(NodeRecord));
-  put(placed[1].offset, children.data(), children.size() * 4);
-  put(placed[2].offset, roots.data(), roots.size() * 4);
-  put(placed[3].offset, objects.data(), objects.size() * sizeof(ObjectRecord));
-  put(placed[4].offset, chain_records.data(), chain_records.size() * sizeof(ChainRecord));
-  put(placed[5].offset, levels.data(), levels.size() * sizeof(LevelRecord));
-  put(placed[6].offset, names.data(), names.size());
-  if (attributes) put(placed[7].offset, level_attributes.data(), level_attributes.size() * sizeof(LevelAttributesRecord));
-  put(placed.back().offset, w.data.data(), w.data.size());
+  // each section's contents at its place (a kind not written is not in `placed`)
+  auto put = [&](uint32_t kind, const void* src, size_t bytes) {
+    for (const Placed& p : placed)
+      if (p.kind == kind && bytes) std::memcpy(out.data() + p.offset, src, bytes);
+  };
+  put(kNodes, nodes.data(), nodes.size() * sizeof(NodeRecord));
+  put(kChildren, children.data(), children.size() * 4);
+  put(kRoots, roots.data(), roots.size() * 4);
+  put(kObjects, objects.data(), objects.size() * sizeof(ObjectRecord));
+  put(kChains, chain_records.data(), chain_records.size() * sizeof(ChainRecord));
+  put(kLevels, levels.data(), levels.size() * sizeof(LevelRecord));
+  put(kNames, names.data(), names.size());
+  put(kLevelAttributes, level_attributes.data(), level_attributes.size() * sizeof(LevelAttributesRecord));
+  put(kMaterials, material_records.data(), material_records.size() * sizeof(MaterialRecord));
+  put(kLevelGroups, level_groups.data(), level_groups.size() * sizeof(LevelGroupsRecord));
+  put(kData, w.data.data(), w.data.size());
   const uint32_t crc = crc32(out.data(), out.size());
   std::memcpy(out.data() + kChecksumOffset, &crc, 4);
   if (stats) {
@@ -509,7 +583,8 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   bool seen[kSectionKindCount + 1] = {};
   for (uint32_t s = 0; s < h.section_count; ++s) {
     const SectionEntry e = read<SectionEntry>(bytes_, h.section_table_offset + s * sizeof(SectionEntry));
-    if (e.kind == 0 || e.kind > kSectionKindCount) continue;  // unknown sections are skipped (minor additions)
+    // unknown sections are skipped (minor additions)
+    if (e.kind == 0 || e.kind > kSectionKindCount || kElementBytes[e.kind] == 0) continue;
     if (e.element_bytes != kElementBytes[e.kind])
       return corrupt("section " + std::to_string(e.kind) + " has " + std::to_string(e.element_bytes) + "-byte elements, expected " +
                      std::to_string(kElementBytes[e.kind]));
@@ -532,8 +607,18 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   if (seen[kLevelAttributes] && count[kLevelAttributes] != level_count_)
     return corrupt("section 9 has " + std::to_string(count[kLevelAttributes]) + " level attribute records for " +
                    std::to_string(level_count_) + " level records");
+  materials_ = seen[kMaterials] ? offset[kMaterials] : 0;
+  material_count_ = seen[kMaterials] ? count[kMaterials] : 0;
+  groups_ = seen[kLevelGroups] ? offset[kLevelGroups] : 0;
+  if (seen[kLevelGroups] && count[kLevelGroups] != level_count_)
+    return corrupt("section 12 has " + std::to_string(count[kLevelGroups]) + " level group records for " +
+                   std::to_string(level_count_) + " level records");
   if (names_size_ > 0 && bytes_[names_ + names_size_ - 1] != 0) return corrupt("names section is not terminated");
   auto nameOk = [&](uint32_t n) { return names_size_ > 0 && n < names_size_; };
+  for (size_t i = 0; i < material_count_; ++i) {
+    const MaterialRecord r = read<MaterialRecord>(bytes_, materials_ + i * sizeof(MaterialRecord));
+    if (!nameOk(r.name) || !nameOk(r.source)) return corrupt("material " + std::to_string(i) + " has a name out of range");
+  }
   std::vector<int32_t> parents(node_count_);
   for (size_t i = 0; i < node_count_; ++i) {
     const NodeRecord r = read<NodeRecord>(bytes_, nodes_ + i * sizeof(NodeRecord));
@@ -593,6 +678,17 @@ Error Pack::parse(const std::string& what, bool check_indices) {
                                     original_vertices[l], data_begin, data_end, check_indices);
           !e.ok())
         return corrupt(where + e.message);
+    if (groups_ != 0) {
+      const LevelGroupsRecord g = read<LevelGroupsRecord>(bytes_, groups_ + l * sizeof(LevelGroupsRecord));
+      if (!arrayOk(g.group_materials, g.group_count, 4, false) || !arrayOk(g.edge_groups, r.edge_count, 4, true) ||
+          !arrayOk(g.point_groups, r.point_count, 4, true))
+        return corrupt(where + " has a group array outside the data section");
+      const int32_t* mats = reinterpret_cast<const int32_t*>(bytes_.data() + g.group_materials);
+      for (uint32_t i = 0; i < g.group_count; ++i)
+        if (mats[i] < -1 || mats[i] >= int64_t(material_count_))
+          return corrupt(where + " has group " + std::to_string(i) + " with material " + std::to_string(mats[i]) + " but the pack has " +
+                         std::to_string(material_count_) + " materials");
+    }
   }
   return {};
 }
@@ -654,6 +750,12 @@ PackLevelView Pack::level(size_t chain, size_t level) const {
   v.edges = span((uint32_t*)nullptr, r.edges, 2 * size_t(r.edge_count));
   v.edge_thickness = span((float*)nullptr, r.thickness, r.edge_count);
   v.points = span((uint32_t*)nullptr, r.points, r.point_count);
+  if (groups_ != 0) {
+    const LevelGroupsRecord g = read<LevelGroupsRecord>(bytes_, groups_ + (c.first_level + level) * sizeof(LevelGroupsRecord));
+    v.group_materials = span((int32_t*)nullptr, g.group_materials, g.group_count);
+    v.edge_groups = span((uint32_t*)nullptr, g.edge_groups, r.edge_count);
+    v.point_groups = span((uint32_t*)nullptr, g.point_groups, r.point_count);
+  }
   if (attributes_ == 0) return v;
   const LevelAttributesRecord a =
       read<LevelAttributesRecord>(bytes_, attributes_ + (c.first_level + level) * sizeof(LevelAttributesRecord));
@@ -687,9 +789,46 @@ Mesh meshFromLevel(const PackLevelView& v) {
   m.weights.assign(v.weights.begin(), v.weights.end());
   m.joint_parents.assign(v.joint_parents.begin(), v.joint_parents.end());
   m.triangle_groups.assign(v.triangle_groups.begin(), v.triangle_groups.end());
+  m.edge_groups.assign(v.edge_groups.begin(), v.edge_groups.end());
+  m.point_groups.assign(v.point_groups.begin(), v.point_groups.end());
   return m;
 }
 }  // namespace
+
+size_t Pack::materialCount() const { return material_count_; }
+
+PackMaterialView Pack::material(size_t i) const {
+  const MaterialRecord r = read<MaterialRecord>(bytes_, materials_ + i * sizeof(MaterialRecord));
+  PackMaterialView v;
+  v.name = reinterpret_cast<const char*>(bytes_.data() + names_ + r.name);
+  v.source = reinterpret_cast<const char*>(bytes_.data() + names_ + r.source);
+  v.source_index = r.index;
+  v.textured = (r.flags & 1u) != 0;
+  v.base_color = glm::vec4(r.base_color[0], r.base_color[1], r.base_color[2], r.base_color[3]);
+  v.average_texel_color = glm::vec3(r.average_texel_color[0], r.average_texel_color[1], r.average_texel_color[2]);
+  v.base_color_texture = r.base_color_texture;
+  v.base_color_texcoord = r.base_color_texcoord;
+  v.base_color_transform.offset = glm::vec2(r.transform[0], r.transform[1]);
+  v.base_color_transform.rotation = r.transform[2];
+  v.base_color_transform.scale = glm::vec2(r.transform[3], r.transform[4]);
+  v.base_color_transform.texcoord = r.transform_texcoord;
+  return v;
+}
+
+std::vector<PackMaterialRange> materialRanges(const PackLevelView& level) {
+  std::vector<PackMaterialRange> ranges;
+  const size_t n = level.triangles.size() / 3;
+  for (size_t t = 0; t < n; ++t) {
+    const uint32_t g = level.triangle_groups.empty() ? 0u : level.triangle_groups[t];
+    if (!ranges.empty() && ranges.back().group == g) {
+      ++ranges.back().triangle_count;
+      continue;
+    }
+    const int32_t material = g < level.group_materials.size() ? level.group_materials[g] : -1;
+    ranges.push_back(PackMaterialRange{static_cast<uint32_t>(t), 1u, g, material});
+  }
+  return ranges;
+}
 
 void Pack::toSceneData(SceneData& out) const {
   out = SceneData{};
@@ -707,7 +846,22 @@ void Pack::toSceneData(SceneData& out) const {
   out.meshes.resize(chain_count_);
   for (size_t c = 0; c < chain_count_; ++c) {
     out.meshes[c].name = meshName(c);
-    if (levelCount(c) > 0) out.meshes[c].mesh = meshFromLevel(level(c, 0));
+    if (levelCount(c) == 0) continue;
+    const PackLevelView l0 = level(c, 0);
+    out.meshes[c].mesh = meshFromLevel(l0);
+    out.meshes[c].primitive_materials.assign(l0.group_materials.begin(), l0.group_materials.end());
+  }
+  // the textures stay in the source file: references to them are dropped here
+  out.materials.resize(material_count_);
+  for (size_t i = 0; i < material_count_; ++i) {
+    const PackMaterialView v = material(i);
+    MaterialData& m = out.materials[i];
+    m.name = v.name;
+    m.base_color = v.base_color;
+    m.textured = v.textured;
+    m.average_texel_color = v.average_texel_color;
+    m.base_color_texcoord = v.base_color_texcoord;
+    m.base_color_transform = v.base_color_transform;
   }
 }
 

@@ -169,10 +169,9 @@ std::vector<glm::vec3> bakedMaterialColors(const SceneData& s, const MeshData& m
     const MaterialData& x = s.materials[static_cast<size_t>(mat)];
     return glm::vec3(x.base_color) * (x.textured ? x.average_texel_color : glm::vec3(1.0f));
   };
-  // edges and points have no group: the first primitive's material, unless a triangle uses the vertex
-  const glm::vec3 first = materialColor(0);
-  for (uint32_t v : m.edges) factor[v] = first;
-  for (uint32_t v : m.points) factor[v] = first;
+  // edges and points in their group's material, unless a triangle uses the vertex
+  for (size_t e = 0; e < m.edgeCount(); ++e) factor[m.edges[2 * e]] = factor[m.edges[2 * e + 1]] = materialColor(m.edgeGroup(e));
+  for (size_t p = 0; p < m.pointCount(); ++p) factor[m.points[p]] = materialColor(m.pointGroup(p));
   for (size_t t = 0; t < m.triangleCount(); ++t) {
     const glm::vec3 c = materialColor(m.triangleGroup(t));
     for (int k = 0; k < 3; ++k) factor[m.triangles[3 * t + static_cast<size_t>(k)]] = c;

@@ -36,6 +36,9 @@ struct PackWriteOptions {
   std::vector<float> importance;
   std::vector<uint8_t> must_draw;
   std::vector<uint64_t> user_data;
+  // the file the scene's materials come from (stored with each material; `scenelod pack` writes the
+  // input's path relative to the pack's folder)
+  std::string material_source;
 };
 
 struct PackWriteStats {
@@ -78,7 +81,40 @@ struct PackLevelView {
   Span<const int32_t> joint_parents;     // the skeleton; every joint index is below its size
   Span<const uint32_t> triangle_groups;  // one per triangle; each group one contiguous run when ordered
   Span<const uint32_t> source_vertex;    // LodLevel::source_vertex: vertices of the chain's level 0
+  // the level groups section (empty when absent): the material of each triangle group (an index
+  // into Pack::material, -1 for none; groups past the end have none), each edge's and point's group
+  Span<const int32_t> group_materials;
+  Span<const uint32_t> edge_groups;   // empty = all in group 0
+  Span<const uint32_t> point_groups;  // empty = all in group 0
 };
+
+// A material as the pack holds it: what scenelod reads of it, and where the full material is
+// (material `source_index` of the glTF file `source`, whose textures the texture index refers to).
+struct PackMaterialView {
+  const char* name = "";
+  const char* source = "";
+  int32_t source_index = -1;
+  glm::vec4 base_color{1.0f};
+  bool textured = false;
+  glm::vec3 average_texel_color{1.0f};
+  int32_t base_color_texture = -1;  // in the source file
+  uint32_t base_color_texcoord = 0;
+  TextureTransform base_color_transform;
+};
+
+// One run of consecutive triangles of one group: triangles [first_triangle, first_triangle +
+// triangle_count) of a level, drawn with `material` (an index into Pack::material, -1 for none).
+struct PackMaterialRange {
+  uint32_t first_triangle = 0;
+  uint32_t triangle_count = 0;
+  uint32_t group = 0;
+  int32_t material = -1;
+};
+
+// The level's triangles as runs of one group, in triangle order: one run per group present when
+// the pack was written with optimize_order (the default sorts triangles by group), possibly more
+// otherwise. Allocates.
+std::vector<PackMaterialRange> materialRanges(const PackLevelView& level);
 
 struct PackNodeView {
   int32_t parent = -1;
@@ -118,11 +154,14 @@ class Pack {
   Sphere chainSphere(size_t chain) const;
   const char* meshName(size_t chain) const;
   PackLevelView level(size_t chain, size_t level) const;
+  size_t materialCount() const;  // 0 for packs written without materials
+  PackMaterialView material(size_t i) const;
   size_t byteSize() const { return bytes_.size(); }
   const uint8_t* bytes() const { return bytes_.data(); }  // the whole file
 
-  // Copies out owned data: the scene (meshes = level 0 of each chain; materials are not stored)
-  // and the chains. Allocates.
+  // Copies out owned data: the scene (meshes = level 0 of each chain with their group materials;
+  // materials as the pack holds them, without texture references: the textures stay in the
+  // source file) and the chains. Allocates.
   void toSceneData(SceneData& out) const;
   void toChains(std::vector<LodChain>& chains, std::vector<Sphere>& chain_spheres) const;
   // Builds a runtime scene: nodes as in toSceneData, the pack's objects with their importance,
@@ -137,6 +176,8 @@ class Pack {
   size_t objects_ = 0, object_count_ = 0, chains_ = 0, chain_count_ = 0, levels_ = 0, level_count_ = 0;
   size_t names_ = 0, names_size_ = 0;
   size_t attributes_ = 0;  // the level attributes section, 0 when absent
+  size_t materials_ = 0, material_count_ = 0;  // the materials section, 0 when absent
+  size_t groups_ = 0;                           // the level groups section, 0 when absent
 };
 
 }  // namespace scenelod::scene

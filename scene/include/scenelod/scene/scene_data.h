@@ -136,7 +136,7 @@ std::vector<glm::mat4> worldTransforms(const SceneData& scene, Span<const glm::m
 // vertex colour alone (SCROOGE's texture averaging, the GL viewer, OBJ output): per vertex, the
 // material's base colour factor x its base colour texture's mean texel (linear, when decoded) x
 // COLOR_0 (white when absent), the material being that of a triangle group using the vertex
-// (the first primitive's for vertices of edges and points alone). A mesh gets colours when it has
+// (their edge or point group's for vertices of edges and points alone). A mesh gets colours when it has
 // COLOR_0 or any primitive a material; the others are returned empty. Cost: linear in the mesh.
 std::vector<glm::vec3> bakedMaterialColors(const SceneData& scene, const MeshData& mesh);
 
