@@ -37,6 +37,8 @@ const char* kUsage =
     "                   texture x COLOR_0, headlight shading, as `scenelod render`), and over the\n"
     "                   pixels both cover, the share off by more than 16/255 in any channel and the\n"
     "                   mean absolute difference (8-bit levels); the silhouette mismatch stays apart\n"
+    "  --stored-level K SIMPLIFIED is a file with LOD levels (MSFT_lod, as `scenelod lods` writes):\n"
+    "                   measure its level K (every mesh at level K, or its last), with its materials\n"
     "\n"
     "With --chain, builds MODEL's LOD chain (buildChain, default settings, --levels simplified levels,\n"
     "default 8) and prints per level its counts, cell width, Hausdorff and RMS against level 0, and\n"
@@ -187,7 +189,7 @@ int runChain(const std::string& path, const ChainOptions& o) {
 
 int runEval(const std::vector<std::string>& argv) {
   Args args(argv, {"--json", "--force", "--chain", "--image", "--animated"},
-            {"--samples", "--resolution", "--levels", "--pixels", "--at-switch"});
+            {"--samples", "--resolution", "--levels", "--pixels", "--at-switch", "--stored-level"});
   long samples = 100000, resolution = 256, levels = 8;
   double pixels = 1.0;
   args.getInt("--samples", samples);
@@ -233,7 +235,17 @@ int runEval(const std::vector<std::string>& argv) {
   Mesh original, simplified;
   EvalMaterials a_materials, b_materials;
   if (Error e = loadFlatModel(a_path, original, a_materials); !e.ok()) return runError("eval", e.message);
-  if (Error e = loadFlatModel(b_path, simplified, b_materials); !e.ok()) return runError("eval", e.message);
+  if (args.has("--stored-level")) {
+    long k = -1;
+    if (!args.getInt("--stored-level", k) || k < 0) return usageError("eval", "--stored-level needs a level K >= 0");
+    LodChain stored;
+    if (Error e = loadStoredLevels(b_path, stored, b_materials); !e.ok()) return runError("eval", e.message);
+    if (static_cast<size_t>(k) >= stored.levelCount())
+      return runError("eval", b_path + ": holds levels 0.." + std::to_string(stored.levelCount() - 1) + ", no level " + std::to_string(k));
+    simplified = std::move(stored.levels[static_cast<size_t>(k)].mesh);
+  } else if (Error e = loadFlatModel(b_path, simplified, b_materials); !e.ok()) {
+    return runError("eval", e.message);
+  }
   if (original.triangleCount() == 0)
     return runError("eval", a_path + ": the original has no triangles; the error is measured against its surface");
   if (simplified.empty()) return runError("eval", b_path + ": the simplified model has no triangles, edges or points");

@@ -20,7 +20,7 @@ namespace {
 
 const char* kUsage =
     "usage: scenelod render IN -o OUT.png [--view axis|diag N] [--size W H] [--level K | --grid]\n"
-    "                       [--show LIST] [--levels N] [--plain]\n"
+    "                       [--show LIST] [--levels N] [--plain] [--stored]\n"
     "\n"
     "Draws IN (OBJ, glTF or GLB, flattened to one world-space mesh) with an orthographic Embree ray\n"
     "cast: headlight Lambert + ambient shading. Triangles of a model with materials show their\n"
@@ -39,7 +39,10 @@ const char* kUsage =
     "  --show LIST     like --grid, only the listed levels (e.g. 0,2,4,6; each at most 32)\n"
     "  --levels N      simplified levels in the chain (default 8)\n"
     "  --plain         ignore materials and textures: vertex colours (material colours baked in) or\n"
-    "                  grey, as without materials\n";
+    "                  grey, as without materials\n"
+    "  --stored        with --level, --grid or --show: draw the levels IN holds (glTF with MSFT_lod,\n"
+    "                  as 'scenelod lods' writes them; every mesh at its level K, or its last level)\n"
+    "                  instead of building a chain\n";
 
 // "--view axis 3" and "--size 640 480" take two words: join them so Args sees one value
 std::vector<std::string> joinTwoWordOptions(const std::vector<std::string>& in) {
@@ -128,7 +131,7 @@ bool parseLevelList(const std::string& text, std::vector<int>& out) {
 }
 
 int runRender(const std::vector<std::string>& argv) {
-  Args args(joinTwoWordOptions(argv), {"--grid", "--plain"}, {"--out", "--view", "--size", "--level", "--levels", "--show"});
+  Args args(joinTwoWordOptions(argv), {"--grid", "--plain", "--stored"}, {"--out", "--view", "--size", "--level", "--levels", "--show"});
   long level = -1, levels = 8;
   args.getInt("--level", level);
   args.getInt("--levels", levels);
@@ -141,6 +144,10 @@ int runRender(const std::vector<std::string>& argv) {
   const bool grid = args.has("--grid") || !show.empty();
   if (grid && args.has("--level")) return usageError("render", "--grid/--show and --level exclude each other");
   if (args.has("--level") && level < 0) return usageError("render", "--level must be >= 0");
+  const bool stored = args.has("--stored");
+  if (stored && !grid && !args.has("--level")) return usageError("render", "--stored needs --level, --grid or --show");
+  if (stored && (args.has("--plain") || args.has("--levels")))
+    return usageError("render", "--stored draws the file's own levels: no --plain or --levels");
   if (levels < 1 || levels > 32) return usageError("render", "--levels must be in [1, 32]");
   eval::RenderParams rp;
   rp.width = rp.height = grid ? 256 : 512;
@@ -159,8 +166,13 @@ int runRender(const std::vector<std::string>& argv) {
 
   Mesh mesh;
   EvalMaterials materials;
+  LodChain chain;
+  if (stored) {
+    if (Error e = loadStoredLevels(in, chain, materials); !e.ok()) return runError("render", e.message);
+    mesh = chain.levels[0].mesh;
+  }
   // --plain: the material colours baked into the vertex colours, as the other tools draw
-  const Error load = args.has("--plain") ? loadFlatMesh(in, mesh) : loadFlatModel(in, mesh, materials);
+  const Error load = stored ? Error() : args.has("--plain") ? loadFlatMesh(in, mesh) : loadFlatModel(in, mesh, materials);
   if (!load.ok()) return runError("render", load.message);
   if (mesh.empty()) return runError("render", in + ": the model has no triangles, edges or points");
   rp.materials = materials.materials;
@@ -176,15 +188,16 @@ int runRender(const std::vector<std::string>& argv) {
     return 0;
   }
 
-  LodChain chain;
-  ChainParams cp;
-  long deepest = grid ? levels : std::max<long>(levels, level);
-  for (int k : show) deepest = std::max<long>(deepest, k);
-  cp.level_count = static_cast<size_t>(deepest);
-  ProgressBar bar("building chain");
-  cp.progress = bar.callback();
-  if (Error e = buildChain(mesh, cp, chain); !e.ok()) return runError("render", in + ": " + e.message);
-  bar.finish();
+  if (!stored) {
+    ChainParams cp;
+    long deepest = grid ? levels : std::max<long>(levels, level);
+    for (int k : show) deepest = std::max<long>(deepest, k);
+    cp.level_count = static_cast<size_t>(deepest);
+    ProgressBar bar("building chain");
+    cp.progress = bar.callback();
+    if (Error e = buildChain(mesh, cp, chain); !e.ok()) return runError("render", in + ": " + e.message);
+    bar.finish();
+  }
   rp.frame = eval::boundingSphere(chain.levels[0].mesh);  // every level framed like the original
   if (!grid) {
     if (static_cast<size_t>(level) >= chain.levelCount())

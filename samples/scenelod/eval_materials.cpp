@@ -1,5 +1,7 @@
 #include "eval_materials.h"
 
+#include <algorithm>
+
 #include "eval_support.h"
 #include "scenelod/scene/gltf_io.h"
 
@@ -67,6 +69,33 @@ Error loadFlatModel(const std::string& path, Mesh& mesh, EvalMaterials& material
   mesh = scene::flattenScene(scene);
   if (Error e = validateMesh(mesh, path); !e.ok()) return e;
   return evalMaterials(scene, materials, path);
+}
+
+// the levels a glTF file holds (MSFT_lod), each as one world-space mesh: level k draws every mesh
+// at its level k (its last level when it has fewer), triangle groups as material indices
+Error loadStoredLevels(const std::string& path, LodChain& out, EvalMaterials& materials) {
+  scene::SceneData s;
+  std::vector<LodChain> chains;
+  if (Error e = scene::importGltfLods(path, s, chains); !e.ok()) return e;
+  size_t deepest = 1;
+  for (const LodChain& c : chains) deepest = std::max(deepest, c.levelCount());
+  if (deepest < 2) return {Status::kInvalidArgument, path + ": holds no LOD levels (no MSFT_lod): --stored draws stored levels"};
+  out = LodChain{};
+  for (size_t k = 0; k < deepest; ++k) {
+    scene::SceneData at = s;
+    LodLevel level;
+    for (size_t m = 0; m < chains.size(); ++m) {
+      const LodLevel& l = chains[m].levels[std::min(k, chains[m].levelCount() - 1)];
+      at.meshes[m].mesh = l.mesh;
+      if (k < chains[m].levelCount() && chains[m].levelCount() > 1) {
+        level.method = l.method;
+        level.cell_width = std::max(level.cell_width, l.cell_width);
+      }
+    }
+    level.mesh = scene::flattenScene(at);
+    out.levels.push_back(std::move(level));
+  }
+  return evalMaterials(s, materials, path);
 }
 
 }  // namespace scenelod::tool

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "scenelod/eval/material.h"
+#include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/mesh.h"
 #include "scenelod/lodcore/status.h"
 #include "scenelod/scene/scene_data.h"
@@ -42,5 +43,10 @@ std::vector<eval::Material> primitiveMaterials(const EvalMaterials& all, const s
 
 // Loads OBJ, glTF or GLB as one world-space mesh (like loadFlatMesh) and its materials.
 Error loadFlatModel(const std::string& path, Mesh& mesh, EvalMaterials& materials);
+
+// The levels a glTF file holds (MSFT_lod, as `scenelod lods` writes them), each as one world-space
+// mesh in `out.levels`: level k draws every mesh at its level k (its last level when it has fewer),
+// triangle groups as material indices, with the file's materials. A file without levels is an error.
+Error loadStoredLevels(const std::string& path, LodChain& out, EvalMaterials& materials);
 
 }  // namespace scenelod::tool

@@ -570,6 +570,12 @@ int addLevelMesh(GlbWriter& w, FallbackMaterials& fallback, const Mesh& level, c
   };
   auto add = [&](tinygltf::Primitive p, int mode, uint32_t group) {
     p.mode = mode;
+    // the source primitive (group) this one draws, so that importGltfLods gives chains whose
+    // groups index level 0's primitives (materials can repeat, and untextured copies differ)
+    tinygltf::Value::Object ours, extras;
+    ours["group"] = tinygltf::Value(static_cast<int>(group));
+    extras["scenelod"] = tinygltf::Value(ours);
+    p.extras = tinygltf::Value(extras);
     if (const tinygltf::Primitive* sp = source(group)) {
       const bool tangents = sp->attributes.count("TANGENT") > 0;
       p.material = fallback.materialFor(sp->material, level, tangents);

@@ -1244,6 +1244,41 @@ Error remapSkinsAndAnimations(const std::string& path, const SceneData& raw, con
   return {};
 }
 
+// A level mesh's groups are its own primitives; a chain's groups are level 0's primitives. Each
+// level primitive names its source group in extras.scenelod.group (as exportGltfLods writes);
+// without it, the first level-0 primitive with the same material; otherwise the group is kept.
+void levelGroupsAsSourceGroups(const tinygltf::Mesh& gm, const MeshData& level_data, const MeshData& original, Mesh& level) {
+  std::vector<uint32_t> to_source(gm.primitives.size());
+  for (size_t p = 0; p < gm.primitives.size(); ++p) {
+    to_source[p] = static_cast<uint32_t>(p);
+    const tinygltf::Value& ex = gm.primitives[p].extras;
+    if (ex.IsObject() && ex.Has("scenelod") && ex.Get("scenelod").Has("group") && ex.Get("scenelod").Get("group").IsInt()) {
+      const int g = ex.Get("scenelod").Get("group").GetNumberAsInt();
+      if (g >= 0 && (original.primitive_materials.empty() || static_cast<size_t>(g) < original.primitive_materials.size())) {
+        to_source[p] = static_cast<uint32_t>(g);
+        continue;
+      }
+    }
+    const int32_t mat = p < level_data.primitive_materials.size() ? level_data.primitive_materials[p] : -1;
+    const auto it = std::find(original.primitive_materials.begin(), original.primitive_materials.end(), mat);
+    if (it != original.primitive_materials.end()) to_source[p] = static_cast<uint32_t>(it - original.primitive_materials.begin());
+  }
+  auto remap = [&](std::vector<uint32_t>& groups) {
+    for (uint32_t& g : groups)
+      if (g < to_source.size()) g = to_source[g];
+  };
+  remap(level.triangle_groups);
+  remap(level.edge_groups);
+  remap(level.point_groups);
+  // a level drawn by one primitive of group 0 needs no group arrays
+  auto allZero = [](const std::vector<uint32_t>& v) { return std::all_of(v.begin(), v.end(), [](uint32_t g) { return g == 0; }); };
+  if (allZero(level.triangle_groups) && allZero(level.edge_groups) && allZero(level.point_groups)) {
+    level.triangle_groups.clear();
+    level.edge_groups.clear();
+    level.point_groups.clear();
+  }
+}
+
 // runs `read`, turning what tinygltf and the standard library may throw into errors naming the file
 template <class Read>
 Error withoutExceptions(const std::string& path, Read read) {
@@ -1377,6 +1412,8 @@ Error importGltfLods(const std::string& path, SceneData& out, std::vector<LodCha
         const tinygltf::Node& ln = model.nodes[static_cast<size_t>(lod_ids[i][k])];
         LodLevel level;
         level.mesh = raw.meshes[static_cast<size_t>(ln.mesh)].mesh;
+        levelGroupsAsSourceGroups(model.meshes[static_cast<size_t>(ln.mesh)], raw.meshes[static_cast<size_t>(ln.mesh)],
+                                  s.meshes[m], level.mesh);
         level.method = LodMethod::kUniform;
         if (k < coverage.size() && coverage[k] > 0.0f)
           level.cell_width = 2.0f * c[m].levels[0].bounds.radius * kCoverageCellPixels / (coverage[k] * kCoverageViewportPx);

@@ -3,7 +3,9 @@
 // the importer, the material conversion and the renderer.
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -124,6 +126,37 @@ TEST_F(TexturedCommand, TransformTexcoordAndPlainAreHonoured) {
   EXPECT_EQ(r.code, 0) << r.output;
   r = runTool("render " + plain + " -o " + png + " --view axis 4 --size 64 64 --plain");
   EXPECT_EQ(r.code, 0) << r.output;
+}
+
+std::vector<char> fileBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// `render --stored` draws the levels a file holds: lods' level 0 is the textured input itself, so its
+// picture is the input's, texture included; a file without levels is refused by name
+TEST_F(TexturedCommand, StoredLevelsAreDrawnWithTheirMaterials) {
+  const std::string quad = writeQuadGltf("quad_for_lods.gltf", "");
+  const std::string dir = scenelod::test::scratchDir();
+  ToolRun r = runTool("lods " + quad + " -o " + dir + "/quad_lods.glb --levels 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = runTool("render " + quad + " -o " + dir + "/quad_built.png --show 0 --size 64 64 --view axis 4");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = runTool("render " + dir + "/quad_lods.glb -o " + dir + "/quad_stored.png --stored --show 0 --size 64 64 --view axis 4");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::vector<char> built = fileBytes(dir + "/quad_built.png"), stored = fileBytes(dir + "/quad_stored.png");
+  EXPECT_FALSE(built.empty());
+  EXPECT_EQ(built, stored);
+  // eval measures a stored level: level 0 is the input
+  r = runTool("eval " + quad + " " + dir + "/quad_lods.glb --stored-level 0 --json --samples 1000 --resolution 32");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_LT(jsonValue(r.output, "hausdorff"), 1e-6) << r.output;  // float noise of the sampling
+  r = runTool("eval " + quad + " " + dir + "/quad_lods.glb --stored-level 40");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("quad_lods.glb: holds levels 0.."), std::string::npos) << r.output;
+  r = runTool("render " + quad + " -o " + dir + "/quad_none.png --stored --level 1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("quad_for_lods.gltf: holds no LOD levels (no MSFT_lod)"), std::string::npos) << r.output;
 }
 
 }  // namespace
