@@ -140,6 +140,40 @@ TEST(GltfPassThrough, RefusesARequiredExtensionItCannotKeepAndWritesNothing) {
   EXPECT_FALSE(test::fileExists(dir + "/out.glb"));
 }
 
+// broken references in the input: refused naming the file and the element, nothing written
+TEST(GltfPassThrough, BadReferencesAreRefusedAndNothingIsWritten) {
+  const std::string dir = makeDir("pass_bad_refs");
+  const std::string good = triangleGltf();
+  struct Case {
+    const char* from;
+    const char* to;
+    const char* message;
+  };
+  const Case cases[] = {
+      {R"("material":0,)", R"("material":3,)", "primitive 0: material 3 out of range"},
+      {R"("materials":[{"name":"red",)", R"("materials":[{"name":"red","pbrMetallicRoughness":{"baseColorTexture":{"index":5}}},{"name":"x",)",
+       "material 0: texture 5 out of range (the file has 0)"},
+      {R"("materials":[{"name":"red",)",
+       R"("textures":[{"source":0}],"images":[{"uri":"../outside.png"}],"materials":[{"name":"red","pbrMetallicRoughness":{"baseColorTexture":{"index":0}}},{"name":"x",)",
+       "external URI '../outside.png' escapes the glTF file's folder"},
+      {R"("materials":[{"name":"red",)", R"("textures":[{"source":0}],"images":[{"uri":"missing.png"}],"materials":[{"name":"red",)",
+       "image 0: cannot read 'missing.png'"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.message);
+    const size_t at = good.find(c.from);
+    ASSERT_NE(at, std::string::npos);
+    std::string edited = good;
+    edited.replace(at, std::string(c.from).size(), c.to);
+    const std::string in = writeText(dir + "/bad.gltf", edited), out = dir + "/out.glb";
+    const Error e = exportCopies(in, out);
+    ASSERT_FALSE(e.ok());
+    EXPECT_TRUE(contains(e.message, in + ": ")) << e.message;
+    EXPECT_TRUE(contains(e.message, c.message)) << e.message;
+    EXPECT_FALSE(test::fileExists(out));
+  }
+}
+
 TEST(GltfPassThrough, WritingOverTheInputGlbReplacesItOnlyOnSuccess) {
   const std::string dir = makeDir("pass_inplace");
   const std::string src = writeText(dir + "/tri.gltf", triangleGltf());
