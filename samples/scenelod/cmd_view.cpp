@@ -53,6 +53,11 @@ const char kUsage[] =
     "  --budget MS         frame-time budget of the selection (default: the replay's, else 16.7)\n"
     "  --pixels X          pixels per cell of the accuracy test (default 1)\n"
     "  --no-calibrate      keep the selector's prior cost model (measured times are still printed)\n"
+    "  --shadows           also render a shadow map: a directional light from above the scene, its\n"
+    "                      orthographic camera a shadow view of the same selection (docs/SELECTION.md,\n"
+    "                      \"Views\"), which picks the casters' levels under the same budget\n"
+    "  --shadow-pixels X   pixels (texels) per cell of the shadow view (default 4)\n"
+    "  --shadow-map N      shadow map side in texels (default 2048)\n"
     "  --quiet             no per-frame lines";
 
 // World matrix of every node from parents and local transforms (validated scenes have no cycles).
@@ -118,6 +123,27 @@ bool parseSize(const std::string& s, long& w, long& h) {
   return *end == '\0' && x + 1 < s.size() && w >= 16 && h >= 16 && w <= 8192 && h <= 8192;
 }
 
+// The light of --shadows: a directional light from above the scene (its up direction `up`, tilted
+// 35 degrees), as an orthographic camera whose box holds the whole scene sphere, so that every
+// caster lies between the light and what it shadows.
+Camera shadowCamera(const Sphere& bounds, glm::vec3 up, uint32_t texels) {
+  up = glm::length(up) > 0.0f ? glm::normalize(up) : glm::vec3(0.0f, 1.0f, 0.0f);
+  const glm::vec3 side = std::fabs(up.x) < 0.9f ? glm::normalize(glm::cross(up, glm::vec3(1, 0, 0)))
+                                                 : glm::normalize(glm::cross(up, glm::vec3(0, 0, 1)));
+  const glm::vec3 to_light = glm::normalize(up * std::cos(0.61f) + side * std::sin(0.61f));
+  const float r = std::max(bounds.radius, 1e-3f);
+  Camera c;
+  c.projection = Projection::kOrthographic;
+  c.target = bounds.center;
+  c.eye = bounds.center + to_light * (2.0f * r);
+  c.up = glm::normalize(glm::cross(to_light, glm::cross(side, to_light)) + 1e-3f * side);
+  c.ortho_height = 2.05f * r;
+  c.near_plane = 0.5f * r;
+  c.far_plane = 3.5f * r;
+  c.viewport_width_px = c.viewport_height_px = texels;
+  return c;
+}
+
 bool makeDir(const std::string& dir) {
   struct stat st;
   if (stat(dir.c_str(), &st) == 0) return S_ISDIR(st.st_mode);
@@ -125,8 +151,8 @@ bool makeDir(const std::string& dir) {
 }
 
 int run(const std::vector<std::string>& raw_argv) {
-  Args args(joinSize(raw_argv), {"--headless", "--no-calibrate", "--quiet"},
-            {"--replay", "--frames", "--png", "--every", "--size", "--budget", "--pixels"});
+  Args args(joinSize(raw_argv), {"--headless", "--no-calibrate", "--quiet", "--shadows"},
+            {"--replay", "--frames", "--png", "--every", "--size", "--budget", "--pixels", "--shadow-pixels", "--shadow-map"});
   if (!args.ok()) return usageError("view", args.error());
   if (args.positional().size() > 1) return usageError("view", "expected at most one scene");
   if (!args.has("--headless"))
@@ -141,6 +167,15 @@ int run(const std::vector<std::string>& raw_argv) {
   if (args.has("--every") && every < 1) return usageError("view", "--every must be >= 1");
   if (args.has("--budget") && !(budget > 0.0 && budget < 1e6)) return usageError("view", "--budget must be in (0, 1e6)");
   if (!(pixels > 0.0 && pixels < 1e6)) return usageError("view", "--pixels must be > 0");
+  const bool shadows = args.has("--shadows");
+  double shadow_pixels = 4.0;
+  long shadow_map = 2048;
+  if (!args.getDouble("--shadow-pixels", shadow_pixels) || !args.getInt("--shadow-map", shadow_map))
+    return usageError("view", args.error());
+  if (!shadows && (args.has("--shadow-pixels") || args.has("--shadow-map")))
+    return usageError("view", "--shadow-pixels and --shadow-map need --shadows");
+  if (!(shadow_pixels > 0.0 && shadow_pixels < 1e6)) return usageError("view", "--shadow-pixels must be > 0");
+  if (shadow_map < 16 || shadow_map > 8192) return usageError("view", "--shadow-map must be in 16..8192");
   long width = 640, height = 360;
   if (args.has("--size") && !parseSize(args.get("--size"), width, height))
     return usageError("view", "--size needs W H (or WxH), each 16..8192, got '" + args.get("--size") + "'");
@@ -169,6 +204,7 @@ int run(const std::vector<std::string>& raw_argv) {
   gl::RendererConfig rc;
   rc.width_px = static_cast<uint32_t>(width);
   rc.height_px = static_cast<uint32_t>(height);
+  rc.shadow_map_px = static_cast<uint32_t>(shadow_map);
   gl::Renderer renderer;
   bool unavailable = false;
   if (Error e = renderer.init(rc, &unavailable); !e.ok()) {
@@ -191,12 +227,16 @@ int run(const std::vector<std::string>& raw_argv) {
   sc.max_object_count = n;
   sc.max_levels_per_chain = std::max<size_t>(1, scene.table.maxLevelsPerChain());
   sc.max_level_rows = std::max<size_t>(1, scene.table.cell_width.size());
+  sc.max_view_groups = shadows ? 2 : 0;
+  if (shadows && scene.table.maxLevelsPerChain() > kMaxViewLevels)
+    return runError("view", "--shadows selects with views, which take chains of at most " + std::to_string(kMaxViewLevels) + " levels");
   SelectorContext* ctx = createSelectorContext(sc);
   if (!ctx) return runError("view", "cannot create the selector context (levels per chain above 64?)");
   std::vector<glm::vec3> centers;
   std::vector<float> radii, max_scales;
   std::vector<glm::mat4> node_world, object_world(n);
-  std::vector<int8_t> levels(n, -1);
+  std::vector<int8_t> levels(n, -1), group_levels(shadows ? 2 * n : 0, -1);
+  uint64_t sum_triangles = 0, sum_shadow_triangles = 0;
   Camera cam;
   cam.viewport_width_px = rc.width_px;
   cam.viewport_height_px = rc.height_px;
@@ -240,6 +280,19 @@ int run(const std::vector<std::string>& raw_argv) {
     job.importance = {scene.importance.data(), scene.importance.size()};
     job.must_draw = {scene.must_draw.data(), scene.must_draw.size()};
     job.levels_out = {levels.data(), n};
+    View views[2];
+    if (shadows) {
+      views[0].camera = cam;
+      views[0].kind = ViewKind::kPrimary;
+      views[0].group = 0;
+      views[0].pixels_per_cell = static_cast<float>(pixels);
+      views[1].camera = shadowCamera(bounds, replay.frames[0].up, rc.shadow_map_px);
+      views[1].kind = ViewKind::kShadow;
+      views[1].group = 1;
+      views[1].pixels_per_cell = static_cast<float>(shadow_pixels);
+      job.views = {views, 2};
+      job.group_levels_out = {group_levels.data(), group_levels.size()};
+    }
     SelectionStats stats;
     job.stats = &stats;
     job.context = ctx;
@@ -252,11 +305,20 @@ int run(const std::vector<std::string>& raw_argv) {
     in.object_world = {object_world.data(), n};
     in.object_chain = {scene.object_chain.data(), n};
     in.levels = {levels.data(), n};
+    if (shadows) {
+      in.shadow_camera = &views[1].camera;
+      in.shadow_levels = {group_levels.data() + n, n};
+    }
     gl::FrameResult fr;
     // the first draw of a level compiles shader variants and touches fresh buffers in the driver:
     // the first frame is drawn once unmeasured so that cost does not reach the calibration
-    if (f == 0) renderer.drawFrame(in, &fr);
+    if (f == 0 && !renderer.drawFrame(in, &fr)) {
+      rc_exit = runError("view", "the renderer refused the frame (shadow map incomplete?)");
+      break;
+    }
     renderer.drawFrame(in, &fr);
+    sum_triangles += fr.triangles;
+    sum_shadow_triangles += fr.shadow_triangles;
     reportFrameTime(ctx, stats.frame, static_cast<float>(fr.measured_ms));
     const double rel = fr.measured_ms > 0 ? std::fabs(stats.predicted_ms - fr.measured_ms) / fr.measured_ms : 0.0;
     if (f >= 30) {
@@ -272,6 +334,9 @@ int run(const std::vector<std::string>& raw_argv) {
                   stats.drawn_count, stats.culled_count, stats.dropped_count,
                   static_cast<unsigned long long>(fr.triangles), static_cast<unsigned long long>(fr.edges),
                   static_cast<unsigned long long>(fr.points), fr.draw_calls);
+    if (!args.has("--quiet") && shadows)
+      std::printf("            shadow map: %llu triangles, %u draws\n", static_cast<unsigned long long>(fr.shadow_triangles),
+                  fr.shadow_draw_calls);
     if (!png_dir.empty() && (f % static_cast<size_t>(every) == 0 || f + 1 == frame_count)) {
       eval::Image img;
       char name[32];
@@ -294,6 +359,10 @@ int run(const std::vector<std::string>& raw_argv) {
               "%.4g ms/edge-or-point + %.4g ms/pixel\n", model.per_frame_ms, model.per_object_ms, model.per_triangle_ms,
               model.per_vertex_ms, model.per_line_point_ms, model.per_pixel_ms);
   if (pngs) std::printf("%zu screenshots in %s\n", pngs, png_dir.c_str());
+  if (shadows && sum_triangles > 0)
+    std::printf("shadow map at X = %g: %.0f triangles per frame against the camera's %.0f (%.0f %%)\n", shadow_pixels,
+                double(sum_shadow_triangles) / double(frame_count), double(sum_triangles) / double(frame_count),
+                100.0 * double(sum_shadow_triangles) / double(sum_triangles));
   if (rel_errors.empty()) {
     std::printf("fewer than 31 frames: no prediction error after the 30-frame warm-up\n");
   } else {

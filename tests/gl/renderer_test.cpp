@@ -114,5 +114,75 @@ TEST_F(RendererTest, RejectsBadLevelsAndInputs) {
   EXPECT_FALSE(renderer_.drawFrame(in, &r));
 }
 
+LodChain quadChain(float half, float z) {
+  LodChain c;
+  LodLevel l;
+  l.mesh.positions = {{-half, -half, z}, {half, -half, z}, {half, half, z}, {-half, half, z}};
+  l.mesh.normals.assign(4, glm::vec3(0.0f, 0.0f, 1.0f));
+  l.mesh.triangles = {0, 1, 2, 0, 2, 3};
+  c.levels.push_back(l);
+  return c;
+}
+
+int brightness(const eval::Image& img, int x, int y) {
+  const uint8_t* p = img.pixel(x, y);
+  return p[0] + p[1] + p[2];
+}
+
+// a floor 2 x 2 at z = 0 and a card 0.5 x 0.5 at z = 1 over its middle, seen from above; a light
+// tilted toward +x throws the card's shadow 0.6 units toward -x: the floor there is darker than at
+// the mirrored point, unless the card casts no shadow (its shadow level -1)
+TEST_F(RendererTest, ShadowPassDarkensTheFloorBehindTheCasterOnly) {
+  ASSERT_TRUE(renderer_.uploadChains({quadChain(1.0f, 0.0f), quadChain(0.25f, 1.0f)}).ok());
+  const glm::mat4 world[2] = {glm::mat4(1.0f), glm::mat4(1.0f)};
+  const uint32_t chains[2] = {0, 1};
+  const int8_t levels[2] = {0, 0};
+  selection::Camera light;
+  light.projection = selection::Projection::kOrthographic;
+  light.eye = {3.0f, 0.0f, 5.0f};
+  light.target = {0.0f, 0.0f, 0.0f};
+  light.ortho_height = 4.0f;
+  light.near_plane = 0.1f;
+  light.far_plane = 20.0f;
+  light.viewport_width_px = light.viewport_height_px = 512;
+  auto frame = [&](const int8_t* shadow_levels, eval::Image& img) {
+    FrameInput in;
+    in.camera = &cam_;
+    in.object_world = {world, 2};
+    in.object_chain = {chains, 2};
+    in.levels = {levels, 2};
+    in.shadow_camera = &light;
+    in.shadow_levels = {shadow_levels, 2};
+    FrameResult r;
+    EXPECT_TRUE(renderer_.drawFrame(in, &r));
+    EXPECT_TRUE(renderer_.readPixels(img).ok());
+    return r;
+  };
+  // pixel (100 + 100 x, 100) is the floor at (x, 0) (image rows top to bottom, y = 0 in the middle)
+  eval::Image img;
+  const int8_t casting[2] = {0, 0};
+  const FrameResult r = frame(casting, img);
+  EXPECT_EQ(r.shadow_triangles, 4u);
+  EXPECT_EQ(r.triangles, 4u);
+  const int shadowed = brightness(img, 40, 100), lit = brightness(img, 160, 100);
+  EXPECT_LT(shadowed, lit * 3 / 4) << "shadowed " << shadowed << ", lit " << lit;
+  EXPECT_GT(shadowed, 0);  // ambient and headlight remain
+  const int8_t floor_only[2] = {0, -1};
+  frame(floor_only, img);
+  EXPECT_NEAR(brightness(img, 40, 100), brightness(img, 160, 100), 3);
+  EXPECT_NEAR(brightness(img, 160, 100), lit, 3);
+  // a perspective light is refused
+  light.projection = selection::Projection::kPerspective;
+  FrameInput in;
+  in.camera = &cam_;
+  in.object_world = {world, 2};
+  in.object_chain = {chains, 2};
+  in.levels = {levels, 2};
+  in.shadow_camera = &light;
+  in.shadow_levels = {casting, 2};
+  FrameResult bad;
+  EXPECT_FALSE(renderer_.drawFrame(in, &bad));
+}
+
 }  // namespace
 }  // namespace scenelod::gl

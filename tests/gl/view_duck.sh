@@ -20,3 +20,10 @@ for f in frame_0000.png frame_0005.png frame_0009.png; do
 done
 "$check" "$dir/frame_0000.png" 160 120 2 || { echo "FAIL: the screenshot shows (almost) only background"; exit 1; }
 "$check" "$dir/frame_0009.png" 160 120 2 || { echo "FAIL: the last screenshot shows (almost) only background"; exit 1; }
+# the same with a shadow map: the shadow view selects the casters' levels and the frame reports them
+out=$("$tool" view "$model" --headless --frames 3 --size 160 120 --shadows --shadow-map 256 --png "$dir/shadows" 2>&1)
+rc=$?
+echo "$out"
+[ $rc -eq 0 ] || { echo "FAIL: scenelod view --shadows exited with $rc"; exit 1; }
+printf '%s\n' "$out" | grep -q "shadow map: [1-9][0-9]* triangles" || { echo "FAIL: no triangles drawn into the shadow map"; exit 1; }
+"$check" "$dir/shadows/frame_0002.png" 160 120 2 || { echo "FAIL: the shadowed screenshot shows (almost) only background"; exit 1; }

@@ -87,26 +87,41 @@ void main() {
 }
 )";
 
-// a headlight: the light sits at the eye; both sides of a surface are lit
+// a headlight: the light sits at the eye; both sides of a surface are lit. With a shadow map, a
+// directional light (u_light_dir, toward the light) adds most of the light where the map sees the
+// surface (2x2 percentage-closer filtering by the depth comparison sampler)
 const char kFs[] = R"(#version 330 core
 in vec3 v_normal;
 in vec3 v_world;
 uniform vec3 u_eye;
 uniform vec3 u_color;
+uniform int u_shadow_on;
+uniform mat4 u_shadow_view_proj;
+uniform vec3 u_light_dir;
+uniform sampler2DShadow u_shadow_map;
 out vec4 o_color;
 void main() {
   float n_len = length(v_normal);
   vec3 to_eye = u_eye - v_world;
   float e_len = length(to_eye);
   float d = (n_len > 0.0 && e_len > 0.0) ? abs(dot(v_normal / n_len, to_eye / e_len)) : 1.0;
-  o_color = vec4(u_color * (0.2 + 0.8 * d), 1.0);
+  if (u_shadow_on == 0) {
+    o_color = vec4(u_color * (0.2 + 0.8 * d), 1.0);
+    return;
+  }
+  vec4 s = u_shadow_view_proj * vec4(v_world, 1.0);
+  vec3 p = s.xyz / s.w * 0.5 + 0.5;
+  float lit = 1.0;
+  if (all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(1.0)))) lit = texture(u_shadow_map, p);
+  float l = n_len > 0.0 ? abs(dot(v_normal / n_len, u_light_dir)) : 1.0;
+  o_color = vec4(u_color * (0.15 + 0.3 * d + 0.55 * l * lit), 1.0);
 }
 )";
 
 struct Program {
   GLuint id = 0;
   GLint model = -1, view_proj = -1, normal_matrix = -1, eye = -1, color = -1, scale = -1, pixel_factor = -1,
-        pixel_const = -1, point_size = -1;
+        pixel_const = -1, point_size = -1, shadow_on = -1, shadow_view_proj = -1, light_dir = -1, shadow_map = -1;
 };
 
 struct LevelGpu {
@@ -167,6 +182,14 @@ Error linkProgram(const char* vs_source, const char* name, Program& out) {
   out.pixel_factor = glGetUniformLocation(p, "u_pixel_factor");
   out.pixel_const = glGetUniformLocation(p, "u_pixel_const");
   out.point_size = glGetUniformLocation(p, "u_point_size");
+  out.shadow_on = glGetUniformLocation(p, "u_shadow_on");
+  out.shadow_view_proj = glGetUniformLocation(p, "u_shadow_view_proj");
+  out.light_dir = glGetUniformLocation(p, "u_light_dir");
+  out.shadow_map = glGetUniformLocation(p, "u_shadow_map");
+  glUseProgram(p);
+  glUniform1i(out.shadow_map, 0);  // texture unit 0
+  glUniform1i(out.shadow_on, 0);
+  glUseProgram(0);
   return {};
 }
 
@@ -212,6 +235,7 @@ struct Renderer::Impl {
   EGLContext context = EGL_NO_CONTEXT;
   EGLSurface pbuffer = EGL_NO_SURFACE;
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;  // made on the first frame with a shadow camera
   Program tri, edge, point;
   std::vector<ChainGpu> chains;
   size_t gpu_bytes = 0;
@@ -237,6 +261,8 @@ struct Renderer::Impl {
       glDeleteProgram(edge.id);
       glDeleteProgram(point.id);
       glDeleteFramebuffers(1, &fbo);
+      glDeleteFramebuffers(1, &shadow_fbo);
+      glDeleteTextures(1, &shadow_tex);
       glDeleteRenderbuffers(1, &color_rb);
       glDeleteRenderbuffers(1, &depth_rb);
     }
@@ -246,6 +272,29 @@ struct Renderer::Impl {
       if (pbuffer != EGL_NO_SURFACE) eglDestroySurface(display, pbuffer);
       eglTerminate(display);
     }
+  }
+
+  // the depth texture and framebuffer of the shadow pass; false when the framebuffer is incomplete
+  bool makeShadowMap() {
+    if (shadow_fbo) return true;
+    const GLsizei n = static_cast<GLsizei>(config.shadow_map_px);
+    glGenTextures(1, &shadow_tex);
+    glBindTexture(GL_TEXTURE_2D, shadow_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, n, n, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &shadow_fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    const bool ok = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE && glGetError() == GL_NO_ERROR;
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    return ok;
   }
 
   Error startEgl() {
@@ -296,6 +345,8 @@ Error Renderer::init(const RendererConfig& config, bool* unavailable) {
   if (unavailable) *unavailable = false;
   if (config.width_px < 1 || config.height_px < 1 || config.width_px > 8192 || config.height_px > 8192)
     return Error(Status::kInvalidArgument, "GL renderer: size must be 1..8192 pixels per side");
+  if (config.shadow_map_px < 16 || config.shadow_map_px > 8192)
+    return Error(Status::kInvalidArgument, "GL renderer: the shadow map must be 16..8192 texels per side");
   impl_ = std::make_unique<Impl>();
   Impl& m = *impl_;
   m.config = config;
@@ -451,13 +502,9 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains) {
   return {};
 }
 
-bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
-  if (!impl_ || !in.camera || in.object_world.count != in.levels.count || in.object_chain.count != in.levels.count)
-    return false;
-  Impl& m = *impl_;
-  const selection::Camera& cam = *in.camera;
-  const auto t0 = std::chrono::steady_clock::now();
-  const float aspect = static_cast<float>(m.config.width_px) / static_cast<float>(m.config.height_px);
+namespace {
+
+glm::mat4 viewProjection(const selection::Camera& cam, float aspect) {
   glm::mat4 proj;
   if (cam.projection == selection::Projection::kOrthographic) {
     const float h = 0.5f * cam.ortho_height, w = h * aspect;
@@ -465,42 +512,48 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
   } else {
     proj = glm::perspective(cam.fov_y_rad, aspect, cam.near_plane, cam.far_plane);
   }
-  const glm::mat4 view_proj = proj * glm::lookAt(cam.eye, cam.target, cam.up);
-  // one pixel in world units at distance d: factor * d + constant (the render target's height)
+  return proj * glm::lookAt(cam.eye, cam.target, cam.up);
+}
+
+// One pass over the objects: each one's level of `levels` under the camera's matrices, counted in
+// `triangles`, `edges`, `points`, `draw_calls`.
+struct PassCounters {
+  uint64_t triangles = 0, edges = 0, points = 0;
+  uint32_t draw_calls = 0;
+};
+
+void drawObjects(const Program& tri, const Program& edge, const Program& point, const std::vector<ChainGpu>& chains,
+                 const FrameInput& in, Span<const int8_t> levels, const selection::Camera& cam, const glm::mat4& view_proj,
+                 uint32_t height_px, float point_size, PassCounters& r) {
+  // one pixel in world units at distance d: factor * d + constant (the target's height)
   const float tan_half = std::tan(0.5f * cam.fov_y_rad);
   const float pixel_factor =
-      cam.projection == selection::Projection::kPerspective ? 2.0f * tan_half / static_cast<float>(m.config.height_px) : 0.0f;
+      cam.projection == selection::Projection::kPerspective ? 2.0f * tan_half / static_cast<float>(height_px) : 0.0f;
   const float pixel_const =
-      cam.projection == selection::Projection::kOrthographic ? cam.ortho_height / static_cast<float>(m.config.height_px) : 0.0f;
-
-  glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-  glClearColor(m.config.background[0], m.config.background[1], m.config.background[2], 1.0f);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  for (const Program* p : {&m.tri, &m.edge, &m.point}) {
+      cam.projection == selection::Projection::kOrthographic ? cam.ortho_height / static_cast<float>(height_px) : 0.0f;
+  for (const Program* p : {&tri, &edge, &point}) {
     glUseProgram(p->id);
     glUniformMatrix4fv(p->view_proj, 1, GL_FALSE, glm::value_ptr(view_proj));
     if (p->eye >= 0) glUniform3fv(p->eye, 1, glm::value_ptr(cam.eye));
   }
-  glUseProgram(m.edge.id);
-  glUniform1f(m.edge.pixel_factor, pixel_factor);
-  glUniform1f(m.edge.pixel_const, pixel_const);
-  glUseProgram(m.point.id);
-  glUniform1f(m.point.point_size, m.config.point_size_px);
-
-  FrameResult r;
-  for (size_t o = 0; o < in.levels.count; ++o) {
-    const int level = in.levels[o];
+  glUseProgram(edge.id);
+  glUniform1f(edge.pixel_factor, pixel_factor);
+  glUniform1f(edge.pixel_const, pixel_const);
+  glUseProgram(point.id);
+  glUniform1f(point.point_size, point_size);
+  for (size_t o = 0; o < levels.count; ++o) {
+    const int level = levels[o];
     const uint32_t chain = in.object_chain[o];
-    if (level < 0 || chain >= m.chains.size() || static_cast<size_t>(level) >= m.chains[chain].levels.size()) continue;
-    const LevelGpu& lg = m.chains[chain].levels[static_cast<size_t>(level)];
-    const glm::vec3& color = m.chains[chain].color;
+    if (level < 0 || chain >= chains.size() || static_cast<size_t>(level) >= chains[chain].levels.size()) continue;
+    const LevelGpu& lg = chains[chain].levels[static_cast<size_t>(level)];
+    const glm::vec3& color = chains[chain].color;
     const glm::mat4& model = in.object_world[o];
     if (lg.tri_indices) {
       const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(model));
-      glUseProgram(m.tri.id);
-      glUniformMatrix4fv(m.tri.model, 1, GL_FALSE, glm::value_ptr(model));
-      glUniformMatrix3fv(m.tri.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
-      glUniform3fv(m.tri.color, 1, glm::value_ptr(color));
+      glUseProgram(tri.id);
+      glUniformMatrix4fv(tri.model, 1, GL_FALSE, glm::value_ptr(model));
+      glUniformMatrix3fv(tri.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
+      glUniform3fv(tri.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.tri_vao);
       glDrawElements(GL_TRIANGLES, lg.tri_indices, GL_UNSIGNED_INT, nullptr);
       r.triangles += static_cast<uint64_t>(lg.tri_indices) / 3;
@@ -509,19 +562,19 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
     if (lg.edge_indices) {
       const float scale = std::max({glm::length(glm::vec3(model[0])), glm::length(glm::vec3(model[1])),
                                     glm::length(glm::vec3(model[2]))});
-      glUseProgram(m.edge.id);
-      glUniformMatrix4fv(m.edge.model, 1, GL_FALSE, glm::value_ptr(model));
-      glUniform1f(m.edge.scale, scale);
-      glUniform3fv(m.edge.color, 1, glm::value_ptr(color));
+      glUseProgram(edge.id);
+      glUniformMatrix4fv(edge.model, 1, GL_FALSE, glm::value_ptr(model));
+      glUniform1f(edge.scale, scale);
+      glUniform3fv(edge.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.edge_vao);
       glDrawElements(GL_TRIANGLES, lg.edge_indices, GL_UNSIGNED_INT, nullptr);
       r.edges += static_cast<uint64_t>(lg.edge_indices) / 6;
       ++r.draw_calls;
     }
     if (lg.point_indices) {
-      glUseProgram(m.point.id);
-      glUniformMatrix4fv(m.point.model, 1, GL_FALSE, glm::value_ptr(model));
-      glUniform3fv(m.point.color, 1, glm::value_ptr(color));
+      glUseProgram(point.id);
+      glUniformMatrix4fv(point.model, 1, GL_FALSE, glm::value_ptr(model));
+      glUniform3fv(point.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.point_vao);
       glDrawElements(GL_POINTS, lg.point_indices, GL_UNSIGNED_INT, nullptr);
       r.points += static_cast<uint64_t>(lg.point_indices);
@@ -529,8 +582,68 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
     }
   }
   glBindVertexArray(0);
+}
+
+}  // namespace
+
+bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
+  if (!impl_ || !in.camera || in.object_world.count != in.levels.count || in.object_chain.count != in.levels.count)
+    return false;
+  const bool shadows = in.shadow_camera != nullptr;
+  if (shadows && (in.shadow_levels.count != in.levels.count || in.shadow_camera->projection != selection::Projection::kOrthographic))
+    return false;
+  Impl& m = *impl_;
+  if (shadows && !m.makeShadowMap()) return false;
+  const selection::Camera& cam = *in.camera;
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameResult r;
+  glm::mat4 shadow_view_proj(1.0f);
+  if (shadows) {
+    // depth only, from the light; the offset keeps lit surfaces from shadowing themselves
+    const selection::Camera& light = *in.shadow_camera;
+    shadow_view_proj = viewProjection(light, 1.0f);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.shadow_fbo);
+    glViewport(0, 0, static_cast<GLsizei>(m.config.shadow_map_px), static_cast<GLsizei>(m.config.shadow_map_px));
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(2.0f, 4.0f);
+    for (const Program* p : {&m.tri, &m.edge, &m.point}) {
+      glUseProgram(p->id);
+      glUniform1i(p->shadow_on, 0);
+    }
+    PassCounters sc;
+    drawObjects(m.tri, m.edge, m.point, m.chains, in, in.shadow_levels, light, shadow_view_proj, m.config.shadow_map_px,
+                m.config.point_size_px, sc);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glViewport(0, 0, static_cast<GLsizei>(m.config.width_px), static_cast<GLsizei>(m.config.height_px));
+    r.shadow_triangles = sc.triangles;
+    r.shadow_draw_calls = sc.draw_calls;
+  }
+  const glm::vec3 light_dir = shadows ? glm::normalize(in.shadow_camera->eye - in.shadow_camera->target) : glm::vec3(0.0f, 0.0f, 1.0f);
+  for (const Program* p : {&m.tri, &m.edge, &m.point}) {
+    glUseProgram(p->id);
+    glUniform1i(p->shadow_on, shadows ? 1 : 0);
+    glUniformMatrix4fv(p->shadow_view_proj, 1, GL_FALSE, glm::value_ptr(shadow_view_proj));
+    glUniform3fv(p->light_dir, 1, glm::value_ptr(light_dir));
+  }
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, shadows ? m.shadow_tex : 0);
+
+  glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+  glClearColor(m.config.background[0], m.config.background[1], m.config.background[2], 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  const float aspect = static_cast<float>(m.config.width_px) / static_cast<float>(m.config.height_px);
+  PassCounters pc;
+  drawObjects(m.tri, m.edge, m.point, m.chains, in, in.levels, cam, viewProjection(cam, aspect), m.config.height_px,
+              m.config.point_size_px, pc);
   glFinish();
   const auto t1 = std::chrono::steady_clock::now();
+  r.triangles = pc.triangles;
+  r.edges = pc.edges;
+  r.points = pc.points;
+  r.draw_calls = pc.draw_calls;
   r.measured_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
   if (result) *result = r;
   return true;

@@ -32,6 +32,7 @@ struct RendererConfig {
   uint32_t height_px = 720;
   float background[3] = {0.08f, 0.09f, 0.11f};  // linear RGB clear colour
   float point_size_px = 3.0f;  // size of point primitives
+  uint32_t shadow_map_px = 2048;  // side of the shadow map (depth texture), 16..8192, made on first use
 };
 
 struct FrameInput {
@@ -39,6 +40,11 @@ struct FrameInput {
   Span<const glm::mat4> object_world;         // per object: object-to-world matrix
   Span<const uint32_t> object_chain;          // per object: chain index (< uploaded chain count)
   Span<const int8_t> levels;                  // per object: level to draw, -1 = not drawn
+  // optional shadow pass: the scene is first drawn (depth only) from `shadow_camera` (orthographic,
+  // a directional light looking from its eye to its target) with `shadow_levels` (per object, -1 =
+  // casts no shadow), then the frame is lit by that light and shadowed by that map
+  const selection::Camera* shadow_camera = nullptr;
+  Span<const int8_t> shadow_levels;
 };
 
 struct FrameResult {
@@ -47,6 +53,8 @@ struct FrameResult {
   uint64_t edges = 0;
   uint64_t points = 0;
   uint32_t draw_calls = 0;
+  uint64_t shadow_triangles = 0;  // drawn into the shadow map (part of measured_ms)
+  uint32_t shadow_draw_calls = 0;
 };
 
 class Renderer {
@@ -73,8 +81,10 @@ class Renderer {
   size_t gpuBytes() const;  // buffer bytes uploaded
 
   // Clears and draws the frame into the offscreen target and waits for it (glFinish). Objects with
-  // level -1, an out-of-range chain or level are skipped. Allocates nothing. Returns false (result
-  // untouched) before init or on mismatched span sizes or a null camera.
+  // level -1, an out-of-range chain or level are skipped. With a shadow camera, draws the shadow map
+  // first (the first such frame creates it). Allocates nothing after that. Returns false (result
+  // untouched) before init, on mismatched span sizes, a null camera or a shadow camera that is not
+  // orthographic, or when the shadow map cannot be made.
   bool drawFrame(const FrameInput& input, FrameResult* result);
 
   // Reads the last frame back into `out` (rows top to bottom). Errors: init not done.
