@@ -57,7 +57,8 @@ const char kUsage[] =
     "                      orthographic camera a shadow view of the same selection (docs/SELECTION.md,\n"
     "                      \"Views\"), which picks the casters' levels under the same budget\n"
     "  --shadow-pixels X   pixels (texels) per cell of the shadow view (default 4)\n"
-    "  --shadow-map N      shadow map side in texels (default 2048)\n"
+    "  --shadow-map N      shadow map side in texels (default 2048); with --png, each screenshot\n"
+    "                      has a DIR/light_NNNN.png beside it: the shadow levels seen from the light\n"
     "  --quiet             no per-frame lines";
 
 // World matrix of every node from parents and local transforms (validated scenes have no cycles).
@@ -350,6 +351,22 @@ int run(const std::vector<std::string>& raw_argv) {
         break;
       }
       ++pngs;
+      if (shadows) {
+        // what the shadow map holds: the shadow levels seen from the light (unmeasured)
+        gl::FrameInput light_in = in;
+        light_in.camera = &views[1].camera;
+        light_in.levels = light_in.shadow_levels;
+        light_in.shadow_camera = nullptr;
+        light_in.shadow_levels = {};
+        std::snprintf(name, sizeof(name), "/light_%04zu.png", f);
+        gl::FrameResult unused;
+        Error e = renderer.drawFrame(light_in, &unused) ? renderer.readPixels(img) : Error(Status::kUnsupported, "the light view was refused");
+        if (e.ok()) e = eval::writePng(png_dir + name, img);
+        if (!e.ok()) {
+          rc_exit = runError("view", e.message);
+          break;
+        }
+      }
     }
   }
   const CostCoefficients model = selectorCostModel(ctx);

@@ -27,3 +27,4 @@ echo "$out"
 [ $rc -eq 0 ] || { echo "FAIL: scenelod view --shadows exited with $rc"; exit 1; }
 printf '%s\n' "$out" | grep -q "shadow map: [1-9][0-9]* triangles" || { echo "FAIL: no triangles drawn into the shadow map"; exit 1; }
 "$check" "$dir/shadows/frame_0002.png" 160 120 2 || { echo "FAIL: the shadowed screenshot shows (almost) only background"; exit 1; }
+[ -f "$dir/shadows/light_0002.png" ] || { echo "FAIL: the light's view of the shadow levels was not written"; exit 1; }
