@@ -145,13 +145,13 @@ TEST_F(RendererTest, ShadowPassDarkensTheFloorBehindTheCasterOnly) {
   light.near_plane = 0.1f;
   light.far_plane = 20.0f;
   light.viewport_width_px = light.viewport_height_px = 512;
+  FrameInput in;
+  in.camera = &cam_;
+  in.object_world = {world, 2};
+  in.object_chain = {chains, 2};
+  in.levels = {levels, 2};
+  in.shadow_camera = &light;
   auto frame = [&](const int8_t* shadow_levels, eval::Image& img) {
-    FrameInput in;
-    in.camera = &cam_;
-    in.object_world = {world, 2};
-    in.object_chain = {chains, 2};
-    in.levels = {levels, 2};
-    in.shadow_camera = &light;
     in.shadow_levels = {shadow_levels, 2};
     FrameResult r;
     EXPECT_TRUE(renderer_.drawFrame(in, &r));
@@ -173,12 +173,6 @@ TEST_F(RendererTest, ShadowPassDarkensTheFloorBehindTheCasterOnly) {
   EXPECT_NEAR(brightness(img, 160, 100), lit, 3);
   // a perspective light is refused
   light.projection = selection::Projection::kPerspective;
-  FrameInput in;
-  in.camera = &cam_;
-  in.object_world = {world, 2};
-  in.object_chain = {chains, 2};
-  in.levels = {levels, 2};
-  in.shadow_camera = &light;
   in.shadow_levels = {casting, 2};
   FrameResult bad;
   EXPECT_FALSE(renderer_.drawFrame(in, &bad));
