@@ -3,6 +3,7 @@
 // the selector so its cost model is fitted to real rendering. Built only with SCENELOD_HAVE_GL.
 #ifdef SCENELOD_HAVE_GL
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +18,7 @@
 #include "scenelod/eval/image.h"
 #include "scenelod/gl/renderer.h"
 #include "scenelod/scene/demo_scene.h"
+#include "scenelod/scene/gltf_io.h"
 #include "scenelod/scene/lod_build.h"
 #include "scenelod/selection/camera_path.h"
 #include "scenelod/selection/replay.h"
@@ -83,17 +85,26 @@ void computeNodeWorld(const ReplayScene& s, std::vector<glm::mat4>& world) {
   }
 }
 
-Error loadViewScene(const std::string& path, ReplayScene& out) {
+// The scene to draw and, in `materials`, the scene data whose materials and textures its chains'
+// groups refer to (chain c is mesh c; empty for scenes without meshes).
+Error loadViewScene(const std::string& path, ReplayScene& out, scene::SceneData& materials) {
   if (path.empty() || path == "builtin") {
-    scene::SceneData data;
     scene::DemoSceneInfo info;
-    if (Error e = scene::makeDemoScene(data, scene::DemoSceneParams(), &info); !e.ok()) return e;
+    if (Error e = scene::makeDemoScene(materials, scene::DemoSceneParams(), &info); !e.ok()) return e;
     if (!info.note.empty()) std::printf("%s\n", info.note.c_str());
     scene::SceneLods lods;
-    if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, "demo scene"); !e.ok()) return e;
-    return replaySceneFromSceneData(data, lods.chains, "demo scene", out, &lods.chain_spheres);
+    if (Error e = scene::buildLods(materials, scene::LodBuildParams(), lods, nullptr, "demo scene"); !e.ok()) return e;
+    return replaySceneFromSceneData(materials, lods.chains, "demo scene", out, &lods.chain_spheres);
   }
   if (Error e = loadReplayScene(path, out); !e.ok()) return e;
+  std::string ext = path.size() > 4 ? path.substr(path.size() - 4) : "";
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::vector<LodChain> unused;
+  if (ext == "gltf" || ext == ".glb") {
+    if (Error e = scene::importGltfLods(path, materials, unused); !e.ok()) return e;
+  } else if (ext == ".obj") {
+    if (Error e = scene::loadScene(path, materials); !e.ok()) return e;
+  }
   if (out.chains.size() != out.table.chainCount())
     return Error(Status::kUnsupported, path + ": the scene has no meshes to render (level-scene, pack and builtin:NAME "
                                               "scenes carry only level rows); give a glTF/GLB/OBJ file or `builtin`");
@@ -145,6 +156,44 @@ Camera shadowCamera(const Sphere& bounds, glm::vec3 up, uint32_t texels) {
   return c;
 }
 
+// The renderer's materials from the scene's: factor, the decoded base colour texture (an undecoded
+// one drawn as its mean colour), wrap modes, KHR_texture_transform; and each chain's group
+// materials (its mesh's primitive materials).
+void viewMaterials(const scene::SceneData& s, size_t chain_count, std::vector<gl::MaterialDesc>& out,
+                   std::vector<std::vector<int32_t>>& groups) {
+  out.assign(s.materials.size(), gl::MaterialDesc());
+  for (size_t i = 0; i < s.materials.size(); ++i) {
+    const scene::MaterialData& m = s.materials[i];
+    gl::MaterialDesc& d = out[i];
+    for (int k = 0; k < 4; ++k) d.base_color[k] = m.base_color[k];
+    const int32_t t = m.base_color_texture;
+    const int32_t image = t >= 0 && static_cast<size_t>(t) < s.textures.size() ? s.textures[static_cast<size_t>(t)].image : -1;
+    const scene::ImageData* img = image >= 0 && static_cast<size_t>(image) < s.images.size() ? &s.images[static_cast<size_t>(image)] : nullptr;
+    if (img && !img->rgba8.empty()) {
+      d.rgba8 = img->rgba8.data();
+      d.width = img->width;
+      d.height = img->height;
+      d.wrap_s = s.textures[static_cast<size_t>(t)].wrap_s;
+      d.wrap_t = s.textures[static_cast<size_t>(t)].wrap_t;
+      const scene::TextureTransform& x = m.base_color_transform;
+      glm::mat3 translate(1.0f), rotate(1.0f), scale(1.0f);
+      translate[2] = glm::vec3(x.offset, 1.0f);
+      rotate[0] = glm::vec3(std::cos(x.rotation), -std::sin(x.rotation), 0.0f);
+      rotate[1] = glm::vec3(std::sin(x.rotation), std::cos(x.rotation), 0.0f);
+      scale[0][0] = x.scale.x;
+      scale[1][1] = x.scale.y;
+      const glm::mat3 uv = translate * rotate * scale;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) d.uv_transform[3 * c + r] = uv[c][r];
+    } else if (m.textured) {
+      for (int k = 0; k < 3; ++k) d.base_color[k] *= m.average_texel_color[k];
+    }
+  }
+  groups.assign(std::min(chain_count, s.meshes.size()), {});
+  for (size_t c = 0; c < groups.size(); ++c) groups[c] = s.meshes[c].primitive_materials;
+  if (s.materials.empty()) groups.clear();
+}
+
 bool makeDir(const std::string& dir) {
   struct stat st;
   if (stat(dir.c_str(), &st) == 0) return S_ISDIR(st.st_mode);
@@ -194,7 +243,8 @@ int run(const std::vector<std::string>& raw_argv) {
     if (!args.has("--budget") && replay.header.has_budget) budget = replay.header.budget_ms;
   }
   ReplayScene scene;
-  if (Error e = loadViewScene(scene_path, scene); !e.ok()) return runError("view", e.message);
+  scene::SceneData scene_materials;
+  if (Error e = loadViewScene(scene_path, scene, scene_materials); !e.ok()) return runError("view", e.message);
   if (Error e = validateReplayScene(scene, scene_path.empty() ? "demo scene" : scene_path); !e.ok()) return runError("view", e.message);
   if (scene.objectCount() == 0) return runError("view", scene_path + ": the scene has no objects");
   const Sphere bounds = sceneBounds(scene);
@@ -217,7 +267,11 @@ int run(const std::vector<std::string>& raw_argv) {
     }
     return 1;
   }
-  if (Error e = renderer.uploadChains(scene.chains); !e.ok()) return runError("view", e.message);
+  std::vector<gl::MaterialDesc> materials;
+  std::vector<std::vector<int32_t>> group_materials;
+  viewMaterials(scene_materials, scene.chains.size(), materials, group_materials);
+  if (Error e = renderer.uploadMaterials({materials.data(), materials.size()}); !e.ok()) return runError("view", e.message);
+  if (Error e = renderer.uploadChains(scene.chains, group_materials); !e.ok()) return runError("view", e.message);
   std::printf("%s\n", renderer.description().c_str());
   std::printf("scene %s: %zu objects, %zu chains, %zu level rows, %.1f MB on the GPU; %zu frames at %ldx%ld, budget %.3g ms\n",
               scene_path.empty() ? "builtin (demo)" : scene_path.c_str(), scene.objectCount(), scene.table.chainCount(),

@@ -178,5 +178,45 @@ TEST_F(RendererTest, ShadowPassDarkensTheFloorBehindTheCasterOnly) {
   EXPECT_FALSE(renderer_.drawFrame(in, &bad));
 }
 
+// two quads side by side in two groups: the left one textured (a 2 x 1 texture, red then green,
+// across its u), the right one a blue material without texture; each pixel shows its material
+TEST_F(RendererTest, GroupsAreDrawnWithTheirMaterialsAndTextures) {
+  LodChain c;
+  LodLevel l;
+  Mesh& m = l.mesh;
+  m.positions = {{-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {0, -1, 0}, {1, -1, 0}, {1, 1, 0}, {0, 1, 0}};
+  m.normals.assign(8, glm::vec3(0, 0, 1));
+  m.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}, {0, 1}, {1, 1}, {1, 0}, {0, 0}};
+  m.triangles = {4, 5, 6, 0, 1, 2, 4, 6, 7, 0, 2, 3};  // groups interleaved
+  m.triangle_groups = {1, 0, 1, 0};
+  c.levels.push_back(l);
+  const uint8_t texels[8] = {255, 0, 0, 255, 0, 255, 0, 255};
+  MaterialDesc mats[2];
+  mats[0].rgba8 = texels;
+  mats[0].width = 2;
+  mats[0].height = 1;
+  mats[0].wrap_s = mats[0].wrap_t = 33071;  // CLAMP_TO_EDGE
+  mats[1].base_color[0] = mats[1].base_color[1] = 0.0f;
+  ASSERT_TRUE(renderer_.uploadMaterials({mats, 2}).ok());
+  ASSERT_TRUE(renderer_.uploadChains({c}, {{0, 1}}).ok());
+  eval::Image img;
+  const FrameResult r = draw(0, img);
+  EXPECT_EQ(r.triangles, 4u);
+  EXPECT_EQ(r.draw_calls, 2u);  // one per group
+  const uint8_t* red = img.pixel(20, 100);
+  const uint8_t* green = img.pixel(80, 100);
+  const uint8_t* blue = img.pixel(150, 100);
+  EXPECT_GT(red[0], 200);
+  EXPECT_LT(red[1], 40);
+  EXPECT_GT(green[1], 200);
+  EXPECT_LT(green[0], 40);
+  EXPECT_GT(blue[2], 200);
+  EXPECT_LT(blue[0] + blue[1], 20);
+  // a group material past the uploaded ones is refused naming the chain
+  const Error e = renderer_.uploadChains({c}, {{0, 2}});
+  EXPECT_FALSE(e.ok());
+  EXPECT_NE(e.message.find("chain 0: material 2 but 2 were uploaded"), std::string::npos) << e.message;
+}
+
 }  // namespace
 }  // namespace scenelod::gl

@@ -26,15 +26,21 @@ namespace {
 const char kTriangleVs[] = R"(#version 330 core
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec2 a_uv;
+layout(location = 3) in vec3 a_color;
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
 uniform mat3 u_normal_matrix;
 out vec3 v_normal;
 out vec3 v_world;
+out vec2 v_uv;
+out vec3 v_color;
 void main() {
   vec4 w = u_model * vec4(a_pos, 1.0);
   v_world = w.xyz;
   v_normal = u_normal_matrix * a_normal;
+  v_uv = a_uv;
+  v_color = a_color;
   gl_Position = u_view_proj * w;
 }
 )";
@@ -52,7 +58,11 @@ uniform float u_pixel_factor;
 uniform float u_pixel_const;
 out vec3 v_normal;
 out vec3 v_world;
+out vec2 v_uv;
+out vec3 v_color;
 void main() {
+  v_uv = vec2(0.0);
+  v_color = vec3(1.0);
   vec3 w1 = (u_model * vec4(a_v1, 1.0)).xyz;
   vec3 w2 = (u_model * vec4(a_v2, 1.0)).xyz;
   vec3 dir = w2 - w1;
@@ -78,7 +88,11 @@ uniform vec3 u_eye;
 uniform float u_point_size;
 out vec3 v_normal;
 out vec3 v_world;
+out vec2 v_uv;
+out vec3 v_color;
 void main() {
+  v_uv = vec2(0.0);
+  v_color = vec3(1.0);
   vec4 w = u_model * vec4(a_pos, 1.0);
   v_world = w.xyz;
   v_normal = u_eye - w.xyz;
@@ -93,8 +107,13 @@ void main() {
 const char kFs[] = R"(#version 330 core
 in vec3 v_normal;
 in vec3 v_world;
+in vec2 v_uv;
+in vec3 v_color;
 uniform vec3 u_eye;
 uniform vec3 u_color;
+uniform int u_has_texture;
+uniform sampler2D u_texture;
+uniform mat3 u_uv_transform;
 uniform int u_shadow_on;
 uniform mat4 u_shadow_view_proj;
 uniform vec3 u_light_dir;
@@ -105,8 +124,10 @@ void main() {
   vec3 to_eye = u_eye - v_world;
   float e_len = length(to_eye);
   float d = (n_len > 0.0 && e_len > 0.0) ? abs(dot(v_normal / n_len, to_eye / e_len)) : 1.0;
+  vec3 base = u_color * v_color;
+  if (u_has_texture != 0) base *= texture(u_texture, (u_uv_transform * vec3(v_uv, 1.0)).xy).rgb;
   if (u_shadow_on == 0) {
-    o_color = vec4(u_color * (0.2 + 0.8 * d), 1.0);
+    o_color = vec4(base * (0.2 + 0.8 * d), 1.0);
     return;
   }
   vec4 s = u_shadow_view_proj * vec4(v_world, 1.0);
@@ -114,26 +135,59 @@ void main() {
   float lit = 1.0;
   if (all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(1.0)))) lit = texture(u_shadow_map, p);
   float l = n_len > 0.0 ? abs(dot(v_normal / n_len, u_light_dir)) : 1.0;
-  o_color = vec4(u_color * (0.15 + 0.3 * d + 0.55 * l * lit), 1.0);
+  o_color = vec4(base * (0.15 + 0.3 * d + 0.55 * l * lit), 1.0);
 }
 )";
 
 struct Program {
   GLuint id = 0;
   GLint model = -1, view_proj = -1, normal_matrix = -1, eye = -1, color = -1, scale = -1, pixel_factor = -1,
-        pixel_const = -1, point_size = -1, shadow_on = -1, shadow_view_proj = -1, light_dir = -1, shadow_map = -1;
+        pixel_const = -1, point_size = -1, shadow_on = -1, shadow_view_proj = -1, light_dir = -1, shadow_map = -1,
+        has_texture = -1, texture = -1, uv_transform = -1;
+};
+
+// a run of one primitive kind's indices drawn with one material
+struct Range {
+  GLsizei first = 0, count = 0;  // in indices
+  int32_t material = -1;         // -1: white (or the chain's colour when it has no materials)
 };
 
 struct LevelGpu {
   GLuint vbo = 0, tri_vao = 0, tri_ibo = 0, point_vao = 0, point_ibo = 0;
   GLuint edge_vao = 0, edge_vbo = 0, edge_ibo = 0;
   GLsizei tri_indices = 0, point_indices = 0, edge_indices = 0;
+  std::vector<Range> tri_ranges, edge_ranges, point_ranges;
 };
 
 struct ChainGpu {
   std::vector<LevelGpu> levels;
   glm::vec3 color{0.8f};
+  bool materials = false;  // drawn with materials (else the flat chain colour)
 };
+
+struct MaterialGpu {
+  GLuint texture = 0;
+  glm::vec3 factor{1.0f};
+  glm::vec3 mean_texel{1.0f};  // for edges and points, which have no texture coordinates
+  glm::mat3 uv_transform{1.0f};
+};
+
+// the order of `n` primitives sorted by their group (stable), and the runs of one group
+std::vector<uint32_t> groupOrder(size_t n, const std::vector<uint32_t>& groups, const std::vector<int32_t>* materials,
+                                 GLsizei per_primitive, std::vector<Range>& ranges) {
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
+  auto group = [&](uint32_t i) { return groups.empty() ? 0u : groups[i]; };
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return group(a) < group(b); });
+  ranges.clear();
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t g = group(order[k]);
+    const int32_t material = materials && g < materials->size() ? (*materials)[g] : -1;
+    if (k == 0 || group(order[k - 1]) != g) ranges.push_back(Range{static_cast<GLsizei>(k) * per_primitive, 0, material});
+    ranges.back().count += per_primitive;
+  }
+  return order;
+}
 
 Error compileShader(GLenum type, const char* source, const char* name, GLuint& out) {
   GLuint s = glCreateShader(type);
@@ -186,9 +240,16 @@ Error linkProgram(const char* vs_source, const char* name, Program& out) {
   out.shadow_view_proj = glGetUniformLocation(p, "u_shadow_view_proj");
   out.light_dir = glGetUniformLocation(p, "u_light_dir");
   out.shadow_map = glGetUniformLocation(p, "u_shadow_map");
+  out.has_texture = glGetUniformLocation(p, "u_has_texture");
+  out.texture = glGetUniformLocation(p, "u_texture");
+  out.uv_transform = glGetUniformLocation(p, "u_uv_transform");
   glUseProgram(p);
-  glUniform1i(out.shadow_map, 0);  // texture unit 0
+  glUniform1i(out.shadow_map, 0);  // texture unit 0: the shadow map
+  glUniform1i(out.texture, 1);     // texture unit 1: the material's base colour
   glUniform1i(out.shadow_on, 0);
+  glUniform1i(out.has_texture, 0);
+  const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  glUniformMatrix3fv(out.uv_transform, 1, GL_FALSE, identity);
   glUseProgram(0);
   return {};
 }
@@ -238,9 +299,15 @@ struct Renderer::Impl {
   GLuint shadow_fbo = 0, shadow_tex = 0;  // made on the first frame with a shadow camera
   Program tri, edge, point;
   std::vector<ChainGpu> chains;
+  std::vector<MaterialGpu> materials;
   size_t gpu_bytes = 0;
   bool ready = false;
   std::string description;
+
+  void releaseMaterials() {
+    for (MaterialGpu& mat : materials) glDeleteTextures(1, &mat.texture);
+    materials.clear();
+  }
 
   void releaseChains() {
     for (ChainGpu& c : chains)
@@ -257,6 +324,7 @@ struct Renderer::Impl {
   ~Impl() {
     if (ready) {
       releaseChains();
+      releaseMaterials();
       glDeleteProgram(tri.id);
       glDeleteProgram(edge.id);
       glDeleteProgram(point.id);
@@ -394,15 +462,61 @@ std::string Renderer::description() const { return impl_ ? impl_->description : 
 size_t Renderer::chainCount() const { return impl_ ? impl_->chains.size() : 0; }
 size_t Renderer::gpuBytes() const { return impl_ ? impl_->gpu_bytes : 0; }
 
-Error Renderer::uploadChains(const std::vector<LodChain>& chains) {
+Error Renderer::uploadMaterials(Span<const MaterialDesc> materials) {
+  if (!impl_) return Error(Status::kInvalidArgument, "GL renderer: uploadMaterials before init");
+  Impl& m = *impl_;
+  m.releaseMaterials();
+  auto wrapOk = [](int32_t w) { return w == GL_REPEAT || w == GL_CLAMP_TO_EDGE || w == GL_MIRRORED_REPEAT; };
+  for (size_t i = 0; i < materials.count; ++i) {
+    const MaterialDesc& d = materials[i];
+    const std::string what = "GL renderer: material " + std::to_string(i);
+    MaterialGpu g;
+    g.factor = glm::vec3(d.base_color[0], d.base_color[1], d.base_color[2]);
+    g.uv_transform = glm::make_mat3(d.uv_transform);
+    if (d.rgba8) {
+      if (d.width < 1 || d.height < 1 || d.width > 16384 || d.height > 16384)
+        return Error(Status::kInvalidArgument, what + ": texture of " + std::to_string(d.width) + "x" + std::to_string(d.height) + " texels");
+      if (!wrapOk(d.wrap_s) || !wrapOk(d.wrap_t)) return Error(Status::kInvalidArgument, what + ": unknown wrap mode");
+      glm::dvec3 sum(0.0);
+      const size_t texels = static_cast<size_t>(d.width) * static_cast<size_t>(d.height);
+      for (size_t t = 0; t < texels; ++t) sum += glm::dvec3(d.rgba8[4 * t], d.rgba8[4 * t + 1], d.rgba8[4 * t + 2]);
+      g.mean_texel = glm::vec3(sum / (255.0 * static_cast<double>(texels)));
+      glGenTextures(1, &g.texture);
+      glBindTexture(GL_TEXTURE_2D, g.texture);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      // rows top first, as glTF's v: v = 0 is the first row, which GL calls t = 0
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, d.width, d.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, d.rgba8);
+      glGenerateMipmap(GL_TEXTURE_2D);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, d.wrap_s);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, d.wrap_t);
+      glBindTexture(GL_TEXTURE_2D, 0);
+      m.gpu_bytes += texels * 4 * 4 / 3;
+    }
+    m.materials.push_back(g);
+    if (glGetError() != GL_NO_ERROR) return Error(Status::kOutOfMemory, what + ": a GL error uploading its texture");
+  }
+  return {};
+}
+
+Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vector<std::vector<int32_t>>& group_materials) {
   if (!impl_) return Error(Status::kInvalidArgument, "GL renderer: uploadChains before init");
   Impl& m = *impl_;
   m.releaseChains();
+  for (size_t c = 0; c < group_materials.size() && c < chains.size(); ++c)
+    for (int32_t mat : group_materials[c])
+      if (mat < -1 || mat >= static_cast<int32_t>(m.materials.size()))
+        return Error(Status::kInvalidArgument, "GL renderer: chain " + std::to_string(c) + ": material " + std::to_string(mat) +
+                                                   " but " + std::to_string(m.materials.size()) + " were uploaded");
+  constexpr size_t kStride = 11;  // position, normal, uv, colour
   std::vector<float> vertex_data, edge_data;
-  std::vector<uint32_t> edge_indices;
+  std::vector<uint32_t> indices;
   for (size_t c = 0; c < chains.size(); ++c) {
     ChainGpu gpu;
     gpu.color = chainColor(c);
+    gpu.materials = c < group_materials.size();
+    const std::vector<int32_t>* mats = gpu.materials ? &group_materials[c] : nullptr;
     for (size_t l = 0; l < chains[c].levels.size(); ++l) {
       const Mesh& src = chains[c].levels[l].mesh;
       const std::string what = "chain " + std::to_string(c) + " level " + std::to_string(l);
@@ -415,63 +529,82 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains) {
         computeVertexNormals(normals_mesh);
         normals = &normals_mesh.normals;
       }
+      const bool uvs = src.uvs.size() == src.positions.size();
+      const bool colors = gpu.materials && src.colors.size() == src.positions.size();
       LevelGpu lg;
-      vertex_data.resize(src.positions.size() * 6);
+      vertex_data.assign(src.positions.size() * kStride, 1.0f);
       for (size_t v = 0; v < src.positions.size(); ++v) {
-        std::memcpy(&vertex_data[v * 6], &src.positions[v], 12);
-        std::memcpy(&vertex_data[v * 6 + 3], &(*normals)[v], 12);
+        float* d = &vertex_data[v * kStride];
+        std::memcpy(d, &src.positions[v], 12);
+        std::memcpy(d + 3, &(*normals)[v], 12);
+        d[6] = uvs ? src.uvs[v].x : 0.0f;
+        d[7] = uvs ? src.uvs[v].y : 0.0f;
+        if (colors) std::memcpy(d + 8, &src.colors[v], 12);
       }
       glGenBuffers(1, &lg.vbo);
       glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
       glBufferData(GL_ARRAY_BUFFER, vertex_data.size() * 4, vertex_data.data(), GL_STATIC_DRAW);
       m.gpu_bytes += vertex_data.size() * 4;
-      if (!src.triangles.empty()) {
-        glGenVertexArrays(1, &lg.tri_vao);
-        glBindVertexArray(lg.tri_vao);
+      auto vertexArray = [&](GLuint& vao, bool all_attributes) {
+        glGenVertexArrays(1, &vao);
+        glBindVertexArray(vao);
         glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
+        const GLsizei stride = kStride * 4;
         glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(0));
+        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(0));
+        if (!all_attributes) return;
         glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(12));
-        glGenBuffers(1, &lg.tri_ibo);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, lg.tri_ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, src.triangles.size() * 4, src.triangles.data(), GL_STATIC_DRAW);
-        lg.tri_indices = static_cast<GLsizei>(src.triangles.size());
-        m.gpu_bytes += src.triangles.size() * 4;
+        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(12));
+        glEnableVertexAttribArray(2);
+        glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(24));
+        glEnableVertexAttribArray(3);
+        glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(32));
+      };
+      auto indexBuffer = [&](GLuint& ibo, const std::vector<uint32_t>& data) {
+        glGenBuffers(1, &ibo);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, data.size() * 4, data.data(), GL_STATIC_DRAW);
+        m.gpu_bytes += data.size() * 4;
+      };
+      if (!src.triangles.empty()) {
+        const std::vector<uint32_t> order = groupOrder(src.triangleCount(), src.triangle_groups, mats, 3, lg.tri_ranges);
+        indices.clear();
+        for (uint32_t t : order) indices.insert(indices.end(), src.triangles.begin() + 3 * t, src.triangles.begin() + 3 * t + 3);
+        vertexArray(lg.tri_vao, true);
+        indexBuffer(lg.tri_ibo, indices);
+        lg.tri_indices = static_cast<GLsizei>(indices.size());
       }
       if (!src.points.empty()) {
-        glGenVertexArrays(1, &lg.point_vao);
-        glBindVertexArray(lg.point_vao);
-        glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(0));
-        glGenBuffers(1, &lg.point_ibo);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, lg.point_ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, src.points.size() * 4, src.points.data(), GL_STATIC_DRAW);
-        lg.point_indices = static_cast<GLsizei>(src.points.size());
-        m.gpu_bytes += src.points.size() * 4;
+        const std::vector<uint32_t> order = groupOrder(src.pointCount(), src.point_groups, mats, 1, lg.point_ranges);
+        indices.clear();
+        for (uint32_t p : order) indices.push_back(src.points[p]);
+        vertexArray(lg.point_vao, false);
+        indexBuffer(lg.point_ibo, indices);
+        lg.point_indices = static_cast<GLsizei>(indices.size());
       }
       const size_t edge_count = src.edgeCount();
       if (edge_count) {
         // four vertices per edge: (V1, V2, end, side, thickness), two triangles
+        const std::vector<uint32_t> order = groupOrder(edge_count, src.edge_groups, mats, 6, lg.edge_ranges);
         edge_data.resize(edge_count * 4 * 10);
-        edge_indices.resize(edge_count * 6);
-        for (size_t e = 0; e < edge_count; ++e) {
+        indices.resize(edge_count * 6);
+        for (size_t k = 0; k < edge_count; ++k) {
+          const size_t e = order[k];
           const glm::vec3& a = src.positions[src.edges[2 * e]];
           const glm::vec3& b = src.positions[src.edges[2 * e + 1]];
           const float thickness = src.edgeThickness(e);
-          for (int k = 0; k < 4; ++k) {
-            float* d = &edge_data[(e * 4 + k) * 10];
+          for (int q = 0; q < 4; ++q) {
+            float* d = &edge_data[(k * 4 + q) * 10];
             std::memcpy(d, &a, 12);
             std::memcpy(d + 3, &b, 12);
-            d[6] = (k == 1 || k == 2) ? 1.0f : 0.0f;  // end
-            d[7] = (k < 2) ? -1.0f : 1.0f;            // side
+            d[6] = (q == 1 || q == 2) ? 1.0f : 0.0f;  // end
+            d[7] = (q < 2) ? -1.0f : 1.0f;            // side
             d[8] = thickness;
             d[9] = 0.0f;
           }
-          const uint32_t base = static_cast<uint32_t>(e * 4);
+          const uint32_t base = static_cast<uint32_t>(k * 4);
           const uint32_t quad[6] = {base, base + 1, base + 2, base, base + 2, base + 3};
-          std::memcpy(&edge_indices[e * 6], quad, sizeof(quad));
+          std::memcpy(&indices[k * 6], quad, sizeof(quad));
         }
         glGenVertexArrays(1, &lg.edge_vao);
         glBindVertexArray(lg.edge_vao);
@@ -484,14 +617,12 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains) {
         glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 40, reinterpret_cast<void*>(12));
         glEnableVertexAttribArray(2);
         glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 40, reinterpret_cast<void*>(24));
-        glGenBuffers(1, &lg.edge_ibo);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, lg.edge_ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, edge_indices.size() * 4, edge_indices.data(), GL_STATIC_DRAW);
-        lg.edge_indices = static_cast<GLsizei>(edge_indices.size());
-        m.gpu_bytes += edge_data.size() * 4 + edge_indices.size() * 4;
+        indexBuffer(lg.edge_ibo, indices);
+        lg.edge_indices = static_cast<GLsizei>(indices.size());
+        m.gpu_bytes += edge_data.size() * 4;
       }
       glBindVertexArray(0);
-      gpu.levels.push_back(lg);
+      gpu.levels.push_back(std::move(lg));
       if (glGetError() != GL_NO_ERROR) {
         m.chains.push_back(std::move(gpu));
         return Error(Status::kOutOfMemory, "GL renderer: a GL error uploading " + what);
@@ -522,9 +653,32 @@ struct PassCounters {
   uint32_t draw_calls = 0;
 };
 
+// the uniforms of one range's material: the chain's colour when the chain has no materials, white
+// for a range without one; edges and points (no texture coordinates) take the texture's mean
+void setMaterial(const Program& p, const ChainGpu& chain, const std::vector<MaterialGpu>& materials, int32_t material,
+                 bool textured) {
+  glm::vec3 color = chain.materials ? glm::vec3(1.0f) : chain.color;
+  const MaterialGpu* mat = chain.materials && material >= 0 && static_cast<size_t>(material) < materials.size()
+                               ? &materials[static_cast<size_t>(material)]
+                               : nullptr;
+  const bool texture = mat && mat->texture && textured;
+  if (mat) color = mat->factor * (mat->texture && !textured ? mat->mean_texel : glm::vec3(1.0f));
+  glUniform3fv(p.color, 1, glm::value_ptr(color));
+  glUniform1i(p.has_texture, texture ? 1 : 0);
+  if (texture) {
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, mat->texture);
+    glUniformMatrix3fv(p.uv_transform, 1, GL_FALSE, glm::value_ptr(mat->uv_transform));
+  }
+}
+
+// One pass over the objects: each one's level of `levels` under the camera's matrices, counted in
+// `r`. A depth-only pass draws each primitive kind of a level in one call; the colour pass one call
+// per material range.
 void drawObjects(const Program& tri, const Program& edge, const Program& point, const std::vector<ChainGpu>& chains,
-                 const FrameInput& in, Span<const int8_t> levels, const selection::Camera& cam, const glm::mat4& view_proj,
-                 uint32_t height_px, float point_size, PassCounters& r) {
+                 const std::vector<MaterialGpu>& materials, const FrameInput& in, Span<const int8_t> levels,
+                 const selection::Camera& cam, const glm::mat4& view_proj, uint32_t height_px, float point_size,
+                 bool depth_only, PassCounters& r) {
   // one pixel in world units at distance d: factor * d + constant (the target's height)
   const float tan_half = std::tan(0.5f * cam.fov_y_rad);
   const float pixel_factor =
@@ -535,29 +689,42 @@ void drawObjects(const Program& tri, const Program& edge, const Program& point, 
     glUseProgram(p->id);
     glUniformMatrix4fv(p->view_proj, 1, GL_FALSE, glm::value_ptr(view_proj));
     if (p->eye >= 0) glUniform3fv(p->eye, 1, glm::value_ptr(cam.eye));
+    glUniform1i(p->has_texture, 0);
   }
   glUseProgram(edge.id);
   glUniform1f(edge.pixel_factor, pixel_factor);
   glUniform1f(edge.pixel_const, pixel_const);
   glUseProgram(point.id);
   glUniform1f(point.point_size, point_size);
+  // each range of `ranges` (or the whole `count` indices in a depth pass) as `mode` primitives
+  auto drawRanges = [&](const Program& p, const ChainGpu& chain, const std::vector<Range>& ranges, GLsizei count, GLenum mode,
+                        bool textured) {
+    if (depth_only) {
+      glDrawElements(mode, count, GL_UNSIGNED_INT, nullptr);
+      ++r.draw_calls;
+      return;
+    }
+    for (const Range& range : ranges) {
+      setMaterial(p, chain, materials, range.material, textured);
+      glDrawElements(mode, range.count, GL_UNSIGNED_INT, reinterpret_cast<void*>(static_cast<uintptr_t>(range.first) * 4));
+      ++r.draw_calls;
+    }
+  };
   for (size_t o = 0; o < levels.count; ++o) {
     const int level = levels[o];
-    const uint32_t chain = in.object_chain[o];
-    if (level < 0 || chain >= chains.size() || static_cast<size_t>(level) >= chains[chain].levels.size()) continue;
-    const LevelGpu& lg = chains[chain].levels[static_cast<size_t>(level)];
-    const glm::vec3& color = chains[chain].color;
+    const uint32_t c = in.object_chain[o];
+    if (level < 0 || c >= chains.size() || static_cast<size_t>(level) >= chains[c].levels.size()) continue;
+    const ChainGpu& chain = chains[c];
+    const LevelGpu& lg = chain.levels[static_cast<size_t>(level)];
     const glm::mat4& model = in.object_world[o];
     if (lg.tri_indices) {
       const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(model));
       glUseProgram(tri.id);
       glUniformMatrix4fv(tri.model, 1, GL_FALSE, glm::value_ptr(model));
       glUniformMatrix3fv(tri.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
-      glUniform3fv(tri.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.tri_vao);
-      glDrawElements(GL_TRIANGLES, lg.tri_indices, GL_UNSIGNED_INT, nullptr);
+      drawRanges(tri, chain, lg.tri_ranges, lg.tri_indices, GL_TRIANGLES, true);
       r.triangles += static_cast<uint64_t>(lg.tri_indices) / 3;
-      ++r.draw_calls;
     }
     if (lg.edge_indices) {
       const float scale = std::max({glm::length(glm::vec3(model[0])), glm::length(glm::vec3(model[1])),
@@ -565,20 +732,16 @@ void drawObjects(const Program& tri, const Program& edge, const Program& point, 
       glUseProgram(edge.id);
       glUniformMatrix4fv(edge.model, 1, GL_FALSE, glm::value_ptr(model));
       glUniform1f(edge.scale, scale);
-      glUniform3fv(edge.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.edge_vao);
-      glDrawElements(GL_TRIANGLES, lg.edge_indices, GL_UNSIGNED_INT, nullptr);
+      drawRanges(edge, chain, lg.edge_ranges, lg.edge_indices, GL_TRIANGLES, false);
       r.edges += static_cast<uint64_t>(lg.edge_indices) / 6;
-      ++r.draw_calls;
     }
     if (lg.point_indices) {
       glUseProgram(point.id);
       glUniformMatrix4fv(point.model, 1, GL_FALSE, glm::value_ptr(model));
-      glUniform3fv(point.color, 1, glm::value_ptr(color));
       glBindVertexArray(lg.point_vao);
-      glDrawElements(GL_POINTS, lg.point_indices, GL_UNSIGNED_INT, nullptr);
+      drawRanges(point, chain, lg.point_ranges, lg.point_indices, GL_POINTS, false);
       r.points += static_cast<uint64_t>(lg.point_indices);
-      ++r.draw_calls;
     }
   }
   glBindVertexArray(0);
@@ -613,8 +776,8 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
       glUniform1i(p->shadow_on, 0);
     }
     PassCounters sc;
-    drawObjects(m.tri, m.edge, m.point, m.chains, in, in.shadow_levels, light, shadow_view_proj, m.config.shadow_map_px,
-                m.config.point_size_px, sc);
+    drawObjects(m.tri, m.edge, m.point, m.chains, m.materials, in, in.shadow_levels, light, shadow_view_proj,
+                m.config.shadow_map_px, m.config.point_size_px, true, sc);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glViewport(0, 0, static_cast<GLsizei>(m.config.width_px), static_cast<GLsizei>(m.config.height_px));
@@ -636,8 +799,8 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   const float aspect = static_cast<float>(m.config.width_px) / static_cast<float>(m.config.height_px);
   PassCounters pc;
-  drawObjects(m.tri, m.edge, m.point, m.chains, in, in.levels, cam, viewProjection(cam, aspect), m.config.height_px,
-              m.config.point_size_px, pc);
+  drawObjects(m.tri, m.edge, m.point, m.chains, m.materials, in, in.levels, cam, viewProjection(cam, aspect),
+              m.config.height_px, m.config.point_size_px, false, pc);
   glFinish();
   const auto t1 = std::chrono::steady_clock::now();
   r.triangles = pc.triangles;

@@ -35,6 +35,18 @@ struct RendererConfig {
   uint32_t shadow_map_px = 2048;  // side of the shadow map (depth texture), 16..8192, made on first use
 };
 
+// A material as the renderer draws it: base colour factor x base colour texture (8-bit RGBA rows,
+// top row first, drawn as stored: no sRGB decoding) at the vertices' first texture coordinate set,
+// transformed by `uv_transform` (KHR_texture_transform as a 3x3 matrix, column-major) x the
+// vertex colour. The pixels are copied at upload.
+struct MaterialDesc {
+  float base_color[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+  const uint8_t* rgba8 = nullptr;  // null: no texture
+  int32_t width = 0, height = 0;
+  int32_t wrap_s = 10497, wrap_t = 10497;  // GL wrap enums: REPEAT, CLAMP_TO_EDGE, MIRRORED_REPEAT
+  float uv_transform[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+};
+
 struct FrameInput {
   const selection::Camera* camera = nullptr;  // its viewport should match the render target
   Span<const glm::mat4> object_world;         // per object: object-to-world matrix
@@ -74,9 +86,18 @@ class Renderer {
   std::string description() const;
 
   // Uploads every level of every chain (one vertex and index buffer per level and primitive kind).
-  // Meshes without normals get area-weighted vertex normals. Replaces earlier uploads. Errors: init
-  // not done, a level whose indices are out of range, a GL error (out of memory). Allocates.
-  Error uploadChains(const std::vector<LodChain>& chains);
+  // Meshes without normals get area-weighted vertex normals. Replaces earlier uploads. With
+  // `group_materials` (one list per chain, or empty), chain c's triangle group g (edge group, point
+  // group) is drawn with material group_materials[c][g] of the last uploadMaterials (-1 or past the
+  // list: white), its triangles one draw per group; without, every chain has its own flat colour.
+  // Errors: init not done, a level whose indices are out of range, a group material out of range, a
+  // GL error (out of memory). Allocates.
+  Error uploadChains(const std::vector<LodChain>& chains,
+                     const std::vector<std::vector<int32_t>>& group_materials = {});
+  // Uploads the materials (textures with mipmaps) that uploadChains' group materials refer to;
+  // call before uploadChains. Errors: init not done, a texture without pixels or of a bad size or
+  // wrap mode. Allocates.
+  Error uploadMaterials(Span<const MaterialDesc> materials);
   size_t chainCount() const;
   size_t gpuBytes() const;  // buffer bytes uploaded
 
