@@ -80,6 +80,18 @@ struct PackLevelView {
   Span<const uint32_t> source_vertex;    // LodLevel::source_vertex: vertices of the chain's level 0
 };
 
+// A level's geomorph targets (LodLevel::morph; section 11): all empty when the level has none (the
+// last level of a chain, packs written without them).
+struct PackLevelMorphView {
+  Span<const glm::vec3> positions;
+  Span<const glm::vec3> normals;
+  Span<const glm::vec3> colors;
+  Span<const glm::vec2> uvs;
+  size_t extra_uv_set_count = 0;
+  Span<const glm::vec2> extra_uvs;  // sets 1, 2, ...: set s at [(s - 1) x V, s x V)
+  Span<const glm::vec4> tangents;
+};
+
 struct PackNodeView {
   int32_t parent = -1;
   int32_t mesh = -1;
@@ -118,6 +130,7 @@ class Pack {
   Sphere chainSphere(size_t chain) const;
   const char* meshName(size_t chain) const;
   PackLevelView level(size_t chain, size_t level) const;
+  PackLevelMorphView levelMorph(size_t chain, size_t level) const;
   size_t byteSize() const { return bytes_.size(); }
   const uint8_t* bytes() const { return bytes_.data(); }  // the whole file
 
@@ -137,6 +150,7 @@ class Pack {
   size_t objects_ = 0, object_count_ = 0, chains_ = 0, chain_count_ = 0, levels_ = 0, level_count_ = 0;
   size_t names_ = 0, names_size_ = 0;
   size_t attributes_ = 0;  // the level attributes section, 0 when absent
+  size_t morphs_ = 0;      // the level geomorph section, 0 when absent
 };
 
 }  // namespace scenelod::scene
