@@ -828,6 +828,13 @@ slod_status slod_level_get(const slod_context* cctx, slod_chain chain, uint32_t 
     d.weights = l.mesh.weights.empty() ? nullptr : &l.mesh.weights[0].x;
     d.joint_count = o.joint_count;
     d.joint_parents = l.mesh.joint_parents.empty() ? nullptr : l.mesh.joint_parents.data();
+    const LevelMorph& morph = l.morph;
+    auto floats = [](const auto& v) { return v.empty() ? nullptr : &v[0].x; };
+    d.morph_positions = floats(morph.positions);
+    d.morph_normals = floats(morph.normals);
+    d.morph_colors = floats(morph.colors);
+    d.morph_uvs = floats(morph.uvs);
+    d.morph_tangents = floats(morph.tangents);
     writeStruct(d, out);
     return ok(ctx);
   });

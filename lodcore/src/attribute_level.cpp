@@ -35,9 +35,11 @@ void makeAttributeMesh(const Mesh& in, AttributeMesh& out) {
   std::vector<uint32_t> old_to_new;
   out.did_weld = weldedCopy(in, out.welded, &old_to_new) > 0;
   out.input_vertex.clear();
+  out.welded_of.clear();
   if (out.did_weld) {
     out.input_vertex.assign(out.welded.vertexCount(), kNone);
     for (size_t i = old_to_new.size(); i-- > 0;) out.input_vertex[old_to_new[i]] = static_cast<uint32_t>(i);
+    out.welded_of = std::move(old_to_new);
   }
   const Mesh& m = out.mesh();
   // without texture coordinates there is no seam to keep: a group's pieces share their clusters'
@@ -466,7 +468,8 @@ void writeEdgeAndPointGroups(const AttributeMesh& am, const AttributeGroups& gro
 }
 
 void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
-                          std::vector<uint32_t>* source_vertex) {
+                          std::vector<uint32_t>* source_vertex, std::vector<uint32_t>* cluster_of_out,
+                          std::vector<uint32_t>* vertex_cluster) {
   out = Mesh();
   if (source_vertex) source_vertex->clear();
   const Mesh& m = am.mesh();
@@ -494,6 +497,12 @@ void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, 
       (*source_vertex)[i] = am.did_weld ? am.input_vertex[v] : v;
     }
   }
+  if (vertex_cluster) {
+    const std::vector<uint32_t>& group_of = vertices.groupOfVertex();
+    vertex_cluster->resize(group_of.size());
+    for (size_t i = 0; i < group_of.size(); ++i) (*vertex_cluster)[i] = groups[group_of[i]].cluster;
+  }
+  if (cluster_of_out) *cluster_of_out = std::move(parts.assignment.cluster_of);
   parts = AttributeLevelParts();
 }
 

@@ -26,6 +26,7 @@ struct AttributeMesh {
   Mesh welded;                         // used only where welding removed a vertex
   bool did_weld = false;
   std::vector<uint32_t> input_vertex;  // per welded vertex: its first vertex in the input
+  std::vector<uint32_t> welded_of;     // per input vertex: its welded vertex (empty when none welded)
   std::vector<uint32_t> chart;         // per triangle: its UV chart (computeUvCharts), or its
                                        // triangle group where the mesh has no texture coordinates
   // per triangle: what each corner adds to its group's weight, a third of the area (floored at 1e-6
@@ -57,8 +58,11 @@ struct AttributeLevelParts {
 };
 Error clusterAttributeParts(const PreparedMesh& p, const ClusterParams& params, AttributeLevelParts& parts,
                             ClusterStats* stats);
+// `cluster_of` (optional) receives the assignment's cluster of every vertex of am.mesh(), and
+// `vertex_cluster` (optional) every output vertex's cluster
 void finishAttributeLevel(const AttributeMesh& am, const ClusterParams& params, AttributeLevelParts& parts, Mesh& out,
-                          std::vector<uint32_t>* source_vertex);
+                          std::vector<uint32_t>* source_vertex, std::vector<uint32_t>* cluster_of = nullptr,
+                          std::vector<uint32_t>* vertex_cluster = nullptr);
 
 // clusterPrepared and clusterMesh for a mesh with attributes: weld, charts, and (where welding
 // removed vertices) a preparation of the welded mesh with `prepared`'s grading

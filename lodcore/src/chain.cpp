@@ -22,6 +22,7 @@
 #include <tbb/task_group.h>
 
 #include "attribute_level.h"
+#include "chain_internal.h"
 #include "cluster_internal.h"
 #include "test_hooks.h"
 #include "scenelod/lodcore/scrooge.h"
@@ -340,12 +341,14 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 //   level waits for (not 1 or 2), and no progress is reported for them.
 class ChainLevels {
  public:
-  ChainLevels(const Mesh& original, const ChainParams& params, PreparedMesh& p, LodChain& out, ChainStats& stats)
-      : original_(original), params_(params), p_(p), out_(out), stats_(stats), n_(params.level_count),
+  ChainLevels(const Mesh& original, const ChainParams& params, PreparedMesh& p, LodChain& out, ChainStats& stats,
+              std::vector<detail::LevelMap>* maps)
+      : original_(original), params_(params), p_(p), out_(out), stats_(stats), maps_(maps), n_(params.level_count),
         errors_(n_), synthesis_pending_(n_), second_early_(p.sorted_positions.empty() && n_ >= 3),
         release_pending_(n_) {
     out_.levels.resize(n_ + 1);
     stats_.level_seconds.assign(n_, 0.0);
+    if (maps_) maps_->assign(n_ + 1, detail::LevelMap());
   }
   ~ChainLevels() {  // (on the way out of an exception only: every other path has waited)
     try {
@@ -379,6 +382,7 @@ class ChainLevels {
   PreparedMesh& p_;
   LodChain& out_;
   ChainStats& stats_;
+  std::vector<detail::LevelMap>* maps_;  // per level (index k + 1), when kept for geomorphs
   const size_t n_;
   float w1_ = 0.0f;  // level 1's width, searched when 0 (level 1 is only ever built at it)
   std::vector<Error> errors_;
@@ -467,7 +471,13 @@ void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const Cluster
                               bool report) {
   const Clock::time_point start = Clock::now();
   LodLevel& level = out_.levels[k + 1];
-  detail::finishLevel(parts, cp, level.mesh);
+  if (maps_) {
+    detail::LevelMap& map = (*maps_)[k + 1];
+    map.cluster_of = std::move(parts.cluster_of);
+    detail::finishLevel(parts, cp, level.mesh, nullptr, &map.vertex_cluster);
+  } else {
+    detail::finishLevel(parts, cp, level.mesh);
+  }
   detail::carryUniformGroup(original_, level.mesh);
   level.bounds = computeBoundingSphere(level.mesh);
   stats_.level_seconds[k] = seconds + since(start);
@@ -483,6 +493,7 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   const ClusterParams cp = levelParams(k, first_width);
   LodLevel& level = out_.levels[k + 1];
   detail::LevelParts parts;
+  parts.keep_cluster_of = maps_ != nullptr;
   ClusterStats cs;
   // level 2, where it was claimed early, is synthesized before its elimination: the last level past
   // synthesis, it then frees the prepared arrays and hands over level 1's held output pass an
@@ -531,6 +542,7 @@ void ChainLevels::dropSpeculativeLevels() {
   for (size_t c = 0; c < next_claim_; ++c) {
     const size_t k = n_ - 1 - c;
     out_.levels[k + 1] = LodLevel();
+    if (maps_) (*maps_)[k + 1] = detail::LevelMap();
     stats_.level_seconds[k] = 0.0;
     errors_[k] = Error();
   }
@@ -617,7 +629,7 @@ void setBaseLevel(const Mesh& original, Mesh* take, const Sphere& bounds, LodLev
 // `take`, when given, is `original` itself, handed over by the caller: level 0 takes it by move
 // instead of a copy once the levels are done
 Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
-                        ChainStats& stats) {
+                        ChainStats& stats, std::vector<detail::LevelMap>* maps) {
   params.progress(0.0, "grading");
   PreparedMesh p;
   Clock::time_point t0 = Clock::now();
@@ -632,7 +644,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   out.levels.resize(1);
   const bool no_levels = p.order.empty() || params.level_count == 0;
   if (!no_levels) {
-    ChainLevels levels(original, params, p, out, stats);
+    ChainLevels levels(original, params, p, out, stats, maps);
     if (Error e = levels.run(base_bounds); !e.ok()) return e;
   }
   p = PreparedMesh();
@@ -646,7 +658,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
 // the shared welded mesh and its preparation, so the result is the same on any number of threads).
 // Each level records its source vertices in the input's indices.
 Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
-                          ChainStats& stats) {
+                          ChainStats& stats, std::vector<detail::LevelMap>* maps) {
   params.progress(0.0, "grading");
   Clock::time_point t0 = Clock::now();
   if (Error e = validateMesh(original, "mesh"); !e.ok()) return e;
@@ -657,6 +669,19 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
   stats.prepare_seconds = since(t0);
   const size_t n = p.order.empty() ? 0 : params.level_count;
   out.levels.resize(n + 1);
+  if (maps) maps->assign(n + 1, detail::LevelMap());
+  // a level's maps, its clusters of the welded vertices taken to the input's
+  auto keepMap = [&](size_t k, std::vector<uint32_t>& cluster_of, std::vector<uint32_t>& vertex_cluster) {
+    detail::LevelMap& map = (*maps)[k + 1];
+    if (am.did_weld) {
+      map.cluster_of.resize(am.welded_of.size());
+      for (size_t v = 0; v < am.welded_of.size(); ++v) map.cluster_of[v] = cluster_of[am.welded_of[v]];
+      std::vector<uint32_t>().swap(cluster_of);
+    } else {
+      map.cluster_of = std::move(cluster_of);
+    }
+    map.vertex_cluster = std::move(vertex_cluster);
+  };
   if (n > 0) {
     t0 = Clock::now();
     float w1 = params.first_cell_width;
@@ -709,14 +734,23 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
             const Clock::time_point start = Clock::now();
             LodLevel& level = out.levels[k + 1];
             ClusterStats cs;
-            errors[k] = detail::clusterAttributeLevel(p, am, levelParams(k), level.mesh, &level.source_vertex, &cs);
+            detail::AttributeLevelParts parts;
+            errors[k] = detail::clusterAttributeParts(p, levelParams(k), parts, &cs);
+            if (!errors[k].ok()) return;
+            std::vector<uint32_t> cluster_of, vertex_cluster;
+            detail::finishAttributeLevel(am, levelParams(k), parts, level.mesh, &level.source_vertex,
+                                         maps ? &cluster_of : nullptr, maps ? &vertex_cluster : nullptr);
+            if (maps) keepMap(k, cluster_of, vertex_cluster);
             record(k, cs, since(start));
           });
         });
     p = PreparedMesh();
     if (errors[0].ok()) {
       const Clock::time_point start = Clock::now();
-      detail::finishAttributeLevel(am, levelParams(0), first, out.levels[1].mesh, &out.levels[1].source_vertex);
+      std::vector<uint32_t> cluster_of, vertex_cluster;
+      detail::finishAttributeLevel(am, levelParams(0), first, out.levels[1].mesh, &out.levels[1].source_vertex,
+                                   maps ? &cluster_of : nullptr, maps ? &vertex_cluster : nullptr);
+      if (maps) keepMap(0, cluster_of, vertex_cluster);
       record(0, first_stats, first_seconds + since(start));
     }
     for (const Error& e : errors)
@@ -729,6 +763,116 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
   am = detail::AttributeMesh();
   setBaseLevel(original, take, computeBoundingSphere(original), out.levels[0]);
   if (n == 0) params.progress(1.0, "done");
+  return {};
+}
+
+// The nested chain: level 1 as an independent chain's (the same w_1 search), then each level
+// clusters the one before (nested_level.cpp), one after the other. `maps` (optional) keeps every
+// level's maps for the geomorphs; without it only the last level's are held.
+Error buildNestedChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out, ChainStats& stats,
+                       std::vector<detail::LevelMap>* maps) {
+  params.progress(0.0, "grading");
+  Clock::time_point t0 = Clock::now();
+  if (Error e = validateMesh(original, "mesh"); !e.ok()) return e;
+  detail::NestedInput in;
+  if (Error e = detail::prepareNested(original, nullptr, params.cluster, in); !e.ok()) return e;
+  stats.prepare_seconds = since(t0);
+  const size_t n = in.p.order.empty() ? 0 : params.level_count;
+  out.levels.clear();
+  out.levels.reserve(n + 1);
+  out.levels.resize(1);
+  std::vector<detail::LevelMap> local(2);
+  if (maps) maps->assign(n + 1, detail::LevelMap());
+  auto map = [&](size_t level) -> detail::LevelMap& { return maps ? (*maps)[level] : local[level % 2]; };
+  detail::identityMap(original.vertexCount(), map(0));
+  if (n > 0) {
+    t0 = Clock::now();
+    float w1 = params.first_cell_width;
+    const size_t tn = in.p.mesh->triangleCount();
+    if (w1 == 0.0f && tn >= 2) {
+      params.progress(0.05, "choosing w1");
+      if (Error e = searchCellWidth(in.p, params.cluster, tn / 2, w1, 0.05, nullptr, &stats.first_width_probes); !e.ok())
+        return e;
+    } else if (w1 == 0.0f) {
+      w1 = smallMeshFirstWidth(in.p);
+    }
+    if (Error e = detail::checkCellWidth(in.p, w1); !e.ok()) return e;
+    stats.first_width_seconds = since(t0);
+    stats.level_seconds.assign(n, 0.0);
+    detail::Carried carried;
+    for (size_t k = 0; k < n; ++k) {
+      const Clock::time_point start = Clock::now();
+      ClusterParams cp = params.cluster;
+      cp.cell_width = static_cast<float>(double(w1) * std::pow(double(params.growth), double(k)));
+      const LodLevel* prev = k == 0 ? nullptr : &out.levels[k];
+      if (prev) {
+        if (Error e = detail::prepareNested(prev->mesh, &carried, cp, in); !e.ok()) return e;
+      }
+      LodLevel level;
+      detail::Carried next;
+      if (Error e = detail::nestedLevel(in, prev ? prev->mesh : original, &map(k), prev ? &prev->source_vertex : nullptr,
+                                        prev ? prev->max_error : 0.0f, original, cp, level, &map(k + 1), &next);
+          !e.ok()) {
+        out.levels.clear();
+        return e;
+      }
+      out.levels.push_back(std::move(level));
+      carried = std::move(next);
+      stats.level_seconds[k] = since(start);
+      params.progress(0.1 + 0.9 * double(k + 1) / double(n), "clustering levels");
+    }
+  }
+  in = detail::NestedInput();
+  setBaseLevel(original, take, computeBoundingSphere(original), out.levels[0]);
+  if (n == 0) params.progress(1.0, "done");
+  return {};
+}
+
+// whether level `b` has more triangles, or more primitives, than the level `a` before it
+bool gainsPrimitives(const Mesh& a, const Mesh& b) {
+  const size_t pa = a.triangleCount() + a.edgeCount() + a.pointCount();
+  const size_t pb = b.triangleCount() + b.edgeCount() + b.pointCount();
+  return b.triangleCount() > a.triangleCount() || pb > pa;
+}
+
+// A built chain's last steps: no level gains primitives (a clustering level that would is rebuilt by
+// a nested step from the level before at its own width, another generator's is dropped), then the
+// geomorphs from `maps` (one per level, or empty: none), freeing each level's maps once used.
+Error finishChain(const ChainParams& params, bool clustering, LodChain& out, std::vector<detail::LevelMap>* maps) {
+  std::vector<LodLevel>& levels = out.levels;
+  const bool have_maps = maps && maps->size() == levels.size();
+  if (have_maps && (*maps)[0].empty()) detail::identityMap(levels[0].mesh.vertexCount(), (*maps)[0]);
+  for (size_t k = 1; k < levels.size(); ++k) {
+    if (!gainsPrimitives(levels[k - 1].mesh, levels[k].mesh)) continue;
+    if (!clustering) {
+      levels.erase(levels.begin() + std::ptrdiff_t(k));
+      levels[k - 1].morph = LevelMorph();  // (its targets were in the level dropped)
+      if (have_maps) maps->erase(maps->begin() + std::ptrdiff_t(k));
+      --k;
+      continue;
+    }
+    ClusterParams cp = params.cluster;
+    cp.cell_width = levels[k].cell_width;
+    detail::NestedInput in;
+    if (Error e = detail::prepareNested(levels[k - 1].mesh, nullptr, cp, in); !e.ok()) return e;
+    LodLevel rebuilt;
+    detail::LevelMap map;
+    const LodLevel& prev = levels[k - 1];
+    if (Error e = detail::nestedLevel(in, prev.mesh, have_maps ? &(*maps)[k - 1] : nullptr,
+                                      k == 1 ? nullptr : &prev.source_vertex, prev.max_error, levels[0].mesh, cp, rebuilt,
+                                      have_maps ? &map : nullptr, nullptr);
+        !e.ok())
+      return e;
+    levels[k] = std::move(rebuilt);
+    if (have_maps) (*maps)[k] = std::move(map);
+  }
+  if (!params.morphs || !have_maps) return {};
+  const std::vector<float> area = detail::sourceAreas(levels[0].mesh);
+  for (size_t k = 0; k + 1 < levels.size(); ++k) {
+    detail::computeMorph(area, (*maps)[k], levels[k].mesh, (*maps)[k + 1], levels[k + 1].mesh, levels[k].morph);
+    (*maps)[k] = detail::LevelMap();
+  }
+  maps->clear();
   return {};
 }
 
@@ -749,24 +893,33 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
     case LodMethod::kFloatingNearest:
     {
       const Clock::time_point t0 = Clock::now();
-      const Error e = detail::hasAttributes(original) ? buildAttributeChain(original, take, params, out, stats)
-                                                      : buildClusterChain(original, take, params, out, stats);
+      std::vector<detail::LevelMap> maps;
+      std::vector<detail::LevelMap>* keep = params.morphs ? &maps : nullptr;
+      Error e = params.nested ? buildNestedChain(original, take, params, out, stats, keep)
+                : detail::hasAttributes(original) ? buildAttributeChain(original, take, params, out, stats, keep)
+                                                  : buildClusterChain(original, take, params, out, stats, keep);
+      if (e.ok()) e = finishChain(params, true, out, keep);
+      if (!e.ok()) out.levels.clear();
       stats.total_seconds = since(t0);
       return e;
     }
     case LodMethod::kZhang:
     {
-      const Error e = buildZhangChain(original, params, out);
+      Error e = buildZhangChain(original, params, out);  // (its geomorphs made there)
       // these generators copy level 0; a handed-over mesh replaces the copy, as documented
       if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
+      if (e.ok()) e = finishChain(params, false, out, nullptr);
+      if (!e.ok()) out.levels.clear();
       return e;
     }
     case LodMethod::kScrooge:
     {
       const Clock::time_point t0 = Clock::now();
-      const Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
+      Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
       stats.total_seconds = since(t0);
       if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
+      if (e.ok()) e = finishChain(params, false, out, nullptr);
+      if (!e.ok()) out.levels.clear();
       return e;
     }
     case LodMethod::kOriginal:

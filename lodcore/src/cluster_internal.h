@@ -250,6 +250,9 @@ struct LevelParts {
   // vertices (clusterPrepared with ClusterOutputs); a chain's levels do not
   bool keep_heaviest = false;
   std::vector<uint32_t> heaviest;  // per cluster, when kept
+  // set before clusterLevelParts to keep the assignment's cluster of every vertex (for geomorphs)
+  bool keep_cluster_of = false;
+  std::vector<uint32_t> cluster_of;  // per vertex of the prepared mesh, when kept
 };
 // With `synthesized` given, synthesis comes before elimination and `synthesized(synthesized_context)`
 // is called between them (the prepared mesh's arrays are not read after it, only its mesh).
@@ -257,9 +260,9 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
                         ClusterStats* stats, void (*assigned)(void*) = nullptr, void* context = nullptr,
                         void (*synthesized)(void*) = nullptr, void* synthesized_context = nullptr);
 // frees parts; `source_vertex` (optional, parts.heaviest kept) gets each output vertex's cluster's
-// heaviest vertex
+// heaviest vertex, `vertex_cluster` (optional) each output vertex's cluster
 void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out,
-                 std::vector<uint32_t>* source_vertex = nullptr);
+                 std::vector<uint32_t>* source_vertex = nullptr, std::vector<uint32_t>* vertex_cluster = nullptr);
 // The same first step from an assignment already made at params.cell_width (by `assign`, e.g. a
 // width search's last probe, which a chain keeps as its first level's); consumes `a`.
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,

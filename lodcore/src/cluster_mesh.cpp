@@ -153,9 +153,10 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
 
 Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& params, Assignment& a, LevelParts& parts,
                         ClusterStats* stats, void (*synthesized)(void*), void* context) {
-  const bool keep_heaviest = parts.keep_heaviest;
+  const bool keep_heaviest = parts.keep_heaviest, keep_cluster_of = parts.keep_cluster_of;
   parts = LevelParts();
   parts.keep_heaviest = keep_heaviest;
+  parts.keep_cluster_of = keep_cluster_of;
   if (stats) *stats = ClusterStats();
   const Mesh& m = *prepared.mesh;
   auto releaseHeaviest = [&] {
@@ -186,15 +187,17 @@ Error clusterLevelParts(const PreparedMesh& prepared, const ClusterParams& param
     stats->max_error = std::sqrt(maxSquaredDisplacement(m.positions.data(), a.cluster_of.data(), a.cluster_of.size(),
                                                         r.positions.data()));
   }
+  if (keep_cluster_of) parts.cluster_of = std::move(a.cluster_of);
   a = Assignment();
   return {};
 }
 
-void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out, std::vector<uint32_t>* source_vertex) {
+void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out, std::vector<uint32_t>* source_vertex,
+                 std::vector<uint32_t>* vertex_cluster) {
   const Eliminated& e = parts.eliminated;
   // the triangles' cluster ids, which the output pass overwrites with vertex ids in place
   std::vector<uint32_t> corner_cluster;
-  if (source_vertex) corner_cluster = e.triangles;
+  if (source_vertex || vertex_cluster) corner_cluster = e.triangles;
   buildOutputMesh(parts.eliminated, parts.representatives, params.crease_angle_deg, out);
   if (source_vertex) {
     const std::vector<uint32_t>& h = parts.heaviest;
@@ -202,6 +205,12 @@ void finishLevel(LevelParts& parts, const ClusterParams& params, Mesh& out, std:
     for (size_t i = 0; i < corner_cluster.size(); ++i) (*source_vertex)[out.triangles[i]] = h[corner_cluster[i]];
     for (size_t i = 0; i < e.edges.size(); ++i) (*source_vertex)[out.edges[i]] = h[e.edges[i]];
     for (size_t i = 0; i < e.points.size(); ++i) (*source_vertex)[out.points[i]] = h[e.points[i]];
+  }
+  if (vertex_cluster) {
+    vertex_cluster->assign(out.vertexCount(), kNone);
+    for (size_t i = 0; i < corner_cluster.size(); ++i) (*vertex_cluster)[out.triangles[i]] = corner_cluster[i];
+    for (size_t i = 0; i < e.edges.size(); ++i) (*vertex_cluster)[out.edges[i]] = e.edges[i];
+    for (size_t i = 0; i < e.points.size(); ++i) (*vertex_cluster)[out.points[i]] = e.points[i];
   }
   parts = LevelParts();
 }

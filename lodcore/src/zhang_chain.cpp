@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "chain_internal.h"
 #include "scenelod/lodcore/zhang.h"
 
 namespace scenelod {
@@ -46,6 +47,9 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
   const float min_width = 1e-6f * std::max(computeBounds(original).diagonal(), 1e-30f);
   size_t previous_triangles = t0;
   float previous_width = 0.0f;
+  // the levels' maps for the geomorphs: an input vertex's cluster is the vertex it collapsed into
+  std::vector<detail::LevelMap> maps(1);
+  if (params.morphs) detail::identityMap(original.vertexCount(), maps[0]);
   for (size_t i = 0; i < meshes.size(); ++i) {
     if (stats[i].output_triangles >= previous_triangles) break;  // no collapse possible any more
     previous_triangles = stats[i].output_triangles;
@@ -59,6 +63,19 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
     level.mesh = std::move(meshes[i]);
     level.source_vertex = std::move(stats[i].source_vertex);
     out.levels.push_back(std::move(level));
+    if (params.morphs) {
+      maps.emplace_back();
+      maps.back().cluster_of = std::move(stats[i].collapsed_into);
+      maps.back().vertex_cluster = std::move(stats[i].output_vertex_of);
+    }
+    std::vector<uint32_t>().swap(stats[i].collapsed_into);
+  }
+  if (params.morphs) {
+    const std::vector<float> area = detail::sourceAreas(original);
+    for (size_t k = 0; k + 1 < out.levels.size(); ++k) {
+      detail::computeMorph(area, maps[k], out.levels[k].mesh, maps[k + 1], out.levels[k + 1].mesh, out.levels[k].morph);
+      maps[k] = detail::LevelMap();
+    }
   }
   return {};
 }

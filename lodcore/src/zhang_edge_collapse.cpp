@@ -1197,12 +1197,14 @@ void ZhangEngine::emitMesh(Mesh& out, std::vector<uint8_t>& present) {
     out.joint_parents = in.joint_parents;
   }
   stats_.source_vertex.resize(next_id);
+  stats_.output_vertex_of.resize(next_id);
   present.assign(in.vertexCount(), 0);
   for (size_t key = 0; key < kn; ++key) {
     if (remap[key] == kNone) continue;
     const uint32_t o = remap[key], v = keyVertex(uint32_t(key)), src = attr_ ? wedge_src_[key] : uint32_t(key);
     present[v] = 1;
     stats_.source_vertex[o] = src;
+    stats_.output_vertex_of[o] = v;
     out.positions[o] = pos_[v];
     glm::vec3 nrm = attr_nrm_.empty() ? nrm_[v] : safeNormalize(attr_nrm_[key]);
     out.normals[o] = glm::dot(nrm, nrm) > 0.0f ? nrm : glm::vec3(0.0f, 0.0f, 1.0f);
@@ -1238,9 +1240,11 @@ void ZhangEngine::extract(Mesh& out, ZhangStats& stats) {
   emitMesh(out, present);
   // measured error: the largest distance an input vertex moved to its representative
   float max_d2 = 0.0f;
+  stats_.collapsed_into.assign(vn, kNone);
   for (size_t v = 0; v < vn; ++v) {
     const uint32_t r = find(static_cast<uint32_t>(v));
     if (!present[r]) continue;
+    stats_.collapsed_into[v] = r;
     const glm::vec3 d = in.positions[v] - pos_[r];
     max_d2 = std::max(max_d2, glm::dot(d, d));
   }

@@ -63,6 +63,19 @@ bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error)
   return true;
 }
 
+bool parseNesting(const Args& args, ChainParams& cp, std::string& error) {
+  const bool nested = args.has("--nested"), independent = args.has("--independent");
+  if (!nested && !independent) return true;
+  if (nested && independent) return error = "give only one of --nested, --independent", false;
+  const LodMethod m = cp.cluster.method;
+  if (m != LodMethod::kUniform && m != LodMethod::kFloatingHeaviest && m != LodMethod::kFloatingNearest)
+    return error = std::string(nested ? "--nested" : "--independent") + " applies to the clustering methods, not " +
+                   lodMethodName(m),
+           false;
+  cp.nested = nested;
+  return true;
+}
+
 Error loadWorldMesh(const std::string& path, Mesh& out) {
   scene::SceneData s;
   if (Error e = scene::loadScene(path, s); !e.ok()) return e;

@@ -21,6 +21,10 @@ inline std::vector<std::string> clusterOptionNames() {
 // best measured ones (docs/CLUSTERING.md). Returns false with `error` set on an unknown value.
 bool parseClusterOptions(const Args& args, ClusterParams& p, std::string& error);
 
+// --nested / --independent (flags): ChainParams::nested; only with a clustering method. Returns false
+// with `error` set when both are given or the method is not a clustering one.
+bool parseNesting(const Args& args, ChainParams& cp, std::string& error);
+
 // Reads an OBJ, glTF or GLB file as one mesh in world space (every node instance, transforms applied).
 Error loadWorldMesh(const std::string& path, Mesh& out);
 

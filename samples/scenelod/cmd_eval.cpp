@@ -18,6 +18,7 @@ namespace {
 const char* kUsage =
     "usage: scenelod eval ORIGINAL SIMPLIFIED [--image] [--json] [--samples N] [--resolution N] [--force]\n"
     "       scenelod eval MODEL --chain [--image [--at-switch K|all]] [--levels N] [--pixels X] [--json]\n"
+    "                                   [--nested | --independent]\n"
     "                                   [--samples N] [--resolution N]\n"
     "       scenelod eval MODEL --animated [LEVEL...] [--levels N] [--json] [--samples N]\n"
     "\n"
@@ -41,7 +42,8 @@ const char* kUsage =
     "                   measure its level K (every mesh at level K, or its last), with its materials\n"
     "\n"
     "With --chain, builds MODEL's LOD chain (buildChain, default settings, --levels simplified levels,\n"
-    "default 8) and prints per level its counts, cell width, Hausdorff and RMS against level 0, and\n"
+    "default 8; --nested or --independent: how its clustering levels are built) and prints per level\n"
+    "its counts, cell width, Hausdorff and RMS against level 0, and\n"
     "per transition the popping: the image error between levels k and k+1 at the distance where the\n"
     "selector switches (cell width of k+1 = X pixels, --pixels X, default 1). With --image, also per\n"
     "level the textured image error against level 0, each level framed at --resolution; with\n"
@@ -62,6 +64,7 @@ struct ChainOptions {
   int resolution = 256;
   bool json = false;
   bool image = false;
+  int nesting = -1;  // -1: the default; 0 independent; 1 nested
   long at_switch = -1;  // -1: frame every level at `resolution`; 0: every level at its switch; K: level K only
 };
 
@@ -162,6 +165,7 @@ int runChain(const std::string& path, const ChainOptions& o) {
   LodChain chain;
   ChainParams cp;
   cp.level_count = static_cast<size_t>(o.levels);
+  if (o.nesting >= 0) cp.nested = o.nesting == 1;
   if (Error e = buildChain(mesh, cp, chain); !e.ok()) return runError("eval", path + ": " + e.message);
   if (o.at_switch > 0 && static_cast<size_t>(o.at_switch) >= chain.levelCount())
     return runError("eval", path + ": --at-switch " + std::to_string(o.at_switch) + ", but the chain has levels 0.." +
@@ -188,7 +192,7 @@ int runChain(const std::string& path, const ChainOptions& o) {
 }
 
 int runEval(const std::vector<std::string>& argv) {
-  Args args(argv, {"--json", "--force", "--chain", "--image", "--animated"},
+  Args args(argv, {"--json", "--force", "--chain", "--image", "--animated", "--nested", "--independent"},
             {"--samples", "--resolution", "--levels", "--pixels", "--at-switch", "--stored-level"});
   long samples = 100000, resolution = 256, levels = 8;
   double pixels = 1.0;
@@ -202,6 +206,8 @@ int runEval(const std::vector<std::string>& argv) {
   if (resolution < 1 || resolution > 8192) return usageError("eval", "--resolution must be in [1, 8192]");
   if (args.has("--at-switch") && !(args.has("--chain") && image))
     return usageError("eval", "--at-switch needs --chain and --image (only a built chain's levels have a cell width)");
+  if ((args.has("--nested") || args.has("--independent")) && !args.has("--chain"))
+    return usageError("eval", "--nested and --independent go with --chain");
   if (args.has("--animated")) {
     if (args.has("--chain") || image) return usageError("eval", "--animated takes neither --chain nor --image");
     if (args.positional().empty()) return usageError("eval", "--animated needs MODEL");
@@ -220,6 +226,8 @@ int runEval(const std::vector<std::string>& argv) {
     o.resolution = static_cast<int>(resolution);
     o.json = args.has("--json");
     o.image = image;
+    if (args.has("--nested") && args.has("--independent")) return usageError("eval", "give only one of --nested, --independent");
+    if (args.has("--nested") || args.has("--independent")) o.nesting = args.has("--nested") ? 1 : 0;
     if (args.has("--at-switch")) {
       const std::string k = args.get("--at-switch");
       if (k == "all") o.at_switch = 0;

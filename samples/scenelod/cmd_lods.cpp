@@ -22,7 +22,7 @@ namespace {
 
 const std::string kUsage = std::string(
     "usage: scenelod lods IN -o OUT [--levels N] [--cell W1 | --cell-rel F] [--method M] [--grading G]\n"
-    "                     [--synthesis S] [--cell-shape C] [--split]\n"
+    "                     [--synthesis S] [--cell-shape C] [--nested | --independent] [--split]\n"
     "\n"
     "Builds LOD chains of IN (.obj, .gltf, .glb): level 0 is the original, levels 1..N use cell widths\n"
     "w_k = w_1 x 2^(k-1), each derived from the original.\n"
@@ -39,6 +39,9 @@ const std::string kUsage = std::string(
     "  --levels N    simplified levels (default 8)\n"
     "  --cell W1     first cell width, object space (default: level 1 has about half the triangles)\n"
     "  --cell-rel F  first cell width as F x the bounding-box diagonal\n"
+    "  --nested      clustering: each level clusters the level before, so that its geomorph ends\n"
+    "                exactly on the next level (docs/CLUSTERING.md, \"Nested or independent levels\")\n"
+    "  --independent clustering: each level clusters the original\n"
     "  --split       one file per level (the whole model in world space)\n"
     "  --flatten     OUT.glb holds one chain of the whole model in world space\n"
     "  --thick-edges prisms|lines  glTF input: a level's thick edges as 3-sided prisms and its points\n"
@@ -130,7 +133,7 @@ int runLods(const std::vector<std::string>& argv) {
   for (const char* o : {"--out", "--levels", "--cell", "--cell-rel", "--thick-edges"}) options.push_back(o);
   for (const std::string& o : zhangOptionNames()) options.push_back(o);
   for (const std::string& o : scroogeOptionNames()) options.push_back(o);
-  Args args(argv, {"--split", "--flatten"}, options);
+  Args args(argv, {"--split", "--flatten", "--nested", "--independent"}, options);
   if (!args.ok()) return usageError("lods", args.error());
   if (args.positional().size() != 1) return usageError("lods", "expected one input file");
   if (!args.has("--out")) return usageError("lods", "missing -o OUT");
@@ -166,6 +169,7 @@ int runLods(const std::vector<std::string>& argv) {
   if (args.has("--cell-rel") && (!args.getDouble("--cell-rel", rel) || !(rel > 0.0)))
     return usageError("lods", args.ok() ? "--cell-rel must be a finite number > 0" : args.error());
   cp.level_count = size_t(levels);
+  if (std::string nerr; !parseNesting(args, cp, nerr)) return usageError("lods", nerr);
   const std::string thick = args.get("--thick-edges", "prisms");
   if (thick != "prisms" && thick != "lines")
     return usageError("lods", "--thick-edges takes prisms or lines, not '" + thick + "'");

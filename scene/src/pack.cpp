@@ -51,7 +51,7 @@ constexpr size_t kChecksumOffset = 24;
 
 enum SectionKind : uint32_t {
   kNodes = 1, kChildren = 2, kRoots = 3, kObjects = 4, kChains = 5, kLevels = 6, kNames = 7, kData = 8,
-  kLevelAttributes = 9, kMaterials = 10, kLevelGroups = 12,  // kind 11: geomorph data
+  kLevelAttributes = 9, kMaterials = 10, kLevelMorphs = 11, kLevelGroups = 12,
 };
 constexpr uint32_t kSectionKindCount = 12;
 // sections every pack has; later kinds are optional (a pack written before them has none)
@@ -154,11 +154,28 @@ struct LevelGroupsRecord {
 };
 static_assert(sizeof(LevelGroupsRecord) == 32, "level groups record is 32 bytes");
 
-// element sizes by kind; 0 = a kind this build does not read (skipped)
+// the geomorph targets of a level's vertices (LodLevel::morph), one record per level record (same
+// order); written only when some level has them, so packs of chains without them are unchanged
+struct LevelMorphRecord {
+  uint32_t vertex_count;        // the level's vertex count, or 0: no targets
+  uint32_t extra_uv_set_count;  // texture coordinate sets after set 0
+  uint32_t reserved[2];
+  // absolute byte offsets into the data section; 0 = absent (positions present when vertex_count > 0)
+  uint64_t positions;  // vertex_count x 3 f32
+  uint64_t normals;    // vertex_count x 3 f32
+  uint64_t colors;     // vertex_count x 3 f32
+  uint64_t uvs;        // vertex_count x 2 f32
+  uint64_t extra_uvs;  // extra_uv_set_count x vertex_count x 2 f32, set after set
+  uint64_t tangents;   // vertex_count x 4 f32
+  uint64_t reserved_offset[2];
+};
+static_assert(sizeof(LevelMorphRecord) == 80, "level morph record is 80 bytes");
+
+// element sizes by kind; 0 = a kind this build does not read (skipped like unknown kinds)
 constexpr uint32_t kElementBytes[kSectionKindCount + 1] = {0, sizeof(NodeRecord), 4, 4, sizeof(ObjectRecord),
                                                            sizeof(ChainRecord), sizeof(LevelRecord), 1, 1,
-                                                           sizeof(LevelAttributesRecord), sizeof(MaterialRecord), 0,
-                                                           sizeof(LevelGroupsRecord)};
+                                                           sizeof(LevelAttributesRecord), sizeof(MaterialRecord),
+                                                           sizeof(LevelMorphRecord), sizeof(LevelGroupsRecord)};
 
 size_t align16(size_t x) { return (x + 15) & ~size_t(15); }
 
@@ -231,6 +248,45 @@ LevelAttributesRecord writeAttributes(Writer& w, uint64_t data_base, const Mesh&
     sv[remap.empty() ? v : remap[v]] = original_remap.empty() ? source[v] : original_remap[source[v]];
   r.source_vertex = w.array(sv, data_base);
   return r;
+}
+
+// the morph record of a level (its arrays written to `w`), reordered by the level's `remap` (empty:
+// not reordered); a level without targets, or whose targets lie in a level not written, gets none
+LevelMorphRecord writeMorph(Writer& w, uint64_t data_base, const LevelMorph& morph, const std::vector<uint32_t>& remap) {
+  LevelMorphRecord r;
+  std::memset(&r, 0, sizeof r);
+  if (morph.empty()) return r;
+  auto reordered = [&](const auto& v) {
+    std::remove_const_t<std::remove_reference_t<decltype(v)>> out(v.size());
+    for (size_t i = 0; i < v.size(); ++i) out[remap.empty() ? i : remap[i]] = v[i];
+    return out;
+  };
+  r.vertex_count = static_cast<uint32_t>(morph.positions.size());
+  r.positions = w.array(reordered(morph.positions), data_base);
+  r.normals = w.array(reordered(morph.normals), data_base);
+  r.colors = w.array(reordered(morph.colors), data_base);
+  r.uvs = w.array(reordered(morph.uvs), data_base);
+  std::vector<glm::vec2> sets;
+  for (const std::vector<glm::vec2>& set : morph.extra_uvs) {
+    const std::vector<glm::vec2> one = set.empty() ? std::vector<glm::vec2>(morph.positions.size()) : reordered(set);
+    sets.insert(sets.end(), one.begin(), one.end());
+  }
+  r.extra_uv_set_count = static_cast<uint32_t>(morph.extra_uvs.size());
+  r.extra_uvs = w.array(sets, data_base);
+  r.tangents = w.array(reordered(morph.tangents), data_base);
+  return r;
+}
+
+// what the pack needs of a level's targets: every array empty or one per vertex
+Error checkLevelMorph(const LodLevel& l, const std::string& what) {
+  const LevelMorph& m = l.morph;
+  if (m.empty()) return {};
+  const size_t n = l.mesh.vertexCount();
+  bool ok = m.positions.size() == n;
+  for (size_t size : {m.normals.size(), m.colors.size(), m.uvs.size(), m.tangents.size()}) ok = ok && (size == 0 || size == n);
+  for (const std::vector<glm::vec2>& set : m.extra_uvs) ok = ok && (set.empty() || set.size() == n);
+  if (!ok) return {Status::kInvalidMesh, what + ": its geomorph targets are not one per vertex (" + std::to_string(n) + ")"};
+  return {};
 }
 
 uint32_t addName(std::vector<char>& names, const std::string& s) {
@@ -311,7 +367,13 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
     }
   for (const MeshData& m : scene.meshes) groups = groups || !m.primitive_materials.empty();  // in range: validateSceneData
   const bool materials = !scene.materials.empty();
-  const uint32_t section_count = kRequiredSectionKinds + uint32_t(attributes) + uint32_t(materials) + uint32_t(groups);
+  bool morphs = false;
+  for (const LodChain& chain : chains) {
+    const size_t kept = opt.max_levels == 0 ? chain.levels.size() : std::min(chain.levels.size(), opt.max_levels);
+    for (size_t l = 0; l + 1 < kept; ++l) morphs = morphs || !chain.levels[l].morph.empty();
+  }
+  const uint32_t section_count =
+      kRequiredSectionKinds + uint32_t(attributes) + uint32_t(materials) + uint32_t(morphs) + uint32_t(groups);
   std::vector<MaterialRecord> material_records(scene.materials.size());
   const uint32_t source_name = materials ? addName(names, opt.material_source) : 0;
   for (size_t i = 0; i < scene.materials.size(); ++i) {
@@ -365,6 +427,8 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   std::vector<LevelAttributesRecord> level_attributes(attributes ? levels.size() : 0);
   if (attributes) place(kLevelAttributes, level_attributes.size());
   if (materials) place(kMaterials, material_records.size());
+  std::vector<LevelMorphRecord> level_morphs(morphs ? levels.size() : 0);
+  if (morphs) place(kLevelMorphs, level_morphs.size());
   std::vector<LevelGroupsRecord> level_groups(groups ? levels.size() : 0);
   if (groups) place(kLevelGroups, level_groups.size());
   const size_t data_base = at;
@@ -380,6 +444,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
       const std::string level_name = what + " chain " + std::to_string(c) + " level " + std::to_string(l);
       if (Error e = validateMesh(src.mesh, level_name); !e.ok()) return e;
       if (Error e = checkLevelExtras(src, chains[c].levels[0].mesh.vertexCount(), level_name); !e.ok()) return e;
+      if (Error e = checkLevelMorph(src, level_name); !e.ok()) return e;
       Mesh m = src.mesh;
       const double tris = double(m.triangleCount());
       if (tris > 0) acmr_before += tris * computeAcmr(Span<const uint32_t>(m.triangles.data(), m.triangles.size()), m.vertexCount());
@@ -413,6 +478,8 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
       r.points = w.array(m.points, data_base);
       if (attributes)
         level_attributes[chain_records[c].first_level + l] = writeAttributes(w, data_base, m, src.source_vertex, remap, original_remap);
+      if (morphs && l + 1 < chain_records[c].level_count)
+        level_morphs[chain_records[c].first_level + l] = writeMorph(w, data_base, src.morph, remap);
       if (groups) {
         LevelGroupsRecord& g = level_groups[chain_records[c].first_level + l];
         std::memset(&g, 0, sizeof g);
@@ -454,6 +521,7 @@ Error writePackBytes(std::vector<uint8_t>& out, const SceneData& scene, const st
   put(kNames, names.data(), names.size());
   put(kLevelAttributes, level_attributes.data(), level_attributes.size() * sizeof(LevelAttributesRecord));
   put(kMaterials, material_records.data(), material_records.size() * sizeof(MaterialRecord));
+  put(kLevelMorphs, level_morphs.data(), level_morphs.size() * sizeof(LevelMorphRecord));
   put(kLevelGroups, level_groups.data(), level_groups.size() * sizeof(LevelGroupsRecord));
   put(kData, w.data.data(), w.data.size());
   const uint32_t crc = crc32(out.data(), out.size());
@@ -549,6 +617,29 @@ Error checkAttributes(const std::vector<uint8_t>& bytes, const LevelAttributesRe
   return {};
 }
 
+// A level record r's morph record m: no targets, or one per vertex of the level with every array
+// inside the data section. Returns the problem after the record's name.
+Error checkMorph(const LevelMorphRecord& m, const LevelRecord& r, size_t data_begin, size_t data_end) {
+  auto arrayOk = [&](uint64_t at, uint64_t n, uint64_t elem) {
+    return at == 0 || (at % 4 == 0 && at >= data_begin && at <= data_end && n <= (data_end - at) / elem);
+  };
+  if (m.vertex_count == 0) {
+    if (m.positions || m.normals || m.colors || m.uvs || m.extra_uvs || m.tangents)
+      return {Status::kCorrupt, " has geomorph arrays for 0 vertices"};
+    return {};
+  }
+  if (m.vertex_count != r.vertex_count)
+    return {Status::kCorrupt, " has geomorph targets for " + std::to_string(m.vertex_count) + " vertices, the level has " +
+                                  std::to_string(r.vertex_count)};
+  const uint64_t v = m.vertex_count;
+  if (m.positions == 0 || (m.extra_uv_set_count == 0) != (m.extra_uvs == 0))
+    return {Status::kCorrupt, " has geomorph targets without positions, or texture coordinate sets without their array"};
+  if (!arrayOk(m.positions, v, 12) || !arrayOk(m.normals, v, 12) || !arrayOk(m.colors, v, 12) || !arrayOk(m.uvs, v, 8) ||
+      !arrayOk(m.extra_uvs, v, 8ull * m.extra_uv_set_count) || !arrayOk(m.tangents, v, 16))
+    return {Status::kCorrupt, " has a geomorph array outside the data section"};
+  return {};
+}
+
 }  // namespace
 
 Error Pack::parse(const std::string& what, bool check_indices) {
@@ -606,6 +697,10 @@ Error Pack::parse(const std::string& what, bool check_indices) {
   attributes_ = seen[kLevelAttributes] ? offset[kLevelAttributes] : 0;
   if (seen[kLevelAttributes] && count[kLevelAttributes] != level_count_)
     return corrupt("section 9 has " + std::to_string(count[kLevelAttributes]) + " level attribute records for " +
+                   std::to_string(level_count_) + " level records");
+  morphs_ = seen[kLevelMorphs] ? offset[kLevelMorphs] : 0;
+  if (seen[kLevelMorphs] && count[kLevelMorphs] != level_count_)
+    return corrupt("section 11 (geomorphs) has " + std::to_string(count[kLevelMorphs]) + " level morph records for " +
                    std::to_string(level_count_) + " level records");
   materials_ = seen[kMaterials] ? offset[kMaterials] : 0;
   material_count_ = seen[kMaterials] ? count[kMaterials] : 0;
@@ -676,6 +771,10 @@ Error Pack::parse(const std::string& what, bool check_indices) {
     if (attributes_ != 0)
       if (Error e = checkAttributes(bytes_, read<LevelAttributesRecord>(bytes_, attributes_ + l * sizeof(LevelAttributesRecord)), r,
                                     original_vertices[l], data_begin, data_end, check_indices);
+          !e.ok())
+        return corrupt(where + e.message);
+    if (morphs_ != 0)
+      if (Error e = checkMorph(read<LevelMorphRecord>(bytes_, morphs_ + l * sizeof(LevelMorphRecord)), r, data_begin, data_end);
           !e.ok())
         return corrupt(where + e.message);
     if (groups_ != 0) {
@@ -767,6 +866,27 @@ PackLevelView Pack::level(size_t chain, size_t level) const {
   v.joint_parents = span((int32_t*)nullptr, a.joint_parents, a.joint_count);
   v.triangle_groups = span((uint32_t*)nullptr, a.triangle_groups, r.triangle_count);
   v.source_vertex = span((uint32_t*)nullptr, a.source_vertex, r.vertex_count);
+  return v;
+}
+
+PackLevelMorphView Pack::levelMorph(size_t chain, size_t level) const {
+  PackLevelMorphView v;
+  if (morphs_ == 0) return v;
+  const ChainRecord c = read<ChainRecord>(bytes_, chains_ + chain * sizeof(ChainRecord));
+  const LevelMorphRecord m = read<LevelMorphRecord>(bytes_, morphs_ + (c.first_level + level) * sizeof(LevelMorphRecord));
+  if (m.vertex_count == 0) return v;
+  const size_t n = m.vertex_count;
+  auto span = [&](auto* type_tag, uint64_t at, size_t count) {
+    using T = std::remove_pointer_t<decltype(type_tag)>;
+    return at == 0 ? Span<const T>() : Span<const T>(reinterpret_cast<const T*>(bytes_.data() + at), count);
+  };
+  v.positions = span((glm::vec3*)nullptr, m.positions, n);
+  v.normals = span((glm::vec3*)nullptr, m.normals, n);
+  v.colors = span((glm::vec3*)nullptr, m.colors, n);
+  v.uvs = span((glm::vec2*)nullptr, m.uvs, n);
+  v.extra_uv_set_count = m.extra_uvs == 0 ? 0 : m.extra_uv_set_count;
+  v.extra_uvs = span((glm::vec2*)nullptr, m.extra_uvs, v.extra_uv_set_count * n);
+  v.tangents = span((glm::vec4*)nullptr, m.tangents, n);
   return v;
 }
 
@@ -881,6 +1001,17 @@ void Pack::toChains(std::vector<LodChain>& chains, std::vector<Sphere>& spheres)
       dst.method = v.method;
       dst.bounds = v.bounds;
       dst.source_vertex.assign(v.source_vertex.begin(), v.source_vertex.end());
+      const PackLevelMorphView mv = levelMorph(c, l);
+      LevelMorph& morph = dst.morph;
+      morph.positions.assign(mv.positions.begin(), mv.positions.end());
+      morph.normals.assign(mv.normals.begin(), mv.normals.end());
+      morph.colors.assign(mv.colors.begin(), mv.colors.end());
+      morph.uvs.assign(mv.uvs.begin(), mv.uvs.end());
+      const size_t vn = mv.positions.size();
+      morph.extra_uvs.resize(mv.extra_uv_set_count);
+      for (size_t s = 0; s < mv.extra_uv_set_count; ++s)
+        morph.extra_uvs[s].assign(mv.extra_uvs.begin() + s * vn, mv.extra_uvs.begin() + (s + 1) * vn);
+      morph.tangents.assign(mv.tangents.begin(), mv.tangents.end());
     }
   }
 }

@@ -272,6 +272,20 @@ void checkLevelsAgainstLodcore(slod_method method, LodMethod lod_method) {
     held = size_t(!m.normals.empty()) + size_t(!m.colors.empty()) + size_t(!m.uvs.empty()) + m.extra_uvs.size() +
            size_t(!m.tangents.empty());
     EXPECT_EQ(d.attribute_count, held);
+    // the geomorph targets, as the chain's level holds them (none on the last level, nor for SCROOGE)
+    const LevelMorph& morph = level.morph;
+    auto same = [&](const float* got, const auto& want, size_t components) {
+      if (want.empty()) return got == nullptr;
+      return got != nullptr && std::memcmp(got, &want[0].x, want.size() * components * sizeof(float)) == 0;
+    };
+    EXPECT_TRUE(same(d.morph_positions, morph.positions, 3));
+    EXPECT_TRUE(same(d.morph_normals, morph.normals, 3));
+    EXPECT_TRUE(same(d.morph_colors, morph.colors, 3));
+    EXPECT_TRUE(same(d.morph_uvs, morph.uvs, 2));
+    EXPECT_TRUE(same(d.morph_tangents, morph.tangents, 4));
+    const bool last = l + 1 == expected.levels.size();
+    EXPECT_EQ(d.morph_positions != nullptr, !last && lod_method != LodMethod::kScrooge);
+    if (!last && lod_method != LodMethod::kScrooge) EXPECT_EQ(morph.positions.size(), m.vertexCount());
     // a textured input's simplified level returns its texture coordinates whenever the level has them
     if (l == 1 && !m.uvs.empty()) {
       bool uv = false;
@@ -334,6 +348,28 @@ TEST(CapiAttributes, EveryLevelReturnsWhatItsMeshHolds) {
     SCOPED_TRACE("method " + std::to_string(int(method)));
     checkLevelsAgainstLodcore(method, lod_method);
   }
+}
+
+// a 1.1 caller's slod_level_data ends before the geomorph fields: nothing is written past it
+TEST(CapiAttributes, CallersBeforeGeomorphsGetNothingPastTheirStruct) {
+  Context c;
+  TexturedGrid g(16);
+  const slod_chain chain = build(c, g.desc);
+  ASSERT_NE(chain, SLOD_NULL_CHAIN);
+  struct {
+    slod_level_data d;
+    unsigned char guard[8];
+  } out;
+  std::memset(&out, 0xab, sizeof out);
+  out.d.size = uint32_t(offsetof(slod_level_data, morph_positions));
+  ASSERT_EQ(slod_level_get(c.ctx, chain, 0, &out.d), SLOD_OK);
+  EXPECT_GT(out.d.vertex_count, 0u);
+  const unsigned char* tail = reinterpret_cast<const unsigned char*>(&out.d) + offsetof(slod_level_data, morph_positions);
+  for (size_t i = 0; i < sizeof out - offsetof(slod_level_data, morph_positions); ++i) ASSERT_EQ(tail[i], 0xab) << i;
+  slod_level_data now;
+  slod_level_data_init(&now);
+  ASSERT_EQ(slod_level_get(c.ctx, chain, 0, &now), SLOD_OK);
+  EXPECT_NE(now.morph_positions, nullptr);
 }
 
 TEST(CapiAttributes, MeshWithoutAttributesReturnsNone) {

@@ -51,7 +51,7 @@ extern "C" {
 
 /* the library's version; the major version is the SONAME's (libscenelod.so.1) */
 #define SLOD_VERSION_MAJOR 1
-#define SLOD_VERSION_MINOR 1
+#define SLOD_VERSION_MINOR 2
 #define SLOD_VERSION_PATCH 0
 
 typedef enum slod_status {
@@ -259,6 +259,16 @@ typedef struct slod_level_data {
   const float* weights;        /* 4 per vertex, or null */
   uint32_t joint_count;        /* the input's joint_count */
   const int32_t* joint_parents;/* joint_count entries, or null when the input had none */
+  /* since 1.2: geomorph targets (docs/INTEGRATION.md, "Geomorphs"). Per vertex of this level, its
+     value in the next level: draw attribute a as a + f x (morph_a - a) for a morph factor f in [0, 1];
+     at f = 1 the level matches the next one (exactly for nested chains). Null on the last level and
+     where the chain's generator records none (SCROOGE); each attribute also null where the level has
+     no such stream. A caller built against 1.1 passes a smaller size and never sees these. */
+  const float* morph_positions;/* 3 per vertex */
+  const float* morph_normals;  /* 3 per vertex */
+  const float* morph_colors;   /* 3 per vertex (linear RGB) */
+  const float* morph_uvs;      /* 2 per vertex, texture coordinate set 0 */
+  const float* morph_tangents; /* 4 per vertex (w: the bitangent's sign, as the level's own) */
 } slod_level_data;
 
 static inline void slod_level_data_init(slod_level_data* data) {

@@ -17,6 +17,12 @@ struct ChainParams {
   size_t level_count = 8;         // simplified levels after the original
   float first_cell_width = 0.0f;  // w_1; 0 = chosen so level 1 has about half the triangles
   float growth = 2.0f;            // w_k = w_1 * growth^(k-1)
+  // clustering methods: level k + 1 clusters level k's vertices (carrying their weights and their
+  // original vertices' face sums) instead of the original's, so that every level's geomorph ends
+  // exactly on the next level (docs/CLUSTERING.md, "Nested or independent levels")
+  bool nested = false;
+  // fill LodLevel::morph for every level but the last (clustering and Zhang chains)
+  bool morphs = true;
   ProgressCallback progress;
 };
 
@@ -27,7 +33,13 @@ struct ChainParams {
 // clustering methods, and total_seconds for kScrooge). Each level records
 // its cell width, its measured maximum vertex displacement and a bounding sphere (centre of the
 // level's vertex box, radius to the farthest vertex). Levels that come out identical in counts to
-// the previous one are kept, so level indices always match cell widths.
+// the previous one are kept, so level indices always match cell widths. No level has more triangles,
+// or more primitives (triangles, edges and points), than the level before: a clustering level that
+// would is rebuilt from the level before at its own width (a nested step), a level of another
+// generator is dropped. With params.morphs each level but the last gets its geomorph targets
+// (LodLevel::morph); the levels' vertex -> cluster maps this needs (4 bytes per original vertex and
+// level, plus 4 per level vertex) are freed when the morphs are made. With params.nested (clustering
+// methods) the levels are built one after the other, each from the one before.
 // A mesh with attributes (texture coordinates, tangents, a skin or more than one triangle group)
 // is welded, split into UV charts and prepared once, and each clustering level carries its texture
 // coordinates, tangents, joint weights and triangle groups and records LodLevel::source_vertex in

@@ -1,13 +1,15 @@
 #pragma once
 // A level-of-detail chain: level 0 is the original mesh, levels 1.. are simplified from the original
-// (never from another level), each with the object-space cell width it was built for and its
+// (independent levels) or each from the one before (nested levels), each with the object-space cell width it was built for and its
 // measured error. Produced by the generators (clustering, Zhang edge collapse, SCROOGE) and consumed
 // by scene and selection.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "scenelod/lodcore/mesh.h"
 
@@ -30,6 +32,30 @@ struct Sphere {
   float radius = 0.0f;
 };
 
+// Geomorph targets of a level (Hoppe 1996): for every vertex of the level, where it goes in the next
+// coarser level of its chain. A renderer draws the level with each attribute mixed as
+// (1 - f) x own + f x target for a morph factor f in [0, 1]; at f = 1 the vertex sits on its
+// target, so the switch to the next level moves nothing (exactly, for nested chains:
+// docs/CLUSTERING.md, "Geomorphs"). The target of a vertex is the vertex of the next level whose
+// cluster holds the largest area share of the vertex's cluster's original vertices, taken in the
+// same triangle group, with the nearest texture coordinates, then the nearest normal. Every array is
+// empty or one per vertex of the level's mesh, present where the level's mesh has that attribute;
+// all empty (empty()) on the last level and where the generator records none (SCROOGE). Skin
+// joints and weights have no target (a vertex keeps its own).
+struct LevelMorph {
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;
+  std::vector<glm::vec3> colors;
+  std::vector<glm::vec2> uvs;
+  std::vector<std::vector<glm::vec2>> extra_uvs;  // per set, as Mesh::extra_uvs
+  std::vector<glm::vec4> tangents;
+
+  bool empty() const { return positions.empty(); }
+  // bytes the targets take: 12 per vertex for positions, 12 for normals and colours, 8 per texture
+  // coordinate set, 16 for tangents
+  size_t byteSize() const;
+};
+
 struct LodLevel {
   Mesh mesh;
   float cell_width = 0.0f;   // object space; 0 for the original. The level is accurate enough
@@ -41,10 +67,12 @@ struct LodLevel {
   // attributes' main source, for engines that rebuild their own vertex format. Empty for level 0
   // (the identity) and where a generator does not record it.
   std::vector<uint32_t> source_vertex;
+  LevelMorph morph;  // this level's vertices' targets in the next level (empty when absent)
 };
 
 struct LodChain {
-  std::vector<LodLevel> levels;  // levels[0] is the original; cell widths strictly increase
+  std::vector<LodLevel> levels;  // levels[0] is the original; cell widths strictly increase and no
+                                 // level has more triangles or primitives than the one before
 
   size_t levelCount() const { return levels.size(); }
   bool empty() const { return levels.empty(); }

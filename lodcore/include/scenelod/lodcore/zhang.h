@@ -130,6 +130,11 @@ struct ZhangStats {
   size_t seam_vertices = 0;
   // one per output vertex: the input vertex whose attributes it carries (the collapse survivor)
   std::vector<uint32_t> source_vertex;
+  // where the input went, for geomorphs (buildZhangChain): per input vertex, the input vertex whose
+  // position it collapsed into (UINT32_MAX where that vertex is in no primitive of the result); per
+  // output vertex, the input vertex whose position it has
+  std::vector<uint32_t> collapsed_into;
+  std::vector<uint32_t> output_vertex_of;
 };
 
 // Simplifies the triangles of `in` to at most `target_triangles` (or as close as the checks allow)
@@ -162,7 +167,9 @@ float zhangEquivalentCellWidth(float max_distance);
 
 // Builds level 0 (a copy of `original`) and up to params.level_count levels at triangle targets
 // halving each level (T / 2, T / 4, ...), from one recorded run of simplifyZhang. Each level gets
-// method kZhang, its source_vertex (ZhangStats::source_vertex), its measured max_error (max vertex
+// method kZhang, its source_vertex (ZhangStats::source_vertex), its geomorph toward the next level
+// (LodLevel::morph, with params.morphs; the levels nest, so a vertex's target is the position its
+// vertex collapsed into), its measured max_error (max vertex
 // displacement), bounds, and cell_width =
 // zhangEquivalentCellWidth(ZhangStats::max_surface_distance) (the bound of the input vertices'
 // distance to the level, much tighter than the displacement for edge collapse; docs/ZHANG.md),

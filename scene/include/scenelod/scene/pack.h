@@ -116,6 +116,18 @@ struct PackMaterialRange {
 // otherwise. Allocates.
 std::vector<PackMaterialRange> materialRanges(const PackLevelView& level);
 
+// A level's geomorph targets (LodLevel::morph; section 11): all empty when the level has none (the
+// last level of a chain, packs written without them).
+struct PackLevelMorphView {
+  Span<const glm::vec3> positions;
+  Span<const glm::vec3> normals;
+  Span<const glm::vec3> colors;
+  Span<const glm::vec2> uvs;
+  size_t extra_uv_set_count = 0;
+  Span<const glm::vec2> extra_uvs;  // sets 1, 2, ...: set s at [(s - 1) x V, s x V)
+  Span<const glm::vec4> tangents;
+};
+
 struct PackNodeView {
   int32_t parent = -1;
   int32_t mesh = -1;
@@ -156,6 +168,7 @@ class Pack {
   PackLevelView level(size_t chain, size_t level) const;
   size_t materialCount() const;  // 0 for packs written without materials
   PackMaterialView material(size_t i) const;
+  PackLevelMorphView levelMorph(size_t chain, size_t level) const;
   size_t byteSize() const { return bytes_.size(); }
   const uint8_t* bytes() const { return bytes_.data(); }  // the whole file
 
@@ -178,6 +191,7 @@ class Pack {
   size_t attributes_ = 0;  // the level attributes section, 0 when absent
   size_t materials_ = 0, material_count_ = 0;  // the materials section, 0 when absent
   size_t groups_ = 0;                           // the level groups section, 0 when absent
+  size_t morphs_ = 0;      // the level geomorph section, 0 when absent
 };
 
 }  // namespace scenelod::scene
