@@ -165,6 +165,38 @@ TEST(SceneCommands, LodsWritesOneGlbWithAChainPerMesh) {
   }
 }
 
+// --nested builds each level from the one before (other levels than --independent's), and the
+// two options exclude each other and apply to clustering only
+TEST(SceneCommands, LodsNestedAndIndependentLevels) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the scenelod tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  const std::string glb = dir + "/nested_in.glb", nested = dir + "/nested.glb", independent = dir + "/independent.glb";
+  ToolRun r = runTool("demo-scene -o " + glb + " --segments 8 --gearboxes 1 --bunnies 0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = runTool("lods " + glb + " -o " + nested + " --levels 4 --nested");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = runTool("lods " + glb + " -o " + independent + " --levels 4 --independent");
+  ASSERT_EQ(r.code, 0) << r.output;
+  scene::SceneData a, b;
+  std::vector<LodChain> ca, cb;
+  ASSERT_TRUE(scene::importGltfLods(nested, a, ca).ok());
+  ASSERT_TRUE(scene::importGltfLods(independent, b, cb).ok());
+  ASSERT_EQ(ca.size(), cb.size());
+  bool differ = false;
+  for (size_t m = 0; m < ca.size(); ++m) {
+    ASSERT_EQ(ca[m].levelCount(), cb[m].levelCount());
+    for (size_t l = 2; l < ca[m].levelCount(); ++l)
+      differ = differ || ca[m].levels[l].mesh.positions != cb[m].levels[l].mesh.positions;
+  }
+  EXPECT_TRUE(differ) << "nested and independent levels 2+ came out equal on every mesh";
+  r = runTool("lods " + glb + " -o " + nested + " --nested --independent");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("give only one of --nested, --independent"), std::string::npos) << r.output;
+  r = runTool("lods " + glb + " -o " + nested + " --nested --method zhang");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--nested applies to the clustering methods, not zhang"), std::string::npos) << r.output;
+}
+
 TEST(SceneCommands, InPlaceConvertThatCannotWriteKeepsItsInput) {
   // `convert x.glb x.glb` on a full disk once truncated x.glb; here a 16 KiB file-size limit (the
   // shell ignores SIGXFSZ so that the write fails with EFBIG instead of killing the tool)
