@@ -181,6 +181,19 @@ class SelectorContext {
 
   ViewScratch views;  // frames with views (selector_views.cpp)
 
+  // transitions (selector_transitions.cpp): per object the level fading out and the fade's elapsed
+  // time (+inf: no fade), and the tag of the last frame with transitions that saw it in view
+  int8_t* fade_from = nullptr;
+  float* fade_elapsed = nullptr;
+  uint8_t* view_tag = nullptr;
+  uint8_t last_view_tag = 1;
+  bool transitions_valid = false;  // last frame ran with transitions (its tags and fades hold)
+  // per level-table row, frames in morph mode: the morph factor's band [start, end) of the
+  // accuracy term q and 1 / ln(end / start) (start = end = +inf: the row never morphs)
+  float* row_morph_start = nullptr;
+  float* row_morph_end = nullptr;
+  float* row_morph_inv = nullptr;
+
   // cost of drawing slot `s` at level `l` (-1: not drawn)
   float pointCost(size_t s, int l) const {
     if (l < 0) return 0.0f;
@@ -210,6 +223,32 @@ class SelectorContext {
 CostCoefficients takeReportedFrameTime(SelectorContext& ctx, bool calibrate);
 // Keeps this frame's features for a later time report and advances the context's history.
 void recordFrame(SelectorContext& ctx, const CostFeatures& features, bool budget, size_t slot_count);
+
+// ---- transitions (selector_transitions.cpp)
+
+// Null when the job's transition parameters and outputs are usable, else what is wrong.
+const char* transitionsError(const SelectionJob& job);
+// The rows' morph bands for this frame's hysteresis and morph_band (morph mode).
+void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const SelectionParams& params);
+// Budget mode, before the choice: the predicted cost of the levels still fading out this frame
+// from fades started in earlier frames (slot columns a of the slot pass), in slot order while it
+// stays within `cap`; the fades beyond it end now.
+double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, double cap);
+// The outgoing levels drawn this frame beside the chosen ones: their count, cost and features.
+struct TransitionSums {
+  uint32_t count = 0;
+  double cost = 0.0, pixels = 0.0;
+  uint64_t tri = 0, vert = 0, lines = 0;
+};
+// After the choice (levels_out final, ctx.prev_level still last frame's): advances and starts the
+// fades, computes the morph factors, writes the job's transition outputs. Needs the slot columns
+// object, q, a and px (and finest in budget mode) of this frame's `slots` slots.
+// `new_fade_cap`: the cost the fades started in this frame may add (+inf in distance mode); a switch
+// whose fade would exceed it is a hard switch.
+TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, size_t slots, double new_fade_cap);
+// A frame without transitions: the outputs (when given) say "no fade, no morph"; the fade state is
+// forgotten.
+void noTransitions(SelectorContext& ctx, const SelectionJob& job);
 
 // ---- frames with views or forced levels (selector_views.cpp)
 

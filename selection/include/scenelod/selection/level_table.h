@@ -16,6 +16,8 @@ struct LevelTableData {
   std::vector<uint32_t> triangle_count;
   std::vector<uint32_t> vertex_count;
   std::vector<uint32_t> line_point_count;
+  std::vector<uint8_t> has_morph;  // per row: the level has geomorph data (0 for every level today;
+                                   // set a row to 1 to let transitions morph from it)
 
   // Appends a chain's levels (cell width, counts; edges + points as line_point_count) and returns its
   // chain id. Allocates.
