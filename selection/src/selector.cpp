@@ -59,7 +59,8 @@ struct FrameInput {
   float c_obj = 0.0f, c_px = 0.0f;  // the cost model's per object and per pixel
   double per_frame_ms = 0.0;
   bool budget = false;
-  bool keep_slot_terms = false;  // distance mode: keep q, a and pixels in the slot columns (transitions)
+  bool keep_slot_terms = false;  // distance mode: keep a and pixels in the slot columns (transitions)
+  float* morph_out = nullptr;    // distance mode, morph transitions: the morph factors, per block
 };
 
 FrameInput frameInput(const SelectionJob& job, const CostCoefficients& coef) {
@@ -97,6 +98,7 @@ FrameInput frameInput(const SelectionJob& job, const CostCoefficients& coef) {
   in.per_frame_ms = coef.per_frame_ms;
   in.budget = job.params.mode == SelectionMode::kBudget;
   in.keep_slot_terms = job.params.transitions != Transitions::kNone;
+  if (!in.budget && job.params.transitions == Transitions::kMorph && job.morph_out.count) in.morph_out = job.morph_out.data;
   return in;
 }
 
@@ -346,10 +348,10 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
     } else {
       distanceLevels(in, ctx, m, g, distance_sums);
       if (in.keep_slot_terms) {  // the block's queue entries are consumed: their columns are free
-        std::memcpy(ctx.slot_q + s0, lq, m * sizeof(float));
         std::memcpy(ctx.slot_a + s0, la, m * sizeof(float));
         std::memcpy(ctx.slot_px + s0, lpx, m * sizeof(float));
       }
+      if (in.morph_out) morphFactors(ctx, g.object, g.row0, g.q, in.level_of, m, in.morph_out);
     }
   };
   // slots are handed on in full blocks while their objects' inputs are still in cache
@@ -615,6 +617,7 @@ bool SelectionJob::run() {
   }
   const bool transitions = params.transitions != Transitions::kNone;
   if (params.transitions == Transitions::kMorph) prepareMorphRows(ctx, levels, params);
+  if (transitions && morph_out.count) std::fill(morph_out.data, morph_out.data + centers.count, 0.0f);
   const FrameInput in = frameInput(*this, coef);
 
   SlotSums sums{};
