@@ -123,6 +123,8 @@ struct slod_context {
   std::vector<glm::vec3> centers;
   std::vector<float> radii, scales;
   std::vector<int8_t> levels;
+  std::vector<int8_t> previous_levels;  // transitions (slod_select)
+  std::vector<float> morph, fade;
   std::vector<selection::View> views;  // slod_select_views' (capacity kept: no allocation after the first frame)
   bool spheres_dirty = true;
 
@@ -606,6 +608,10 @@ void writeSelections(const slod_context* ctx, void* out, size_t out_stride) {
     e.object = ctx->object_handles.handle(static_cast<uint32_t>(i));
     e.user_data = ctx->user_data[i];
     e.level = ctx->levels[i];
+    const bool transitions = i < ctx->fade.size();
+    e.morph = transitions ? ctx->morph[i] : 0.0f;
+    e.previous_level = transitions ? ctx->previous_levels[i] : e.level;
+    e.fade = transitions ? ctx->fade[i] : 1.0f;
     std::memcpy(static_cast<char*>(out) + i * out_stride, &e, bytes);
   }
 }
@@ -980,6 +986,11 @@ selection::SelectionJob objectsJob(slod_context* ctx, const slod_frame_params& p
   const bool budget = params.budget_ms > 0.0f;
   job.params.mode = budget ? selection::SelectionMode::kBudget : selection::SelectionMode::kDistance;
   job.params.budget_ms = budget ? params.budget_ms : 1.0f;
+  job.params.transitions = static_cast<selection::Transitions>(params.transitions);
+  job.params.dt_ms = params.dt_ms;
+  job.params.fade_ms = params.fade_ms;
+  job.params.morph_band = params.morph_band;
+  job.params.fade_budget_share = params.fade_budget_share;
   job.levels = ctx->objects.table.view();
   job.centers = Span<const glm::vec3>(ctx->centers.data(), n);
   job.radii = Span<const float>(ctx->radii.data(), n);
@@ -1075,8 +1086,19 @@ slod_status slod_select(slod_context* ctx, const slod_camera* camera_in, const s
       return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: pixels_per_cell must be > 0 and budget_ms finite");
     if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
     const selection::Camera cam = toCamera(camera);
+    if (params.transitions < SLOD_TRANSITIONS_NONE || params.transitions > SLOD_TRANSITIONS_MORPH)
+      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: transitions is " + std::to_string(params.transitions) +
+                                                        ", not a slod_transitions value");
     selection::SelectionJob job = objectsJob(ctx, params);
     job.camera = &cam;
+    const size_t n = ctx->objects.objectCount();
+    ctx->morph.resize(n);
+    ctx->previous_levels.resize(n);
+    ctx->fade.resize(n);
+    job.morph_out = Span<float>(ctx->morph.data(), n);
+    job.previous_levels_out = Span<int8_t>(ctx->previous_levels.data(), n);
+    job.fade_out = Span<float>(ctx->fade.data(), n);
+    if (const char* e = job.error()) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string("slod_select: ") + e);
     selection::SelectionStats st;
     job.stats = &st;
     if (!job.run()) return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, "slod_select: the selector refused the frame (degenerate camera?)");
@@ -1114,8 +1136,11 @@ slod_status slod_select_views(slod_context* ctx, const slod_view* views, size_t 
       return fail(ctx, SLOD_ERROR_CAPACITY, std::string(fn) + ": levels holds " + std::to_string(levels_capacity) +
                                                 " entries for " + std::to_string(groups) + " groups of " + std::to_string(n) + " objects");
     if (Error e = ensureSelector(ctx); !e.ok()) return fail(ctx, e);
+    if (params.transitions != SLOD_TRANSITIONS_NONE)
+      return fail(ctx, SLOD_ERROR_INVALID_ARGUMENT, std::string(fn) + ": transitions need slod_select (one camera)");
     selection::SelectionJob job = objectsJob(ctx, params);
     job.views = Span<const selection::View>(sv.data(), sv.size());
+    ctx->fade.clear();  // out says: no transition
     job.group_levels_out = Span<int8_t>(levels, groups * n);
     selection::SelectionStats st;
     job.stats = &st;

@@ -9,7 +9,8 @@ using namespace selection_bench;
 
 namespace {
 
-void run(benchmark::State& state, SelectionMode mode, BudgetAlgorithm alg, bool cold) {
+void run(benchmark::State& state, SelectionMode mode, BudgetAlgorithm alg, bool cold,
+         Transitions transitions = Transitions::kNone) {
   const size_t n = static_cast<size_t>(state.range(0));
   BenchScene& s = scene(n);
   const float budget = budgetFor(s, n);
@@ -27,6 +28,7 @@ void run(benchmark::State& state, SelectionMode mode, BudgetAlgorithm alg, bool 
     j.params.algorithm = alg;
     j.params.budget_ms = budget;
     j.params.calibrate = false;
+    if (transitions != Transitions::kNone) withTransitions(j, s, transitions);
     if (!j.run()) state.SkipWithError("run() refused the input");
     benchmark::DoNotOptimize(s.levels.data());
     benchmark::ClobberMemory();
@@ -47,6 +49,19 @@ void BM_BudgetLagrangianCold(benchmark::State& s) { run(s, SelectionMode::kBudge
 void BM_BudgetGreedySmooth(benchmark::State& s) { run(s, SelectionMode::kBudget, BudgetAlgorithm::kGreedy, false); }
 void BM_BudgetGreedyCold(benchmark::State& s) { run(s, SelectionMode::kBudget, BudgetAlgorithm::kGreedy, true); }
 void BM_DistanceSmooth(benchmark::State& s) { run(s, SelectionMode::kDistance, BudgetAlgorithm::kLagrangian, false); }
+// with transitions (morph factors and fades, their outputs written): the same runs' extra cost
+void BM_BudgetLagrangianSmoothMorph(benchmark::State& s) {
+  run(s, SelectionMode::kBudget, BudgetAlgorithm::kLagrangian, false, Transitions::kMorph);
+}
+void BM_DistanceSmoothMorph(benchmark::State& s) {
+  run(s, SelectionMode::kDistance, BudgetAlgorithm::kLagrangian, false, Transitions::kMorph);
+}
+void BM_DistanceSmoothFade(benchmark::State& s) {
+  run(s, SelectionMode::kDistance, BudgetAlgorithm::kLagrangian, false, Transitions::kFade);
+}
+void BM_BudgetLagrangianSmoothFade(benchmark::State& s) {
+  run(s, SelectionMode::kBudget, BudgetAlgorithm::kLagrangian, false, Transitions::kFade);
+}
 
 }  // namespace
 
@@ -55,3 +70,7 @@ BENCHMARK(BM_BudgetLagrangianCold)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(
 BENCHMARK(BM_BudgetGreedySmooth)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BudgetGreedyCold)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DistanceSmooth)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BudgetLagrangianSmoothMorph)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DistanceSmoothMorph)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DistanceSmoothFade)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BudgetLagrangianSmoothFade)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);

@@ -8,10 +8,12 @@
 //   cold     budget, Lagrangian, camera jump and history reset every frame
 //   greedy   budget, heap greedy, smooth camera
 //   distance distance mode, smooth camera
+// each optionally followed by +fade or +morph: the same frames with transitions (outputs written)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <cstdint>
+#include <string>
 
 #include "selection/selector_scene.h"
 
@@ -24,7 +26,17 @@ int main(int argc, char** argv) {
   }
   const size_t n = std::strtoul(argv[1], nullptr, 10);
   const int frames = std::atoi(argv[2]);
-  const char* mode = argv[3];
+  std::string mode_arg = argv[3];
+  Transitions transitions = Transitions::kNone;
+  const size_t plus = mode_arg.find('+');
+  if (plus != std::string::npos) {
+    const std::string t = mode_arg.substr(plus + 1);
+    if (t == "fade") transitions = Transitions::kFade;
+    else if (t == "morph") transitions = Transitions::kMorph;
+    else return std::fprintf(stderr, "bad transitions '%s'\n", t.c_str()), 2;
+    mode_arg.resize(plus);
+  }
+  const char* mode = mode_arg.c_str();
   const bool cold = std::strcmp(mode, "cold") == 0, greedy = std::strcmp(mode, "greedy") == 0,
              distance = std::strcmp(mode, "distance") == 0;
   if (n == 0 || frames <= 0 || !(cold || greedy || distance || std::strcmp(mode, "smooth") == 0)) {
@@ -51,6 +63,7 @@ int main(int argc, char** argv) {
     j.params.algorithm = greedy ? BudgetAlgorithm::kGreedy : BudgetAlgorithm::kLagrangian;
     j.params.budget_ms = budget;
     j.params.calibrate = false;
+    if (transitions != Transitions::kNone) withTransitions(j, s, transitions);
     if (!j.run()) return 1;
     drawn += st.drawn_count;
     mixBytes(s.levels.data(), s.levels.size());

@@ -23,6 +23,8 @@ struct BenchScene {
   std::vector<float> radii, scales, importance;
   std::vector<uint32_t> chains;
   std::vector<int8_t> levels;
+  std::vector<int8_t> previous_levels;  // transition outputs (benchmarks with transitions)
+  std::vector<float> morph, fade;
   SelectorContext* ctx = nullptr;
   float distance_cost_ms = 0.0f;
   ~BenchScene() { destroySelectorContext(ctx); }
@@ -59,7 +61,11 @@ inline BenchScene& scene(size_t n) {
     s.importance.push_back(0.5f + u(rng));
     s.chains.push_back(static_cast<uint32_t>(rng() % 32));
   }
+  for (auto& m : s.table.has_morph) m = 1;  // read only by frames with transitions
   s.levels.resize(n);
+  s.previous_levels.resize(n);
+  s.morph.resize(n);
+  s.fade.resize(n);
   SelectorConfig cfg;
   cfg.max_object_count = n;
   cfg.max_levels_per_chain = 8;
@@ -76,6 +82,15 @@ inline Camera cameraAt(size_t n, double t) {
   c.near_plane = 0.1f;
   c.far_plane = 1e6f;
   return c;
+}
+
+// The job's transition outputs and mode (morph factors on every level but the last, fades elsewhere).
+inline void withTransitions(SelectionJob& j, BenchScene& s, Transitions mode) {
+  const size_t n = s.centers.size();
+  j.params.transitions = mode;
+  j.morph_out = Span<float>(s.morph.data(), n);
+  j.previous_levels_out = Span<int8_t>(s.previous_levels.data(), n);
+  j.fade_out = Span<float>(s.fade.data(), n);
 }
 
 inline SelectionJob job(BenchScene& s, const Camera* cam, SelectionStats* st) {

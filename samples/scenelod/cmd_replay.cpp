@@ -1,4 +1,5 @@
 // scenelod replay: runs a replay file through the selector and writes the per-frame log and a report.
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -39,11 +40,18 @@ const char kUsage[] =
     "  --visibility         Embree occlusion estimates and pick focus feed the selection (docs/VISIBILITY.md);\n"
     "                       the log adds visible, pick_object, hidden_count, hidden_cost_ms,\n"
     "                       hidden_cost_without_ms, occlusion_saved_ms\n"
-    "  --ray-budget N       occlusion samples per frame with --visibility (default 20000)";
+    "  --ray-budget N       occlusion samples per frame with --visibility (default 20000)\n"
+    "  --transitions MODE   none (default: hard switches), fade (cross-fades) or morph (geomorphs where\n"
+    "                       levels have morph data, fades elsewhere); the log adds morph, fade,\n"
+    "                       previous_levels and fading; time between frames from time_s\n"
+    "  --fade-ms MS         duration of a cross-fade (default 250)\n"
+    "  --morph-band F       share of a level's log pixel-size interval the morph takes, (0, 1] (default 0.3)\n"
+    "  --fade-budget-share F  budget mode: share of the objects' budget fades may take, [0, 1] (default 0.1)";
 
 int run(const std::vector<std::string>& argv) {
   Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility"},
-            {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget"});
+            {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget",
+             "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share"});
   if (!args.ok()) return usageError("replay", args.error());
   if (args.positional().size() != 1) return usageError("replay", "expected one replay file");
   if (!args.has("--out") && !args.has("--report")) return usageError("replay", "nothing to write: give -o LOG and/or --report FILE.md");
@@ -69,6 +77,20 @@ int run(const std::vector<std::string>& argv) {
   const std::string alg = args.get("--algorithm", "lagrangian");
   if (alg == "greedy") opt.params.algorithm = BudgetAlgorithm::kGreedy;
   else if (alg != "lagrangian") return usageError("replay", "--algorithm must be lagrangian or greedy");
+  double fade_ms = 250.0, morph_band = 0.3, fade_share = 0.1;
+  if (!args.getDouble("--fade-ms", fade_ms) || !args.getDouble("--morph-band", morph_band) ||
+      !args.getDouble("--fade-budget-share", fade_share))
+    return usageError("replay", args.error());
+  const std::string transitions = args.get("--transitions", "none");
+  if (transitions == "fade") opt.params.transitions = Transitions::kFade;
+  else if (transitions == "morph") opt.params.transitions = Transitions::kMorph;
+  else if (transitions != "none") return usageError("replay", "--transitions must be none, fade or morph");
+  if (!(fade_ms >= 0.0) || !std::isfinite(fade_ms)) return usageError("replay", "--fade-ms must be >= 0 and finite");
+  if (!(morph_band > 0.0 && morph_band <= 1.0)) return usageError("replay", "--morph-band must be in (0, 1]");
+  if (!(fade_share >= 0.0 && fade_share <= 1.0)) return usageError("replay", "--fade-budget-share must be in [0, 1]");
+  opt.params.fade_ms = static_cast<float>(fade_ms);
+  opt.params.morph_band = static_cast<float>(morph_band);
+  opt.params.fade_budget_share = static_cast<float>(fade_share);
   opt.seed = static_cast<uint64_t>(seed);
   opt.noise = noise;
 

@@ -11,6 +11,7 @@ uint32_t LevelTableData::addChain(const LodChain& chain) {
     triangle_count.push_back(static_cast<uint32_t>(l.mesh.triangleCount()));
     vertex_count.push_back(static_cast<uint32_t>(l.mesh.vertexCount()));
     line_point_count.push_back(static_cast<uint32_t>(l.mesh.edgeCount() + l.mesh.pointCount()));
+    has_morph.push_back(l.morph.empty() ? 0 : 1);
   }
   chain_level_offset.push_back(static_cast<uint32_t>(cell_width.size()));
   return static_cast<uint32_t>(chain_level_offset.size() - 2);
@@ -23,6 +24,7 @@ uint32_t LevelTableData::addChain(Span<const float> w, Span<const uint32_t> t, S
     triangle_count.push_back(i < t.size() ? t[i] : 0);
     vertex_count.push_back(i < v.size() ? v[i] : 0);
     line_point_count.push_back(i < lp.size() ? lp[i] : 0);
+    has_morph.push_back(0);
   }
   chain_level_offset.push_back(static_cast<uint32_t>(cell_width.size()));
   return static_cast<uint32_t>(chain_level_offset.size() - 2);
@@ -42,6 +44,7 @@ LevelTable LevelTableData::view() const {
   t.triangle_count = Span<const uint32_t>(triangle_count.data(), triangle_count.size());
   t.vertex_count = Span<const uint32_t>(vertex_count.data(), vertex_count.size());
   t.line_point_count = Span<const uint32_t>(line_point_count.data(), line_point_count.size());
+  t.has_morph = Span<const uint8_t>(has_morph.data(), has_morph.size());
   return t;
 }
 

@@ -133,6 +133,9 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
   Error read_error;
   std::vector<View> views;
   std::vector<int8_t> group_levels;
+  const bool transitions = params.transitions != Transitions::kNone;
+  bool first_frame = true;
+  double last_time_s = 0.0;
   while (next_frame(f, read_error)) {
     const std::string where = scene.name + ": replay frame " + std::to_string(f.frame);
     if (!f.moves.empty()) {
@@ -160,6 +163,22 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     job.importance = Span<const float>(scene.importance.data(), n);
     job.must_draw = Span<const uint8_t>(scene.must_draw.data(), n);
     job.levels_out = Span<int8_t>(out.levels.data(), n);
+    if (transitions) {
+      const double dt_ms = first_frame ? 0.0 : (f.time_s - last_time_s) * 1000.0;
+      if (!(dt_ms >= 0.0) || !std::isfinite(dt_ms))
+        return Error(Status::kInvalidArgument, where + ": time_s goes back (" + std::to_string(f.time_s) + " after " +
+                                                   std::to_string(last_time_s) + "): fades need time to run forward");
+      job.params.dt_ms = static_cast<float>(dt_ms);
+      out.has_transitions = true;
+      out.morph.assign(n, 0.0f);
+      out.fade.assign(n, 1.0f);
+      out.previous_levels.assign(n, -1);
+      job.morph_out = Span<float>(out.morph.data(), n);
+      job.fade_out = Span<float>(out.fade.data(), n);
+      job.previous_levels_out = Span<int8_t>(out.previous_levels.data(), n);
+    }
+    first_frame = false;
+    last_time_s = f.time_s;
     job.stats = &st;
     job.context = ctx.c;
     const size_t groups = frameViews(f, views);
@@ -168,7 +187,8 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     job.group_levels_out = Span<int8_t>(group_levels.data(), group_levels.size());
     if (options.visibility)
       if (Error e = options.visibility->beforeSelect(scene, cam, f, job); !e.ok()) return Error(e.status, where + ": " + e.message);
-    if (!job.run()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame's input");
+    if (const char* e = job.error()) return Error(Status::kInvalidArgument, where + ": the selector refused the frame: " + e);
+    job.run();
     if (options.visibility) options.visibility->afterSelect(job, out);
     for (size_t g = 0; g < groups; ++g)
       out.view_levels.emplace_back(group_levels.begin() + g * n, group_levels.begin() + (g + 1) * n);
@@ -181,6 +201,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     out.drawn = st.drawn_count;
     out.culled = st.culled_count;
     out.dropped = st.dropped_count;
+    out.fading = st.fading_count;
     out.flags = st.flags;
     out.benefit = st.total_benefit;
     out.triangles = st.features.triangles;
@@ -238,6 +259,21 @@ std::string replayLogLine(const ReplayLogFrame& f) {
       o << "]";
     }
     o << "]";
+  }
+  if (f.has_transitions) {
+    o << ", \"morph\": [";
+    for (size_t i = 0; i < f.morph.size(); ++i) {
+      std::snprintf(buf, sizeof(buf), "%s%.3f", i ? "," : "", f.morph[i]);
+      o << buf;
+    }
+    o << "], \"fade\": [";
+    for (size_t i = 0; i < f.fade.size(); ++i) {
+      std::snprintf(buf, sizeof(buf), "%s%.3f", i ? "," : "", f.fade[i]);
+      o << buf;
+    }
+    o << "], \"previous_levels\": [";
+    for (size_t i = 0; i < f.previous_levels.size(); ++i) o << (i ? "," : "") << static_cast<int>(f.previous_levels[i]);
+    o << "], \"fading\": " << f.fading;
   }
   o << ", \"switches\": " << f.switches << ", \"drawn\": " << f.drawn << ", \"culled\": " << f.culled
     << ", \"dropped\": " << f.dropped << ", \"flags\": " << f.flags;

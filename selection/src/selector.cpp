@@ -59,6 +59,8 @@ struct FrameInput {
   float c_obj = 0.0f, c_px = 0.0f;  // the cost model's per object and per pixel
   double per_frame_ms = 0.0;
   bool budget = false;
+  bool keep_slot_terms = false;  // distance mode: keep a and pixels in the slot columns (transitions)
+  float* morph_out = nullptr;    // distance mode, morph transitions: the morph factors, per block
 };
 
 FrameInput frameInput(const SelectionJob& job, const CostCoefficients& coef) {
@@ -95,6 +97,8 @@ FrameInput frameInput(const SelectionJob& job, const CostCoefficients& coef) {
   in.c_px = static_cast<float>(coef.per_pixel_ms);
   in.per_frame_ms = coef.per_frame_ms;
   in.budget = job.params.mode == SelectionMode::kBudget;
+  in.keep_slot_terms = job.params.transitions != Transitions::kNone;
+  if (!in.budget && job.params.transitions == Transitions::kMorph && job.morph_out.count) in.morph_out = job.morph_out.data;
   return in;
 }
 
@@ -339,10 +343,16 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
                                 ctx.slot_finest + s0, ctx.slot_levels + s0, ctx.slot_prev + s0}
                   : SlotColumns{ctx.slot_object + s0, lrow0, lq, la, lb, lpx, lfinest, llevels, lprev};
     slotTerms(in, ctx, s0, m, g);
-    if (in.budget)
+    if (in.budget) {
       budgetSlotTerms(in, ctx, s0, m, g, &pass);
-    else
+    } else {
       distanceLevels(in, ctx, m, g, distance_sums);
+      if (in.keep_slot_terms) {  // the block's queue entries are consumed: their columns are free
+        std::memcpy(ctx.slot_a + s0, la, m * sizeof(float));
+        std::memcpy(ctx.slot_px + s0, lpx, m * sizeof(float));
+      }
+      if (in.morph_out) morphFactors(ctx, g.object, g.row0, g.q, in.level_of, m, in.morph_out);
+    }
   };
   // slots are handed on in full blocks while their objects' inputs are still in cache
   size_t slots = 0, done = 0;
@@ -449,8 +459,9 @@ bool halfGuarantee(SelectorContext& ctx, const HullSums& hulls, const BudgetChoi
 // Budget mode after the slot pass: the hulls, the price search and the greedy on its bracket (or
 // the heap greedy), the write-out and the 1/2 guarantee. Returns the frame's sums.
 SlotSums budgetLevels(const FrameInput& in, SelectorContext& ctx, const SelectionParams& params, const SlotPass& pass,
-                      SelectionStats* st) {
-  const double cap = static_cast<double>(params.budget_ms);
+                      double reserve, SelectionStats* st) {
+  // the fades running since an earlier frame (`reserve`, transitions) come off the budget first
+  const double cap = static_cast<double>(params.budget_ms) - reserve;
   BudgetFrame frame;
   frame.slots = pass.slots;
   frame.rows = in.rows;
@@ -586,6 +597,7 @@ const char* SelectionJob::error() const {
   const uint32_t last_chain = static_cast<uint32_t>(chain_count - 1);
   if ((context->use_avx2 ? chainsAboveAvx2 : chainsAboveSse2)(chains.data, n, last_chain) != 0)
     return "a chain index out of range";
+  if (const char* e = transitionsError(*this)) return e;
   if (with_views || forced_levels.count) return viewsError(*this);
   return nullptr;
 }
@@ -600,8 +612,12 @@ bool SelectionJob::run() {
   ctx.h1 = 1.0f + params.hysteresis;
   if (views.count || forced_levels.count) {
     runViews(*this, coef);  // selector_views.cpp
+    noTransitions(ctx, *this);
     return true;
   }
+  const bool transitions = params.transitions != Transitions::kNone;
+  if (params.transitions == Transitions::kMorph) prepareMorphRows(ctx, levels, params);
+  if (transitions && morph_out.count) std::fill(morph_out.data, morph_out.data + centers.count, 0.0f);
   const FrameInput in = frameInput(*this, coef);
 
   SlotSums sums{};
@@ -610,16 +626,38 @@ bool SelectionJob::run() {
   SelectionStats st;
   st.frame = ctx.frame;
   st.culled_count = static_cast<uint32_t>(in.n - pass.slots);
-  st.mandatory_ms = in.budget ? pass.mandatory : 0.0;
-  if (in.budget) sums = budgetLevels(in, ctx, params, pass, &st);
+  // fades running since an earlier frame draw their outgoing level too: budget mode reserves it,
+  // within the share of the objects' budget that fades may take
+  double new_fade_cap = std::numeric_limits<double>::infinity(), reserve = 0.0;
+  if (in.budget && transitions) {
+    const double share = params.fade_budget_share * std::max(0.0, static_cast<double>(params.budget_ms) - pass.mandatory);
+    reserve = fadeReserve(ctx, *this, pass.slots, share);
+    new_fade_cap = share - reserve;
+  }
+  st.mandatory_ms = in.budget ? pass.mandatory + reserve : 0.0;
+  if (in.budget) sums = budgetLevels(in, ctx, params, pass, reserve, &st);
+  TransitionSums fades;
+  if (transitions)
+    fades = transitionPass(ctx, *this, pass.slots, new_fade_cap);
+  else
+    noTransitions(ctx, *this);
 
   st.switch_count = countSwitches(in.level_of, ctx.prev_level, in.n);
   st.dropped_count = sums.dropped;
   st.drawn_count = sums.drawn;
   if (st.dropped_count > 0) st.flags |= kFlagObjectsDropped;
-  st.predicted_ms = sums.predicted;
+  st.predicted_ms = sums.predicted + fades.cost;
   st.total_benefit = sums.benefit;
   st.features = frameFeatures(in, sums);
+  st.fading_count = fades.count;
+  st.fade_cost_ms = fades.cost;
+  if (fades.count) {
+    st.features.objects += fades.count;
+    st.features.pixels += fades.pixels;
+    st.features.triangles += static_cast<double>(fades.tri);
+    st.features.vertices += static_cast<double>(fades.vert);
+    st.features.line_points += static_cast<double>(fades.lines);
+  }
   recordFrame(ctx, st.features, in.budget, pass.slots);
   if (stats) *stats = st;
   return true;

@@ -47,20 +47,25 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   struct Part { size_t bytes; size_t at; };
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
-  constexpr size_t kPerObjectParts = 16;
-  Part parts[23] = {
+  constexpr size_t kPerObjectParts = 20;
+  constexpr size_t kParts = 30;
+  Part parts[kParts] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
       {n, 0},                      {n, 0},                    {n * stride, 0},
       {n, 0},                      {n, 0},                    {n * sizeof(HeapEntry), 0},
       {n * sizeof(uint32_t), 0},   {n, 0},                    {n, 0},
       {n * sizeof(uint16_t), 0},
+      {n, 0},                      {n * sizeof(float), 0},    {n, 0},
+      {n, 0},
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0},
       {kHistMaxBuckets * sizeof(double), 0}, {kHistMaxBuckets * sizeof(uint32_t), 0},
-      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0}};
+      {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0},
+      {(rows + kLanes) * sizeof(float), 0}, {(rows + kLanes) * sizeof(float), 0},
+      {(rows + kLanes) * sizeof(float), 0}};
   size_t per_object = 0;
-  for (size_t i = 0; i < 23; ++i) {
+  for (size_t i = 0; i < kParts; ++i) {
     parts[i].at = offset;
     offset = alignUp(offset + parts[i].bytes, 16);
     if (i < kPerObjectParts) per_object += parts[i].bytes;
@@ -91,13 +96,20 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->slot_prev = reinterpret_cast<int8_t*>(base + parts[13].at);
   c->slot_levels = base + parts[14].at;
   c->slot_key = reinterpret_cast<uint16_t*>(base + parts[15].at);
-  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[16].at);
-  c->row_cost = reinterpret_cast<float*>(base + parts[17].at);
-  c->row_inv_w = reinterpret_cast<float*>(base + parts[18].at);
-  c->hist_cost = reinterpret_cast<double*>(base + parts[19].at);
-  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[20].at);
-  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[21].at);
-  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[22].at);
+  c->bracket = reinterpret_cast<BracketEntry*>(base + parts[20].at);
+  c->row_cost = reinterpret_cast<float*>(base + parts[21].at);
+  c->row_inv_w = reinterpret_cast<float*>(base + parts[22].at);
+  c->hist_cost = reinterpret_cast<double*>(base + parts[23].at);
+  c->hist_count = reinterpret_cast<uint32_t*>(base + parts[24].at);
+  c->bracket_scratch = reinterpret_cast<BracketEntry*>(base + parts[25].at);
+  c->row_drawn = reinterpret_cast<uint32_t*>(base + parts[26].at);
+  c->fade_from = reinterpret_cast<int8_t*>(base + parts[16].at);
+  c->fade_elapsed = reinterpret_cast<float*>(base + parts[17].at);
+  c->view_tag = base + parts[18].at;
+  c->fading = base + parts[19].at;
+  c->row_morph_inv_start = reinterpret_cast<float*>(base + parts[27].at);
+  c->row_morph_end = reinterpret_cast<float*>(base + parts[28].at);
+  c->row_morph_inv = reinterpret_cast<float*>(base + parts[29].at);
   c->max_rows = rows;
   c->use_avx2 = !config.sse2_only && cpuHasAvx2();
   c->calibrator = CostCalibrator(config.initial_cost, config.calibration);
@@ -127,6 +139,8 @@ void resetSelectorHistory(SelectorContext* c) {
   c->has_history = false;
   c->last_was_budget = false;
   c->last_slot_count = 0;
+  c->transitions_valid = false;
+  std::memset(c->fading, 0, c->max_objects);
 }
 
 size_t selectorMemoryBytes(const SelectorContext* c) { return c ? c->total_bytes : 0; }

@@ -181,6 +181,23 @@ class SelectorContext {
 
   ViewScratch views;  // frames with views (selector_views.cpp)
 
+  // transitions (selector_transitions.cpp): per object whether a fade runs (1) or not (0), the
+  // level fading out and the fade's elapsed time (read only while it runs), and the tag of the
+  // last budget frame with transitions that had it in view (a slot)
+  uint8_t* fading = nullptr;
+  int8_t* fade_from = nullptr;
+  float* fade_elapsed = nullptr;
+  uint8_t* view_tag = nullptr;
+  uint8_t last_view_tag = 1;
+  bool transitions_valid = false;  // last frame ran with transitions (its fades hold)
+  bool transitions_budget = false; // ... in budget mode (its view tags hold)
+  // per level-table row, frames in morph mode: the morph factor's band [start, end) of the
+  // accuracy term q as 1 / start, end and 1 / L(end / start) (L: selector_transitions.cpp's log);
+  // 1 / start = 0 and end = +inf: the row never morphs
+  float* row_morph_inv_start = nullptr;
+  float* row_morph_end = nullptr;
+  float* row_morph_inv = nullptr;
+
   // cost of drawing slot `s` at level `l` (-1: not drawn)
   float pointCost(size_t s, int l) const {
     if (l < 0) return 0.0f;
@@ -210,6 +227,37 @@ class SelectorContext {
 CostCoefficients takeReportedFrameTime(SelectorContext& ctx, bool calibrate);
 // Keeps this frame's features for a later time report and advances the context's history.
 void recordFrame(SelectorContext& ctx, const CostFeatures& features, bool budget, size_t slot_count);
+
+// ---- transitions (selector_transitions.cpp)
+
+// Null when the job's transition parameters and outputs are usable, else what is wrong.
+const char* transitionsError(const SelectionJob& job);
+// The rows' morph bands for this frame's hysteresis and morph_band (morph mode).
+void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const SelectionParams& params);
+// The morph factors of m slots (objects, first rows and accuracy terms of their chains, levels by
+// object) into morph_out by object; 0 for a slot not drawn.
+void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row0, const float* q,
+                  const int8_t* level_of, size_t m, float* morph_out);
+// Budget mode, before the choice: the predicted cost of the levels still fading out this frame
+// from fades started in earlier frames (slot columns a of the slot pass), in slot order while it
+// stays within `cap`; the fades beyond it end now.
+double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, double cap);
+// The outgoing levels drawn this frame beside the chosen ones: their count, cost and features.
+struct TransitionSums {
+  uint32_t count = 0;
+  double cost = 0.0, pixels = 0.0;
+  uint64_t tri = 0, vert = 0, lines = 0;
+};
+// After the choice (levels_out final, ctx.prev_level still last frame's): advances and starts the
+// fades, computes the morph factors (budget mode; distance mode's came with the slot pass), writes
+// the job's transition outputs. Needs the slot columns object, a and px (and row0, q, finest in
+// budget mode) of this frame's `slots` slots.
+// `new_fade_cap`: the cost the fades started in this frame may add (+inf in distance mode); a switch
+// whose fade would exceed it is a hard switch.
+TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, size_t slots, double new_fade_cap);
+// A frame without transitions: the outputs (when given) say "no fade, no morph"; the fade state is
+// forgotten.
+void noTransitions(SelectorContext& ctx, const SelectionJob& job);
 
 // ---- frames with views or forced levels (selector_views.cpp)
 

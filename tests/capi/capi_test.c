@@ -231,6 +231,72 @@ static int checkViews(const slod_mesh_desc* md, const slod_chain_desc* chd) {
   return failures == before;
 }
 
+/* transitions: a camera jump starts a cross-fade of fade_ms at the caller's dt_ms; bad parameters
+ * are refused with a message naming them */
+static int checkTransitions(slod_context* ctx, const slod_camera* near_cam) {
+  slod_selection sel[64];
+  slod_frame_params fp;
+  slod_frame_result fr;
+  slod_camera far_cam = *near_cam;
+  uint32_t i, n = slod_object_count(ctx);
+  int frame, fading_frames = 0, object = -1;
+  int32_t before = -2, far_level = -1, near_levels[64];
+  slod_frame_params_init(&fp);
+  fp.budget_ms = 0.0f;
+  fp.transitions = SLOD_TRANSITIONS_FADE;
+  fp.dt_ms = 20.0f;
+  fp.fade_ms = 100.0f;
+  slod_frame_result_init(&fr);
+  far_cam.eye[2] += 40.0f;
+  far_cam.target[2] += 40.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+  for (i = 0; i < n; ++i) CHECK(sel[i].previous_level == sel[i].level && sel[i].fade == 1.0f && sel[i].morph == 0.0f);
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+  for (i = 0; i < n; ++i) near_levels[i] = sel[i].level;
+  for (frame = 0; frame < 20; ++frame) {
+    CHECK(slod_select(ctx, &far_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+    if (frame == 0)
+      for (i = 0; i < n && object < 0; ++i)
+        if (sel[i].level >= 0 && near_levels[i] >= 0 && sel[i].level != near_levels[i]) {
+          object = (int)i;
+          before = near_levels[i];
+        }
+    if (object < 0) break;
+    if (sel[object].previous_level != sel[object].level) {
+      CHECK(sel[object].previous_level == before);
+      CHECK(fabsf(sel[object].fade - 0.2f * (float)fading_frames) < 1e-5f);
+      ++fading_frames;
+    }
+  }
+  CHECK(object >= 0);
+  far_level = object >= 0 ? sel[object].level : -1;
+  CHECK(sel[object].level != before);
+  CHECK(fading_frames == 5); /* 100 ms at 20 ms a frame */
+  fp.dt_ms = -1.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(ctx), "dt_ms") != NULL);
+  fp.dt_ms = 16.0f;
+  fp.morph_band = 0.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(ctx), "morph_band") != NULL);
+  fp.morph_band = 0.3f;
+  fp.fade_ms = -5.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(ctx), "fade_ms") != NULL);
+  fp.fade_ms = 250.0f;
+  fp.transitions = 7;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(ctx), "transitions") != NULL);
+  /* morph mode on chains without morph data: selects, with fades */
+  fp.transitions = SLOD_TRANSITIONS_MORPH;
+  far_cam.eye[2] += 400.0f;
+  far_cam.target[2] += 400.0f;
+  CHECK(slod_select(ctx, &far_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+  CHECK(sel[object].level != far_level && sel[object].morph == 0.0f);
+  CHECK(sel[object].previous_level == far_level && sel[object].fade == 0.0f);
+  return 1;
+}
+
 int main(int argc, char** argv) {
   slod_context_desc cd;
   slod_context* ctx = NULL;
@@ -384,6 +450,7 @@ int main(int argc, char** argv) {
   CHECK(slod_select(ctx, &cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
   for (i = 0; i < 39; ++i) CHECK(sel[i].object != objects[3]);
 
+  CHECK(checkTransitions(ctx, &cam));
   CHECK(checkChainLifecycle(ctx, chain, &md, &cam, &fp, objects[0]));
   CHECK(checkAttributes(ctx, &md));
   CHECK(checkViews(&md, &chd));

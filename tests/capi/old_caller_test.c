@@ -52,6 +52,9 @@ typedef struct v10_level_data {
 /* a newer header's versions: one more field each */
 typedef struct new_object_desc { slod_object_desc d; double future; } new_object_desc;
 typedef struct new_selection { slod_selection s; uint64_t future; } new_selection;
+/* the 1.1 header's selection and frame params: before the transition fields */
+typedef struct v11_selection { slod_object object; uint64_t user_data; int32_t level; } v11_selection;
+typedef struct v11_frame_params { uint32_t size; float budget_ms, pixels_per_cell; } v11_frame_params;
 
 #define GUARD 0xab
 #define OBJECTS 24
@@ -71,6 +74,8 @@ static struct { old_frame_result v; unsigned char tail[64]; } result_out;
 static struct { old_pick_result v; unsigned char tail[64]; } pick_out;
 static struct { old_selection v[OBJECTS]; unsigned char tail[64]; } selection_out;
 static new_selection newer_out[OBJECTS];
+static struct { v11_selection v[OBJECTS]; unsigned char tail[64]; } v11_out;
+static struct { v11_frame_params v; unsigned char tail[64]; } v11_params_in;
 
 static int untouched(const unsigned char* p, size_t n) {
   size_t i;
@@ -157,6 +162,17 @@ static void checkOldCaller(slod_context* ctx, slod_chain chain, const slod_objec
   CHECK(untouched(selection_out.tail, sizeof selection_out.tail));
   CHECK(result_out.v.size == sizeof(old_frame_result) && result_out.v.frame == fr.frame + 1);
   CHECK(untouched(result_out.tail, sizeof result_out.tail));
+
+  /* a 1.1 caller: no transition fields in its params (defaults: none) nor in its selections */
+  memset(&v11_params_in, 0xff, sizeof v11_params_in);
+  v11_params_in.v.size = sizeof(v11_frame_params);
+  v11_params_in.v.budget_ms = 0.0f;
+  v11_params_in.v.pixels_per_cell = 1.0f;
+  memset(&v11_out, GUARD, sizeof v11_out);
+  CHECK(slod_select(ctx, &cam, (const slod_frame_params*)&v11_params_in, v11_out.v, sizeof(v11_selection), OBJECTS,
+                    NULL) == SLOD_OK);
+  for (i = 0; i < OBJECTS; ++i) CHECK(v11_out.v[i].object == objects[i] && v11_out.v[i].level == full[i].level);
+  CHECK(untouched(v11_out.tail, sizeof v11_out.tail));
 
   /* the same frame again, through the old structs' defaults: the same levels */
   CHECK(slod_select(ctx, &cam, &fp, newer_out, sizeof(new_selection), OBJECTS, NULL) == SLOD_OK);

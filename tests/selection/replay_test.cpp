@@ -212,7 +212,8 @@ void addStereoAndShadowViews(const Sphere& bounds, Replay& r) {
 // 150 orbit frames on builtin:field in budget mode at budget_ms (with the views of
 // addStereoAndShadowViews when `views`), measured by the synthetic renderer: the log, and its
 // summary after 30 warm-up frames.
-ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogFrame>& log) {
+ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogFrame>& log,
+                            Transitions transitions = Transitions::kNone) {
   Replay r;
   ReplayScene scene;
   EXPECT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
@@ -224,6 +225,7 @@ ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogF
   ReplayRunOptions o;
   o.override_budget = true;
   o.budget_ms = budget_ms;
+  o.params.transitions = transitions;
   EXPECT_TRUE(runReplay(r, scene, o, log).ok());
   return summarizeReplay(log, 30);
 }
@@ -361,6 +363,47 @@ TEST(Replay, SyntheticRendererBudgetAdherence) {
   EXPECT_GE(s.within_10_percent, 108u);
   EXPECT_LT(s.mean_abs_prediction_error, 0.08);  // the calibrated model tracks the noisy truth
   EXPECT_GT(s.mean_measured_ms, 0.8 * 4.0);  // and the budget is used, not wasted
+}
+
+// With cross-fades the budget still holds: the fades' outgoing levels are counted in the frame's
+// cost (the synthetic renderer measures them) and kept within their share of the budget.
+TEST(Replay, BudgetHoldsWithCrossFades) {
+  std::vector<ReplayLogFrame> log;
+  const ReplaySummary s = runFieldOrbit(4.0, false, log, Transitions::kFade);
+  ASSERT_EQ(s.budget_frames, 120u);
+  EXPECT_GE(s.within_10_percent, 108u);
+  size_t fading = 0;
+  for (const ReplayLogFrame& f : log) {
+    ASSERT_TRUE(f.has_transitions);
+    ASSERT_EQ(f.fade.size(), f.levels.size());
+    fading += f.fading;
+    for (size_t i = 0; i < f.levels.size(); ++i) {
+      EXPECT_GE(f.fade[i], 0.0f);
+      EXPECT_LE(f.fade[i], 1.0f);
+      if (f.previous_levels[i] == f.levels[i]) EXPECT_EQ(f.fade[i], 1.0f);
+    }
+  }
+  EXPECT_GT(fading, 0u);
+}
+
+// Fades run on the replay's clock: a frame whose time_s goes back is refused, naming it.
+TEST(Replay, TransitionsNeedTimeRunningForward) {
+  Replay r;
+  ReplayScene scene;
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", scene).ok());
+  makeCameraPath(sceneBounds(scene), CameraPathKind::kOrbit, 10, 60.0, r);
+  r.frames[6].time_s = r.frames[4].time_s;
+  ReplayRunOptions o;
+  o.params.transitions = Transitions::kFade;
+  std::vector<ReplayLogFrame> log;
+  const Error e = runReplay(r, scene, o, log);
+  EXPECT_FALSE(e.ok());
+  EXPECT_NE(e.message.find("replay frame 6"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("time_s goes back"), std::string::npos) << e.message;
+  o.params.transitions = Transitions::kNone;  // without fades time is not read
+  ReplayScene again;
+  ASSERT_TRUE(makeBuiltinScene("builtin:small", again).ok());
+  EXPECT_TRUE(runReplay(r, again, o, log).ok());
 }
 
 TEST(Replay, BadReplayFilesAreRefusedWithFileAndLine) {

@@ -102,3 +102,35 @@ TEST(ReplayCommands, LongRunsStreamTheirLogAndDecimateTheReportsSeries) {
   EXPECT_NE(r.err.find(bad + ":9002: frames must be in increasing order"), std::string::npos) << r.err;
   EXPECT_FALSE(scenelod::test::fileExists(bad_log));
 }
+
+// --transitions: the log gains morph, fade, previous_levels and fading; none keeps the log as it was
+TEST(ReplayCommands, TransitionsAddMorphAndFadeToTheLog) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  const std::string replay = dir + "/tr.jsonl", none = dir + "/tr_none.jsonl", plain = dir + "/tr_plain.jsonl",
+                    fade = dir + "/tr_fade.jsonl";
+  ToolRun r = tool({"record", "builtin:small", "--path", "orbit", "--frames", "30", "--budget", "1.0", "-o", replay});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_EQ(tool({"replay", replay, "-o", plain}).exit_code, 0);
+  ASSERT_EQ(tool({"replay", replay, "-o", none, "--transitions", "none"}).exit_code, 0);
+  EXPECT_EQ(slurp(none), slurp(plain));
+  EXPECT_EQ(slurp(none).find("\"morph\""), std::string::npos);
+  r = tool({"replay", replay, "-o", fade, "--transitions", "fade", "--fade-ms", "100"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(fade);
+  EXPECT_EQ(lineCount(text), 30u);
+  EXPECT_NE(text.find("\"morph\": ["), std::string::npos);
+  EXPECT_NE(text.find("\"fade\": ["), std::string::npos);
+  EXPECT_NE(text.find("\"previous_levels\": ["), std::string::npos);
+  for (const auto& bad : std::vector<std::vector<std::string>>{{"--transitions", "dither"},
+                                                             {"--fade-ms", "-1"},
+                                                             {"--morph-band", "0"},
+                                                             {"--morph-band", "1.5"},
+                                                             {"--fade-budget-share", "2"}}) {
+    std::vector<std::string> args = {"replay", replay, "-o", fade};
+    args.insert(args.end(), bad.begin(), bad.end());
+    r = tool(args);
+    EXPECT_EQ(r.exit_code, 2) << bad[0];
+    EXPECT_NE(r.err.find(bad[0]), std::string::npos) << r.err;
+  }
+}

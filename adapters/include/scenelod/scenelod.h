@@ -332,13 +332,29 @@ typedef struct slod_frame_params {
   uint32_t size;               /* sizeof(slod_frame_params), set by slod_frame_params_init */
   float budget_ms;             /* > 0: budget mode (Funkhouser & Sequin); <= 0: distance mode. Default 16.7 */
   float pixels_per_cell;       /* X: a level is accurate enough when a cell covers <= X pixels. Default 1 */
+  /* level transitions (docs/SELECTION.md, "Transitions"; slod_select only, not slod_select_views) */
+  int transitions;             /* slod_transitions, default SLOD_TRANSITIONS_NONE (hard switches) */
+  float dt_ms;                 /* >= 0: time since the last slod_select, fades advance by it. Default 1000/60 */
+  float fade_ms;               /* >= 0: a cross-fade's duration. Default 250 */
+  float morph_band;            /* (0, 1]: share of a level's log pixel-size interval the morph takes. Default 0.3 */
+  float fade_budget_share;     /* [0, 1], budget mode: share of the objects' budget fades may take. Default 0.1 */
 } slod_frame_params;
+
+typedef enum slod_transitions {
+  SLOD_TRANSITIONS_NONE = 0,   /* hard switches: previous_level == level, fade 1, morph 0 */
+  SLOD_TRANSITIONS_FADE = 1,   /* cross-fades over fade_ms: draw previous_level with weight 1 - fade too */
+  SLOD_TRANSITIONS_MORPH = 2   /* geomorphs where levels have morph data, cross-fades elsewhere */
+} slod_transitions;
 
 /* One element of slod_select's output; the caller passes its sizeof as the stride. */
 typedef struct slod_selection {
   slod_object object;
   uint64_t user_data;
   int32_t level;               /* level to draw, -1 = not drawn */
+  /* transitions (slod_frame_params.transitions; written when the stride covers them) */
+  float morph;                 /* geomorph factor of `level` toward the next coarser level, [0, 1] */
+  int32_t previous_level;      /* the level fading out (-1: fading in from nothing); == level when no fade runs */
+  float fade;                  /* weight of `level` in [0, 1]; previous_level's is 1 - fade; 1 when no fade runs */
 } slod_selection;
 
 typedef struct slod_frame_result {
@@ -366,6 +382,11 @@ static inline void slod_frame_params_init(slod_frame_params* params) {
   params->size = (uint32_t)sizeof *params;
   params->budget_ms = 16.7f;
   params->pixels_per_cell = 1.0f;
+  params->transitions = SLOD_TRANSITIONS_NONE;
+  params->dt_ms = 1000.0f / 60.0f;
+  params->fade_ms = 250.0f;
+  params->morph_band = 0.3f;
+  params->fade_budget_share = 0.1f;
 }
 static inline void slod_frame_result_init(slod_frame_result* result) {
   if (!result) return;

@@ -23,7 +23,8 @@ CostCoefficients syntheticTrueCost();
 class ReplayVisibility;
 
 struct ReplayRunOptions {
-  SelectionParams params;              // mode, budget and pixels_per_cell are taken from the header
+  SelectionParams params;              // mode, budget and pixels_per_cell are taken from the header;
+                                       // dt_ms from the frames' time_s (0 for the first frame)
   bool force_distance = false;         // distance mode whatever the header says
   bool override_budget = false;        // budget mode with budget_ms below whatever the header says
   double budget_ms = 16.7;
@@ -46,6 +47,12 @@ struct ReplayLogFrame {
   double measured_ms = 0.0;
   bool measured_from_file = false;
   std::vector<int8_t> levels;       // with views: the primary group's (selector.h, SelectionJob::views)
+  // with transitions (ReplayRunOptions::params.transitions != none; logged as "morph" and "fade"):
+  // per object the morph factor, the level fading out and the new level's weight
+  bool has_transitions = false;
+  std::vector<float> morph, fade;
+  std::vector<int8_t> previous_levels;
+  uint32_t fading = 0;
   std::vector<std::vector<int8_t>> view_levels;  // frames with views: one per group, in order of
                                                  // first appearance (logged as "view_levels")
   uint32_t switches = 0;
@@ -82,7 +89,7 @@ Error runReplayStream(const ReplayHeader& header, const ReplayFrameSource& next_
                       const ReplayRunOptions& options, const ReplayLogSink& sink);
 
 // One log line (no newline): {"frame", "time_s", "budget_ms", "predicted_ms", "measured_ms",
-// "levels", ["view_levels",] "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
+// "levels", ["view_levels",] ["morph", "fade", "previous_levels", "fading",] "switches", "drawn", "culled", "dropped", "flags", "triangles"}, numbers printed with
 // fixed precision so logs compare exactly.
 std::string replayLogLine(const ReplayLogFrame& frame);
 Error writeReplayLog(const std::string& path, const std::vector<ReplayLogFrame>& log);

@@ -44,6 +44,9 @@ struct LevelTable {
   Span<const uint32_t> triangle_count;
   Span<const uint32_t> vertex_count;
   Span<const uint32_t> line_point_count;    // edges + points
+  // empty = no level has geomorph data (transitions fade instead of morphing), else one per row:
+  // nonzero = the level's vertices carry their targets in the next coarser level of the chain
+  Span<const uint8_t> has_morph;
 
   size_t chainCount() const { return chain_level_offset.count ? chain_level_offset.count - 1 : 0; }
   size_t rowCount() const { return cell_width.count; }
@@ -102,6 +105,15 @@ enum SelectionFlag : uint32_t {
   kFlagSplitFallback = 1u << 2,    // the half-approximation fallback beat the greedy this frame
 };
 
+// How level switches are shown (docs/SELECTION.md, "Transitions"). The selector cannot know whether
+// the renderer draws two levels at once, so the default is none: hard switches, as before.
+enum class Transitions : uint8_t {
+  kNone,   // hard switches; the transition outputs say "no fade, no morph"
+  kFade,   // every switch in view (and every drop or return of an object in view) cross-fades over fade_ms
+  kMorph,  // geomorphs where a level has morph data and the switch is to the next level at the
+           // distance rule's point; cross-fades for every other switch
+};
+
 struct SelectionParams {
   SelectionMode mode = SelectionMode::kBudget;
   float budget_ms = 16.0f;          // budget mode: total predicted frame time allowed, > 0
@@ -118,6 +130,16 @@ struct SelectionParams {
   // only (cheaper pixels, position-only vertices) and is worth less than what the camera shows
   ViewKindWeights view_kinds[kViewKindCount] = {
       {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 0.25f, 0.5f, 0.25f}, {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 1.0f, 1.0f, 1.0f}};
+  // transitions (jobs without views or forced levels)
+  Transitions transitions = Transitions::kNone;
+  float dt_ms = 1000.0f / 60.0f;    // >= 0, finite: time since the last run() (fades advance by it)
+  float fade_ms = 250.0f;           // >= 0, finite: duration of a cross-fade (0 = hard switches)
+  float morph_band = 0.3f;          // (0, 1]: the share of a level's log pixel-size interval, before
+                                    // its switch to the next coarser level, over which the morph
+                                    // factor rises from 0 to 1 (smoothstep)
+  float fade_budget_share = 0.1f;   // [0, 1], budget mode: the share of the objects' budget (budget_ms
+                                    // less the mandatory part) that fading-out levels may take; fades
+                                    // beyond it end at once (hard switches)
 };
 
 struct SelectionStats {
@@ -135,6 +157,13 @@ struct SelectionStats {
   uint32_t search_passes = 0;      // linear passes of the price search
   uint32_t flags = 0;              // SelectionFlag bits
   uint32_t group_count = 0;        // view groups of the frame (1 without views)
+  // transitions: objects in view that draw a fading-out level beside their level this frame, and
+  // that level's predicted cost (included in predicted_ms and features). Budget mode reserves the
+  // fades running since an earlier frame before the choice (counted in mandatory_ms) and keeps all
+  // fades within fade_budget_share of the objects' budget, so predicted_ms exceeds budget_ms by at
+  // most the fades started in this frame, themselves within that share
+  uint32_t fading_count = 0;
+  double fade_cost_ms = 0.0;
 };
 
 class SelectorContext;
@@ -211,6 +240,13 @@ struct SelectionJob {
   Span<int8_t> group_levels_out;        // empty, or with views group_count * objects: the level of
                                         // object i in group g (order of first appearance) at g * n + i
   Span<float> cost_ms_out;              // empty or one per object: predicted cost of its level(s)
+  // transition outputs (each empty or one per object; docs/SELECTION.md, "Transitions"):
+  Span<float> morph_out;                // geomorph factor of levels_out's level toward the next
+                                        // coarser level, in [0, 1]; 0 without morphs
+  Span<int8_t> previous_levels_out;     // the level fading out (-1: fading in from nothing); equal to
+                                        // levels_out when no fade runs
+  Span<float> fade_out;                 // weight of levels_out's level in [0, 1] (1 - fade for the
+                                        // previous level); 1 when no fade runs
   SelectionStats* stats = nullptr;      // may be null
   SelectorContext* context = nullptr;
 
@@ -220,7 +256,9 @@ struct SelectionJob {
   // non-finite widths), a chain id out of range, non-positive budget in budget mode or non-positive
   // pixels_per_cell; with views: more than kMaxViews, a group mixing kinds, a view with a zero
   // viewport or an invalid camera, X or bias not positive, more groups than max_view_groups, a
-  // wrong-sized output; a forced level out of its chain's range. Cost: O(objects + rows).
+  // wrong-sized output; a forced level out of its chain's range; dt_ms negative or not finite,
+  // fade_ms negative or not finite, morph_band outside (0, 1], fade_budget_share outside [0, 1], transitions with views or forced
+  // levels, a has_morph column of the wrong length. Cost: O(objects + rows).
   const char* error() const;
   // error() == nullptr.
   bool validate() const;
