@@ -4,10 +4,10 @@
 //
 // Uploads every level of every chain to GPU buffers once, then draws per frame the level the
 // selector chose for each object under its world matrix (geomorphed toward the next level and
-// cross-faded from the previous one by screen-door dithering when asked): triangles with a headlight; thick edges
-// expanded to camera-facing quads in the vertex shader, shaded with Low & Tan 1997 §3.3's dynamic
-// normal ((V1 - C) x (V2 - C)) x (V2 - V1) and as wide as their thickness in world units (at least
-// one pixel); points as GL_POINTS. drawFrame returns the measured frame time (CPU time of issuing
+// cross-faded from the previous one by screen-door dithering when asked): triangles with a
+// headlight; thick edges expanded to camera-facing quads in the vertex shader, shaded with Low &
+// Tan 1997 §3.3's dynamic normal ((V1 - C) x (V2 - C)) x (V2 - V1) and as wide as their thickness
+// in world units (at least one pixel); points as GL_POINTS. drawFrame returns the measured frame time (CPU time of issuing
 // the draws plus glFinish), which the caller hands to selection::reportFrameTime so the cost model
 // is fitted to real rendering.
 //
