@@ -23,39 +23,55 @@
 namespace scenelod::gl {
 namespace {
 
-const char kTriangleVs[] = R"(#version 330 core
+// Every program is compiled from "#version 330 core" and one of these sources. Geomorphs (Hoppe
+// 1996): u_morph mixes each vertex toward its target in the next level (locations 4.. for
+// triangles and points, 3 and 4 for edges); a level without targets has them aliased to its own
+// attributes, so any factor leaves it unmoved.
+const char kTriangleVs[] = R"(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv;
 layout(location = 3) in vec3 a_color;
+layout(location = 4) in vec3 a_pos_target;
+layout(location = 5) in vec3 a_normal_target;
+layout(location = 6) in vec2 a_uv_target;
+layout(location = 7) in vec3 a_color_target;
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
 uniform mat3 u_normal_matrix;
+uniform float u_morph;
 out vec3 v_normal;
 out vec3 v_world;
 out vec2 v_uv;
 out vec3 v_color;
 void main() {
-  vec4 w = u_model * vec4(a_pos, 1.0);
+  vec3 n = mix(a_normal, a_normal_target, u_morph);
+  float n_len = length(n);
+  n = n_len > 1e-20 ? n / n_len : a_normal;
+  vec4 w = u_model * vec4(mix(a_pos, a_pos_target, u_morph), 1.0);
   v_world = w.xyz;
-  v_normal = u_normal_matrix * a_normal;
-  v_uv = a_uv;
-  v_color = a_color;
+  v_normal = u_normal_matrix * n;
+  v_uv = mix(a_uv, a_uv_target, u_morph);
+  v_color = mix(a_color, a_color_target, u_morph);
   gl_Position = u_view_proj * w;
 }
 )";
 
-// a_param: x = end (0 at V1, 1 at V2), y = side (-1 or +1), z = thickness (object space)
-const char kEdgeVs[] = R"(#version 330 core
+// a_param: x = end (0 at V1, 1 at V2), y = side (-1 or +1), z = thickness (object space);
+// a_t1, a_t2: the endpoints' morph targets
+const char kEdgeVs[] = R"(
 layout(location = 0) in vec3 a_v1;
 layout(location = 1) in vec3 a_v2;
 layout(location = 2) in vec4 a_param;
+layout(location = 3) in vec3 a_t1;
+layout(location = 4) in vec3 a_t2;
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;
 uniform float u_scale;
 uniform float u_pixel_factor;
 uniform float u_pixel_const;
+uniform float u_morph;
 out vec3 v_normal;
 out vec3 v_world;
 out vec2 v_uv;
@@ -63,8 +79,8 @@ out vec3 v_color;
 void main() {
   v_uv = vec2(0.0);
   v_color = vec3(1.0);
-  vec3 w1 = (u_model * vec4(a_v1, 1.0)).xyz;
-  vec3 w2 = (u_model * vec4(a_v2, 1.0)).xyz;
+  vec3 w1 = (u_model * vec4(mix(a_v1, a_t1, u_morph), 1.0)).xyz;
+  vec3 w2 = (u_model * vec4(mix(a_v2, a_t2, u_morph), 1.0)).xyz;
   vec3 dir = w2 - w1;
   vec3 p = mix(w1, w2, a_param.x);
   vec3 to_p = p - u_eye;
@@ -80,12 +96,14 @@ void main() {
 }
 )";
 
-const char kPointVs[] = R"(#version 330 core
+const char kPointVs[] = R"(
 layout(location = 0) in vec3 a_pos;
+layout(location = 4) in vec3 a_pos_target;
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;
 uniform float u_point_size;
+uniform float u_morph;
 out vec3 v_normal;
 out vec3 v_world;
 out vec2 v_uv;
@@ -93,7 +111,7 @@ out vec3 v_color;
 void main() {
   v_uv = vec2(0.0);
   v_color = vec3(1.0);
-  vec4 w = u_model * vec4(a_pos, 1.0);
+  vec4 w = u_model * vec4(mix(a_pos, a_pos_target, u_morph), 1.0);
   v_world = w.xyz;
   v_normal = u_eye - w.xyz;
   gl_PointSize = u_point_size;
@@ -103,8 +121,11 @@ void main() {
 
 // a headlight: the light sits at the eye; both sides of a surface are lit. With a shadow map, a
 // directional light (u_light_dir, toward the light) adds most of the light where the map sees the
-// surface (2x2 percentage-closer filtering by the depth comparison sampler)
-const char kFs[] = R"(#version 330 core
+// surface (2x2 percentage-closer filtering by the depth comparison sampler). Screen-door dithering
+// for cross-fades: with u_dither_on, a fragment is kept only when its pixel's 4x4 Bayer threshold
+// t = (B(x mod 4, y mod 4) + 0.5) / 16 lies in [u_dither.x, u_dither.y): the new level of a fade
+// keeps [0, fade), the previous one [fade, 2), so every pixel goes to exactly one of them.
+const char kFs[] = R"(
 in vec3 v_normal;
 in vec3 v_world;
 in vec2 v_uv;
@@ -118,8 +139,16 @@ uniform int u_shadow_on;
 uniform mat4 u_shadow_view_proj;
 uniform vec3 u_light_dir;
 uniform sampler2DShadow u_shadow_map;
+uniform int u_dither_on;
+uniform vec2 u_dither;
 out vec4 o_color;
+const int kBayer[16] = int[16](0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5);
 void main() {
+  if (u_dither_on != 0) {
+    ivec2 q = ivec2(gl_FragCoord.xy) & 3;
+    float t = (float(kBayer[q.y * 4 + q.x]) + 0.5) / 16.0;
+    if (t < u_dither.x || t >= u_dither.y) discard;
+  }
   float n_len = length(v_normal);
   vec3 to_eye = u_eye - v_world;
   float e_len = length(to_eye);
@@ -143,7 +172,7 @@ struct Program {
   GLuint id = 0;
   GLint model = -1, view_proj = -1, normal_matrix = -1, eye = -1, color = -1, scale = -1, pixel_factor = -1,
         pixel_const = -1, point_size = -1, shadow_on = -1, shadow_view_proj = -1, light_dir = -1, shadow_map = -1,
-        has_texture = -1, texture = -1, uv_transform = -1;
+        has_texture = -1, texture = -1, uv_transform = -1, morph = -1, dither_on = -1, dither = -1;
 };
 
 // a run of one primitive kind's indices drawn with one material
@@ -191,7 +220,8 @@ std::vector<uint32_t> groupOrder(size_t n, const std::vector<uint32_t>& groups, 
 
 Error compileShader(GLenum type, const char* source, const char* name, GLuint& out) {
   GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
+  const char* sources[2] = {"#version 330 core\n", source};
+  glShaderSource(s, 2, sources, nullptr);
   glCompileShader(s);
   GLint ok = 0;
   glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
@@ -243,11 +273,17 @@ Error linkProgram(const char* vs_source, const char* name, Program& out) {
   out.has_texture = glGetUniformLocation(p, "u_has_texture");
   out.texture = glGetUniformLocation(p, "u_texture");
   out.uv_transform = glGetUniformLocation(p, "u_uv_transform");
+  out.morph = glGetUniformLocation(p, "u_morph");
+  out.dither_on = glGetUniformLocation(p, "u_dither_on");
+  out.dither = glGetUniformLocation(p, "u_dither");
   glUseProgram(p);
   glUniform1i(out.shadow_map, 0);  // texture unit 0: the shadow map
   glUniform1i(out.texture, 1);     // texture unit 1: the material's base colour
   glUniform1i(out.shadow_on, 0);
   glUniform1i(out.has_texture, 0);
+  glUniform1f(out.morph, 0.0f);
+  glUniform1i(out.dither_on, 0);
+  glUniform2f(out.dither, 0.0f, 2.0f);
   const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   glUniformMatrix3fv(out.uv_transform, 1, GL_FALSE, identity);
   glUseProgram(0);
@@ -509,7 +545,7 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
       if (mat < -1 || mat >= static_cast<int32_t>(m.materials.size()))
         return Error(Status::kInvalidArgument, "GL renderer: chain " + std::to_string(c) + ": material " + std::to_string(mat) +
                                                    " but " + std::to_string(m.materials.size()) + " were uploaded");
-  constexpr size_t kStride = 11;  // position, normal, uv, colour
+  constexpr size_t kOwn = 11;  // floats per vertex: position, normal, uv, colour (then the same for the morph target)
   std::vector<float> vertex_data, edge_data;
   std::vector<uint32_t> indices;
   for (size_t c = 0; c < chains.size(); ++c) {
@@ -519,46 +555,64 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
     const std::vector<int32_t>* mats = gpu.materials ? &group_materials[c] : nullptr;
     for (size_t l = 0; l < chains[c].levels.size(); ++l) {
       const Mesh& src = chains[c].levels[l].mesh;
+      const LevelMorph& morph = chains[c].levels[l].morph;
       const std::string what = "chain " + std::to_string(c) + " level " + std::to_string(l);
       if (Error e = validateMesh(src, what); !e.ok()) return Error(e.status, "GL renderer: " + e.message);
+      const size_t nv = src.positions.size();
+      for (auto [size, name] : {std::make_pair(morph.positions.size(), "positions"), std::make_pair(morph.normals.size(), "normals"),
+                                std::make_pair(morph.uvs.size(), "texture coordinates"), std::make_pair(morph.colors.size(), "colours")})
+        if (size != 0 && size != nv)
+          return Error(Status::kInvalidArgument, "GL renderer: " + what + ": " + std::to_string(size) + " morph target " + name +
+                                                     " for " + std::to_string(nv) + " vertices");
       Mesh normals_mesh;
       const std::vector<glm::vec3>* normals = &src.normals;
-      if (src.normals.size() != src.positions.size()) {
+      if (src.normals.size() != nv) {
         normals_mesh.positions = src.positions;
         normals_mesh.triangles = src.triangles;
         computeVertexNormals(normals_mesh);
         normals = &normals_mesh.normals;
       }
-      const bool uvs = src.uvs.size() == src.positions.size();
-      const bool colors = gpu.materials && src.colors.size() == src.positions.size();
+      const bool uvs = src.uvs.size() == nv;
+      const bool colors = gpu.materials && src.colors.size() == nv;
+      const bool morphs = !morph.positions.empty();
+      const size_t stride = morphs ? 2 * kOwn : kOwn;
       LevelGpu lg;
-      vertex_data.assign(src.positions.size() * kStride, 1.0f);
-      for (size_t v = 0; v < src.positions.size(); ++v) {
-        float* d = &vertex_data[v * kStride];
+      vertex_data.assign(nv * stride, 1.0f);
+      for (size_t v = 0; v < nv; ++v) {
+        float* d = &vertex_data[v * stride];
         std::memcpy(d, &src.positions[v], 12);
         std::memcpy(d + 3, &(*normals)[v], 12);
         d[6] = uvs ? src.uvs[v].x : 0.0f;
         d[7] = uvs ? src.uvs[v].y : 0.0f;
         if (colors) std::memcpy(d + 8, &src.colors[v], 12);
+        if (!morphs) continue;
+        float* t = d + kOwn;  // the target: the vertex's own value where the level has none
+        std::memcpy(t, d, kOwn * 4);
+        std::memcpy(t, &morph.positions[v], 12);
+        if (!morph.normals.empty()) std::memcpy(t + 3, &morph.normals[v], 12);
+        if (uvs && !morph.uvs.empty()) std::memcpy(t + 6, &morph.uvs[v], 8);
+        if (colors && !morph.colors.empty()) std::memcpy(t + 8, &morph.colors[v], 12);
       }
       glGenBuffers(1, &lg.vbo);
       glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
       glBufferData(GL_ARRAY_BUFFER, vertex_data.size() * 4, vertex_data.data(), GL_STATIC_DRAW);
       m.gpu_bytes += vertex_data.size() * 4;
+      // attributes 0..3 the vertex's own, 4..7 its target (the own ones again without morph data)
       auto vertexArray = [&](GLuint& vao, bool all_attributes) {
         glGenVertexArrays(1, &vao);
         glBindVertexArray(vao);
         glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
-        const GLsizei stride = kStride * 4;
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(0));
-        if (!all_attributes) return;
-        glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(12));
-        glEnableVertexAttribArray(2);
-        glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(24));
-        glEnableVertexAttribArray(3);
-        glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(32));
+        const GLsizei bytes = static_cast<GLsizei>(stride * 4);
+        const uintptr_t target = morphs ? kOwn * 4 : 0;
+        const GLint sizes[4] = {3, 3, 2, 3};
+        const uintptr_t offsets[4] = {0, 12, 24, 32};
+        for (GLuint a = 0; a < 4; ++a) {
+          if (a > 0 && !all_attributes) break;
+          glEnableVertexAttribArray(a);
+          glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, bytes, reinterpret_cast<void*>(offsets[a]));
+          glEnableVertexAttribArray(a + 4);
+          glVertexAttribPointer(a + 4, sizes[a], GL_FLOAT, GL_FALSE, bytes, reinterpret_cast<void*>(offsets[a] + target));
+        }
       };
       auto indexBuffer = [&](GLuint& ibo, const std::vector<uint32_t>& data) {
         glGenBuffers(1, &ibo);
@@ -584,23 +638,30 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
       }
       const size_t edge_count = src.edgeCount();
       if (edge_count) {
-        // four vertices per edge: (V1, V2, end, side, thickness), two triangles
+        // four vertices per edge: (V1, V2, end, side, thickness, 0, T1, T2) with T the endpoints'
+        // morph targets (V again without morph data), two triangles
+        constexpr size_t kEdgeFloats = 16;
         const std::vector<uint32_t> order = groupOrder(edge_count, src.edge_groups, mats, 6, lg.edge_ranges);
-        edge_data.resize(edge_count * 4 * 10);
+        edge_data.resize(edge_count * 4 * kEdgeFloats);
         indices.resize(edge_count * 6);
         for (size_t k = 0; k < edge_count; ++k) {
           const size_t e = order[k];
-          const glm::vec3& a = src.positions[src.edges[2 * e]];
-          const glm::vec3& b = src.positions[src.edges[2 * e + 1]];
+          const uint32_t ia = src.edges[2 * e], ib = src.edges[2 * e + 1];
+          const glm::vec3& a = src.positions[ia];
+          const glm::vec3& b = src.positions[ib];
+          const glm::vec3& ta = morphs ? morph.positions[ia] : a;
+          const glm::vec3& tb = morphs ? morph.positions[ib] : b;
           const float thickness = src.edgeThickness(e);
           for (int q = 0; q < 4; ++q) {
-            float* d = &edge_data[(k * 4 + q) * 10];
+            float* d = &edge_data[(k * 4 + q) * kEdgeFloats];
             std::memcpy(d, &a, 12);
             std::memcpy(d + 3, &b, 12);
             d[6] = (q == 1 || q == 2) ? 1.0f : 0.0f;  // end
             d[7] = (q < 2) ? -1.0f : 1.0f;            // side
             d[8] = thickness;
             d[9] = 0.0f;
+            std::memcpy(d + 10, &ta, 12);
+            std::memcpy(d + 13, &tb, 12);
           }
           const uint32_t base = static_cast<uint32_t>(k * 4);
           const uint32_t quad[6] = {base, base + 1, base + 2, base, base + 2, base + 3};
@@ -611,12 +672,13 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
         glGenBuffers(1, &lg.edge_vbo);
         glBindBuffer(GL_ARRAY_BUFFER, lg.edge_vbo);
         glBufferData(GL_ARRAY_BUFFER, edge_data.size() * 4, edge_data.data(), GL_STATIC_DRAW);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 40, reinterpret_cast<void*>(0));
-        glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 40, reinterpret_cast<void*>(12));
-        glEnableVertexAttribArray(2);
-        glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 40, reinterpret_cast<void*>(24));
+        const GLsizei edge_bytes = kEdgeFloats * 4;
+        const GLint sizes[5] = {3, 3, 4, 3, 3};
+        const uintptr_t offsets[5] = {0, 12, 24, 40, 52};
+        for (GLuint a = 0; a < 5; ++a) {
+          glEnableVertexAttribArray(a);
+          glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, edge_bytes, reinterpret_cast<void*>(offsets[a]));
+        }
         indexBuffer(lg.edge_ibo, indices);
         lg.edge_indices = static_cast<GLsizei>(indices.size());
         m.gpu_bytes += edge_data.size() * 4;
@@ -646,11 +708,13 @@ glm::mat4 viewProjection(const selection::Camera& cam, float aspect) {
   return proj * glm::lookAt(cam.eye, cam.target, cam.up);
 }
 
-// One pass over the objects: each one's level of `levels` under the camera's matrices, counted in
-// `triangles`, `edges`, `points`, `draw_calls`.
+// What one pass drew: all of it, and the part drawn by fading objects' previous levels.
 struct PassCounters {
   uint64_t triangles = 0, edges = 0, points = 0;
   uint32_t draw_calls = 0;
+  uint32_t fading_objects = 0;
+  uint64_t fade_triangles = 0, fade_edges = 0, fade_points = 0;
+  uint32_t fade_draw_calls = 0;
 };
 
 // the uniforms of one range's material: the chain's colour when the chain has no materials, white
@@ -674,7 +738,9 @@ void setMaterial(const Program& p, const ChainGpu& chain, const std::vector<Mate
 
 // One pass over the objects: each one's level of `levels` under the camera's matrices, counted in
 // `r`. A depth-only pass draws each primitive kind of a level in one call; the colour pass one call
-// per material range.
+// per material range. The colour pass (`fades`) also draws the cross-fades: the new level keeps
+// the pixels whose dither threshold is below the fade, the previous level (unmorphed) the rest.
+// The depth pass morphs a level only where it is the object's level in `in.levels`.
 void drawObjects(const Program& tri, const Program& edge, const Program& point, const std::vector<ChainGpu>& chains,
                  const std::vector<MaterialGpu>& materials, const FrameInput& in, Span<const int8_t> levels,
                  const selection::Camera& cam, const glm::mat4& view_proj, uint32_t height_px, float point_size,
@@ -690,41 +756,51 @@ void drawObjects(const Program& tri, const Program& edge, const Program& point, 
     glUniformMatrix4fv(p->view_proj, 1, GL_FALSE, glm::value_ptr(view_proj));
     if (p->eye >= 0) glUniform3fv(p->eye, 1, glm::value_ptr(cam.eye));
     glUniform1i(p->has_texture, 0);
+    glUniform1i(p->dither_on, 0);
   }
   glUseProgram(edge.id);
   glUniform1f(edge.pixel_factor, pixel_factor);
   glUniform1f(edge.pixel_const, pixel_const);
   glUseProgram(point.id);
   glUniform1f(point.point_size, point_size);
+  bool dithering = false;  // u_dither_on of the three programs
   // each range of `ranges` (or the whole `count` indices in a depth pass) as `mode` primitives
   auto drawRanges = [&](const Program& p, const ChainGpu& chain, const std::vector<Range>& ranges, GLsizei count, GLenum mode,
-                        bool textured) {
+                        bool textured, uint32_t& draw_calls) {
     if (depth_only) {
       glDrawElements(mode, count, GL_UNSIGNED_INT, nullptr);
-      ++r.draw_calls;
+      ++draw_calls;
       return;
     }
     for (const Range& range : ranges) {
       setMaterial(p, chain, materials, range.material, textured);
       glDrawElements(mode, range.count, GL_UNSIGNED_INT, reinterpret_cast<void*>(static_cast<uintptr_t>(range.first) * 4));
-      ++r.draw_calls;
+      ++draw_calls;
     }
   };
-  for (size_t o = 0; o < levels.count; ++o) {
-    const int level = levels[o];
-    const uint32_t c = in.object_chain[o];
-    if (level < 0 || c >= chains.size() || static_cast<size_t>(level) >= chains[c].levels.size()) continue;
-    const ChainGpu& chain = chains[c];
-    const LevelGpu& lg = chain.levels[static_cast<size_t>(level)];
+  // object o's `level` at morph factor `factor`, its fragments kept where the dither threshold lies
+  // in [lo, hi) when `dither`; counted in r's totals and, for a previous level, its fade counters
+  auto drawLevel = [&](size_t o, const ChainGpu& chain, const LevelGpu& lg, float factor, bool dither, float lo, float hi,
+                       bool previous) {
+    if (dither || dithering)
+      for (const Program* p : {&tri, &edge, &point}) {
+        glUseProgram(p->id);
+        glUniform1i(p->dither_on, dither ? 1 : 0);
+        if (dither) glUniform2f(p->dither, lo, hi);
+      }
+    dithering = dither;
+    uint32_t calls = 0;
     const glm::mat4& model = in.object_world[o];
     if (lg.tri_indices) {
       const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(model));
       glUseProgram(tri.id);
       glUniformMatrix4fv(tri.model, 1, GL_FALSE, glm::value_ptr(model));
       glUniformMatrix3fv(tri.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
+      glUniform1f(tri.morph, factor);
       glBindVertexArray(lg.tri_vao);
-      drawRanges(tri, chain, lg.tri_ranges, lg.tri_indices, GL_TRIANGLES, true);
+      drawRanges(tri, chain, lg.tri_ranges, lg.tri_indices, GL_TRIANGLES, true, calls);
       r.triangles += static_cast<uint64_t>(lg.tri_indices) / 3;
+      if (previous) r.fade_triangles += static_cast<uint64_t>(lg.tri_indices) / 3;
     }
     if (lg.edge_indices) {
       const float scale = std::max({glm::length(glm::vec3(model[0])), glm::length(glm::vec3(model[1])),
@@ -732,19 +808,60 @@ void drawObjects(const Program& tri, const Program& edge, const Program& point, 
       glUseProgram(edge.id);
       glUniformMatrix4fv(edge.model, 1, GL_FALSE, glm::value_ptr(model));
       glUniform1f(edge.scale, scale);
+      glUniform1f(edge.morph, factor);
       glBindVertexArray(lg.edge_vao);
-      drawRanges(edge, chain, lg.edge_ranges, lg.edge_indices, GL_TRIANGLES, false);
+      drawRanges(edge, chain, lg.edge_ranges, lg.edge_indices, GL_TRIANGLES, false, calls);
       r.edges += static_cast<uint64_t>(lg.edge_indices) / 6;
+      if (previous) r.fade_edges += static_cast<uint64_t>(lg.edge_indices) / 6;
     }
     if (lg.point_indices) {
       glUseProgram(point.id);
       glUniformMatrix4fv(point.model, 1, GL_FALSE, glm::value_ptr(model));
+      glUniform1f(point.morph, factor);
       glBindVertexArray(lg.point_vao);
-      drawRanges(point, chain, lg.point_ranges, lg.point_indices, GL_POINTS, false);
+      drawRanges(point, chain, lg.point_ranges, lg.point_indices, GL_POINTS, false, calls);
       r.points += static_cast<uint64_t>(lg.point_indices);
+      if (previous) r.fade_points += static_cast<uint64_t>(lg.point_indices);
     }
+    r.draw_calls += calls;
+    if (previous) r.fade_draw_calls += calls;
+  };
+  // the chain and level `level` of object o, or null when it draws nothing
+  auto find = [&](size_t o, int level, const ChainGpu*& chain) -> const LevelGpu* {
+    const uint32_t c = in.object_chain[o];
+    if (level < 0 || c >= chains.size() || static_cast<size_t>(level) >= chains[c].levels.size()) return nullptr;
+    chain = &chains[c];
+    return &chain->levels[static_cast<size_t>(level)];
+  };
+  for (size_t o = 0; o < levels.count; ++o) {
+    const int level = levels[o];
+    float factor = in.morph.count ? in.morph[o] : 0.0f;
+    if (depth_only && (level != in.levels[o])) factor = 0.0f;
+    const float fade = depth_only || !in.fade.count ? 1.0f : in.fade[o];
+    const int previous = in.previous_levels.count ? in.previous_levels[o] : -1;
+    const ChainGpu* chain = nullptr;
+    const LevelGpu* lg = find(o, level, chain);
+    if (fade >= 1.0f || previous == level) {  // no fade
+      if (lg) drawLevel(o, *chain, *lg, factor, false, 0.0f, 2.0f, false);
+      continue;
+    }
+    ++r.fading_objects;
+    if (lg && fade > 0.0f) drawLevel(o, *chain, *lg, factor, true, 0.0f, fade, false);
+    const ChainGpu* previous_chain = nullptr;
+    if (const LevelGpu* pg = find(o, previous, previous_chain)) drawLevel(o, *previous_chain, *pg, 0.0f, true, fade, 2.0f, true);
   }
   glBindVertexArray(0);
+}
+
+}  // namespace
+
+namespace {
+
+// every value in [0, 1] (NaN is not)
+bool unitInterval(Span<const float> values) {
+  for (size_t i = 0; i < values.count; ++i)
+    if (!(values[i] >= 0.0f && values[i] <= 1.0f)) return false;
+  return true;
 }
 
 }  // namespace
@@ -752,6 +869,10 @@ void drawObjects(const Program& tri, const Program& edge, const Program& point, 
 bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
   if (!impl_ || !in.camera || in.object_world.count != in.levels.count || in.object_chain.count != in.levels.count)
     return false;
+  const size_t n = in.levels.count;
+  for (size_t count : {in.morph.count, in.previous_levels.count, in.fade.count})
+    if (count != 0 && count != n) return false;
+  if (!unitInterval(in.morph) || !unitInterval(in.fade)) return false;
   const bool shadows = in.shadow_camera != nullptr;
   if (shadows && (in.shadow_levels.count != in.levels.count || in.shadow_camera->projection != selection::Projection::kOrthographic))
     return false;
@@ -807,6 +928,11 @@ bool Renderer::drawFrame(const FrameInput& in, FrameResult* result) {
   r.edges = pc.edges;
   r.points = pc.points;
   r.draw_calls = pc.draw_calls;
+  r.fading_objects = pc.fading_objects;
+  r.fade_triangles = pc.fade_triangles;
+  r.fade_edges = pc.fade_edges;
+  r.fade_points = pc.fade_points;
+  r.fade_draw_calls = pc.fade_draw_calls;
   r.measured_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
   if (result) *result = r;
   return true;

@@ -3,10 +3,11 @@
 // the default display with a pbuffer; software rendering works, no GPU or display needed).
 //
 // Uploads every level of every chain to GPU buffers once, then draws per frame the level the
-// selector chose for each object under its world matrix: triangles with a headlight; thick edges
-// expanded to camera-facing quads in the vertex shader, shaded with Low & Tan 1997 §3.3's dynamic
-// normal ((V1 - C) x (V2 - C)) x (V2 - V1) and as wide as their thickness in world units (at least
-// one pixel); points as GL_POINTS. drawFrame returns the measured frame time (CPU time of issuing
+// selector chose for each object under its world matrix (geomorphed toward the next level and
+// cross-faded from the previous one by screen-door dithering when asked): triangles with a
+// headlight; thick edges expanded to camera-facing quads in the vertex shader, shaded with Low &
+// Tan 1997 §3.3's dynamic normal ((V1 - C) x (V2 - C)) x (V2 - V1) and as wide as their thickness
+// in world units (at least one pixel); points as GL_POINTS. drawFrame returns the measured frame time (CPU time of issuing
 // the draws plus glFinish), which the caller hands to selection::reportFrameTime so the cost model
 // is fitted to real rendering.
 //
@@ -57,6 +58,22 @@ struct FrameInput {
   // casts no shadow), then the frame is lit by that light and shadowed by that map
   const selection::Camera* shadow_camera = nullptr;
   Span<const int8_t> shadow_levels;
+  // level transitions (docs/GL.md, "Level transitions"); each span empty or one value per object.
+  // Geomorph factor in [0, 1] (empty = 0 for every object): the level is drawn with every vertex's
+  // position, normal (renormalised), texture coordinates and colour mixed toward its target in the
+  // next level (LodLevel::morph) as (1 - f) x own + f x target; thick edges and points move their
+  // vertices' positions likewise. Levels without morph data are drawn unmoved at any factor.
+  Span<const float> morph;
+  // Cross-fade by screen-door dithering: `fade` in [0, 1] (empty = 1: fully the new level) is the
+  // share of the object's pixels drawn with `levels`; the complementary share is drawn with
+  // `previous_levels` (empty or -1: nothing), unmorphed, no blending. A 4x4 Bayer threshold of the
+  // pixel position decides, so each pixel shows exactly one of the two. Only objects with fade < 1
+  // and a previous level other than the new one are drawn twice; with fade < 1 and no previous
+  // level (-1) the new level covers only its `fade` share (an object appearing), with level -1 the
+  // previous one covers its 1 - fade share (an object leaving). The shadow pass draws only
+  // `shadow_levels`, undithered, morphed by `morph` where its level is the object's `levels` entry.
+  Span<const int8_t> previous_levels;
+  Span<const float> fade;
 };
 
 struct FrameResult {
@@ -67,6 +84,13 @@ struct FrameResult {
   uint32_t draw_calls = 0;
   uint64_t shadow_triangles = 0;  // drawn into the shadow map (part of measured_ms)
   uint32_t shadow_draw_calls = 0;
+  // the previous levels drawn by fading objects (FrameInput::fade < 1); already counted in the
+  // totals above, which hold both levels of a fading object
+  uint32_t fading_objects = 0;  // objects with fade < 1 (drawn with one or both of their levels)
+  uint64_t fade_triangles = 0;
+  uint64_t fade_edges = 0;
+  uint64_t fade_points = 0;
+  uint32_t fade_draw_calls = 0;
 };
 
 class Renderer {
@@ -86,12 +110,15 @@ class Renderer {
   std::string description() const;
 
   // Uploads every level of every chain (one vertex and index buffer per level and primitive kind).
-  // Meshes without normals get area-weighted vertex normals. Replaces earlier uploads. With
+  // Meshes without normals get area-weighted vertex normals. A level with morph targets
+  // (LodLevel::morph) gets them beside its vertices (positions, normals, texture coordinate set 0,
+  // colours; a missing target array means the vertex's own value), doubling its vertex bytes; a
+  // level without keeps its own vertex size. Replaces earlier uploads. With
   // `group_materials` (one list per chain, or empty), chain c's triangle group g (edge group, point
   // group) is drawn with material group_materials[c][g] of the last uploadMaterials (-1 or past the
   // list: white), its triangles one draw per group; without, every chain has its own flat colour.
-  // Errors: init not done, a level whose indices are out of range, a group material out of range, a
-  // GL error (out of memory). Allocates.
+  // Errors: init not done, a level whose indices are out of range, morph target arrays neither empty
+  // nor one per vertex, a group material out of range, a GL error (out of memory). Allocates.
   Error uploadChains(const std::vector<LodChain>& chains,
                      const std::vector<std::vector<int32_t>>& group_materials = {});
   // Uploads the materials (textures with mipmaps) that uploadChains' group materials refer to;
@@ -102,10 +129,12 @@ class Renderer {
   size_t gpuBytes() const;  // buffer bytes uploaded
 
   // Clears and draws the frame into the offscreen target and waits for it (glFinish). Objects with
-  // level -1, an out-of-range chain or level are skipped. With a shadow camera, draws the shadow map
-  // first (the first such frame creates it). Allocates nothing after that. Returns false (result
-  // untouched) before init, on mismatched span sizes, a null camera or a shadow camera that is not
-  // orthographic, or when the shadow map cannot be made.
+  // level -1, an out-of-range chain or level are skipped (so is an out-of-range previous level).
+  // With a shadow camera, draws the shadow map first (the first such frame creates it). Allocates
+  // nothing after that. Returns false (result untouched) before init, on mismatched span sizes
+  // (morph, previous_levels and fade must each be empty or as long as levels), a morph factor or
+  // fade outside [0, 1] or NaN, a null camera or a shadow camera that is not orthographic, or when
+  // the shadow map cannot be made.
   bool drawFrame(const FrameInput& input, FrameResult* result);
 
   // Reads the last frame back into `out` (rows top to bottom). Errors: init not done.
