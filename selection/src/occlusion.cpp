@@ -397,19 +397,30 @@ struct RaysSoA {
   glm::vec3 direction(uint32_t k) const { return {dx[k], dy[k], dz[k]}; }
 };
 
-// Tests the rays in `active` (bit k = ray k) against object `other`'s occluder level, each within
-// [t_near, t_end[k]], first against its bounding sphere; returns `active` without the rays it
-// blocks. A hit blocks only where the level's error allows it (see docs/VISIBILITY.md: the level's
-// world error must project to at most occluder_error_px pixels at the hit).
+// The level of object `other` to test a ray against when its hits may lie no nearer than where the
+// ray enters the object's box, where `allowed` world units of error project to occluder_error_px
+// pixels: the coarsest level from the occluder level down whose world error is within `allowed`,
+// level 0 (the mesh itself, exact) when none is. Levels without triangles are skipped.
+inline RTCScene traceLevel(const ChainPrototypes& p, float scale, float allowed) {
+  int32_t l = p.occluder_level;
+  while (l > 0 && (p.levels[static_cast<size_t>(l)] == nullptr || p.max_error[static_cast<size_t>(l)] * scale > allowed)) --l;
+  return p.levels[static_cast<size_t>(l)];
+}
+
+// Tests the rays in `active` (bit k = ray k) against object `other`, each within [t_near, t_end[k]]:
+// first against its bounding sphere (world space), then, in object space, against its chain's box,
+// whose entry distance t_box is a lower bound of any hit's distance; the ray is then traced at the
+// coarsest level whose world error projects to at most occluder_error_px pixels at t_box (level 0
+// when no coarser one is trusted there), so every hit that blocks is trusted at its own distance.
+// Returns `active` without the rays it blocks.
 template <class Limit>
 uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays, uint32_t active,
                    const float* t_end, float t_near, const Limit& limit) {
   const glm::vec4 sp = m.world_sphere[other];
   const float r2 = sp.w * sp.w;
   const ChainPrototypes& op = m.chains[m.chain[other]];
-  RTCScene occluder = op.levels[static_cast<size_t>(op.occluder_level)];
-  const float e = m.occluder_error_world[other];
-  uint32_t trusted = 0, checked = 0;  // rays for an any-hit query, rays whose closest hit is checked
+  const float scale = m.largest_scale[other];
+  const glm::mat4& inv = m.inverse_world[other];
   for (uint32_t left = active; left != 0; left &= left - 1) {
     const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
     const float ocx = sp.x - rays.ox[k], ocy = sp.y - rays.oy[k], ocz = sp.z - rays.oz[k];
@@ -417,25 +428,16 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
     const float miss2 = ocx * ocx + ocy * ocy + ocz * ocz - along * along;
     if (miss2 > r2) continue;
     const float half = std::sqrt(r2 - miss2);
-    const float t_enter = std::max(along - half, t_near), t_exit = std::min(along + half, t_end[k]);
-    if (t_enter > t_exit) continue;
-    if (e <= limit(t_enter)) {
-      trusted |= 1u << k;  // every hit in the sphere is trusted
-    } else if (e <= limit(t_exit)) {
-      checked |= 1u << k;  // trusted only beyond some distance: find the hit and check it
-    }
-  }
-  // one Embree call per ray: 16-ray packets (rtcOccluded16 / rtcIntersect16 with the rays that
-  // reach this object) measured no faster here (docs/bench/visibility.md)
-  for (uint32_t left = trusted; left != 0; left &= left - 1) {
-    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
-    if (occludedByObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_end[k])) active &= ~(1u << k);
-  }
-  for (uint32_t left = checked; left != 0; left &= left - 1) {
-    const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
-    float t_hit = t_end[k];
-    if (intersectObject(m, other, occluder, rays.origin(k), rays.direction(k), t_near, t_hit) && e <= limit(t_hit))
-      active &= ~(1u << k);
+    if (std::max(along - half, t_near) > std::min(along + half, t_end[k])) continue;
+    // object space keeps the ray parameter t
+    const glm::vec3 o(inv * glm::vec4(rays.origin(k), 1.0f));
+    const glm::vec3 d(inv * glm::vec4(rays.direction(k), 0.0f));
+    float t_box, t_box_exit;
+    if (!rayBox(o, glm::vec3(1.0f / d.x, 1.0f / d.y, 1.0f / d.z), op.box_lo, op.box_hi, t_near, t_end[k], t_box,
+                t_box_exit))
+      continue;
+    const RTCScene level = traceLevel(op, scale, limit(t_box));
+    if (occludedInObjectSpace(level, o, d, t_near, t_end[k])) active &= ~(1u << k);
   }
   return active;
 }
