@@ -412,10 +412,10 @@ inline RTCScene traceLevel(const ChainPrototypes& p, float scale, float allowed)
 // whose entry distance t_box is a lower bound of any hit's distance; the ray is then traced at the
 // coarsest level whose world error projects to at most occluder_error_px pixels at t_box (level 0
 // when no coarser one is trusted there), so every hit that blocks is trusted at its own distance.
-// Returns `active` without the rays it blocks.
+// Returns `active` without the rays it blocks; counts its Embree queries in `embree_rays`.
 template <class Limit>
 uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays, uint32_t active,
-                   const float* t_end, float t_near, const Limit& limit) {
+                   const float* t_end, float t_near, const Limit& limit, uint32_t& embree_rays) {
   const glm::vec4 sp = m.world_sphere[other];
   const float r2 = sp.w * sp.w;
   const ChainPrototypes& op = m.chains[m.chain[other]];
@@ -437,6 +437,7 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
                 t_box_exit))
       continue;
     const RTCScene level = traceLevel(op, scale, limit(t_box));
+    ++embree_rays;
     if (occludedInObjectSpace(level, o, d, t_near, t_end[k])) active &= ~(1u << k);
   }
   return active;
@@ -581,13 +582,15 @@ void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& 
     if (active != 0)
       forEachCandidate(m, beam, id, [&](uint32_t other) {
         ++stats.occluder_candidates;
-        active = blockRays(m, other, rays, active, t_end, t_near, limit);
+        active = blockRays(m, other, rays, active, t_end, t_near, limit, stats.embree_rays);
         return active == 0;
       });
     hidden += bitCount(open & ~active);
   }
   stats.samples += n;
+  stats.embree_rays += n;  // the self rays
   stats.self_hits += counted;
+  stats.hidden_samples += hidden;
   ++stats.objects_tested;
   visible[id] = counted ? static_cast<float>(counted - hidden) / static_cast<float>(counted) : 1.0f;
   tested_frame[id] = frame;

@@ -180,6 +180,8 @@ struct OcclusionStats {
   uint32_t occlusion_rays = 0;   // occlusion rays cast (one per self hit)
   uint32_t candidates = 0;       // objects in the view frustum and in front of the eye
   uint32_t occluder_candidates = 0;  // objects whose bounding spheres a tested object's rays were checked against
+  uint32_t embree_rays = 0;      // single-ray Embree queries: one self ray per sample plus the occluder queries
+  uint32_t hidden_samples = 0;   // counted samples found hidden
 };
 
 // Amortised visible-fraction estimate. Each update() tests the objects of highest priority (screen
