@@ -382,6 +382,7 @@ void forEachCandidate(const RayScene::Impl& m, const Beam& beam, uint32_t self, 
 }
 
 constexpr uint32_t kChunk = 16;  // rays handled together (bit masks of 16)
+constexpr uint32_t kMaxChunks = 256 / kChunk;  // rays_per_test <= 256
 
 struct RaysSoA {
   float ox[kChunk], oy[kChunk], oz[kChunk], dx[kChunk], dy[kChunk], dz[kChunk];
@@ -407,7 +408,7 @@ inline RTCScene traceLevel(const ChainPrototypes& p, float scale, float allowed)
   return p.levels[static_cast<size_t>(l)];
 }
 
-// Tests the rays in `active` (bit k = ray k) against object `other`, each within [t_near, t_end[k]]:
+// Tests the rays in `active` (bit k = ray k) against object `other`, each within [t_start[k], t_end[k]]:
 // first against its bounding sphere (world space), then, in object space, against its chain's box,
 // whose entry distance t_box is a lower bound of any hit's distance; the ray is then traced at the
 // coarsest level whose world error projects to at most occluder_error_px pixels at t_box (level 0
@@ -415,7 +416,7 @@ inline RTCScene traceLevel(const ChainPrototypes& p, float scale, float allowed)
 // Returns `active` without the rays it blocks; counts its Embree queries in `embree_rays`.
 template <class Limit>
 uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays, uint32_t active,
-                   const float* t_end, float t_near, const Limit& limit, uint32_t& embree_rays) {
+                   const float* t_start, const float* t_end, const Limit& limit, uint32_t& embree_rays) {
   const glm::vec4 sp = m.world_sphere[other];
   const float r2 = sp.w * sp.w;
   const ChainPrototypes& op = m.chains[m.chain[other]];
@@ -428,17 +429,17 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
     const float miss2 = ocx * ocx + ocy * ocy + ocz * ocz - along * along;
     if (miss2 > r2) continue;
     const float half = std::sqrt(r2 - miss2);
-    if (std::max(along - half, t_near) > std::min(along + half, t_end[k])) continue;
+    if (std::max(along - half, t_start[k]) > std::min(along + half, t_end[k])) continue;
     // object space keeps the ray parameter t
     const glm::vec3 o(inv * glm::vec4(rays.origin(k), 1.0f));
     const glm::vec3 d(inv * glm::vec4(rays.direction(k), 0.0f));
     float t_box, t_box_exit;
-    if (!rayBox(o, glm::vec3(1.0f / d.x, 1.0f / d.y, 1.0f / d.z), op.box_lo, op.box_hi, t_near, t_end[k], t_box,
+    if (!rayBox(o, glm::vec3(1.0f / d.x, 1.0f / d.y, 1.0f / d.z), op.box_lo, op.box_hi, t_start[k], t_end[k], t_box,
                 t_box_exit))
       continue;
     const RTCScene level = traceLevel(op, scale, limit(t_box));
     ++embree_rays;
-    if (occludedInObjectSpace(level, o, d, t_near, t_end[k])) active &= ~(1u << k);
+    if (occludedInObjectSpace(level, o, d, t_start[k], t_end[k])) active &= ~(1u << k);
   }
   return active;
 }
@@ -540,13 +541,19 @@ void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& 
   const glm::vec3 v = cos_rot * v0 - sin_rot * u0;
 
   const uint32_t n = params.rays_per_test;
-  uint32_t counted = 0, hidden = 0;
-  for (uint32_t k0 = 0; k0 < n; k0 += kChunk) {
-    const uint32_t lanes = std::min(kChunk, n - k0);
-    RaysSoA rays;
+  const uint32_t chunks = (n + kChunk - 1) / kChunk;
+  RaysSoA rays[kMaxChunks];
+  float t_sphere[kMaxChunks][kChunk];  // where each ray enters the object's bounding sphere
+  uint32_t open[kMaxChunks];           // rays not blocked before the bounding sphere
+  const float r2 = sph.w * sph.w;
+  bool any_open = false;
+  // 1. occluders in front of the object's bounding sphere, for every ray: when they block all of
+  //    them the object is hidden whichever rays meet it, and it needs no ray against itself
+  for (uint32_t c = 0; c < chunks; ++c) {
+    const uint32_t k0 = c * kChunk, lanes = std::min(kChunk, n - k0);
+    float t_start[kChunk];
     for (uint32_t k = 0; k < lanes; ++k) {
-      const uint32_t sample = k0 + k;
-      const glm::vec3 pat = pattern[sample];
+      const glm::vec3 pat = pattern[k0 + k];
       const glm::vec3 p = center + (disc_r * pat.x) * (pat.y * u + pat.z * v);
       glm::vec3 o, dir;
       if (view.ortho) {
@@ -556,39 +563,54 @@ void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& 
         o = view.eye;
         dir = glm::normalize(p - view.eye);
       }
-      rays.set(k, o, dir);
+      rays[c].set(k, o, dir);
+      const glm::vec3 oc = center - o;
+      const float along = glm::dot(oc, dir);
+      const float miss2 = glm::dot(oc, oc) - along * along;
+      t_sphere[c][k] = std::max(miss2 < r2 ? along - std::sqrt(r2 - miss2) : along, t_near);
+      t_start[k] = t_near;
     }
-    // where each ray meets the object itself, at its occluder level (a 16-ray packet was slower)
-    float t_self[kChunk];
-    uint32_t self_hits = 0;
-    for (uint32_t k = 0; k < lanes; ++k) {
-      t_self[k] = std::numeric_limits<float>::infinity();
-      if (intersectObject(m, id, self_scene, rays.origin(k), rays.direction(k), t_near, t_self[k])) self_hits |= 1u << k;
+    uint32_t active = lanes == 32 ? ~0u : (1u << lanes) - 1u;
+    stats.occlusion_rays += lanes;
+    forEachCandidate(m, beam, id, [&](uint32_t other) {
+      ++stats.occluder_candidates;
+      active = blockRays(m, other, rays[c], active, t_start, t_sphere[c], limit, stats.embree_rays);
+      return active == 0;
+    });
+    open[c] = active;
+    any_open = any_open || active != 0;
+  }
+  uint32_t counted = 0, hidden = 0;
+  if (!any_open) {
+    counted = hidden = n;
+  } else {
+    // 2. where each ray meets the object itself, at its occluder level (a 16-ray packet was
+    //    slower): rays outside its silhouette are not counted; the others are hidden when blocked
+    //    before the sphere, or between the sphere and the object
+    for (uint32_t c = 0; c < chunks; ++c) {
+      const uint32_t k0 = c * kChunk, lanes = std::min(kChunk, n - k0);
+      float t_self[kChunk], t_end[kChunk];
+      uint32_t self_hits = 0, active = 0;
+      for (uint32_t k = 0; k < lanes; ++k) {
+        t_self[k] = std::numeric_limits<float>::infinity();
+        ++stats.embree_rays;
+        if (!intersectObject(m, id, self_scene, rays[c].origin(k), rays[c].direction(k), t_near, t_self[k])) continue;
+        self_hits |= 1u << k;
+        t_end[k] = t_self[k] * (1.0f - 1e-4f);
+        if ((open[c] >> k & 1u) && t_end[k] > t_sphere[c][k]) active |= 1u << k;
+      }
+      counted += bitCount(self_hits);
+      const uint32_t inside = active;
+      if (active != 0)
+        forEachCandidate(m, beam, id, [&](uint32_t other) {
+          ++stats.occluder_candidates;
+          active = blockRays(m, other, rays[c], active, t_sphere[c], t_end, limit, stats.embree_rays);
+          return active == 0;
+        });
+      hidden += bitCount(self_hits & ~(open[c] & ~(inside & ~active)));
     }
-    counted += bitCount(self_hits);
-    // rays outside the object's silhouette are not counted; the others are open until blocked
-    uint32_t active = 0;
-    float t_end[kChunk];
-    for (uint32_t k = 0; k < lanes; ++k) {
-      if (!(self_hits >> k & 1u)) continue;
-      t_end[k] = t_self[k] * (1.0f - 1e-4f);
-      if (t_end[k] <= t_near) continue;
-      active |= 1u << k;
-      ++stats.occlusion_rays;
-    }
-    const uint32_t open = active;
-    // objects that can stand between the eye and the object, nearer roughly first, until every
-    // ray is blocked
-    if (active != 0)
-      forEachCandidate(m, beam, id, [&](uint32_t other) {
-        ++stats.occluder_candidates;
-        active = blockRays(m, other, rays, active, t_end, t_near, limit, stats.embree_rays);
-        return active == 0;
-      });
-    hidden += bitCount(open & ~active);
   }
   stats.samples += n;
-  stats.embree_rays += n;  // the self rays
   stats.self_hits += counted;
   stats.hidden_samples += hidden;
   ++stats.objects_tested;
