@@ -422,6 +422,11 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
   const ChainPrototypes& op = m.chains[m.chain[other]];
   const float scale = m.largest_scale[other];
   const glm::mat4& inv = m.inverse_world[other];
+  // the rays that reach the object's box, with the level each is traced at
+  RTCScene pend_level[kChunk];
+  uint32_t pend_lane[kChunk];
+  glm::vec3 pend_o[kChunk], pend_d[kChunk];
+  uint32_t pending = 0;
   for (uint32_t left = active; left != 0; left &= left - 1) {
     const uint32_t k = static_cast<uint32_t>(__builtin_ctz(left));
     const float ocx = sp.x - rays.ox[k], ocy = sp.y - rays.oy[k], ocz = sp.z - rays.oz[k];
@@ -438,8 +443,57 @@ uint32_t blockRays(const RayScene::Impl& m, uint32_t other, const RaysSoA& rays,
                 t_box_exit))
       continue;
     const RTCScene level = traceLevel(op, scale, limit(t_box));
-    ++embree_rays;
-    if (occludedInObjectSpace(level, o, d, t_start[k], t_end[k])) active &= ~(1u << k);
+    pend_level[pending] = level;
+    pend_lane[pending] = k;
+    pend_o[pending] = o;
+    pend_d[pending] = d;
+    ++pending;
+  }
+  // 8-ray packets (rtcOccluded8, native on AVX2; 16 is emulated there), one level at a time; a
+  // lone ray goes alone. 1.3x faster than one rtcOccluded1 per ray at 100,000 objects
+  // (docs/bench/visibility.md)
+  uint32_t done = 0;
+  while (done != (1u << pending) - 1u) {
+    const uint32_t first = static_cast<uint32_t>(__builtin_ctz(~done));
+    const RTCScene level = pend_level[first];
+    alignas(32) RTCRay8 r8;
+    alignas(32) int valid[8];
+    uint32_t lane_of[8];
+    uint32_t count = 0;
+    for (uint32_t i = first; i < pending && count < 8; ++i) {
+      if ((done >> i & 1u) || pend_level[i] != level) continue;
+      done |= 1u << i;
+      const uint32_t k = pend_lane[i];
+      r8.org_x[count] = pend_o[i].x;
+      r8.org_y[count] = pend_o[i].y;
+      r8.org_z[count] = pend_o[i].z;
+      r8.dir_x[count] = pend_d[i].x;
+      r8.dir_y[count] = pend_d[i].y;
+      r8.dir_z[count] = pend_d[i].z;
+      r8.tnear[count] = t_start[k];
+      r8.tfar[count] = t_end[k];
+      r8.time[count] = 0.0f;
+      r8.mask[count] = 0xFFFFFFFFu;
+      r8.id[count] = 0;
+      r8.flags[count] = 0;
+      valid[count] = -1;
+      lane_of[count] = k;
+      ++count;
+    }
+    for (uint32_t j = count; j < 8; ++j) valid[j] = 0;
+    if (count == 1) {
+      ++embree_rays;
+      if (occludedInObjectSpace(level, pend_o[first], pend_d[first], t_start[lane_of[0]], t_end[lane_of[0]]))
+        active &= ~(1u << lane_of[0]);
+      continue;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded8(valid, level, &ctx, &r8);
+    embree_rays += count;
+    for (uint32_t j = 0; j < count; ++j)
+      if (r8.tfar[j] < 0.0f) active &= ~(1u << lane_of[j]);
   }
   return active;
 }
@@ -584,8 +638,8 @@ void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& 
   if (!any_open) {
     counted = hidden = n;
   } else {
-    // 2. where each ray meets the object itself, at its occluder level (a 16-ray packet was
-    //    slower): rays outside its silhouette are not counted; the others are hidden when blocked
+    // 2. where each ray meets the object itself, at its occluder level (one rtcIntersect1 per
+    //    ray): rays outside its silhouette are not counted; the others are hidden when blocked
     //    before the sphere, or between the sphere and the object
     for (uint32_t c = 0; c < chunks; ++c) {
       const uint32_t k0 = c * kChunk, lanes = std::min(kChunk, n - k0);
