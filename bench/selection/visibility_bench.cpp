@@ -143,10 +143,24 @@ std::unique_ptr<RayScene> buildScene(const GridScene& g, const char* device_conf
   return rs;
 }
 
+// The grid seen from high above, looking down at its centre: few objects hide others.
+GridScene openScene(size_t n) {
+  GridScene g = gridScene(n);
+  const float extent = 4.0f * std::ceil(std::sqrt(static_cast<float>(n)));
+  g.camera.target = {extent * 0.5f, 0.0f, -extent * 0.5f};
+  g.camera.eye = g.camera.target + glm::vec3(0.0f, extent * 0.9f, 0.01f * extent);
+  return g;
+}
+
+enum class SceneKind { kStreet, kPanels, kOpen };
+GridScene sceneOf(SceneKind kind, size_t n) {
+  return kind == SceneKind::kPanels ? panelScene(n) : kind == SceneKind::kOpen ? openScene(n) : gridScene(n);
+}
+
 // One estimator frame at the given budget; items are occlusion samples.
-void occlusionFrame(benchmark::State& state, bool panels) {
+void occlusionFrame(benchmark::State& state, SceneKind kind) {
   const size_t n = static_cast<size_t>(state.range(0));
-  const GridScene g = panels ? panelScene(n) : gridScene(n);
+  const GridScene g = sceneOf(kind, n);
   auto rs = buildScene(g);
   if (!rs) {
     state.SkipWithError("scene build failed");
@@ -185,10 +199,13 @@ void occlusionFrame(benchmark::State& state, bool panels) {
   state.counters["rays/s"] = benchmark::Counter(static_cast<double>(embree_rays), benchmark::Counter::kIsRate);
   state.counters["hidden_sample_share"] = self_hits ? static_cast<double>(hidden_samples) / static_cast<double>(self_hits) : 0.0;
 }
-void BM_OcclusionFrame(benchmark::State& state) { occlusionFrame(state, false); }
+void BM_OcclusionFrame(benchmark::State& state) { occlusionFrame(state, SceneKind::kStreet); }
 // half the objects thin wall panels (panelChain)
-void BM_OcclusionFramePanels(benchmark::State& state) { occlusionFrame(state, true); }
+void BM_OcclusionFramePanels(benchmark::State& state) { occlusionFrame(state, SceneKind::kPanels); }
+// seen from above: most samples visible, so most tests trace the object itself too
+void BM_OcclusionFrameOpen(benchmark::State& state) { occlusionFrame(state, SceneKind::kOpen); }
 BENCHMARK(BM_OcclusionFramePanels)->Args({10000, 20000})->Args({100000, 20000})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OcclusionFrameOpen)->Args({100000, 20000})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OcclusionFrame)
     ->Args({10000, 20000})
     ->Args({100000, 20000})
@@ -200,9 +217,9 @@ BENCHMARK(BM_OcclusionFrame)
 // over each object's sphere footprint, each ray stopping just before the object's bounding sphere,
 // traced by a plain loop of rtcOccluded1 against one Embree scene holding every object as an
 // instance of its occluder level. One ray per sample; items are rays.
-void BM_OcclusionFloor(benchmark::State& state) {
+void occlusionFloor(benchmark::State& state, SceneKind kind) {
   const size_t n = static_cast<size_t>(state.range(0));
-  const GridScene g = gridScene(n);
+  const GridScene g = sceneOf(kind, n);
   auto rs = buildScene(g);
   if (!rs) {
     state.SkipWithError("scene build failed");
@@ -255,7 +272,9 @@ void BM_OcclusionFloor(benchmark::State& state) {
   const Span<const glm::vec4> spheres = rs->worldSpheres();
   const float golden = 2.39996323f;
   const glm::vec3 eye = g.camera.eye;
-  const glm::vec3 view_up = g.camera.up;
+  const glm::vec3 view_forward = glm::normalize(g.camera.target - eye);
+  const glm::vec3 view_right = glm::normalize(glm::cross(view_forward, g.camera.up));
+  const glm::vec3 view_up = glm::cross(view_right, view_forward);
   for (size_t id = 0; id < n; ++id) {
     if (est.ageFrames(*rs, static_cast<uint32_t>(id)) != 0) continue;
     const glm::vec3 c(spheres[id]);
@@ -264,15 +283,19 @@ void BM_OcclusionFloor(benchmark::State& state) {
     if (dist <= r) continue;
     const glm::vec3 w = (c - eye) / dist;
     const float disc_r = r * dist / std::sqrt(dist * dist - r * r);
-    const glm::vec3 u = glm::normalize(glm::cross(w, view_up)), v = glm::cross(u, w);
+    // the estimator's disc axes: across the view direction, from the up vector unless nearly parallel
+    const glm::vec3 ref = std::fabs(glm::dot(w, view_up)) < 0.9f ? view_up : view_right;
+    const glm::vec3 u = glm::normalize(glm::cross(w, ref)), v = glm::cross(u, w);
     for (uint32_t k = 0; k < p.rays_per_test; ++k) {
       const float rad = std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(p.rays_per_test));
       const float th = static_cast<float>(k) * golden;
       const glm::vec3 target = c + disc_r * rad * (std::cos(th) * u + std::sin(th) * v);
       const glm::vec3 d = glm::normalize(target - eye);
       // stop before the object's bounding sphere (or its closest approach, for a grazing ray)
+      // (the squared miss distance from a cross product: |c - eye|^2 - along^2 cancels at 1,000 units)
       const float along = glm::dot(c - eye, d);
-      const float miss2 = std::max(glm::dot(c - eye, c - eye) - along * along, 0.0f);
+      const glm::vec3 across = glm::cross(c - eye, d);
+      const float miss2 = glm::dot(across, across);
       const float t_far = miss2 < r * r ? along - std::sqrt(r * r - miss2) : along;
       rays.push_back({eye, d, t_far * (1.0f - 1e-4f)});
     }
@@ -309,7 +332,10 @@ void BM_OcclusionFloor(benchmark::State& state) {
   state.counters["rays/s"] = benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
   state.counters["hidden_sample_share"] = traced ? static_cast<double>(hidden) / static_cast<double>(traced) : 0.0;
 }
+void BM_OcclusionFloor(benchmark::State& state) { occlusionFloor(state, SceneKind::kStreet); }
+void BM_OcclusionFloorOpen(benchmark::State& state) { occlusionFloor(state, SceneKind::kOpen); }
 BENCHMARK(BM_OcclusionFloor)->Args({10000, 20000})->Args({100000, 20000})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OcclusionFloorOpen)->Args({100000, 20000})->Unit(benchmark::kMillisecond);
 
 // Moves every object (a small translation) and commits; the device's build threads as given.
 void commitMoving(benchmark::State& state, const char* device_config) {

@@ -618,9 +618,11 @@ void OcclusionEstimator::State::testObject(const RayScene::Impl& m, const View& 
         dir = glm::normalize(p - view.eye);
       }
       rays[c].set(k, o, dir);
+      // the squared miss distance from a cross product: |oc|^2 - along^2 cancels far from the eye
       const glm::vec3 oc = center - o;
       const float along = glm::dot(oc, dir);
-      const float miss2 = glm::dot(oc, oc) - along * along;
+      const glm::vec3 across = glm::cross(oc, dir);
+      const float miss2 = glm::dot(across, across);
       t_sphere[c][k] = std::max(miss2 < r2 ? along - std::sqrt(r2 - miss2) : along, t_near);
       t_start[k] = t_near;
     }
