@@ -2,6 +2,7 @@
 // occlusion estimate for 100 000 objects at 20 000 rays per frame, and the commit time after moving
 // 10 000 objects. Scenes are synthetic: a jittered grid of icospheres (4 levels, 1280 to 20
 // triangles) on a plane, seen from street level, so most rays meet other objects.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -97,20 +99,68 @@ GridScene gridScene(size_t n) {
   return g;
 }
 
+// Thin occluders: a chain of a wall panel 8 wide, 4 high and 0.2 thick whose level 1 is its
+// mid-plane (max_error 0.1, the thickness collapsed), so near the eye the estimator must trace the
+// panels at level 0.
+const LodChain& panelChain() {
+  static const LodChain chain = [] {
+    LodChain c;
+    LodLevel l0, l1;
+    const glm::vec3 lo(-4.0f, 0.0f, -0.1f), hi(4.0f, 4.0f, 0.1f);
+    for (int i = 0; i < 8; ++i) l0.mesh.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+    const uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : f) l0.mesh.triangles.insert(l0.mesh.triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    l1.mesh.positions = {{-4.0f, 0.0f, 0.0f}, {4.0f, 0.0f, 0.0f}, {4.0f, 4.0f, 0.0f}, {-4.0f, 4.0f, 0.0f}};
+    l1.mesh.triangles = {0, 1, 2, 0, 2, 3};
+    l1.max_error = 0.1f;
+    c.levels.push_back(std::move(l0));
+    c.levels.push_back(std::move(l1));
+    return c;
+  }();
+  return chain;
+}
+
+// The grid scene with every other object a wall panel (chain 1), turned 0 or 90 degrees.
+GridScene panelScene(size_t n) {
+  GridScene g = gridScene(n);
+  for (size_t i = 1; i < n; i += 2) {
+    const glm::vec3 p(g.world[i][3]);
+    g.world[i] = glm::rotate(glm::translate(glm::mat4(1.0f), {p.x, 0.0f, p.z}), (i / 2) % 2 ? 1.5707963f : 0.0f,
+                             glm::vec3(0.0f, 1.0f, 0.0f));
+    g.chain_ids[i] = 1;
+    g.levels[i] = 0;
+  }
+  return g;
+}
+
 std::unique_ptr<RayScene> buildScene(const GridScene& g, const char* device_config = nullptr) {
   auto rs = std::make_unique<RayScene>();
-  const LodChain* chains[] = {&sphereChain()};
+  const LodChain* chains[] = {&sphereChain(), &panelChain()};
   RaySceneParams p;
   p.device_config = device_config;
-  if (!rs->init(Span<const LodChain* const>(chains, 1), p).ok() || !rs->setObjects(g.world, g.chain_ids, g.levels).ok()) return nullptr;
+  if (!rs->init(Span<const LodChain* const>(chains, 2), p).ok() || !rs->setObjects(g.world, g.chain_ids, g.levels).ok()) return nullptr;
   rs->commit();
   return rs;
 }
 
+// The grid seen from high above, looking down at its centre: few objects hide others.
+GridScene openScene(size_t n) {
+  GridScene g = gridScene(n);
+  const float extent = 4.0f * std::ceil(std::sqrt(static_cast<float>(n)));
+  g.camera.target = {extent * 0.5f, 0.0f, -extent * 0.5f};
+  g.camera.eye = g.camera.target + glm::vec3(0.0f, extent * 0.9f, 0.01f * extent);
+  return g;
+}
+
+enum class SceneKind { kStreet, kPanels, kOpen };
+GridScene sceneOf(SceneKind kind, size_t n) {
+  return kind == SceneKind::kPanels ? panelScene(n) : kind == SceneKind::kOpen ? openScene(n) : gridScene(n);
+}
+
 // One estimator frame at the given budget; items are occlusion samples.
-void BM_OcclusionFrame(benchmark::State& state) {
+void occlusionFrame(benchmark::State& state, SceneKind kind) {
   const size_t n = static_cast<size_t>(state.range(0));
-  const GridScene g = gridScene(n);
+  const GridScene g = sceneOf(kind, n);
   auto rs = buildScene(g);
   if (!rs) {
     state.SkipWithError("scene build failed");
@@ -121,10 +171,13 @@ void BM_OcclusionFrame(benchmark::State& state) {
   p.ray_budget = static_cast<uint32_t>(state.range(1));
   est.init(n, p);
   std::vector<float> vis(n);
-  uint64_t samples = 0, occlusion_rays = 0, self_hits = 0, tested = 0, occluder_candidates = 0;
+  uint64_t samples = 0, occlusion_rays = 0, self_hits = 0, tested = 0, occluder_candidates = 0, embree_rays = 0;
+  uint64_t hidden_samples = 0;
   for (auto _ : state) {
     est.update(*rs, g.camera, Span<float>(vis));
     samples += est.lastStats().samples;
+    embree_rays += est.lastStats().embree_rays;
+    hidden_samples += est.lastStats().hidden_samples;
     occlusion_rays += est.lastStats().occlusion_rays;
     self_hits += est.lastStats().self_hits;
     tested += est.lastStats().objects_tested;
@@ -142,12 +195,147 @@ void BM_OcclusionFrame(benchmark::State& state) {
   state.counters["candidates"] = est.lastStats().candidates;
   state.counters["occluders/test"] = tested ? static_cast<double>(occluder_candidates) / static_cast<double>(tested) : 0.0;
   state.counters["hidden_share_end"] = static_cast<double>(hidden) / static_cast<double>(n);
+  state.counters["rays/sample"] = samples ? static_cast<double>(embree_rays) / static_cast<double>(samples) : 0.0;
+  state.counters["rays/s"] = benchmark::Counter(static_cast<double>(embree_rays), benchmark::Counter::kIsRate);
+  state.counters["hidden_sample_share"] = self_hits ? static_cast<double>(hidden_samples) / static_cast<double>(self_hits) : 0.0;
 }
+void BM_OcclusionFrame(benchmark::State& state) { occlusionFrame(state, SceneKind::kStreet); }
+// half the objects thin wall panels (panelChain)
+void BM_OcclusionFramePanels(benchmark::State& state) { occlusionFrame(state, SceneKind::kPanels); }
+// seen from above: most samples visible, so most tests trace the object itself too
+void BM_OcclusionFrameOpen(benchmark::State& state) { occlusionFrame(state, SceneKind::kOpen); }
+BENCHMARK(BM_OcclusionFramePanels)->Args({10000, 20000})->Args({100000, 20000})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OcclusionFrameOpen)->Args({100000, 20000})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OcclusionFrame)
     ->Args({10000, 20000})
     ->Args({100000, 20000})
     ->Args({100000, 0})
     ->Unit(benchmark::kMillisecond);
+
+// The floor: the same question asked of Embree alone. The objects the estimator tests in one frame
+// (after 8 warm-up frames, as its benchmark runs), 16 rays each through the same golden-angle disc
+// over each object's sphere footprint, each ray stopping just before the object's bounding sphere,
+// traced by a plain loop of rtcOccluded1 against one Embree scene holding every object as an
+// instance of its occluder level. One ray per sample; items are rays.
+void occlusionFloor(benchmark::State& state, SceneKind kind) {
+  const size_t n = static_cast<size_t>(state.range(0));
+  const GridScene g = sceneOf(kind, n);
+  auto rs = buildScene(g);
+  if (!rs) {
+    state.SkipWithError("scene build failed");
+    return;
+  }
+  OcclusionEstimator est;
+  OcclusionParams p;
+  p.ray_budget = static_cast<uint32_t>(state.range(1));
+  est.init(n, p);
+  for (int f = 0; f < 8; ++f) est.update(*rs, g.camera, {});
+  const uint32_t occluder_level = static_cast<uint32_t>(rs->occluderLevel(0));
+
+  RTCDevice device = rtcNewDevice("threads=1");
+  RTCScene proto = rtcNewScene(device);
+  {
+    const Mesh& mesh = sphereChain().levels[occluder_level].mesh;
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), mesh.vertexCount()));
+    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                             3 * sizeof(uint32_t), mesh.triangleCount()));
+    for (size_t i = 0; i < mesh.vertexCount(); ++i) {
+      v[3 * i] = mesh.positions[i].x;
+      v[3 * i + 1] = mesh.positions[i].y;
+      v[3 * i + 2] = mesh.positions[i].z;
+    }
+    std::copy(mesh.triangles.begin(), mesh.triangles.end(), t);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(proto, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(proto);
+  }
+  RTCScene top = rtcNewScene(device);
+  for (size_t i = 0; i < n; ++i) {
+    RTCGeometry inst = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(inst, proto);
+    rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &g.world[i][0][0]);
+    rtcCommitGeometry(inst);
+    rtcAttachGeometry(top, inst);
+    rtcReleaseGeometry(inst);
+  }
+  rtcCommitScene(top);
+
+  // the rays of the objects tested in the last frame
+  struct FloorRay {
+    glm::vec3 o, d;
+    float t_far;
+  };
+  std::vector<FloorRay> rays;
+  const Span<const glm::vec4> spheres = rs->worldSpheres();
+  const float golden = 2.39996323f;
+  const glm::vec3 eye = g.camera.eye;
+  const glm::vec3 view_forward = glm::normalize(g.camera.target - eye);
+  const glm::vec3 view_right = glm::normalize(glm::cross(view_forward, g.camera.up));
+  const glm::vec3 view_up = glm::cross(view_right, view_forward);
+  for (size_t id = 0; id < n; ++id) {
+    if (est.ageFrames(*rs, static_cast<uint32_t>(id)) != 0) continue;
+    const glm::vec3 c(spheres[id]);
+    const float r = spheres[id].w;
+    const float dist = glm::length(c - eye);
+    if (dist <= r) continue;
+    const glm::vec3 w = (c - eye) / dist;
+    const float disc_r = r * dist / std::sqrt(dist * dist - r * r);
+    // the estimator's disc axes: across the view direction, from the up vector unless nearly parallel
+    const glm::vec3 ref = std::fabs(glm::dot(w, view_up)) < 0.9f ? view_up : view_right;
+    const glm::vec3 u = glm::normalize(glm::cross(w, ref)), v = glm::cross(u, w);
+    for (uint32_t k = 0; k < p.rays_per_test; ++k) {
+      const float rad = std::sqrt((static_cast<float>(k) + 0.5f) / static_cast<float>(p.rays_per_test));
+      const float th = static_cast<float>(k) * golden;
+      const glm::vec3 target = c + disc_r * rad * (std::cos(th) * u + std::sin(th) * v);
+      const glm::vec3 d = glm::normalize(target - eye);
+      // stop before the object's bounding sphere (or its closest approach, for a grazing ray)
+      // (the squared miss distance from a cross product: |c - eye|^2 - along^2 cancels at 1,000 units)
+      const float along = glm::dot(c - eye, d);
+      const glm::vec3 across = glm::cross(c - eye, d);
+      const float miss2 = glm::dot(across, across);
+      const float t_far = miss2 < r * r ? along - std::sqrt(r * r - miss2) : along;
+      rays.push_back({eye, d, t_far * (1.0f - 1e-4f)});
+    }
+  }
+  uint64_t traced = 0, hidden = 0;
+  for (auto _ : state) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (const FloorRay& fr : rays) {
+      RTCRay r;
+      r.org_x = fr.o.x;
+      r.org_y = fr.o.y;
+      r.org_z = fr.o.z;
+      r.dir_x = fr.d.x;
+      r.dir_y = fr.d.y;
+      r.dir_z = fr.d.z;
+      r.tnear = g.camera.near_plane;
+      r.tfar = fr.t_far;
+      r.time = 0.0f;
+      r.mask = 0xFFFFFFFFu;
+      r.id = 0;
+      r.flags = 0;
+      rtcOccluded1(top, &ctx, &r);
+      hidden += r.tfar < 0.0f ? 1 : 0;
+    }
+    traced += rays.size();
+  }
+  rtcReleaseScene(top);
+  rtcReleaseScene(proto);
+  rtcReleaseDevice(device);
+  state.SetItemsProcessed(static_cast<int64_t>(traced));
+  state.counters["rays/sample"] = 1.0;
+  state.counters["rays/frame"] = static_cast<double>(rays.size());
+  state.counters["rays/s"] = benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
+  state.counters["hidden_sample_share"] = traced ? static_cast<double>(hidden) / static_cast<double>(traced) : 0.0;
+}
+void BM_OcclusionFloor(benchmark::State& state) { occlusionFloor(state, SceneKind::kStreet); }
+void BM_OcclusionFloorOpen(benchmark::State& state) { occlusionFloor(state, SceneKind::kOpen); }
+BENCHMARK(BM_OcclusionFloor)->Args({10000, 20000})->Args({100000, 20000})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OcclusionFloorOpen)->Args({100000, 20000})->Unit(benchmark::kMillisecond);
 
 // Moves every object (a small translation) and commits; the device's build threads as given.
 void commitMoving(benchmark::State& state, const char* device_config) {

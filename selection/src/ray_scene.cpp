@@ -23,11 +23,24 @@ bool finiteMatrix(const glm::mat4& m) {
   return true;
 }
 
+// The largest factor by which the linear part of m stretches a length (its largest singular value:
+// the square root of the largest eigenvalue of M^T M, closed form for symmetric 3 x 3 matrices),
+// never below the longest column. Object-space radii and errors times this bound world ones, also
+// for sheared matrices (a parent's non-uniform scale above a rotated child), where the longest
+// column alone falls short.
 float largestScale(const glm::mat4& m) {
-  const float sx = glm::length(glm::vec3(m[0]));
-  const float sy = glm::length(glm::vec3(m[1]));
-  const float sz = glm::length(glm::vec3(m[2]));
-  return std::max(sx, std::max(sy, sz));
+  const glm::vec3 c0(m[0]), c1(m[1]), c2(m[2]);
+  const float column = std::max(glm::length(c0), std::max(glm::length(c1), glm::length(c2)));
+  const double a01 = glm::dot(c0, c1), a02 = glm::dot(c0, c2), a12 = glm::dot(c1, c2);
+  const double off = a01 * a01 + a02 * a02 + a12 * a12;
+  if (!(off > 0.0)) return column;  // orthogonal columns (rotation and scale): the longest column
+  const double a00 = glm::dot(c0, c0), a11 = glm::dot(c1, c1), a22 = glm::dot(c2, c2);
+  const double q = (a00 + a11 + a22) / 3.0;
+  const double b00 = a00 - q, b11 = a11 - q, b22 = a22 - q;
+  const double p = std::sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0);
+  const double det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02) + a02 * (a01 * a12 - b11 * a02);
+  const double r = std::min(1.0, std::max(-1.0, det / (2.0 * p * p * p)));
+  return std::max(column, static_cast<float>(std::sqrt(q + 2.0 * p * std::cos(std::acos(r) / 3.0)) * (1.0 + 1e-6)));
 }
 
 std::string deviceErrorText(RTCDevice device) {
@@ -84,7 +97,7 @@ void RayScene::Impl::release() {
   box_lo.clear();
   box_hi.clear();
   world_sphere.clear();
-  occluder_error_world.clear();
+  largest_scale.clear();
   inverse_world.clear();
   world.clear();
   chain.clear();
@@ -182,7 +195,7 @@ void growTo(RayScene::Impl& m, size_t n) {
   m.box_lo.resize(n, glm::vec3(kEmpty));
   m.box_hi.resize(n, glm::vec3(-kEmpty));
   m.world_sphere.resize(n, glm::vec4(0.0f));
-  m.occluder_error_world.resize(n, 0.0f);
+  m.largest_scale.resize(n, 0.0f);
   m.inverse_world.resize(n, glm::mat4(1.0f));
   m.world.resize(n, glm::mat4(1.0f));
   m.chain.resize(n, 0);
@@ -209,7 +222,7 @@ void updateDerived(RayScene::Impl& m, uint32_t id) {
   const glm::vec3 e = glm::abs(glm::vec3(w[0])) * h.x + glm::abs(glm::vec3(w[1])) * h.y + glm::abs(glm::vec3(w[2])) * h.z;
   m.box_lo[id] = c - e;
   m.box_hi[id] = c + e;
-  m.occluder_error_world[id] = p.max_error[p.occluder_level] * scale;
+  m.largest_scale[id] = scale;
   m.inverse_world[id] = glm::inverse(w);
 }
 

@@ -34,7 +34,7 @@ struct RayScene::Impl {
   // per object, indexed by id (hot columns first)
   std::vector<glm::vec3> box_lo, box_hi;      // 24 B: world box (empty when free), the BVH's input
   std::vector<glm::vec4> world_sphere;        // 16 B: centre, radius (0 when free)
-  std::vector<float> occluder_error_world;    // 4 B: occluder level max_error * largest scale
+  std::vector<float> largest_scale;           // 4 B: largest axis scale of the world transform
   std::vector<glm::mat4> inverse_world;       // 64 B: for rays into the object's own prototype
   std::vector<glm::mat4> world;               // 64 B
   std::vector<uint32_t> chain;                // 4 B
@@ -84,14 +84,12 @@ inline bool intersectObject(const RayScene::Impl& m, uint32_t id, RTCScene proto
   return true;
 }
 
-// Any hit of the world ray with object `id` drawn as `proto` within [t_near, t_far].
-inline bool occludedByObject(const RayScene::Impl& m, uint32_t id, RTCScene proto, const glm::vec3& o,
-                             const glm::vec3& d, float t_near, float t_far) {
-  const glm::mat4& inv = m.inverse_world[id];
+// Any hit of the object-space ray (o, d) with prototype `proto` within [t_near, t_far].
+inline bool occludedInObjectSpace(RTCScene proto, const glm::vec3& o, const glm::vec3& d, float t_near, float t_far) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay r;
-  fillEmbreeRay(r, glm::vec3(inv * glm::vec4(o, 1.0f)), glm::vec3(inv * glm::vec4(d, 0.0f)), t_near, t_far);
+  fillEmbreeRay(r, o, d, t_near, t_far);
   rtcOccluded1(proto, &ctx, &r);
   return r.tfar < 0.0f && std::isinf(r.tfar);
 }

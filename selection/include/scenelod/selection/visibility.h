@@ -39,9 +39,10 @@ struct RaySceneParams {
   // occluder level of a mesh: the coarsest level whose max_error is at most this fraction of the
   // mesh's bounding radius (0 = always the full mesh, level 0)
   float occluder_relative_error = 0.02f;
-  // an occluder hit at distance t is accepted only when the occluder level's world-space max_error
-  // projects to at most this many pixels at t (error <= occluder_error_px * R(t)); other hits are
-  // ignored, so a wrong 'hidden' sample lies within this many pixels of an occluder's silhouette
+  // a ray blocked by an occluder was traced at a level whose world-space max_error projects to at
+  // most this many pixels where the ray enters the occluder's box (error <= occluder_error_px * R(t),
+  // level 0 when no coarser level is within it), so a wrong 'hidden' sample lies within this many
+  // pixels of an occluder's silhouette
   float occluder_error_px = 1.0f;
   // Embree device configuration string ("threads=1", ...); null = Embree's defaults
   const char* device_config = nullptr;
@@ -176,19 +177,26 @@ struct OcclusionParams {
 struct OcclusionStats {
   uint32_t objects_tested = 0;
   uint32_t samples = 0;          // samples taken (<= ray budget)
-  uint32_t self_hits = 0;        // samples whose ray met the object itself (the estimate's denominator)
-  uint32_t occlusion_rays = 0;   // occlusion rays cast (one per self hit)
+  uint32_t self_hits = 0;        // samples counted: whose ray met the object itself (the estimate's
+                                 // denominator), or every sample of a test blocked before the object
+  uint32_t occlusion_rays = 0;   // sample rays tested against occluders (every sample)
   uint32_t candidates = 0;       // objects in the view frustum and in front of the eye
   uint32_t occluder_candidates = 0;  // objects whose bounding spheres a tested object's rays were checked against
+  uint32_t embree_rays = 0;      // single-ray Embree queries: one self ray per sample plus the occluder queries
+  uint32_t hidden_samples = 0;   // counted samples found hidden
 };
 
 // Amortised visible-fraction estimate. Each update() tests the objects of highest priority (screen
 // size times age) with `rays_per_test` samples each until the ray budget is spent. A sample is a ray
 // from the eye through a fixed stratified (golden-angle) disc pattern facing the camera, covering the
 // object's bounding sphere footprint and rotated on every test; it counts when it meets the object's
-// own occluder level at t_self, and it is hidden when any other object's occluder level is hit before
-// t_self where that level's error projects to at most RaySceneParams::occluder_error_px pixels. visible fraction = unhidden / counted samples of the latest test (1 when no sample met the
-// object). Objects never tested (or whose id was reused) read as 1, i.e. visible.
+// own occluder level at t_self, and it is hidden when another object blocks it before t_self. Another
+// object blocks a ray only with a level whose error projects to at most
+// RaySceneParams::occluder_error_px pixels where the ray enters that object's box: its occluder level
+// when that is trusted there, otherwise a finer one (level 0 is exact). visible fraction = unhidden /
+// counted samples of the latest test (1 when no sample met the object; 0 when every sample was
+// blocked before the object's bounding sphere, which is then not traced itself). Objects never
+// tested (or whose id was reused) read as 1, i.e. visible.
 class OcclusionEstimator {
  public:
   static constexpr float kMaxPriorityRadiusPx = 512.0f;
@@ -209,7 +217,8 @@ class OcclusionEstimator {
   // (1 for untested and free ids) into visible_fraction (may be empty). Returns false (doing nothing)
   // when validate() fails. Precondition: scene committed. No allocation; O(objects) for the
   // priority pass plus, per tested object, one walk of the top-level tree with its beam of sample
-  // rays (stopped once every ray is blocked) and up to 2 Embree calls per sample.
+  // rays (stopped once every ray is blocked), and a second one with a ray per sample against the
+  // object itself unless every sample was blocked before the object's bounding sphere.
   bool update(const RayScene& scene, const Camera& camera, Span<float> visible_fraction);
 
   // Latest estimate of an id (1 when never tested) and how many update() calls ago it was measured
