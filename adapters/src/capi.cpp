@@ -991,6 +991,7 @@ selection::SelectionJob objectsJob(slod_context* ctx, const slod_frame_params& p
   job.params.fade_ms = params.fade_ms;
   job.params.morph_band = params.morph_band;
   job.params.fade_budget_share = params.fade_budget_share;
+  job.params.min_drop_px = params.min_drop_px;
   job.levels = ctx->objects.table.view();
   job.centers = Span<const glm::vec3>(ctx->centers.data(), n);
   job.radii = Span<const float>(ctx->radii.data(), n);

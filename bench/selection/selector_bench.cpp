@@ -10,7 +10,7 @@ using namespace selection_bench;
 namespace {
 
 void run(benchmark::State& state, SelectionMode mode, BudgetAlgorithm alg, bool cold,
-         Transitions transitions = Transitions::kNone) {
+         Transitions transitions = Transitions::kNone, float min_drop_px = SelectionParams().min_drop_px) {
   const size_t n = static_cast<size_t>(state.range(0));
   BenchScene& s = scene(n);
   const float budget = budgetFor(s, n);
@@ -28,6 +28,7 @@ void run(benchmark::State& state, SelectionMode mode, BudgetAlgorithm alg, bool 
     j.params.algorithm = alg;
     j.params.budget_ms = budget;
     j.params.calibrate = false;
+    j.params.min_drop_px = min_drop_px;
     if (transitions != Transitions::kNone) withTransitions(j, s, transitions);
     if (!j.run()) state.SkipWithError("run() refused the input");
     benchmark::DoNotOptimize(s.levels.data());
@@ -49,6 +50,13 @@ void BM_BudgetLagrangianCold(benchmark::State& s) { run(s, SelectionMode::kBudge
 void BM_BudgetGreedySmooth(benchmark::State& s) { run(s, SelectionMode::kBudget, BudgetAlgorithm::kGreedy, false); }
 void BM_BudgetGreedyCold(benchmark::State& s) { run(s, SelectionMode::kBudget, BudgetAlgorithm::kGreedy, true); }
 void BM_DistanceSmooth(benchmark::State& s) { run(s, SelectionMode::kDistance, BudgetAlgorithm::kLagrangian, false); }
+// without the drop policy (any object may be dropped): the same runs' reference
+void BM_BudgetLagrangianSmoothDropAny(benchmark::State& s) {
+  run(s, SelectionMode::kBudget, BudgetAlgorithm::kLagrangian, false, Transitions::kNone, 0.0f);
+}
+void BM_BudgetLagrangianColdDropAny(benchmark::State& s) {
+  run(s, SelectionMode::kBudget, BudgetAlgorithm::kLagrangian, true, Transitions::kNone, 0.0f);
+}
 // with transitions (morph factors and fades, their outputs written): the same runs' extra cost
 void BM_BudgetLagrangianSmoothMorph(benchmark::State& s) {
   run(s, SelectionMode::kBudget, BudgetAlgorithm::kLagrangian, false, Transitions::kMorph);
@@ -70,6 +78,8 @@ BENCHMARK(BM_BudgetLagrangianCold)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(
 BENCHMARK(BM_BudgetGreedySmooth)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BudgetGreedyCold)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DistanceSmooth)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BudgetLagrangianSmoothDropAny)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BudgetLagrangianColdDropAny)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BudgetLagrangianSmoothMorph)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DistanceSmoothMorph)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DistanceSmoothFade)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);

@@ -8,7 +8,8 @@
 //   cold     budget, Lagrangian, camera jump and history reset every frame
 //   greedy   budget, heap greedy, smooth camera
 //   distance distance mode, smooth camera
-// each optionally followed by +fade or +morph: the same frames with transitions (outputs written)
+// each optionally followed by +fade or +morph: the same frames with transitions (outputs written);
+// SELECTION_MIN_DROP_PX=X in the environment sets SelectionParams::min_drop_px (default 4)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
     j.params.algorithm = greedy ? BudgetAlgorithm::kGreedy : BudgetAlgorithm::kLagrangian;
     j.params.budget_ms = budget;
     j.params.calibrate = false;
+    if (const char* e = std::getenv("SELECTION_MIN_DROP_PX")) j.params.min_drop_px = std::strtof(e, nullptr);
     if (transitions != Transitions::kNone) withTransitions(j, s, transitions);
     if (!j.run()) return 1;
     drawn += st.drawn_count;

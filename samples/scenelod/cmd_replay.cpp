@@ -46,12 +46,14 @@ const char kUsage[] =
     "                       previous_levels and fading; time between frames from time_s\n"
     "  --fade-ms MS         duration of a cross-fade (default 250)\n"
     "  --morph-band F       share of a level's log pixel-size interval the morph takes, (0, 1] (default 0.3)\n"
-    "  --fade-budget-share F  budget mode: share of the objects' budget fades may take, [0, 1] (default 0.1)";
+    "  --fade-budget-share F  budget mode: share of the objects' budget fades may take, [0, 1] (default 0.1)\n"
+    "  --min-drop-px PX     budget mode: objects in view with a projected radius of at least PX pixels\n"
+    "                       (and not hidden) are never dropped, only coarsened (default 4; 0: any may be)";
 
 int run(const std::vector<std::string>& argv) {
   Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility"},
             {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget",
-             "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share"});
+             "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share", "--min-drop-px"});
   if (!args.ok()) return usageError("replay", args.error());
   if (args.positional().size() != 1) return usageError("replay", "expected one replay file");
   if (!args.has("--out") && !args.has("--report")) return usageError("replay", "nothing to write: give -o LOG and/or --report FILE.md");
@@ -77,10 +79,12 @@ int run(const std::vector<std::string>& argv) {
   const std::string alg = args.get("--algorithm", "lagrangian");
   if (alg == "greedy") opt.params.algorithm = BudgetAlgorithm::kGreedy;
   else if (alg != "lagrangian") return usageError("replay", "--algorithm must be lagrangian or greedy");
-  double fade_ms = 250.0, morph_band = 0.3, fade_share = 0.1;
+  double fade_ms = 250.0, morph_band = 0.3, fade_share = 0.1, min_drop_px = 4.0;
   if (!args.getDouble("--fade-ms", fade_ms) || !args.getDouble("--morph-band", morph_band) ||
-      !args.getDouble("--fade-budget-share", fade_share))
+      !args.getDouble("--fade-budget-share", fade_share) || !args.getDouble("--min-drop-px", min_drop_px))
     return usageError("replay", args.error());
+  if (!(min_drop_px >= 0.0) || !std::isfinite(min_drop_px)) return usageError("replay", "--min-drop-px must be >= 0 and finite");
+  opt.params.min_drop_px = static_cast<float>(min_drop_px);
   const std::string transitions = args.get("--transitions", "none");
   if (transitions == "fade") opt.params.transitions = Transitions::kFade;
   else if (transitions == "morph") opt.params.transitions = Transitions::kMorph;

@@ -6,6 +6,8 @@
 #include "scenelod/lodcore/atomic_file.h"
 
 #include <algorithm>
+
+#include <glm/geometric.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -202,6 +204,18 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     out.culled = st.culled_count;
     out.dropped = st.dropped_count;
     out.fading = st.fading_count;
+    if (st.dropped_count > 0 && f.views.empty()) {
+      // the largest object left out: objects in view (with levels) not drawn
+      const Frustum frustum = computeFrustum(cam);
+      for (size_t i = 0; i < n; ++i) {
+        if (out.levels[i] >= 0 || !sphereInFrustum(frustum, centers[i], radii[i])) continue;
+        const uint32_t c = scene.object_chain[i];
+        if (table.chain_level_offset[c + 1] == table.chain_level_offset[c]) continue;
+        const float d = glm::length(centers[i] - cam.eye) - radii[i];
+        const double r_px = radii[i] / pixelSize(cam, std::max(d, cam.near_plane));
+        out.max_dropped_radius_px = std::max(out.max_dropped_radius_px, r_px);
+      }
+    }
     out.flags = st.flags;
     out.benefit = st.total_benefit;
     out.triangles = st.features.triangles;
@@ -317,6 +331,9 @@ void ReplaySummaryBuilder::add(const ReplayLogFrame& f) {
   triangles_sum_ += f.triangles;
   benefit_sum_ += f.benefit;
   if (i > 0) switches_ += f.switches;  // the first frame's switches are the initial choice
+  s_.drawn_object_frames += f.drawn;
+  s_.dropped_object_frames += f.dropped;
+  s_.max_dropped_radius_px = std::max(s_.max_dropped_radius_px, f.max_dropped_radius_px);
   for (int8_t l : f.levels) {
     const size_t bin = static_cast<size_t>(l + 1);
     if (s_.level_histogram.size() <= bin) s_.level_histogram.resize(bin + 1, 0);

@@ -59,6 +59,8 @@ struct FrameInput {
   float c_obj = 0.0f, c_px = 0.0f;  // the cost model's per object and per pixel
   double per_frame_ms = 0.0;
   bool budget = false;
+  float keep_px = 0.0f;          // budget mode: slots with at least these projected pixels are kept
+                                 // (the drop policy; +inf: none)
   bool keep_slot_terms = false;  // distance mode: keep a and pixels in the slot columns (transitions)
   float* morph_out = nullptr;    // distance mode, morph transitions: the morph factors, per block
 };
@@ -98,6 +100,9 @@ FrameInput frameInput(const SelectionJob& job, const CostCoefficients& coef) {
   in.per_frame_ms = coef.per_frame_ms;
   in.budget = job.params.mode == SelectionMode::kBudget;
   in.keep_slot_terms = job.params.transitions != Transitions::kNone;
+  const float min_drop = job.params.min_drop_px;
+  in.keep_px = min_drop > 0.0f ? std::min(kPi * min_drop * min_drop, in.viewport_px)
+                               : std::numeric_limits<float>::infinity();
   if (!in.budget && job.params.transitions == Transitions::kMorph && job.morph_out.count) in.morph_out = job.morph_out.data;
   return in;
 }
@@ -112,6 +117,19 @@ void priceRows(SelectorContext& ctx, const LevelTable& levels, const CostCoeffic
                       c_lp * static_cast<float>(levels.line_point_count[r]);
     const float w = levels.cell_width[r];
     ctx.row_inv_w[r] = w > 0.0f ? 1.0f / w : std::numeric_limits<float>::infinity();
+  }
+  // per chain: the smallest cost from each row to the chain's end, and the spread of its costs
+  // when they fall strictly from level to level (the drop policy's settling, budget_hulls.cpp)
+  for (size_t c = 0; c < levels.chainCount(); ++c) {
+    const uint32_t b = levels.chain_level_offset[c], e = levels.chain_level_offset[c + 1];
+    float least = std::numeric_limits<float>::infinity();
+    bool falling = true;
+    for (uint32_t r = e; r-- > b;) {
+      least = std::min(least, ctx.row_cost[r]);
+      ctx.row_suffix_min[r] = least;
+      if (r + 1 < e) falling &= ctx.row_cost[r] > ctx.row_cost[r + 1];
+    }
+    if (e > b) ctx.row_spread[b] = falling ? ctx.row_cost[b] - ctx.row_cost[e - 1] : std::numeric_limits<float>::infinity();
   }
   // a chain's kLanes rows are read side by side, past the last row too
   for (size_t r = levels.cell_width.count; r < levels.cell_width.count + kLanes; ++r) {
@@ -205,28 +223,37 @@ inline __attribute__((always_inline)) void slotTerms(const FrameInput& in, const
 }
 
 // Budget mode's part of a block of slots (in the context's columns from s0): the settling keys,
-// and the must-draw objects (never settled) with their cheapest level's cost to the mandatory part.
+// and the slots kept in view at any price (must-draw objects, never settled, and objects the drop
+// policy keeps, which settle like the others but without a "not drawn" point) with their cheapest
+// level's cost to the mandatory part.
 inline __attribute__((always_inline)) void budgetSlotTerms(const FrameInput& in, SelectorContext& ctx, size_t s0,
                                                            size_t m, const SlotColumns& g, SlotPass* pass) {
   uint16_t* const key = ctx.slot_key + s0;
   uint8_t* const must = ctx.slot_must + s0;
   pass->prev_dropped += (ctx.use_avx2 ? settleKeysAvx2 : settleKeysSse2)(g.a, g.b, g.levels, g.finest, g.prev, m, key);
   const uint8_t* const must_of = in.must;
-  if (!must_of) {
+  const float keep_px = in.keep_px;
+  if (!must_of && !(keep_px < std::numeric_limits<float>::infinity())) {
     std::memset(must, 0, m);
     return;
   }
-  const float* const row_cost = ctx.row_cost;
+  const float* const suffix_min = ctx.row_suffix_min;
+  const float* const visible_of = in.visible;
   double mandatory = pass->mandatory;
   for (size_t j = 0; j < m; ++j) {
-    const bool must_draw = must_of[g.object[j]] != 0;
-    must[j] = must_draw ? 1 : 0;
-    if (must_draw) {
-      key[j] = kSettleIneligible;
-      float cheapest = std::numeric_limits<float>::infinity();
-      for (int l = g.finest[j]; l < static_cast<int>(g.levels[j]); ++l)
-        cheapest = std::min(cheapest, g.a[j] + row_cost[g.row0[j] + static_cast<uint32_t>(l)]);  // ctx.pointCost
-      mandatory += cheapest;
+    const uint32_t i = g.object[j];
+    const bool must_draw = must_of && must_of[i] != 0;
+    // the drop policy: large enough on screen and not hidden
+    const bool large = g.px[j] >= keep_px && (!visible_of || visible_of[i] > kHiddenFraction);
+    const bool kept = must_draw || large;
+    must[j] = kept ? 1 : 0;
+    if (kept) {
+      // a kept object settles at a drawn level only (its hull has no "not drawn" point)
+      const uint16_t k = key[j];
+      key[j] = must_draw || k >= kSettleIneligible || (k & 15u) == 0 ? kSettleIneligible
+                                                                    : static_cast<uint16_t>(k | kSettleKeep);
+      // the cheapest of its levels [finest, count): min over l of a + row cost (ctx.pointCost)
+      mandatory += g.a[j] + suffix_min[g.row0[j] + g.finest[j]];
     }
   }
   pass->mandatory = mandatory;
@@ -447,11 +474,24 @@ SlotSums writeOutUnsettled(const FrameInput& in, const SelectorContext& ctx, con
 bool halfGuarantee(SelectorContext& ctx, const HullSums& hulls, const BudgetChoice& choice, size_t slots,
                    double greedy_benefit) {
   const size_t js = static_cast<size_t>(choice.split_slot);
-  const double alt_benefit = hulls.base_benefit + ctx.pointBenefit(js, ctx.hullLevel(js, choice.split_step + 1)) -
+  // settled kept slots have no hull: their base is their coarsest level (they settle only on
+  // chains whose costs fall from level to level, so it is their cheapest)
+  double kept_settled_benefit = 0.0;
+  for (size_t s = 0; s < slots; ++s)
+    if (ctx.chosen[s] == kSettledAtPrev && ctx.slot_must[s])
+      kept_settled_benefit += ctx.pointBenefit(s, static_cast<int>(ctx.slot_levels[s]) - 1);
+  const double alt_benefit = hulls.base_benefit + kept_settled_benefit +
+                             ctx.pointBenefit(js, ctx.hullLevel(js, choice.split_step + 1)) -
                              ctx.pointBenefit(js, ctx.hullLevel(js, 0));
   if (!(alt_benefit > greedy_benefit)) return false;
-  for (size_t s = 0; s < slots; ++s)  // every slot at its base
-    ctx.chosen[s] = ctx.chosen[s] == kSettledAtPrev ? kSettledAtBase : 0;
+  for (size_t s = 0; s < slots; ++s) {  // every slot at its base
+    if (ctx.chosen[s] == kSettledAtPrev && ctx.slot_must[s]) {
+      ctx.hull[s * ctx.hull_stride] = static_cast<uint8_t>(ctx.slot_levels[s] - 1);
+      ctx.chosen[s] = 0;
+    } else {
+      ctx.chosen[s] = ctx.chosen[s] == kSettledAtPrev ? kSettledAtBase : 0;
+    }
+  }
   ctx.chosen[js] = static_cast<uint8_t>(choice.split_step + 1);
   return true;
 }
@@ -571,6 +611,7 @@ const char* SelectionJob::error() const {
   if (!with_views && (!(params.pixels_per_cell > 0.0f) || !std::isfinite(params.pixels_per_cell)))
     return "pixels_per_cell must be positive and finite";
   if (!(params.hysteresis >= 0.0f) || !std::isfinite(params.hysteresis)) return "hysteresis must be >= 0 and finite";
+  if (!(params.min_drop_px >= 0.0f) || !std::isfinite(params.min_drop_px)) return "min_drop_px must be >= 0 and finite";
   if (params.mode == SelectionMode::kBudget && !(params.budget_ms > 0.0f)) return "budget_ms must be positive";
   // level table
   const size_t rows = levels.cell_width.count;

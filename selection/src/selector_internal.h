@@ -37,6 +37,10 @@ constexpr size_t kSlotBlock = 64;
 // A slot's settling key (settleKeys*): kSettleIneligible, or the lane-mask row
 // finest * (kLanes + 1) + level count in bits 4.. and the candidate (last frame's level) + 1 in bits 0..3.
 constexpr uint16_t kSettleIneligible = 0x8000;
+// A visible fraction at or below this reads as hidden: the drop policy may drop the object.
+constexpr float kHiddenFraction = 0.05f;
+// Set in an eligible key: the slot is kept by the drop policy (its hull has no "not drawn" point).
+constexpr uint16_t kSettleKeep = 0x4000;
 
 // GCC vector extensions: only IEEE adds, multiplies, compares and selects, so the bits do not depend
 // on how the compiler lowers them
@@ -148,6 +152,12 @@ class SelectorContext {
   // per level-table row, this frame: geometry cost (triangles, vertices, lines) and 1 / cell width
   float* row_cost = nullptr;
   float* row_inv_w = nullptr;
+  // per row, this frame: the smallest geometry cost from this row to its chain's end (a kept
+  // slot's cheapest level is a + row_suffix_min[row0 + finest]); and at a chain's first row, the
+  // spread of its rows' costs (largest - smallest) when they fall strictly from level to level,
+  // else +inf (a kept slot may settle only where every level fits alone: spread <= the budget left)
+  float* row_suffix_min = nullptr;
+  float* row_spread = nullptr;
   uint32_t* row_drawn = nullptr;  // per row: the drawn slots at it (the budget write-out's counters)
   size_t max_rows = 0;
   uint8_t* hull = nullptr;       // hull_stride bytes per slot: levels along the hull, kNotDrawn = -1
@@ -329,6 +339,8 @@ struct SettleInput {
   float h1;
   float one;               // 1.0f (from the caller: GCC lowers t < 1 ? t : 1 to minps only when 1 is not a constant)
   float avail;             // largest float <= the budget left after the mandatory part
+  float keep_avail;        // a kept slot settles only when its chain's spread is <= this (below avail)
+  const float* spread;     // row_spread
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
   // the fused write-out's (fuse only): pixels per slot and the per-row counters of drawn slots
   // (zeroed here)

@@ -117,7 +117,9 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
   alignas(32) float hyst[kLanes + 1][kLanes];
   for (int r = 0; r <= kLanes; ++r)
     for (int l = 0; l < kLanes; ++l) hyst[r][l] = l == r - 1 ? in.h1 : 1.0f;
-  const float avail = in.avail, lo = in.lo, hi = in.hi;
+  const float avail = in.avail, lo = in.lo, hi = in.hi, keep_avail = in.keep_avail;
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  const float* const in_spread = in.spread;
   const float* const row_cost = in.row_cost;
   const float* const row_inv_w = in.row_inv_w;
   alignas(32) float pc[kLanes + 1] = {}, pb[kLanes + 1] = {};
@@ -138,7 +140,14 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     const int cand = static_cast<int>(key & 15u) - 1;
     const float sa = in_a[s], sb = in_b[s], sq = in_q[s];
     const uint32_t row0 = in_row0[s];
-    const int32_t* const range = kLaneMasks.range[0][0] + ((key >> 4) & 0x7FFu) * kLanes;
+    const int32_t* const range = kLaneMasks.range[0][0] + ((key >> 4) & 0x3FFu) * kLanes;
+    // a slot kept by the drop policy: no "not drawn" point; it settles only where every level of
+    // its chain fits alone above its cheapest (the hull's base), so that every lane "fits"
+    // (every lane fits: its avail is +inf; and the candidate needs not beat "not drawn": that
+    // test's price is -inf)
+    const bool keep = (key & kSettleKeep) != 0;
+    const bool keep_ok = !keep || in_spread[row0] <= keep_avail;
+    const float slot_avail = keep ? kInfinity : avail, drop_price = keep ? -kInfinity : hi;
     const int32_t* const other = kLaneMasks.other[cand + 1];
     // the points as pointAt computes them, lane l at pc[l + 1] / pb[l + 1]; pc[0] = pb[0] = +0 is
     // "not drawn", so the candidate's point is pc[cand + 1], pb[cand + 1] without a branch
@@ -160,7 +169,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       VI in_range, not_cand;
       std::memcpy(&in_range, range + k * kWidth, sizeof(in_range));
       std::memcpy(&not_cand, other + k * kWidth, sizeof(not_cand));
-      const VI fits = c[k] <= avail;
+      const VI fits = c[k] <= slot_avail;
       const VI v = in_range & not_cand & fits;  // the other points that fit alone
       // cheaper (dc > 0): db > hi dc; costlier (dc < 0): db > lo dc; both are db > max(hi dc, lo dc)
       const VF d = cc - c[k];
@@ -168,7 +177,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       fail |= v & ~(cb - b[k] > (p > q ? p : q));
       // a drawn candidate (its own lane, c[k] = cc and b[k] = cb there) must fit alone and beat
       // "not drawn": cb > hi cc
-      fail |= ~not_cand & ~(fits & (b[k] > hi * c[k]));
+      fail |= ~not_cand & ~(fits & (b[k] > drop_price * c[k]));
     }
     // any lane set: one vptest in the AVX2 form; otherwise the vector's halves ORed down to 16 bytes,
     // then two words
@@ -194,7 +203,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
       std::memcpy(words, &fail4, sizeof(words));
       none = (words[0] | words[1]) == 0;
     }
-    const bool settled = eligible & none;
+    const bool settled = eligible & none & keep_ok;
     const int pick = (cand + 1) & -static_cast<int>(settled);  // cand + 1, or 0 for an unsettled slot
     total += pc[pick];  // cc, or pc[0] = +0
     if (kFuse) {

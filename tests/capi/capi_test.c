@@ -294,6 +294,20 @@ static int checkTransitions(slod_context* ctx, const slod_camera* near_cam) {
   CHECK(slod_select(ctx, &far_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
   CHECK(sel[object].level != far_level && sel[object].morph == 0.0f);
   CHECK(sel[object].previous_level == far_level && sel[object].fade == 0.0f);
+  /* the drop policy: a budget below the per-frame constant keeps the large objects in view (over
+   * budget) unless min_drop_px is 0, which drops them all */
+  fp.transitions = SLOD_TRANSITIONS_NONE;
+  fp.budget_ms = 0.001f;
+  fp.min_drop_px = 4.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+  CHECK(fr.drawn_count > 0 && fr.over_budget);
+  fp.min_drop_px = 0.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_OK);
+  CHECK(fr.drawn_count == 0 && fr.dropped_count > 0);
+  fp.min_drop_px = -1.0f;
+  CHECK(slod_select(ctx, near_cam, &fp, sel, sizeof(slod_selection), 64, &fr) == SLOD_ERROR_INVALID_ARGUMENT);
+  CHECK(strstr(slod_last_error_message(ctx), "min_drop_px") != NULL);
+  fp.min_drop_px = 4.0f;
   return 1;
 }
 

@@ -380,7 +380,9 @@ TEST(Replay, BudgetHoldsWithCrossFades) {
     for (size_t i = 0; i < f.levels.size(); ++i) {
       EXPECT_GE(f.fade[i], 0.0f);
       EXPECT_LE(f.fade[i], 1.0f);
-      if (f.previous_levels[i] == f.levels[i]) EXPECT_EQ(f.fade[i], 1.0f);
+      if (f.previous_levels[i] == f.levels[i]) {
+        EXPECT_EQ(f.fade[i], 1.0f);
+      }
     }
   }
   EXPECT_GT(fading, 0u);

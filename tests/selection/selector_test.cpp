@@ -386,6 +386,7 @@ TEST(Selector, TinyBudgetDropsObjectsButKeepsMustDrawAndFlags) {
   std::vector<int8_t> levels;
   SelectionStats st;
   SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
+  job.params.min_drop_px = 0.0f;  // any object may be dropped (the drop policy off)
   job.params.budget_ms = 0.51f;  // barely above the per-frame constant
   ASSERT_TRUE(job.run());
   EXPECT_TRUE(st.flags & kFlagObjectsDropped);
@@ -844,6 +845,7 @@ TEST(Selector, GreedyIsWithinHalfOfTheExactOptimum) {
     SelectionStats st;
     SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
     job.params.hysteresis = 0.0f;
+    job.params.min_drop_px = 0.0f;  // the exact optimum below may drop any object
     // a budget that makes the instance tight: a fraction of drawing everything at level 0
     job.params.mode = SelectionMode::kDistance;
     ASSERT_TRUE(job.run());
@@ -956,4 +958,101 @@ TEST(Selector, ReportFrameTimeFromAnotherThread) {
   // the reports were used: the model moved from the prior toward the reported ~2 ms frames
   const CostCoefficients prior;
   EXPECT_NE(c.per_frame_ms, prior.per_frame_ms);
+}
+
+// The drop policy: under a budget far below what the view needs, every object in view with a
+// projected radius of at least min_drop_px is drawn (at its cheapest level when nothing else fits)
+// and only smaller ones are dropped; a hidden object may be dropped whatever its size; with the
+// mandatory part above the budget the frame is flagged over budget; min_drop_px = 0 drops anything.
+TEST(Selector, DropPolicyKeepsObjectsLargerThanMinDropPx) {
+  SyntheticScene s = makeScene(11, 400, 5, 6, 120.0f);
+  const size_t n = s.centers.size();
+  const Camera cam = makeCamera(glm::vec3(0, 0, 5));
+  const Frustum fr = computeFrustum(cam);
+  auto radiusPx = [&](size_t i) {
+    const float d = glm::length(s.centers[i] - cam.eye) - s.radii[i];
+    return s.radii[i] / pixelSize(cam, std::max(d, cam.near_plane));
+  };
+  std::vector<float> visible(n, 1.0f);
+  size_t hidden_large = n;
+  for (size_t i = 0; i < n && hidden_large == n; ++i)
+    if (sphereInFrustum(fr, s.centers[i], s.radii[i]) && radiusPx(i) > 20.0f) hidden_large = i;
+  ASSERT_LT(hidden_large, n);
+  visible[hidden_large] = 0.05f;
+  for (const float min_drop : {4.0f, 10.0f, 0.0f}) {
+    Owned o(makeContext(n));
+    std::vector<int8_t> levels;
+    SelectionStats st;
+    SelectionJob job = makeJob(s, o.ctx, &cam, levels, &st);
+    job.visible_fraction = Span<const float>(visible.data(), n);
+    job.params.min_drop_px = min_drop;
+    job.params.calibrate = false;
+    const double per_frame = selectorCostModel(o.ctx).per_frame_ms;
+    job.params.budget_ms = static_cast<float>(per_frame + 0.05);  // a small part of what the view needs
+    for (int frame = 0; frame < 3; ++frame) {  // a cold frame, then warm ones (the settling pass)
+      ASSERT_TRUE(job.run());
+      size_t large = 0, dropped_large = 0, dropped_small = 0, coarsest = 0;
+      for (size_t i = 0; i < n; ++i) {
+        if (!sphereInFrustum(fr, s.centers[i], s.radii[i])) continue;
+        const bool keep = min_drop > 0.0f && radiusPx(i) >= min_drop * 1.0001f && i != hidden_large;
+        if (keep) {
+          ++large;
+          EXPECT_GE(levels[i], 0) << "object " << i << " at " << radiusPx(i) << " px, min_drop_px " << min_drop;
+          const uint32_t b = s.table.chain_level_offset[s.chains[i]], e = s.table.chain_level_offset[s.chains[i] + 1];
+          coarsest += levels[i] == static_cast<int>(e - b) - 1 ? 1 : 0;
+        }
+        if (levels[i] < 0) (keep ? dropped_large : dropped_small) += 1;
+      }
+      EXPECT_TRUE(min_drop == 0.0f || large > 20u) << large;
+      EXPECT_EQ(dropped_large, 0u);
+      if (min_drop > 0.0f) {
+        EXPECT_GT(coarsest, large / 2);  // a tight budget: most kept objects at their cheapest level
+        EXPECT_TRUE(st.flags & kFlagOverBudget);  // their cheapest levels alone exceed it
+        EXPECT_GE(st.mandatory_ms, job.params.budget_ms);
+        EXPECT_LT(levels[hidden_large], 0);  // hidden: dropped whatever its size
+      } else {
+        EXPECT_GT(dropped_small + dropped_large, 100u);
+        EXPECT_FALSE(st.flags & kFlagOverBudget);
+        EXPECT_LE(st.predicted_ms, job.params.budget_ms * 1.0001);
+      }
+    }
+  }
+  // bad input
+  Owned o(makeContext(n));
+  std::vector<int8_t> levels;
+  SelectionJob job = makeJob(s, o.ctx, &cam, levels, nullptr);
+  for (const float bad : {-1.0f, std::nanf(""), INFINITY}) {
+    job.params.min_drop_px = bad;
+    ASSERT_NE(job.error(), nullptr);
+    EXPECT_NE(std::string(job.error()).find("min_drop_px"), std::string::npos);
+  }
+}
+
+// With a budget that holds all kept objects at their cheapest levels and more, the warm frames (the
+// settling pass, kept objects settling without their "not drawn" point) choose what a cold frame
+// chooses from the same state: the greedy on full hulls.
+TEST(Selector, DropPolicySettlingAgreesWithTheFullHullWalk) {
+  SyntheticScene s = makeScene(5, 2000, 8, 6, 150.0f);
+  const size_t n = s.centers.size();
+  Owned warm(makeContext(n)), greedy(makeContext(n));
+  size_t differ = 0, frames = 0;
+  for (int f = 0; f < 40; ++f) {
+    const Camera cam = makeCamera(glm::vec3(0.05f * f, 0.0f, 5.0f - 0.1f * f));
+    std::vector<int8_t> a, b;
+    SelectionStats sa, sb;
+    SelectionJob ja = makeJob(s, warm.ctx, &cam, a, &sa);
+    SelectionJob jb = makeJob(s, greedy.ctx, &cam, b, &sb);
+    for (SelectionJob* j : {&ja, &jb}) {
+      j->params.calibrate = false;
+      j->params.budget_ms = 3.0f;
+      j->params.hysteresis = 0.0f;  // last frame's level gets no bonus: the same problem every frame
+    }
+    jb.params.algorithm = BudgetAlgorithm::kGreedy;
+    ASSERT_TRUE(ja.run());
+    ASSERT_TRUE(jb.run());
+    for (size_t i = 0; i < n; ++i) differ += a[i] != b[i] ? 1 : 0;
+    ++frames;
+    EXPECT_NEAR(sa.total_benefit, sb.total_benefit, 1e-4 * sb.total_benefit) << "frame " << f;
+  }
+  EXPECT_LT(differ, frames * n / 1000);  // ties at the budget's edge only
 }

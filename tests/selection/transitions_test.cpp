@@ -220,6 +220,7 @@ TEST(Transitions, EnteringTheViewIsImmediateDroppingFades) {
       job.params.calibrate = false;
       job.params.transitions = Transitions::kFade;
       job.params.fade_budget_share = share;
+      job.params.min_drop_px = 0.0f;  // the budget may drop any object
       out.attach(job, 2);
       EXPECT_TRUE(job.run()) << job.error();
     };
@@ -311,7 +312,9 @@ TEST(Transitions, BudgetCountsBothLevelsWhileAFadeRuns) {
     EXPECT_NEAR(st.predicted_ms, per_frame + levels_cost + fade_cost, 1e-6 * st.predicted_ms) << "frame " << f;
     EXPECT_GE(st.mandatory_ms, per_frame + continuing - 1e-6) << "frame " << f;
     // all fades within their share of the objects' budget
-    if (f > 0) EXPECT_LE(fade_cost, 0.25 * (job.params.budget_ms - per_frame) * (1.0 + 1e-6)) << "frame " << f;
+    if (f > 0) {
+      EXPECT_LE(fade_cost, 0.25 * (job.params.budget_ms - per_frame) * (1.0 + 1e-6)) << "frame " << f;
+    }
     if (f > 0 && !(st.flags & kFlagOverBudget)) {
       EXPECT_LE(per_frame + levels_cost + continuing, job.params.budget_ms * (1.0 + 1e-6)) << "frame " << f;
     }

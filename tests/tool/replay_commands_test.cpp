@@ -126,11 +126,31 @@ TEST(ReplayCommands, TransitionsAddMorphAndFadeToTheLog) {
                                                              {"--fade-ms", "-1"},
                                                              {"--morph-band", "0"},
                                                              {"--morph-band", "1.5"},
-                                                             {"--fade-budget-share", "2"}}) {
+                                                             {"--fade-budget-share", "2"},
+                                                             {"--min-drop-px", "-1"}}) {
     std::vector<std::string> args = {"replay", replay, "-o", fade};
     args.insert(args.end(), bad.begin(), bad.end());
     r = tool(args);
     EXPECT_EQ(r.exit_code, 2) << bad[0];
     EXPECT_NE(r.err.find(bad[0]), std::string::npos) << r.err;
   }
+}
+
+// --min-drop-px 0 drops any object to fit a budget; the default keeps objects of 4 px or more
+TEST(ReplayCommands, MinDropPxZeroDropsMore) {
+  if (std::string(SCENELOD_TOOL_PATH).empty()) GTEST_SKIP() << "the tool is not built";
+  const std::string dir = scenelod::test::scratchDir();
+  const std::string replay = dir + "/md.jsonl", keep = dir + "/md_keep.jsonl", any = dir + "/md_any.jsonl";
+  ASSERT_EQ(tool({"record", "builtin:small", "--path", "orbit", "--frames", "20", "--budget", "0.85", "-o", replay}).exit_code, 0);
+  ASSERT_EQ(tool({"replay", replay, "-o", keep}).exit_code, 0);
+  ASSERT_EQ(tool({"replay", replay, "-o", any, "--min-drop-px", "0"}).exit_code, 0);
+  auto dropped = [](const std::string& text) {
+    size_t total = 0, at = 0;
+    while ((at = text.find("\"dropped\": ", at)) != std::string::npos) {
+      at += 11;
+      total += std::stoul(text.substr(at));
+    }
+    return total;
+  };
+  EXPECT_GT(dropped(slurp(any)), dropped(slurp(keep)));
 }

@@ -338,6 +338,9 @@ typedef struct slod_frame_params {
   float fade_ms;               /* >= 0: a cross-fade's duration. Default 250 */
   float morph_band;            /* (0, 1]: share of a level's log pixel-size interval the morph takes. Default 0.3 */
   float fade_budget_share;     /* [0, 1], budget mode: share of the objects' budget fades may take. Default 0.1 */
+  float min_drop_px;           /* >= 0, budget mode: objects in view with a projected radius of at least this many
+                                  pixels (and not hidden) are never dropped, at worst drawn at their cheapest
+                                  level (over_budget set when even that does not fit); 0: any may be. Default 4 */
 } slod_frame_params;
 
 typedef enum slod_transitions {
@@ -387,6 +390,7 @@ static inline void slod_frame_params_init(slod_frame_params* params) {
   params->fade_ms = 250.0f;
   params->morph_band = 0.3f;
   params->fade_budget_share = 0.1f;
+  params->min_drop_px = 4.0f;
 }
 static inline void slod_frame_result_init(slod_frame_result* result) {
   if (!result) return;

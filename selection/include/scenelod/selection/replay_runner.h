@@ -53,6 +53,9 @@ struct ReplayLogFrame {
   std::vector<float> morph, fade;
   std::vector<int8_t> previous_levels;
   uint32_t fading = 0;
+  // frames without views: the largest projected radius (pixels) of an object in view left out to
+  // fit the budget, 0 when none was (not logged; the summary's)
+  double max_dropped_radius_px = 0.0;
   std::vector<std::vector<int8_t>> view_levels;  // frames with views: one per group, in order of
                                                  // first appearance (logged as "view_levels")
   uint32_t switches = 0;
@@ -113,6 +116,9 @@ struct ReplaySummary {
   double mean_occlusion_saved_ms = 0.0;
   double mean_hidden_cost_without_ms = 0.0;
   size_t pick_frames = 0;              // frames whose pick hit an object
+  size_t drawn_object_frames = 0;      // sum over frames of the objects drawn
+  size_t dropped_object_frames = 0;    // ... of the objects in view left out to fit the budget
+  double max_dropped_radius_px = 0.0;  // the largest projected radius of a dropped object, any frame
 };
 
 ReplaySummary summarizeReplay(const std::vector<ReplayLogFrame>& log, size_t warmup = 30);

@@ -100,7 +100,8 @@ struct ViewKindWeights {
 };
 
 enum SelectionFlag : uint32_t {
-  kFlagOverBudget = 1u << 0,       // even the mandatory levels (must-draw at coarsest) exceed the budget
+  kFlagOverBudget = 1u << 0,       // even the mandatory levels (must-draw and kept objects at their
+                                   // cheapest) exceed the budget
   kFlagObjectsDropped = 1u << 1,   // some objects in view were not drawn to fit the budget
   kFlagSplitFallback = 1u << 2,    // the half-approximation fallback beat the greedy this frame
 };
@@ -130,6 +131,11 @@ struct SelectionParams {
   // only (cheaper pixels, position-only vertices) and is worth less than what the camera shows
   ViewKindWeights view_kinds[kViewKindCount] = {
       {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 0.25f, 0.5f, 0.25f}, {1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 1.0f, 1.0f, 1.0f}};
+  // drop policy (budget mode, jobs without views): an object in view whose projected radius is at
+  // least min_drop_px pixels and whose visible fraction is above 0.05 is never dropped: at worst
+  // it is drawn at its cheapest level, counted in the mandatory part like a must-draw object (and
+  // the frame flagged over budget when even that does not fit). 0: any object may be dropped.
+  float min_drop_px = 4.0f;         // >= 0, finite
   // transitions (jobs without views or forced levels)
   Transitions transitions = Transitions::kNone;
   float dt_ms = 1000.0f / 60.0f;    // >= 0, finite: time since the last run() (fades advance by it)
@@ -146,7 +152,8 @@ struct SelectionStats {
   uint64_t frame = 0;              // index of this selection on the context, from 0; pass it to
                                    // reportFrameTime when the frame has been rendered
   double predicted_ms = 0.0;       // predicted cost of the chosen levels, per-frame constant included
-  double mandatory_ms = 0.0;       // per-frame constant + must-draw objects at their cheapest level
+  double mandatory_ms = 0.0;       // per-frame constant + must-draw objects and objects kept by the
+                                   // drop policy (min_drop_px) at their cheapest level
   double total_benefit = 0.0;      // sum of benefits of the chosen levels (hysteresis included)
   double lambda = 0.0;             // benefit per ms at the budget's edge (budget mode)
   CostFeatures features;           // what the chosen levels draw (the calibration's regressors)
@@ -258,7 +265,8 @@ struct SelectionJob {
   // viewport or an invalid camera, X or bias not positive, more groups than max_view_groups, a
   // wrong-sized output; a forced level out of its chain's range; dt_ms negative or not finite,
   // fade_ms negative or not finite, morph_band outside (0, 1], fade_budget_share outside [0, 1], transitions with views or forced
-  // levels, a has_morph column of the wrong length. Cost: O(objects + rows).
+  // levels, a has_morph column of the wrong length; min_drop_px negative or not finite.
+  // Cost: O(objects + rows).
   const char* error() const;
   // error() == nullptr.
   bool validate() const;
