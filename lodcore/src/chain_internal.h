@@ -2,6 +2,7 @@
 // What a chain knows about its levels while it builds them, for geomorphs (morph.cpp) and nested
 // levels (nested_level.cpp): which cluster of each level every original vertex joined.
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include <glm/vec4.hpp>
@@ -28,13 +29,44 @@ void identityMap(size_t vertex_count, LevelMap& out);
 std::vector<float> sourceAreas(const Mesh& original);
 
 // The geomorph of level `a` toward level `b` (LevelMorph in lod_chain.h): per cluster of `a`, the
-// cluster of `b` holding the largest area of its original vertices (ties: the lower id); per vertex
-// of `a`, the vertex of that cluster in `b` with the same triangle group, then the nearest texture
-// coordinates, then the nearest normal (ties: the lower index). A cluster of `a` none of whose
-// vertices is in a cluster of `b` (its part vanished) keeps its vertices where they are.
-// Cost: O(V0 + Va + Vb) time and memory.
-void computeMorph(const std::vector<float>& area, const LevelMap& a, const Mesh& ma, const LevelMap& b,
+// cluster of `b` holding the largest area (`area`, sourceAreas) of its original vertices (ties: the
+// lower id); per vertex of `a`, the vertex of that cluster in `b` with the same triangle group, then
+// the nearest texture coordinates, then the nearest normal (ties: the lower index). A cluster of `a`
+// none of whose vertices is in a cluster of `b` (its part vanished) keeps its vertices where they
+// are. `a` null: `ma` is the chain's level 0, every vertex its own cluster (`area` is then not read
+// and may be null). Cost: O(V0 + Va + Vb) time and memory.
+void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b,
                   const Mesh& mb, LevelMorph& out);
+
+// A chain's geomorphs made while its levels are built: each pair of adjacent levels' targets as soon
+// as both levels are built, on the thread that built the second, and each level's maps freed as soon
+// as both its pairs are made. Level 0 is `original` (its map the identity, never stored); levels
+// 1..level_count are built in any order, from any threads. `levels` is the chain's vector (sized by
+// the time a level is built; levels[k].morph receives the pair (k, k + 1)).
+class MorphPairs {
+ public:
+  MorphPairs(const Mesh& original, std::vector<LodLevel>& levels, size_t level_count);
+  // level k (1 <= k <= level_count) is built: its mesh is final and `map` its maps. Makes each of
+  // the pairs (k - 1, k) and (k, k + 1) whose other level is built. Thread-safe.
+  void levelBuilt(size_t k, LevelMap map);
+  // forgets every level built so far (and their pairs' targets): levels dropped before the others
+  // are built; not to be called while a level is being reported
+  void reset();
+
+ private:
+  void makePair(size_t a);
+
+  const Mesh& original_;
+  std::vector<LodLevel>& levels_;
+  const size_t n_;
+  std::mutex mutex_;
+  std::vector<uint8_t> built_;     // per level (level 0 always)
+  std::vector<uint8_t> pending_;   // per level: its pairs still to be made
+  std::vector<LevelMap> maps_;     // per level, until both its pairs are made
+  std::once_flag area_once_;
+  std::vector<float> area_;        // sourceAreas(original), until the last pair that reads it
+  size_t area_pairs_ = 0;          // pairs (k, k + 1), k >= 1, still to be made
+};
 
 // What each vertex of a level carries into the nested level after it: the heaviest weight of its
 // cluster and the face sums of its cluster's original vertices (on the cluster's first vertex only,

@@ -81,41 +81,59 @@ std::vector<float> sourceAreas(const Mesh& m) {
   return area;
 }
 
-void computeMorph(const std::vector<float>& area, const LevelMap& a, const Mesh& ma, const LevelMap& b, const Mesh& mb,
-                  LevelMorph& out) {
-  out = LevelMorph();
-  const size_t na = idCount(a.cluster_of, a.vertex_cluster), nb = idCount(b.cluster_of, b.vertex_cluster);
-  // per cluster of a: the cluster of b with the largest area of its original vertices
+namespace {
+
+// per cluster of `a` (null: level 0, every vertex its own cluster), the cluster of `b` holding the
+// largest area of its original vertices (ties: the lower id); kNone where none of them is in one
+std::vector<uint32_t> bestClusters(const std::vector<float>* area, const LevelMap* a, const LevelMap& b, size_t na,
+                                   size_t nb) {
+  if (!a) return b.cluster_of;  // (one original vertex per cluster: its own cluster of b wins)
   std::vector<uint32_t> best(na, kNone);
-  {
-    std::vector<uint32_t> offset, members;
-    groupBy(a.cluster_of, na, offset, members);
-    std::vector<float> sum(nb, 0.0f);
-    std::vector<uint32_t> touched;
-    for (size_t c = 0; c < na; ++c) {
-      touched.clear();
-      for (uint32_t i = offset[c]; i < offset[c + 1]; ++i) {
-        const uint32_t v = members[i], cb = b.cluster_of[v];
-        if (cb == kNone) continue;
-        if (sum[cb] == 0.0f) touched.push_back(cb);
-        sum[cb] += area[v];
-      }
-      float top = -1.0f;
-      for (uint32_t cb : touched) {
-        if (sum[cb] > top || (sum[cb] == top && cb < best[c])) top = sum[cb], best[c] = cb;
-        sum[cb] = 0.0f;
-      }
+  std::vector<uint32_t> offset, members;
+  groupBy(a->cluster_of, na, offset, members);
+  std::vector<float> sum(nb, 0.0f);
+  std::vector<uint32_t> touched;
+  for (size_t c = 0; c < na; ++c) {
+    touched.clear();
+    for (uint32_t i = offset[c]; i < offset[c + 1]; ++i) {
+      const uint32_t v = members[i], cb = b.cluster_of[v];
+      if (cb == kNone) continue;
+      if (sum[cb] == 0.0f) touched.push_back(cb);
+      sum[cb] += (*area)[v];
+    }
+    float top = -1.0f;
+    for (uint32_t cb : touched) {
+      if (sum[cb] > top || (sum[cb] == top && cb < best[c])) top = sum[cb], best[c] = cb;
+      sum[cb] = 0.0f;
     }
   }
+  return best;
+}
+
+bool hasGroups(const Mesh& m) {
+  return !m.triangle_groups.empty() || !m.edge_groups.empty() || !m.point_groups.empty();
+}
+
+}  // namespace
+
+void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b, const Mesh& mb,
+                  LevelMorph& out) {
+  out = LevelMorph();
+  const size_t na = a ? idCount(a->cluster_of, a->vertex_cluster) : ma.vertexCount();
+  const size_t nb = idCount(b.cluster_of, b.vertex_cluster);
+  const std::vector<uint32_t> best = bestClusters(area, a, b, na, nb);
   std::vector<uint32_t> offset, vertices;
   groupBy(b.vertex_cluster, nb, offset, vertices);
-  const std::vector<uint32_t> ga = vertexGroups(ma), gb = vertexGroups(mb);
+  // (all in group 0 where neither mesh has groups)
+  const bool groups = hasGroups(ma) || hasGroups(mb);
+  const std::vector<uint32_t> ga = groups ? vertexGroups(ma) : std::vector<uint32_t>();
+  const std::vector<uint32_t> gb = groups ? vertexGroups(mb) : std::vector<uint32_t>();
   const size_t n = ma.vertexCount();
   const bool uvs = !ma.uvs.empty() && !mb.uvs.empty(), normals = !ma.normals.empty() && !mb.normals.empty();
   // the vertex of b each vertex of a goes to (kNone: stays)
   std::vector<uint32_t> target(n, kNone);
   for (size_t u = 0; u < n; ++u) {
-    const uint32_t ca = a.vertex_cluster[u];
+    const uint32_t ca = a ? a->vertex_cluster[u] : static_cast<uint32_t>(u);
     const uint32_t cb = ca == kNone || ca >= na ? kNone : best[ca];
     if (cb == kNone) continue;
     // lexicographic: group mismatch, texture coordinate distance, normal (larger dot first)
@@ -123,7 +141,7 @@ void computeMorph(const std::vector<float>& area, const LevelMap& a, const Mesh&
     float best_d2 = 0.0f, best_dot = 0.0f;
     for (uint32_t i = offset[cb]; i < offset[cb + 1]; ++i) {
       const uint32_t w = vertices[i];
-      const bool other = ga[u] != gb[w];
+      const bool other = groups && ga[u] != gb[w];
       const float d2 = uvs ? glm::dot(ma.uvs[u] - mb.uvs[w], ma.uvs[u] - mb.uvs[w]) : 0.0f;
       const float dot = normals ? glm::dot(ma.normals[u], mb.normals[w]) : 0.0f;
       const bool better = target[u] == kNone ||
@@ -146,6 +164,55 @@ void computeMorph(const std::vector<float>& area, const LevelMap& a, const Mesh&
   out.extra_uvs.resize(std::min(ma.extra_uvs.size(), mb.extra_uvs.size()));
   for (size_t s = 0; s < out.extra_uvs.size(); ++s) fill(out.extra_uvs[s], ma.extra_uvs[s], mb.extra_uvs[s]);
   while (!out.extra_uvs.empty() && out.extra_uvs.back().empty()) out.extra_uvs.pop_back();
+}
+
+MorphPairs::MorphPairs(const Mesh& original, std::vector<LodLevel>& levels, size_t level_count)
+    : original_(original), levels_(levels), n_(level_count) {
+  reset();
+}
+
+void MorphPairs::reset() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  built_.assign(n_ + 1, 0);
+  built_[0] = 1;
+  pending_.assign(n_ + 1, 2);
+  pending_[0] = 1;
+  pending_[n_] = n_ > 0 ? 1 : 0;
+  maps_.clear();
+  maps_.resize(n_ + 1);
+  area_pairs_ = n_ > 0 ? n_ - 1 : 0;
+}
+
+void MorphPairs::levelBuilt(size_t k, LevelMap map) {
+  bool below = false, above = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    maps_[k] = std::move(map);
+    built_[k] = 1;
+    below = built_[k - 1] != 0;
+    above = k < n_ && built_[k + 1] != 0;
+  }
+  if (below) makePair(k - 1);
+  if (above) makePair(k);
+}
+
+void MorphPairs::makePair(size_t a) {
+  const std::vector<float>* area = nullptr;
+  if (a > 0) {
+    std::call_once(area_once_, [this] { area_ = sourceAreas(original_); });
+    area = &area_;
+  }
+  const Mesh& ma = a == 0 ? original_ : levels_[a].mesh;
+  computeMorph(area, a == 0 ? nullptr : &maps_[a], ma, maps_[a + 1], levels_[a + 1].mesh, levels_[a].morph);
+  // (freed outside the lock)
+  LevelMap done_a, done_b;
+  std::vector<float> done_area;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (--pending_[a] == 0) done_a = std::move(maps_[a]);
+    if (--pending_[a + 1] == 0) done_b = std::move(maps_[a + 1]);
+    if (a > 0 && --area_pairs_ == 0) done_area = std::move(area_);
+  }
 }
 
 }  // namespace detail
