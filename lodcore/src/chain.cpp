@@ -470,14 +470,13 @@ void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const Cluster
                               bool report) {
   const Clock::time_point start = Clock::now();
   LodLevel& level = out_.levels[k + 1];
-  detail::LevelMap map;
-  map.cluster_of = std::move(parts.cluster_of);
-  detail::finishLevel(parts, cp, level.mesh, nullptr, morphs_ ? &map.vertex_cluster : nullptr);
+  std::vector<uint32_t> vertex_cluster;
+  detail::finishLevel(parts, cp, level.mesh, nullptr, morphs_ ? &vertex_cluster : nullptr);
   detail::carryUniformGroup(original_, level.mesh);
   level.bounds = computeBoundingSphere(level.mesh);
-  // (the geomorphs to and from the levels next to it that are built, the time counted as the level's)
-  if (morphs_) morphs_->levelBuilt(k + 1, std::move(map));
   stats_.level_seconds[k] = seconds + since(start);
+  // the geomorphs' second steps to and from the levels next to it that are built
+  if (morphs_) morphs_->levelBuilt(k + 1, std::move(vertex_cluster));
   const size_t d = ++done_;
   if (report && params_.progress.fn) {
     std::lock_guard<std::mutex> lock(progress_mutex_);
@@ -509,6 +508,7 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   level.max_error = cs.max_error;
   level.method = cp.method;
   const double seconds = since(start);
+  std::vector<uint32_t> cluster_of = std::move(parts.cluster_of);  // (kept for the geomorphs only)
   if (k == 0) {
     held_ = std::move(parts);
     held_seconds_ = seconds;
@@ -517,6 +517,9 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   }
   // (a level's only error is its assignment's, before synthesis: then the callback was not made)
   if (!synthesis_first || !errors_[k].ok()) passSynthesis();
+  // the geomorphs' first steps with the levels next to it whose assignments are made (frees theirs
+  // and this one's where no other step reads them), before the output pass
+  if (morphs_ && errors_[k].ok()) morphs_->levelClustered(k + 1, std::move(cluster_of));
   if (k != 0 && errors_[k].ok()) finishLevel(k, parts, cp, seconds, report);
 }
 
@@ -723,8 +726,8 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
   auto built = [&](size_t k, std::vector<uint32_t>& cluster_of, std::vector<uint32_t>& vertex_cluster) {
     detail::LevelMap map;
     inputMap(am, cluster_of, map);
-    map.vertex_cluster = std::move(vertex_cluster);
-    morphs->levelBuilt(k + 1, std::move(map));
+    morphs->levelClustered(k + 1, std::move(map.cluster_of));
+    morphs->levelBuilt(k + 1, std::move(vertex_cluster));
   };
   if (n > 0) {
     t0 = Clock::now();

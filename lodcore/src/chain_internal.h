@@ -38,34 +38,45 @@ std::vector<float> sourceAreas(const Mesh& original);
 void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b,
                   const Mesh& mb, LevelMorph& out);
 
-// A chain's geomorphs made while its levels are built: each pair of adjacent levels' targets as soon
-// as both levels are built, on the thread that built the second, and each level's maps freed as soon
-// as both its pairs are made. Level 0 is `original` (its map the identity, never stored); levels
-// 1..level_count are built in any order, from any threads. `levels` is the chain's vector (sized by
-// the time a level is built; levels[k].morph receives the pair (k, k + 1)).
+// A chain's geomorphs made while its levels are built, each pair of adjacent levels' as soon as both
+// exist, in two steps on the threads that build the levels: the clusters' targets as soon as both
+// levels' assignments are made (levelClustered), the vertices' as soon as both levels' meshes are
+// (levelBuilt). Each level's arrays are freed as soon as no step left reads them, so that a chain
+// holds few of its levels' assignments (4 bytes per original vertex each) at once. Level 0 is
+// `original` (its map the identity, never stored); levels 1..level_count come in any order, from any
+// threads, levelClustered(k) before levelBuilt(k). `levels` is the chain's vector (sized by the time
+// a level is built; levels[k].morph receives the pair (k, k + 1)).
 class MorphPairs {
  public:
   MorphPairs(const Mesh& original, std::vector<LodLevel>& levels, size_t level_count);
-  // level k (1 <= k <= level_count) is built: its mesh is final and `map` its maps. Makes each of
-  // the pairs (k - 1, k) and (k, k + 1) whose other level is built. Thread-safe.
-  void levelBuilt(size_t k, LevelMap map);
-  // forgets every level built so far (and their pairs' targets): levels dropped before the others
-  // are built; not to be called while a level is being reported
+  // level k's assignment (1 <= k <= level_count): the cluster of every original vertex (kNone for
+  // none), in the ids of its vertex_cluster below. Thread-safe.
+  void levelClustered(size_t k, std::vector<uint32_t> cluster_of);
+  // level k's mesh is final, `vertex_cluster` the cluster of each of its vertices. Thread-safe.
+  void levelBuilt(size_t k, std::vector<uint32_t> vertex_cluster);
+  // forgets every level given so far (and their pairs' targets): levels dropped before the others
+  // are built; not to be called while a level is being given
   void reset();
 
  private:
-  void makePair(size_t a);
+  bool pairReady(size_t a) const;  // (under the lock) the pair (a, a + 1)'s second step can run
+  void firstStep(size_t a);
+  void secondStep(size_t a);
 
   const Mesh& original_;
   std::vector<LodLevel>& levels_;
   const size_t n_;
   std::mutex mutex_;
-  std::vector<uint8_t> built_;     // per level (level 0 always)
-  std::vector<uint8_t> pending_;   // per level: its pairs still to be made
-  std::vector<LevelMap> maps_;     // per level, until both its pairs are made
+  // per level (level 0's flags always set, its arrays never stored)
+  std::vector<uint8_t> clustered_, built_;
+  std::vector<std::vector<uint32_t>> cluster_of_, vertex_cluster_;  // until their last step
+  std::vector<uint8_t> cluster_uses_, vertex_uses_;                 // steps left that read them
+  // per pair (a, a + 1), a >= 1: the first step's result, per cluster of level a
+  std::vector<std::vector<uint32_t>> best_;
+  std::vector<uint8_t> best_done_;
   std::once_flag area_once_;
-  std::vector<float> area_;        // sourceAreas(original), until the last pair that reads it
-  size_t area_pairs_ = 0;          // pairs (k, k + 1), k >= 1, still to be made
+  std::vector<float> area_;  // sourceAreas(original), until the last first step
+  size_t first_steps_ = 0;   // first steps still to be made
 };
 
 // What each vertex of a level carries into the nested level after it: the heaviest weight of its

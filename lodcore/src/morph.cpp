@@ -33,15 +33,6 @@ void groupBy(const std::vector<uint32_t>& id, size_t n, std::vector<uint32_t>& o
     if (id[v] != kNone) list[next[id[v]]++] = static_cast<uint32_t>(v);
 }
 
-size_t idCount(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
-  uint32_t top = 0;
-  bool any = false;
-  for (const std::vector<uint32_t>* ids : {&a, &b})
-    for (uint32_t c : *ids)
-      if (c != kNone) top = std::max(top, c), any = true;
-  return any ? size_t(top) + 1 : 0;
-}
-
 // per vertex: the group of the first triangle (else edge, else point) that uses it, 0 when none
 std::vector<uint32_t> vertexGroups(const Mesh& m) {
   std::vector<uint32_t> g(m.vertexCount(), kNone);
@@ -83,23 +74,32 @@ std::vector<float> sourceAreas(const Mesh& m) {
 
 namespace {
 
-// per cluster of `a` (null: level 0, every vertex its own cluster), the cluster of `b` holding the
-// largest area of its original vertices (ties: the lower id); kNone where none of them is in one
-std::vector<uint32_t> bestClusters(const std::vector<float>* area, const LevelMap* a, const LevelMap& b, size_t na,
-                                   size_t nb) {
-  if (!a) return b.cluster_of;  // (one original vertex per cluster: its own cluster of b wins)
+size_t idCount(const std::vector<uint32_t>& ids) {
+  uint32_t top = 0;
+  bool any = false;
+  for (uint32_t c : ids)
+    if (c != kNone) top = std::max(top, c), any = true;
+  return any ? size_t(top) + 1 : 0;
+}
+
+// The first step of a geomorph (a level's clusters' targets in the next level's, from the two
+// assignments): per cluster of `a`, the cluster of `b` holding the largest area of its original
+// vertices (ties: the lower id); kNone where none of them is in one
+std::vector<uint32_t> nextClusters(const std::vector<float>& area, const std::vector<uint32_t>& a,
+                                   const std::vector<uint32_t>& b) {
+  const size_t na = idCount(a), nb = idCount(b);
   std::vector<uint32_t> best(na, kNone);
   std::vector<uint32_t> offset, members;
-  groupBy(a->cluster_of, na, offset, members);
+  groupBy(a, na, offset, members);
   std::vector<float> sum(nb, 0.0f);
   std::vector<uint32_t> touched;
   for (size_t c = 0; c < na; ++c) {
     touched.clear();
     for (uint32_t i = offset[c]; i < offset[c + 1]; ++i) {
-      const uint32_t v = members[i], cb = b.cluster_of[v];
+      const uint32_t v = members[i], cb = b[v];
       if (cb == kNone) continue;
       if (sum[cb] == 0.0f) touched.push_back(cb);
-      sum[cb] += (*area)[v];
+      sum[cb] += area[v];
     }
     float top = -1.0f;
     for (uint32_t cb : touched) {
@@ -114,16 +114,14 @@ bool hasGroups(const Mesh& m) {
   return !m.triangle_groups.empty() || !m.edge_groups.empty() || !m.point_groups.empty();
 }
 
-}  // namespace
-
-void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b, const Mesh& mb,
-                  LevelMorph& out) {
+// The second step, from the levels' meshes: each vertex of `ma` (of cluster a_vertex_cluster[u], or
+// u itself where that is null: level 0) to a vertex of `mb` in the cluster `best` gives it
+void morphTargets(const std::vector<uint32_t>& best, const std::vector<uint32_t>* a_vertex_cluster, const Mesh& ma,
+                  const std::vector<uint32_t>& b_vertex_cluster, const Mesh& mb, LevelMorph& out) {
   out = LevelMorph();
-  const size_t na = a ? idCount(a->cluster_of, a->vertex_cluster) : ma.vertexCount();
-  const size_t nb = idCount(b.cluster_of, b.vertex_cluster);
-  const std::vector<uint32_t> best = bestClusters(area, a, b, na, nb);
+  const size_t nb = idCount(b_vertex_cluster);
   std::vector<uint32_t> offset, vertices;
-  groupBy(b.vertex_cluster, nb, offset, vertices);
+  groupBy(b_vertex_cluster, nb, offset, vertices);
   // (all in group 0 where neither mesh has groups)
   const bool groups = hasGroups(ma) || hasGroups(mb);
   const std::vector<uint32_t> ga = groups ? vertexGroups(ma) : std::vector<uint32_t>();
@@ -133,9 +131,9 @@ void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh&
   // the vertex of b each vertex of a goes to (kNone: stays)
   std::vector<uint32_t> target(n, kNone);
   for (size_t u = 0; u < n; ++u) {
-    const uint32_t ca = a ? a->vertex_cluster[u] : static_cast<uint32_t>(u);
-    const uint32_t cb = ca == kNone || ca >= na ? kNone : best[ca];
-    if (cb == kNone) continue;
+    const uint32_t ca = a_vertex_cluster ? (*a_vertex_cluster)[u] : static_cast<uint32_t>(u);
+    const uint32_t cb = ca == kNone || ca >= best.size() ? kNone : best[ca];
+    if (cb == kNone || cb >= nb) continue;
     // lexicographic: group mismatch, texture coordinate distance, normal (larger dot first)
     bool best_other = true;
     float best_d2 = 0.0f, best_dot = 0.0f;
@@ -166,6 +164,20 @@ void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh&
   while (!out.extra_uvs.empty() && out.extra_uvs.back().empty()) out.extra_uvs.pop_back();
 }
 
+// moves `v` to `freed` (to be freed outside a lock) when its last use is done
+void release(std::vector<uint32_t>& v, uint8_t& uses, std::vector<std::vector<uint32_t>>& freed) {
+  if (--uses == 0) freed.push_back(std::move(v));
+}
+
+}  // namespace
+
+void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b, const Mesh& mb,
+                  LevelMorph& out) {
+  // (level 0: one original vertex per cluster, whose own cluster of b wins)
+  if (!a) return morphTargets(b.cluster_of, nullptr, ma, b.vertex_cluster, mb, out);
+  morphTargets(nextClusters(*area, a->cluster_of, b.cluster_of), &a->vertex_cluster, ma, b.vertex_cluster, mb, out);
+}
+
 MorphPairs::MorphPairs(const Mesh& original, std::vector<LodLevel>& levels, size_t level_count)
     : original_(original), levels_(levels), n_(level_count) {
   reset();
@@ -173,45 +185,82 @@ MorphPairs::MorphPairs(const Mesh& original, std::vector<LodLevel>& levels, size
 
 void MorphPairs::reset() {
   std::lock_guard<std::mutex> lock(mutex_);
+  clustered_.assign(n_ + 1, 0);
   built_.assign(n_ + 1, 0);
-  built_[0] = 1;
-  pending_.assign(n_ + 1, 2);
-  pending_[0] = 1;
-  pending_[n_] = n_ > 0 ? 1 : 0;
-  maps_.clear();
-  maps_.resize(n_ + 1);
-  area_pairs_ = n_ > 0 ? n_ - 1 : 0;
+  clustered_[0] = built_[0] = 1;
+  cluster_of_.assign(n_ + 1, {});
+  vertex_cluster_.assign(n_ + 1, {});
+  // level k's assignment is read by the first step of the pairs (k - 1, k) and (k, k + 1), level 1's
+  // by the second step of (0, 1) instead of the first; its vertices' clusters by both second steps
+  cluster_uses_.assign(n_ + 1, 2);
+  vertex_uses_.assign(n_ + 1, 2);
+  if (n_ > 0) cluster_uses_[n_] = vertex_uses_[n_] = 1;
+  best_.assign(n_, {});
+  best_done_.assign(n_, 0);
+  first_steps_ = n_ > 0 ? n_ - 1 : 0;
 }
 
-void MorphPairs::levelBuilt(size_t k, LevelMap map) {
-  bool below = false, above = false;
+void MorphPairs::levelClustered(size_t k, std::vector<uint32_t> cluster_of) {
+  std::vector<size_t> first, second;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    maps_[k] = std::move(map);
+    cluster_of_[k] = std::move(cluster_of);
+    clustered_[k] = 1;
+    for (size_t a : {k - 1, k}) {
+      if (a >= n_ || !clustered_[a] || !clustered_[a + 1]) continue;
+      if (a > 0) first.push_back(a);
+      else if (pairReady(0)) second.push_back(0);  // (no first step: level 1's assignment is its result)
+    }
+  }
+  for (size_t a : first) firstStep(a);
+  for (size_t a : second) secondStep(a);
+}
+
+void MorphPairs::levelBuilt(size_t k, std::vector<uint32_t> vertex_cluster) {
+  std::vector<size_t> second;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    vertex_cluster_[k] = std::move(vertex_cluster);
     built_[k] = 1;
-    below = built_[k - 1] != 0;
-    above = k < n_ && built_[k + 1] != 0;
+    for (size_t a : {k - 1, k})
+      if (a < n_ && pairReady(a)) second.push_back(a);
   }
-  if (below) makePair(k - 1);
-  if (above) makePair(k);
+  for (size_t a : second) secondStep(a);
 }
 
-void MorphPairs::makePair(size_t a) {
-  const std::vector<float>* area = nullptr;
-  if (a > 0) {
-    std::call_once(area_once_, [this] { area_ = sourceAreas(original_); });
-    area = &area_;
-  }
-  const Mesh& ma = a == 0 ? original_ : levels_[a].mesh;
-  computeMorph(area, a == 0 ? nullptr : &maps_[a], ma, maps_[a + 1], levels_[a + 1].mesh, levels_[a].morph);
-  // (freed outside the lock)
-  LevelMap done_a, done_b;
-  std::vector<float> done_area;
+bool MorphPairs::pairReady(size_t a) const {
+  return built_[a] && built_[a + 1] && (a == 0 ? clustered_[1] != 0 : best_done_[a] != 0);
+}
+
+void MorphPairs::firstStep(size_t a) {
+  std::call_once(area_once_, [this] { area_ = sourceAreas(original_); });
+  std::vector<uint32_t> best = nextClusters(area_, cluster_of_[a], cluster_of_[a + 1]);
+  std::vector<std::vector<uint32_t>> freed;
+  std::vector<float> freed_area;
+  bool ready = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (--pending_[a] == 0) done_a = std::move(maps_[a]);
-    if (--pending_[a + 1] == 0) done_b = std::move(maps_[a + 1]);
-    if (a > 0 && --area_pairs_ == 0) done_area = std::move(area_);
+    best_[a] = std::move(best);
+    best_done_[a] = 1;
+    release(cluster_of_[a], cluster_uses_[a], freed);
+    release(cluster_of_[a + 1], cluster_uses_[a + 1], freed);
+    if (--first_steps_ == 0) freed_area = std::move(area_);
+    ready = pairReady(a);
+  }
+  if (ready) secondStep(a);
+}
+
+void MorphPairs::secondStep(size_t a) {
+  const std::vector<uint32_t>& best = a == 0 ? cluster_of_[1] : best_[a];
+  morphTargets(best, a == 0 ? nullptr : &vertex_cluster_[a], a == 0 ? original_ : levels_[a].mesh,
+               vertex_cluster_[a + 1], levels_[a + 1].mesh, levels_[a].morph);
+  std::vector<std::vector<uint32_t>> freed;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    freed.push_back(std::move(best_[a]));
+    if (a == 0) release(cluster_of_[1], cluster_uses_[1], freed);
+    else release(vertex_cluster_[a], vertex_uses_[a], freed);
+    release(vertex_cluster_[a + 1], vertex_uses_[a + 1], freed);
   }
 }
 
