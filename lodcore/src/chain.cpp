@@ -48,10 +48,13 @@ namespace {
 // another thread while the probe runs (the default), 2 all of them before the probe, on the
 // calling thread (a test's way to make every one of them and so exercise their dropping)
 std::atomic<int> g_speculation{1};
+// levels (bit k: level k) that finishChain rebuilds as though they gained primitives
+std::atomic<unsigned> g_rebuild{0};
 }  // namespace
 
 // (test_hooks.h)
 int setChainSpeculationForTest(int mode) { return g_speculation.exchange(mode); }
+unsigned setChainRebuildForTest(unsigned levels) { return g_rebuild.exchange(levels); }
 }  // namespace detail
 
 namespace {
@@ -906,8 +909,9 @@ Error finishChain(const ChainParams& params, bool clustering, LodChain& out) {
   bool prev_rebuilt = false;     // level k - 1 was rebuilt here
   bool have_rebuilt_map = false;  // and rebuilt_map holds its maps
   detail::LevelMap rebuilt_map;
+  const unsigned forced = detail::g_rebuild.load();
   for (size_t k = 1; k < levels.size(); ++k) {
-    if (!gainsPrimitives(levels[k - 1].mesh, levels[k].mesh)) {
+    if (!(k < 32 && (forced >> k & 1u)) && !gainsPrimitives(levels[k - 1].mesh, levels[k].mesh)) {
       detail::LevelMap map;
       if (have_rebuilt_map && levelMapsAgain(params, levels[0].mesh, levels[k], map))
         detail::computeMorph(areas(), &rebuilt_map, levels[k - 1].mesh, map, levels[k].mesh, levels[k - 1].morph);
