@@ -309,13 +309,15 @@ SCENELOD_BENCHMARK(BM_Sloppy_1M)->Arg(50)->Arg(25)->Arg(10)->Arg(1)->Unit(benchm
 // peak extra memory (operator new) while building an 8-level chain, per input vertex and triangle;
 // "retained" is what the finished chain holds, "transient" the rest of the peak. With `hand_over`
 // the engine's own copy of the mesh (made before the baseline, like the input it already holds) is
-// moved into the chain, buildChain(Mesh&&), so level 0 costs nothing extra.
-void chainMemory(benchmark::State& state, const Mesh& m, bool hand_over) {
+// moved into the chain, buildChain(Mesh&&), so level 0 costs nothing extra. `morphs` as
+// ChainParams::morphs (the geomorph targets are part of "retained").
+void chainMemory(benchmark::State& state, const Mesh& m, bool hand_over, bool morphs = true) {
   long long peak_extra = 0, retained = 0;
   for (auto _ : state) {
     LodChain chain;
     ChainParams cp;
     cp.level_count = 8;
+    cp.morphs = morphs;
     Mesh own = hand_over ? m : Mesh();
     const long long base = g_current.load();
     g_peak.store(base);
@@ -332,19 +334,25 @@ void chainMemory(benchmark::State& state, const Mesh& m, bool hand_over) {
   state.counters["peak_over_budget"] = double(peak_extra) / budget;
   state.counters["transient_over_budget"] = double(peak_extra - retained) / budget;
   state.counters["budget_MB"] = budget / 1e6;
-  state.SetLabel(hand_over ? "mesh handed over" : "mesh copied");
+  state.SetLabel(std::string(hand_over ? "mesh handed over" : "mesh copied") + (morphs ? "" : ", no geomorphs"));
 }
-void BM_ChainMemory_Bunny(benchmark::State& state) { chainMemory(state, bunny(), state.range(0) == 1); }
-SCENELOD_BENCHMARK(BM_ChainMemory_Bunny)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
-void BM_ChainMemory_1M(benchmark::State& state) { chainMemory(state, bigMesh(), state.range(0) == 1); }
-SCENELOD_BENCHMARK(BM_ChainMemory_1M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
-// 10 M triangles, the mesh copied: Arg 0 one sphere, Arg 1 the scattered parts (a few seconds each)
+// Args: hand over (1) or copy (0) the mesh; geomorphs (1, the default) or none (0)
+void BM_ChainMemory_Bunny(benchmark::State& state) {
+  chainMemory(state, bunny(), state.range(0) == 1, state.range(1) == 1);
+}
+SCENELOD_BENCHMARK(BM_ChainMemory_Bunny)->ArgsProduct({{0, 1}, {1, 0}})->Unit(benchmark::kMillisecond)->Iterations(1);
+void BM_ChainMemory_1M(benchmark::State& state) {
+  chainMemory(state, bigMesh(), state.range(0) == 1, state.range(1) == 1);
+}
+SCENELOD_BENCHMARK(BM_ChainMemory_1M)->ArgsProduct({{0, 1}, {1, 0}})->Unit(benchmark::kMillisecond)->Iterations(1);
+// 10 M triangles, the mesh copied: Arg 0 one sphere, 1 the scattered parts (a few seconds each);
+// geomorphs (1) or none (0)
 void BM_ChainMemory_10M(benchmark::State& state) {
   const Mesh& m = state.range(0) == 0 ? hugeSphere() : hugeScattered();
-  chainMemory(state, m, false);
+  chainMemory(state, m, false, state.range(1) == 1);
   state.counters["triangles"] = double(m.triangleCount());
   state.SetLabel(state.range(0) == 0 ? "one sphere" : "8,000 scattered spheres");
 }
-SCENELOD_BENCHMARK(BM_ChainMemory_10M)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
+SCENELOD_BENCHMARK(BM_ChainMemory_10M)->ArgsProduct({{0, 1}, {1, 0}})->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace

@@ -48,10 +48,13 @@ namespace {
 // another thread while the probe runs (the default), 2 all of them before the probe, on the
 // calling thread (a test's way to make every one of them and so exercise their dropping)
 std::atomic<int> g_speculation{1};
+// levels (bit k: level k) that finishChain rebuilds as though they gained primitives
+std::atomic<unsigned> g_rebuild{0};
 }  // namespace
 
 // (test_hooks.h)
 int setChainSpeculationForTest(int mode) { return g_speculation.exchange(mode); }
+unsigned setChainRebuildForTest(unsigned levels) { return g_rebuild.exchange(levels); }
 }  // namespace detail
 
 namespace {
@@ -342,13 +345,12 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 class ChainLevels {
  public:
   ChainLevels(const Mesh& original, const ChainParams& params, PreparedMesh& p, LodChain& out, ChainStats& stats,
-              std::vector<detail::LevelMap>* maps)
-      : original_(original), params_(params), p_(p), out_(out), stats_(stats), maps_(maps), n_(params.level_count),
+              detail::MorphPairs* morphs)
+      : original_(original), params_(params), p_(p), out_(out), stats_(stats), morphs_(morphs), n_(params.level_count),
         errors_(n_), synthesis_pending_(n_), second_early_(p.sorted_positions.empty() && n_ >= 3),
         release_pending_(n_) {
     out_.levels.resize(n_ + 1);
     stats_.level_seconds.assign(n_, 0.0);
-    if (maps_) maps_->assign(n_ + 1, detail::LevelMap());
   }
   ~ChainLevels() {  // (on the way out of an exception only: every other path has waited)
     try {
@@ -382,7 +384,7 @@ class ChainLevels {
   PreparedMesh& p_;
   LodChain& out_;
   ChainStats& stats_;
-  std::vector<detail::LevelMap>* maps_;  // per level (index k + 1), when kept for geomorphs
+  detail::MorphPairs* morphs_;  // given each level as it is built, when the chain has geomorphs
   const size_t n_;
   float w1_ = 0.0f;  // level 1's width, searched when 0 (level 1 is only ever built at it)
   std::vector<Error> errors_;
@@ -471,16 +473,13 @@ void ChainLevels::finishLevel(size_t k, detail::LevelParts& parts, const Cluster
                               bool report) {
   const Clock::time_point start = Clock::now();
   LodLevel& level = out_.levels[k + 1];
-  if (maps_) {
-    detail::LevelMap& map = (*maps_)[k + 1];
-    map.cluster_of = std::move(parts.cluster_of);
-    detail::finishLevel(parts, cp, level.mesh, nullptr, &map.vertex_cluster);
-  } else {
-    detail::finishLevel(parts, cp, level.mesh);
-  }
+  std::vector<uint32_t> vertex_cluster;
+  detail::finishLevel(parts, cp, level.mesh, nullptr, morphs_ ? &vertex_cluster : nullptr);
   detail::carryUniformGroup(original_, level.mesh);
   level.bounds = computeBoundingSphere(level.mesh);
   stats_.level_seconds[k] = seconds + since(start);
+  // the geomorphs' second steps to and from the levels next to it that are built
+  if (morphs_) morphs_->levelBuilt(k + 1, std::move(vertex_cluster));
   const size_t d = ++done_;
   if (report && params_.progress.fn) {
     std::lock_guard<std::mutex> lock(progress_mutex_);
@@ -493,7 +492,7 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   const ClusterParams cp = levelParams(k, first_width);
   LodLevel& level = out_.levels[k + 1];
   detail::LevelParts parts;
-  parts.keep_cluster_of = maps_ != nullptr;
+  parts.keep_cluster_of = morphs_ != nullptr;
   ClusterStats cs;
   // level 2, where it was claimed early, is synthesized before its elimination: the last level past
   // synthesis, it then frees the prepared arrays and hands over level 1's held output pass an
@@ -512,6 +511,7 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   level.max_error = cs.max_error;
   level.method = cp.method;
   const double seconds = since(start);
+  std::vector<uint32_t> cluster_of = std::move(parts.cluster_of);  // (kept for the geomorphs only)
   if (k == 0) {
     held_ = std::move(parts);
     held_seconds_ = seconds;
@@ -520,6 +520,9 @@ void ChainLevels::runLevel(size_t k, float first_width, bool report) {
   }
   // (a level's only error is its assignment's, before synthesis: then the callback was not made)
   if (!synthesis_first || !errors_[k].ok()) passSynthesis();
+  // the geomorphs' first steps with the levels next to it whose assignments are made (frees theirs
+  // and this one's where no other step reads them), before the output pass
+  if (morphs_ && errors_[k].ok()) morphs_->levelClustered(k + 1, std::move(cluster_of));
   if (k != 0 && errors_[k].ok()) finishLevel(k, parts, cp, seconds, report);
 }
 
@@ -542,10 +545,10 @@ void ChainLevels::dropSpeculativeLevels() {
   for (size_t c = 0; c < next_claim_; ++c) {
     const size_t k = n_ - 1 - c;
     out_.levels[k + 1] = LodLevel();
-    if (maps_) (*maps_)[k + 1] = detail::LevelMap();
     stats_.level_seconds[k] = 0.0;
     errors_[k] = Error();
   }
+  if (morphs_) morphs_->reset();
   synthesis_pending_ += next_claim_;
   release_pending_ += next_claim_;
   done_ -= next_claim_;
@@ -626,10 +629,58 @@ void setBaseLevel(const Mesh& original, Mesh* take, const Sphere& bounds, LodLev
   base.method = LodMethod::kOriginal;
 }
 
+// a level's clusters of an attribute mesh's welded vertices taken to the input's vertices
+void inputMap(const detail::AttributeMesh& am, std::vector<uint32_t>& cluster_of, detail::LevelMap& map) {
+  if (am.did_weld) {
+    map.cluster_of.resize(am.welded_of.size());
+    for (size_t v = 0; v < am.welded_of.size(); ++v) map.cluster_of[v] = cluster_of[am.welded_of[v]];
+    std::vector<uint32_t>().swap(cluster_of);
+  } else {
+    map.cluster_of = std::move(cluster_of);
+  }
+}
+
+// The maps of an independent clustering level of `original` (levels[0]) made again, its clustering
+// repeated at its width as buildClusterChain or buildAttributeChain made it: for finishChain, once
+// the maps made while the level was built are freed. A level's clustering depends on nothing else,
+// so these are its maps; false (none) should the level come out otherwise.
+bool levelMapsAgain(const ChainParams& params, const Mesh& original, const LodLevel& level, detail::LevelMap& map) {
+  map = detail::LevelMap();
+  ClusterParams cp = params.cluster;
+  cp.cell_width = level.cell_width;
+  Mesh mesh;
+  PreparedMesh p;
+  if (detail::hasAttributes(original)) {
+    detail::AttributeMesh am;
+    detail::makeAttributeMesh(original, am);
+    detail::AttributeLevelParts parts;
+    if (!prepareMesh(am.mesh(), params.cluster, p).ok() || !detail::clusterAttributeParts(p, cp, parts, nullptr).ok())
+      return false;
+    p = PreparedMesh();
+    std::vector<uint32_t> source, cluster_of;
+    detail::finishAttributeLevel(am, cp, parts, mesh, &source, &cluster_of, &map.vertex_cluster);
+    inputMap(am, cluster_of, map);
+  } else {
+    if (!prepareMesh(original, params.cluster, p).ok()) return false;
+    if (p.sorted_positions.size() * sizeof(glm::vec3) < detail::kSortedCopyMinBytes)
+      std::vector<glm::vec3>().swap(p.sorted_positions);
+    detail::LevelParts parts;
+    parts.keep_cluster_of = true;
+    if (!detail::clusterLevelParts(p, cp, parts, nullptr).ok()) return false;
+    p = PreparedMesh();
+    map.cluster_of = std::move(parts.cluster_of);
+    detail::finishLevel(parts, cp, mesh, nullptr, &map.vertex_cluster);
+  }
+  const bool same = map.cluster_of.size() == original.vertexCount() && mesh.positions == level.mesh.positions &&
+                    mesh.triangles == level.mesh.triangles;
+  if (!same) map = detail::LevelMap();
+  return same;
+}
+
 // `take`, when given, is `original` itself, handed over by the caller: level 0 takes it by move
 // instead of a copy once the levels are done
 Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
-                        ChainStats& stats, std::vector<detail::LevelMap>* maps) {
+                        ChainStats& stats) {
   params.progress(0.0, "grading");
   PreparedMesh p;
   Clock::time_point t0 = Clock::now();
@@ -644,7 +695,9 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
   out.levels.resize(1);
   const bool no_levels = p.order.empty() || params.level_count == 0;
   if (!no_levels) {
-    ChainLevels levels(original, params, p, out, stats, maps);
+    std::optional<detail::MorphPairs> morphs;
+    if (params.morphs) morphs.emplace(original, out.levels, params.level_count);
+    ChainLevels levels(original, params, p, out, stats, morphs ? &*morphs : nullptr);
     if (Error e = levels.run(base_bounds); !e.ok()) return e;
   }
   p = PreparedMesh();
@@ -658,7 +711,7 @@ Error buildClusterChain(const Mesh& original, Mesh* take, const ChainParams& par
 // the shared welded mesh and its preparation, so the result is the same on any number of threads).
 // Each level records its source vertices in the input's indices.
 Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out,
-                          ChainStats& stats, std::vector<detail::LevelMap>* maps) {
+                          ChainStats& stats) {
   params.progress(0.0, "grading");
   Clock::time_point t0 = Clock::now();
   if (Error e = validateMesh(original, "mesh"); !e.ok()) return e;
@@ -669,18 +722,15 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
   stats.prepare_seconds = since(t0);
   const size_t n = p.order.empty() ? 0 : params.level_count;
   out.levels.resize(n + 1);
-  if (maps) maps->assign(n + 1, detail::LevelMap());
-  // a level's maps, its clusters of the welded vertices taken to the input's
-  auto keepMap = [&](size_t k, std::vector<uint32_t>& cluster_of, std::vector<uint32_t>& vertex_cluster) {
-    detail::LevelMap& map = (*maps)[k + 1];
-    if (am.did_weld) {
-      map.cluster_of.resize(am.welded_of.size());
-      for (size_t v = 0; v < am.welded_of.size(); ++v) map.cluster_of[v] = cluster_of[am.welded_of[v]];
-      std::vector<uint32_t>().swap(cluster_of);
-    } else {
-      map.cluster_of = std::move(cluster_of);
-    }
-    map.vertex_cluster = std::move(vertex_cluster);
+  std::optional<detail::MorphPairs> morphs;
+  if (params.morphs && n > 0) morphs.emplace(original, out.levels, n);
+  const bool maps = morphs.has_value();
+  // a level's maps, its clusters of the welded vertices taken to the input's, to the geomorphs
+  auto built = [&](size_t k, std::vector<uint32_t>& cluster_of, std::vector<uint32_t>& vertex_cluster) {
+    detail::LevelMap map;
+    inputMap(am, cluster_of, map);
+    morphs->levelClustered(k + 1, std::move(map.cluster_of));
+    morphs->levelBuilt(k + 1, std::move(vertex_cluster));
   };
   if (n > 0) {
     t0 = Clock::now();
@@ -740,8 +790,8 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
             std::vector<uint32_t> cluster_of, vertex_cluster;
             detail::finishAttributeLevel(am, levelParams(k), parts, level.mesh, &level.source_vertex,
                                          maps ? &cluster_of : nullptr, maps ? &vertex_cluster : nullptr);
-            if (maps) keepMap(k, cluster_of, vertex_cluster);
             record(k, cs, since(start));
+            if (maps) built(k, cluster_of, vertex_cluster);
           });
         });
     p = PreparedMesh();
@@ -750,8 +800,8 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
       std::vector<uint32_t> cluster_of, vertex_cluster;
       detail::finishAttributeLevel(am, levelParams(0), first, out.levels[1].mesh, &out.levels[1].source_vertex,
                                    maps ? &cluster_of : nullptr, maps ? &vertex_cluster : nullptr);
-      if (maps) keepMap(0, cluster_of, vertex_cluster);
       record(0, first_stats, first_seconds + since(start));
+      if (maps) built(0, cluster_of, vertex_cluster);
     }
     for (const Error& e : errors)
       if (!e.ok()) {
@@ -767,10 +817,9 @@ Error buildAttributeChain(const Mesh& original, Mesh* take, const ChainParams& p
 }
 
 // The nested chain: level 1 as an independent chain's (the same w_1 search), then each level
-// clusters the one before (nested_level.cpp), one after the other. `maps` (optional) keeps every
-// level's maps for the geomorphs; without it only the last level's are held.
-Error buildNestedChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out, ChainStats& stats,
-                       std::vector<detail::LevelMap>* maps) {
+// clusters the one before (nested_level.cpp), one after the other, and (params.morphs) the geomorph
+// toward it is made from the two levels' maps, the only ones held.
+Error buildNestedChain(const Mesh& original, Mesh* take, const ChainParams& params, LodChain& out, ChainStats& stats) {
   params.progress(0.0, "grading");
   Clock::time_point t0 = Clock::now();
   if (Error e = validateMesh(original, "mesh"); !e.ok()) return e;
@@ -781,10 +830,10 @@ Error buildNestedChain(const Mesh& original, Mesh* take, const ChainParams& para
   out.levels.clear();
   out.levels.reserve(n + 1);
   out.levels.resize(1);
-  std::vector<detail::LevelMap> local(2);
-  if (maps) maps->assign(n + 1, detail::LevelMap());
-  auto map = [&](size_t level) -> detail::LevelMap& { return maps ? (*maps)[level] : local[level % 2]; };
+  std::vector<detail::LevelMap> maps(2);
+  auto map = [&](size_t level) -> detail::LevelMap& { return maps[level % 2]; };
   detail::identityMap(original.vertexCount(), map(0));
+  std::vector<float> area;  // (for the geomorphs of levels 1 and on)
   if (n > 0) {
     t0 = Clock::now();
     float w1 = params.first_cell_width;
@@ -818,6 +867,15 @@ Error buildNestedChain(const Mesh& original, Mesh* take, const ChainParams& para
       }
       out.levels.push_back(std::move(level));
       carried = std::move(next);
+      if (params.morphs) {
+        if (k == 0) {
+          detail::computeMorph(nullptr, nullptr, original, map(1), out.levels[1].mesh, out.levels[0].morph);
+        } else {
+          if (area.empty()) area = detail::sourceAreas(original);
+          detail::computeMorph(&area, &map(k), out.levels[k].mesh, map(k + 1), out.levels[k + 1].mesh,
+                               out.levels[k].morph);
+        }
+      }
       stats.level_seconds[k] = since(start);
       params.progress(0.1 + 0.9 * double(k + 1) / double(n), "clustering levels");
     }
@@ -835,21 +893,51 @@ bool gainsPrimitives(const Mesh& a, const Mesh& b) {
   return b.triangleCount() > a.triangleCount() || pb > pa;
 }
 
-// A built chain's last steps: no level gains primitives (a clustering level that would is rebuilt by
-// a nested step from the level before at its own width, another generator's is dropped), then the
-// geomorphs from `maps` (one per level, or empty: none), freeing each level's maps once used.
-Error finishChain(const ChainParams& params, bool clustering, LodChain& out, std::vector<detail::LevelMap>* maps) {
+// A built chain's last step: no level gains primitives. A clustering level that would is rebuilt by
+// a nested step from the level before at its own width, another generator's is dropped (and the
+// geomorph of the level before it with it). The geomorphs were made as the levels were built; those
+// to and from a rebuilt level are made again here, from the maps of the levels next to it made again
+// (levelMapsAgain; a nested chain's levels never gain).
+Error finishChain(const ChainParams& params, bool clustering, LodChain& out) {
   std::vector<LodLevel>& levels = out.levels;
-  const bool have_maps = maps && maps->size() == levels.size();
-  if (have_maps && (*maps)[0].empty()) detail::identityMap(levels[0].mesh.vertexCount(), (*maps)[0]);
+  const bool maps = clustering && params.morphs && !params.nested;
+  std::vector<float> area;
+  auto areas = [&]() -> const std::vector<float>* {
+    if (area.empty()) area = detail::sourceAreas(levels[0].mesh);
+    return &area;
+  };
+  bool prev_rebuilt = false;     // level k - 1 was rebuilt here
+  bool have_rebuilt_map = false;  // and rebuilt_map holds its maps
+  detail::LevelMap rebuilt_map;
+  const unsigned forced = detail::g_rebuild.load();
   for (size_t k = 1; k < levels.size(); ++k) {
-    if (!gainsPrimitives(levels[k - 1].mesh, levels[k].mesh)) continue;
+    if (!(k < 32 && (forced >> k & 1u)) && !gainsPrimitives(levels[k - 1].mesh, levels[k].mesh)) {
+      detail::LevelMap map;
+      if (have_rebuilt_map && levelMapsAgain(params, levels[0].mesh, levels[k], map))
+        detail::computeMorph(areas(), &rebuilt_map, levels[k - 1].mesh, map, levels[k].mesh, levels[k - 1].morph);
+      prev_rebuilt = have_rebuilt_map = false;
+      rebuilt_map = detail::LevelMap();
+      continue;
+    }
     if (!clustering) {
       levels.erase(levels.begin() + std::ptrdiff_t(k));
       levels[k - 1].morph = LevelMorph();  // (its targets were in the level dropped)
-      if (have_maps) maps->erase(maps->begin() + std::ptrdiff_t(k));
       --k;
       continue;
+    }
+    // level k - 1's maps: rebuilt here, level 0's, or made again
+    detail::LevelMap prev_map;
+    bool have_prev = false;
+    if (maps) {
+      if (prev_rebuilt) {
+        have_prev = have_rebuilt_map;
+        prev_map = std::move(rebuilt_map);
+      } else if (k == 1) {
+        detail::identityMap(levels[0].mesh.vertexCount(), prev_map);
+        have_prev = true;
+      } else {
+        have_prev = levelMapsAgain(params, levels[0].mesh, levels[k - 1], prev_map);
+      }
     }
     ClusterParams cp = params.cluster;
     cp.cell_width = levels[k].cell_width;
@@ -858,21 +946,20 @@ Error finishChain(const ChainParams& params, bool clustering, LodChain& out, std
     LodLevel rebuilt;
     detail::LevelMap map;
     const LodLevel& prev = levels[k - 1];
-    if (Error e = detail::nestedLevel(in, prev.mesh, have_maps ? &(*maps)[k - 1] : nullptr,
+    if (Error e = detail::nestedLevel(in, prev.mesh, have_prev ? &prev_map : nullptr,
                                       k == 1 ? nullptr : &prev.source_vertex, prev.max_error, levels[0].mesh, cp, rebuilt,
-                                      have_maps ? &map : nullptr, nullptr);
+                                      have_prev ? &map : nullptr, nullptr);
         !e.ok())
       return e;
     levels[k] = std::move(rebuilt);
-    if (have_maps) (*maps)[k] = std::move(map);
+    levels[k - 1].morph = LevelMorph();
+    if (have_prev && params.morphs)
+      detail::computeMorph(k == 1 ? nullptr : areas(), k == 1 ? nullptr : &prev_map, levels[k - 1].mesh, map,
+                           levels[k].mesh, levels[k - 1].morph);
+    prev_rebuilt = true;
+    have_rebuilt_map = have_prev;
+    rebuilt_map = std::move(map);
   }
-  if (!params.morphs || !have_maps) return {};
-  const std::vector<float> area = detail::sourceAreas(levels[0].mesh);
-  for (size_t k = 0; k + 1 < levels.size(); ++k) {
-    detail::computeMorph(area, (*maps)[k], levels[k].mesh, (*maps)[k + 1], levels[k + 1].mesh, levels[k].morph);
-    (*maps)[k] = detail::LevelMap();
-  }
-  maps->clear();
   return {};
 }
 
@@ -893,12 +980,10 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
     case LodMethod::kFloatingNearest:
     {
       const Clock::time_point t0 = Clock::now();
-      std::vector<detail::LevelMap> maps;
-      std::vector<detail::LevelMap>* keep = params.morphs ? &maps : nullptr;
-      Error e = params.nested ? buildNestedChain(original, take, params, out, stats, keep)
-                : detail::hasAttributes(original) ? buildAttributeChain(original, take, params, out, stats, keep)
-                                                  : buildClusterChain(original, take, params, out, stats, keep);
-      if (e.ok()) e = finishChain(params, true, out, keep);
+      Error e = params.nested ? buildNestedChain(original, take, params, out, stats)
+                : detail::hasAttributes(original) ? buildAttributeChain(original, take, params, out, stats)
+                                                  : buildClusterChain(original, take, params, out, stats);
+      if (e.ok()) e = finishChain(params, true, out);
       if (!e.ok()) out.levels.clear();
       stats.total_seconds = since(t0);
       return e;
@@ -908,7 +993,7 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
       Error e = buildZhangChain(original, params, out);  // (its geomorphs made there)
       // these generators copy level 0; a handed-over mesh replaces the copy, as documented
       if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
-      if (e.ok()) e = finishChain(params, false, out, nullptr);
+      if (e.ok()) e = finishChain(params, false, out);
       if (!e.ok()) out.levels.clear();
       return e;
     }
@@ -918,7 +1003,7 @@ Error buildChainImpl(const Mesh& original, Mesh* take, const ChainParams& params
       Error e = buildScroogeChain(original, params, out);  // default ScroogeParams
       stats.total_seconds = since(t0);
       if (e.ok() && take && !out.levels.empty()) out.levels[0].mesh = std::move(*take);
-      if (e.ok()) e = finishChain(params, false, out, nullptr);
+      if (e.ok()) e = finishChain(params, false, out);
       if (!e.ok()) out.levels.clear();
       return e;
     }

@@ -37,6 +37,10 @@ int setRenumberingForTest(int mode);
 // chain.cpp: how a chain builds its coarse levels during its w_1 search's first probe: 0 not at
 // all, 1 on another thread while the probe runs (the default), 2 all of them before the probe
 int setChainSpeculationForTest(int mode);
+// chain.cpp: not a switch between equal paths but a fault to exercise a rare one: the levels whose
+// bit is set (bit k: level k) are rebuilt by a chain's last step as though they gained primitives
+// (0, the default: none)
+unsigned setChainRebuildForTest(unsigned levels);
 // floating_cell_cluster.cpp: the AVX2 paths of the assignment (on, the default where the CPU has
 // AVX2) or its SSE2 (scalar) ones
 bool setFloatingAvx2ForTest(bool on);

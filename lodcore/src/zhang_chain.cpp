@@ -47,9 +47,10 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
   const float min_width = 1e-6f * std::max(computeBounds(original).diagonal(), 1e-30f);
   size_t previous_triangles = t0;
   float previous_width = 0.0f;
-  // the levels' maps for the geomorphs: an input vertex's cluster is the vertex it collapsed into
-  std::vector<detail::LevelMap> maps(1);
-  if (params.morphs) detail::identityMap(original.vertexCount(), maps[0]);
+  // the geomorphs, each made once its two levels are: an input vertex's cluster is the vertex it
+  // collapsed into (level 0's map, the identity, is not stored)
+  detail::LevelMap prev_map, map;
+  std::vector<float> area;
   for (size_t i = 0; i < meshes.size(); ++i) {
     if (stats[i].output_triangles >= previous_triangles) break;  // no collapse possible any more
     previous_triangles = stats[i].output_triangles;
@@ -64,18 +65,15 @@ Error buildZhangChain(const Mesh& original, const ChainParams& params, const Zha
     level.source_vertex = std::move(stats[i].source_vertex);
     out.levels.push_back(std::move(level));
     if (params.morphs) {
-      maps.emplace_back();
-      maps.back().cluster_of = std::move(stats[i].collapsed_into);
-      maps.back().vertex_cluster = std::move(stats[i].output_vertex_of);
+      map.cluster_of = std::move(stats[i].collapsed_into);
+      map.vertex_cluster = std::move(stats[i].output_vertex_of);
+      const size_t k = out.levels.size() - 2;  // the pair (k, k + 1)
+      if (k > 0 && area.empty()) area = detail::sourceAreas(original);
+      detail::computeMorph(k == 0 ? nullptr : &area, k == 0 ? nullptr : &prev_map, out.levels[k].mesh, map,
+                           out.levels[k + 1].mesh, out.levels[k].morph);
+      prev_map = std::move(map);
     }
     std::vector<uint32_t>().swap(stats[i].collapsed_into);
-  }
-  if (params.morphs) {
-    const std::vector<float> area = detail::sourceAreas(original);
-    for (size_t k = 0; k + 1 < out.levels.size(); ++k) {
-      detail::computeMorph(area, maps[k], out.levels[k].mesh, maps[k + 1], out.levels[k + 1].mesh, out.levels[k].morph);
-      maps[k] = detail::LevelMap();
-    }
   }
   return {};
 }

@@ -17,6 +17,7 @@
 #include "scenelod/lodcore/cluster.h"
 #include "scenelod/lodcore/obj_io.h"
 #include "scenelod/lodcore/zhang.h"
+#include "test_hooks.h"
 #include "test_support.h"
 
 using namespace scenelod;
@@ -309,4 +310,58 @@ TEST(Morph, BunnyNestedChainIsExact) {
   ASSERT_TRUE(buildChain(bunny, cp, chain).ok());
   expectExactMorphs(chain, "bunny nested");
   expectNoLevelGains(chain, "bunny nested");
+}
+
+// A level rebuilt at the chain's end (so as not to gain primitives) after the geomorphs next to it
+// were made gets them made again, from the maps of the levels next to it made again (their
+// clustering repeated): forced here on levels 1, 3 and 4 (two in a row) of a plain and a textured
+// (welded, two charts, two groups) mesh, with the shared models' two natural cases left to
+// ChainMonotoneModels. Every pair with a rebuilt level has its targets, each a vertex of the next
+// level (position and texture coordinates), most of them moved (a rebuilt level is not exactly the
+// level before at factor 1, as a nested chain's levels are); every other pair is as in the chain
+// without rebuilds. (That the maps made again are those the levels were built with, bit for bit,
+// was checked against the chain that kept every level's maps until its end.)
+TEST(Morph, RebuiltLevelsGetTheirGeomorphsAgain) {
+  for (const Mesh& m : {testMesh(), texturedMesh()}) {
+    const std::string what = m.uvs.empty() ? "plain" : "textured";
+    ChainParams cp;
+    cp.level_count = 6;
+    LodChain plain, chain;
+    ASSERT_TRUE(buildChain(m, cp, plain).ok());
+    {
+      detail::HookGuard rebuild(detail::setChainRebuildForTest, (1u << 1) | (1u << 3) | (1u << 4));
+      ASSERT_TRUE(buildChain(m, cp, chain).ok());
+    }
+    ASSERT_EQ(chain.levelCount(), plain.levelCount());
+    std::vector<bool> rebuilt(chain.levelCount());
+    for (size_t k = 1; k < chain.levelCount(); ++k)
+      rebuilt[k] = k == 1 || k == 3 || k == 4 || !sameGeometry(chain.levels[k].mesh, plain.levels[k].mesh);
+    EXPECT_FALSE(sameGeometry(chain.levels[3].mesh, plain.levels[3].mesh)) << what << ": the rebuild changes level 3";
+    for (size_t k = 0; k + 1 < chain.levelCount(); ++k) {
+      const Mesh& a = chain.levels[k].mesh;
+      const Mesh& b = chain.levels[k + 1].mesh;
+      const LevelMorph& morph = chain.levels[k].morph;
+      ASSERT_EQ(morph.positions.size(), a.vertexCount()) << what << " level " << k;
+      ASSERT_EQ(morph.uvs.size(), m.uvs.empty() ? 0 : a.vertexCount()) << what << " level " << k;
+      if (rebuilt[k] || rebuilt[k + 1]) {
+        std::set<std::tuple<float, float, float, float, float>> next;
+        for (size_t w = 0; w < b.vertexCount(); ++w)
+          next.insert({b.positions[w].x, b.positions[w].y, b.positions[w].z, b.uvs.empty() ? 0.0f : b.uvs[w].x,
+                       b.uvs.empty() ? 0.0f : b.uvs[w].y});
+        size_t moved = 0;
+        for (size_t u = 0; u < a.vertexCount(); ++u) {
+          const glm::vec3 p = morph.positions[u];
+          const glm::vec2 t = morph.uvs.empty() ? glm::vec2(0.0f) : morph.uvs[u];
+          ASSERT_TRUE(next.count({p.x, p.y, p.z, t.x, t.y})) << what << " level " << k << " vertex " << u;
+          moved += p != a.positions[u];
+        }
+        EXPECT_GT(moved, a.vertexCount() / 2) << what << " level " << k;
+      } else {
+        EXPECT_EQ(morph.positions, plain.levels[k].morph.positions) << what << " level " << k;
+        EXPECT_EQ(morph.normals, plain.levels[k].morph.normals) << what << " level " << k;
+        EXPECT_EQ(morph.uvs, plain.levels[k].morph.uvs) << what << " level " << k;
+      }
+    }
+    EXPECT_TRUE(chain.levels.back().morph.empty()) << what;
+  }
 }

@@ -37,8 +37,9 @@ struct ChainParams {
 // or more primitives (triangles, edges and points), than the level before: a clustering level that
 // would is rebuilt from the level before at its own width (a nested step), a level of another
 // generator is dropped. With params.morphs each level but the last gets its geomorph targets
-// (LodLevel::morph); the levels' vertex -> cluster maps this needs (4 bytes per original vertex and
-// level, plus 4 per level vertex) are freed when the morphs are made. With params.nested (clustering
+// (LodLevel::morph), made while the levels are built; the levels' vertex -> cluster maps this needs
+// (4 bytes per original vertex and level, plus 4 per level vertex) are each freed as soon as the
+// targets that read them are made (docs/CLUSTERING.md, "Geomorphs"). With params.nested (clustering
 // methods) the levels are built one after the other, each from the one before.
 // A mesh with attributes (texture coordinates, tangents, a skin or more than one triangle group)
 // is welded, split into UV charts and prepared once, and each clustering level carries its texture
