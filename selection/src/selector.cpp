@@ -476,10 +476,27 @@ bool halfGuarantee(SelectorContext& ctx, const HullSums& hulls, const BudgetChoi
   const size_t js = static_cast<size_t>(choice.split_slot);
   // settled kept slots have no hull: their base is their coarsest level (they settle only on
   // chains whose costs fall from level to level, so it is their cheapest)
+  // (16 slots at a time: without the drop policy no slot is one, and most blocks have none)
+  typedef uint8_t V16u __attribute__((vector_size(16)));
+  const uint8_t* const chosen = ctx.chosen;
+  const uint8_t* const must = ctx.slot_must;
   double kept_settled_benefit = 0.0;
-  for (size_t s = 0; s < slots; ++s)
-    if (ctx.chosen[s] == kSettledAtPrev && ctx.slot_must[s])
+  auto add = [&](size_t s) {
+    if (chosen[s] == kSettledAtPrev && must[s])
       kept_settled_benefit += ctx.pointBenefit(s, static_cast<int>(ctx.slot_levels[s]) - 1);
+  };
+  size_t s0 = 0;
+  for (; s0 + 16 <= slots; s0 += 16) {
+    V16u c, k;
+    std::memcpy(&c, chosen + s0, sizeof(c));
+    std::memcpy(&k, must + s0, sizeof(k));
+    const auto hit = (c == kSettledAtPrev) & (k != 0);
+    uint64_t w[2];
+    std::memcpy(w, &hit, sizeof(w));
+    if ((w[0] | w[1]) == 0) continue;
+    for (size_t s = s0; s < s0 + 16; ++s) add(s);
+  }
+  for (; s0 < slots; ++s0) add(s0);
   const double alt_benefit = hulls.base_benefit + kept_settled_benefit +
                              ctx.pointBenefit(js, ctx.hullLevel(js, choice.split_step + 1)) -
                              ctx.pointBenefit(js, ctx.hullLevel(js, 0));
@@ -507,6 +524,7 @@ SlotSums budgetLevels(const FrameInput& in, SelectorContext& ctx, const Selectio
   frame.rows = in.rows;
   frame.avail = cap - pass.mandatory;
   frame.obj_cap = cap - in.per_frame_ms;
+  frame.keep = in.keep_px < std::numeric_limits<float>::infinity();
   frame.use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
   frame.hist = histogramWindow(ctx, frame.slots, frame.use_greedy);
   for (size_t r = 0; r < in.rows; ++r) frame.rows_nonnegative &= ctx.row_cost[r] >= 0.0f;

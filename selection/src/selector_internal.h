@@ -341,6 +341,7 @@ struct SettleInput {
   float avail;             // largest float <= the budget left after the mandatory part
   float keep_avail;        // a kept slot settles only when its chain's spread is <= this (below avail)
   const float* spread;     // row_spread
+  bool keep;               // some key may carry kSettleKeep (the drop policy is on)
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
   // the fused write-out's (fuse only): pixels per slot and the per-row counters of drawn slots
   // (zeroed here)
@@ -410,6 +411,7 @@ struct BudgetFrame {
   double obj_cap = 0.0;         // the objects' share of the budget
   bool use_greedy = false;      // the heap greedy instead of the Lagrangian form
   bool rows_nonnegative = true; // every row's geometry cost >= 0 (not NaN): the settling pass may run
+  bool keep = false;            // the drop policy is on: some slots may be kept (kSettleKeep)
   HistWindow hist;
 };
 // A price bracket (lo, hi].
