@@ -261,9 +261,10 @@ inline __attribute__((always_inline)) void budgetSlotTerms(const FrameInput& in,
 
 // Distance mode's levels of a block of m slots: the finest candidate, or a coarser current level
 // while it is within the hysteresis margin; each slot's cost and benefit at it added to the
-// frame's sums in slot order (the slot is drawn: ctx.pointCost / ctx.pointBenefit at its level).
+// frame's sums in slot order (the slot is drawn: ctx.pointCost / ctx.pointBenefit at its level); each
+// slot's row to row_of.
 inline __attribute__((always_inline)) void distanceLevels(const FrameInput& in, const SelectorContext& ctx, size_t m,
-                                                          const SlotColumns& g, SlotSums* sums) {
+                                                          const SlotColumns& g, SlotSums* sums, uint32_t* row_of) {
   const float* const row_cost = ctx.row_cost;
   const float* const row_inv_w = ctx.row_inv_w;
   const uint32_t* const tri = in.tri;
@@ -283,6 +284,7 @@ inline __attribute__((always_inline)) void distanceLevels(const FrameInput& in, 
         std::min(1.0f, g.q[j] * row_inv_w[row0 + static_cast<uint32_t>(p)]) * h1 >= 1.0f)
       level = p;
     const uint32_t row = row0 + static_cast<uint32_t>(level);
+    row_of[j] = row;
     const float cost = g.a[j] + row_cost[row];
     const float acc = std::min(1.0f, g.q[j] * row_inv_w[row]) * h_mult[level == p];
     s.predicted += cost;
@@ -358,7 +360,7 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
   bool any_empty_chain = false;
   for (size_t c = 0; c < in.chain_count; ++c) any_empty_chain |= in.chain_offset[c + 1] == in.chain_offset[c];
   // distance mode's block columns
-  alignas(32) uint32_t lrow0[kSlotBlock];
+  alignas(32) uint32_t lrow0[kSlotBlock], lrow[kSlotBlock];  // first rows, chosen rows
   alignas(32) float lq[kSlotBlock], la[kSlotBlock], lb[kSlotBlock], lpx[kSlotBlock];
   alignas(32) uint8_t lfinest[kSlotBlock], llevels[kSlotBlock];
   alignas(32) int8_t lprev[kSlotBlock];
@@ -373,12 +375,12 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
     if (in.budget) {
       budgetSlotTerms(in, ctx, s0, m, g, &pass);
     } else {
-      distanceLevels(in, ctx, m, g, distance_sums);
+      distanceLevels(in, ctx, m, g, distance_sums, lrow);
       if (in.keep_slot_terms) {  // the block's queue entries are consumed: their columns are free
         std::memcpy(ctx.slot_a + s0, la, m * sizeof(float));
         std::memcpy(ctx.slot_px + s0, lpx, m * sizeof(float));
       }
-      if (in.morph_out) morphFactors(ctx, g.object, g.row0, g.q, in.level_of, m, in.morph_out);
+      if (in.morph_out) morphFactorsAtRows(ctx, g.object, lrow, g.q, m, in.morph_out);
     }
   };
   // slots are handed on in full blocks while their objects' inputs are still in cache

@@ -248,6 +248,9 @@ void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const Sele
 // object) into morph_out by object; 0 for a slot not drawn.
 void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row0, const float* q,
                   const int8_t* level_of, size_t m, float* morph_out);
+// The same for m drawn slots at the given rows (distance mode: their levels' rows, no lookup by object).
+void morphFactorsAtRows(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row, const float* q,
+                        size_t m, float* morph_out);
 // Budget mode, before the choice: the predicted cost of the levels still fading out this frame
 // from fades started in earlier frames (slot columns a of the slot pass), in slot order while it
 // stays within `cap`; the fades beyond it end now.
