@@ -1,8 +1,8 @@
 // A fixed number of selection frames on the benchmark scene (selector_scene.h), for deterministic
 // instruction and branch-misprediction counts under callgrind (scripts/selection-callgrind); the
 // timing benchmarks are in selector_bench.cpp. It also prints a fingerprint (FNV-1a over every
-// frame's levels and statistics), so a change meant to keep the selector's output can be checked
-// bit for bit: run it before and after and diff the lines.
+// frame's levels and statistics, and with transitions their three outputs), so a change meant to
+// keep the selector's output can be checked bit for bit: run it before and after and diff the lines.
 // Usage: selector_frames OBJECTS FRAMES MODE, MODE one of
 //   smooth   budget, Lagrangian, camera turning 1/600 of the orbit per frame, history kept
 //   cold     budget, Lagrangian, camera jump and history reset every frame
@@ -75,6 +75,13 @@ int main(int argc, char** argv) {
     mixBytes(sums, sizeof sums);
     mixBytes(counts, sizeof counts);
     mixBytes(&st.features, sizeof st.features);
+    if (transitions != Transitions::kNone) {
+      mixBytes(s.morph.data(), s.morph.size() * sizeof(float));
+      mixBytes(s.previous_levels.data(), s.previous_levels.size());
+      mixBytes(s.fade.data(), s.fade.size() * sizeof(float));
+      const double fades[] = {st.fade_cost_ms, static_cast<double>(st.fading_count)};
+      mixBytes(fades, sizeof fades);
+    }
   }
   std::printf("%d frames, %.1f drawn per frame, fingerprint %016llx\n", frames,
               static_cast<double>(drawn) / frames, static_cast<unsigned long long>(hash));

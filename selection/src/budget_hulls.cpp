@@ -139,7 +139,7 @@ size_t settle(const SelectorContext& ctx, const BudgetFrame& frame, const PriceB
   }
   const SettleInput in{ctx.slot_key, ctx.slot_row0, ctx.slot_a, ctx.slot_b, ctx.slot_q,
                        ctx.row_cost, ctx.row_inv_w, ctx.h1, 1.0f, floatAtMost(frame.avail),
-                       floatAtMost(frame.avail * (1.0 - 1.0 / 4096.0)), ctx.row_spread,
+                       floatAtMost(frame.avail * (1.0 - 1.0 / 4096.0)), ctx.row_spread, frame.keep,
                        static_cast<float>(predicted.lo / (1.0 + kSettleMargin)),
                        static_cast<float>(predicted.hi * (1.0 + kSettleMargin)),
                        ctx.slot_px, ctx.row_drawn, frame.rows};

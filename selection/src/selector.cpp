@@ -261,9 +261,10 @@ inline __attribute__((always_inline)) void budgetSlotTerms(const FrameInput& in,
 
 // Distance mode's levels of a block of m slots: the finest candidate, or a coarser current level
 // while it is within the hysteresis margin; each slot's cost and benefit at it added to the
-// frame's sums in slot order (the slot is drawn: ctx.pointCost / ctx.pointBenefit at its level).
+// frame's sums in slot order (the slot is drawn: ctx.pointCost / ctx.pointBenefit at its level); each
+// slot's row to row_of.
 inline __attribute__((always_inline)) void distanceLevels(const FrameInput& in, const SelectorContext& ctx, size_t m,
-                                                          const SlotColumns& g, SlotSums* sums) {
+                                                          const SlotColumns& g, SlotSums* sums, uint32_t* row_of) {
   const float* const row_cost = ctx.row_cost;
   const float* const row_inv_w = ctx.row_inv_w;
   const uint32_t* const tri = in.tri;
@@ -283,6 +284,7 @@ inline __attribute__((always_inline)) void distanceLevels(const FrameInput& in, 
         std::min(1.0f, g.q[j] * row_inv_w[row0 + static_cast<uint32_t>(p)]) * h1 >= 1.0f)
       level = p;
     const uint32_t row = row0 + static_cast<uint32_t>(level);
+    row_of[j] = row;
     const float cost = g.a[j] + row_cost[row];
     const float acc = std::min(1.0f, g.q[j] * row_inv_w[row]) * h_mult[level == p];
     s.predicted += cost;
@@ -358,7 +360,7 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
   bool any_empty_chain = false;
   for (size_t c = 0; c < in.chain_count; ++c) any_empty_chain |= in.chain_offset[c + 1] == in.chain_offset[c];
   // distance mode's block columns
-  alignas(32) uint32_t lrow0[kSlotBlock];
+  alignas(32) uint32_t lrow0[kSlotBlock], lrow[kSlotBlock];  // first rows, chosen rows
   alignas(32) float lq[kSlotBlock], la[kSlotBlock], lb[kSlotBlock], lpx[kSlotBlock];
   alignas(32) uint8_t lfinest[kSlotBlock], llevels[kSlotBlock];
   alignas(32) int8_t lprev[kSlotBlock];
@@ -373,12 +375,12 @@ SlotPass slotPass(const FrameInput& in, SelectorContext& ctx, SlotSums* distance
     if (in.budget) {
       budgetSlotTerms(in, ctx, s0, m, g, &pass);
     } else {
-      distanceLevels(in, ctx, m, g, distance_sums);
+      distanceLevels(in, ctx, m, g, distance_sums, lrow);
       if (in.keep_slot_terms) {  // the block's queue entries are consumed: their columns are free
         std::memcpy(ctx.slot_a + s0, la, m * sizeof(float));
         std::memcpy(ctx.slot_px + s0, lpx, m * sizeof(float));
       }
-      if (in.morph_out) morphFactors(ctx, g.object, g.row0, g.q, in.level_of, m, in.morph_out);
+      if (in.morph_out) morphFactorsAtRows(ctx, g.object, lrow, g.q, m, in.morph_out);
     }
   };
   // slots are handed on in full blocks while their objects' inputs are still in cache
@@ -476,10 +478,27 @@ bool halfGuarantee(SelectorContext& ctx, const HullSums& hulls, const BudgetChoi
   const size_t js = static_cast<size_t>(choice.split_slot);
   // settled kept slots have no hull: their base is their coarsest level (they settle only on
   // chains whose costs fall from level to level, so it is their cheapest)
+  // (16 slots at a time: without the drop policy no slot is one, and most blocks have none)
+  typedef uint8_t V16u __attribute__((vector_size(16)));
+  const uint8_t* const chosen = ctx.chosen;
+  const uint8_t* const must = ctx.slot_must;
   double kept_settled_benefit = 0.0;
-  for (size_t s = 0; s < slots; ++s)
-    if (ctx.chosen[s] == kSettledAtPrev && ctx.slot_must[s])
+  auto add = [&](size_t s) {
+    if (chosen[s] == kSettledAtPrev && must[s])
       kept_settled_benefit += ctx.pointBenefit(s, static_cast<int>(ctx.slot_levels[s]) - 1);
+  };
+  size_t s0 = 0;
+  for (; s0 + 16 <= slots; s0 += 16) {
+    V16u c, k;
+    std::memcpy(&c, chosen + s0, sizeof(c));
+    std::memcpy(&k, must + s0, sizeof(k));
+    const auto hit = (c == kSettledAtPrev) & (k != 0);
+    uint64_t w[2];
+    std::memcpy(w, &hit, sizeof(w));
+    if ((w[0] | w[1]) == 0) continue;
+    for (size_t s = s0; s < s0 + 16; ++s) add(s);
+  }
+  for (; s0 < slots; ++s0) add(s0);
   const double alt_benefit = hulls.base_benefit + kept_settled_benefit +
                              ctx.pointBenefit(js, ctx.hullLevel(js, choice.split_step + 1)) -
                              ctx.pointBenefit(js, ctx.hullLevel(js, 0));
@@ -507,6 +526,7 @@ SlotSums budgetLevels(const FrameInput& in, SelectorContext& ctx, const Selectio
   frame.rows = in.rows;
   frame.avail = cap - pass.mandatory;
   frame.obj_cap = cap - in.per_frame_ms;
+  frame.keep = in.keep_px < std::numeric_limits<float>::infinity();
   frame.use_greedy = params.algorithm == BudgetAlgorithm::kGreedy || !params.stop_at_first_non_fitting;
   frame.hist = histogramWindow(ctx, frame.slots, frame.use_greedy);
   for (size_t r = 0; r < in.rows; ++r) frame.rows_nonnegative &= ctx.row_cost[r] >= 0.0f;

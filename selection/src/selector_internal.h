@@ -248,6 +248,9 @@ void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const Sele
 // object) into morph_out by object; 0 for a slot not drawn.
 void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row0, const float* q,
                   const int8_t* level_of, size_t m, float* morph_out);
+// The same for m drawn slots at the given rows (distance mode: their levels' rows, no lookup by object).
+void morphFactorsAtRows(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row, const float* q,
+                        size_t m, float* morph_out);
 // Budget mode, before the choice: the predicted cost of the levels still fading out this frame
 // from fades started in earlier frames (slot columns a of the slot pass), in slot order while it
 // stays within `cap`; the fades beyond it end now.
@@ -341,6 +344,7 @@ struct SettleInput {
   float avail;             // largest float <= the budget left after the mandatory part
   float keep_avail;        // a kept slot settles only when its chain's spread is <= this (below avail)
   const float* spread;     // row_spread
+  bool keep;               // some key may carry kSettleKeep (the drop policy is on)
   float lo, hi;            // the predicted bracket's ends, widened by kSettleMargin
   // the fused write-out's (fuse only): pixels per slot and the per-row counters of drawn slots
   // (zeroed here)
@@ -410,6 +414,7 @@ struct BudgetFrame {
   double obj_cap = 0.0;         // the objects' share of the budget
   bool use_greedy = false;      // the heap greedy instead of the Lagrangian form
   bool rows_nonnegative = true; // every row's geometry cost >= 0 (not NaN): the settling pass may run
+  bool keep = false;            // the drop policy is on: some slots may be kept (kSettleKeep)
   HistWindow hist;
 };
 // A price bracket (lo, hi].

@@ -94,12 +94,13 @@ inline __attribute__((always_inline)) uint32_t settleKeys(const float* ga, const
 // fused in, when the features are counted per row): also their benefits and pixels, and each
 // drawn settled slot counted at its row in row_drawn; their levels (last frame's) are already in
 // the levels out (the slot pass writes every slot's), so the write-out visits only the unsettled slots.
-// Only slots with an eligible key (settleKey) may settle.
+// Only slots with an eligible key (settleKey) may settle. kKeep: some keys may carry kSettleKeep (the
+// drop policy is on); without it the kept slots' terms are compiled out.
 // The body is generic over vectors VF of floats and VI of int32 masks (kLanes / their width parts
 // per chain) and inlined into an SSE2 and an AVX2 function; the same IEEE operations per lane in
 // both, so the same bits. No helper functions or lambdas inside: they would be compiled for the
 // default target and take AVX vectors by value.
-template <typename VF, typename VI, bool kFuse>
+template <typename VF, typename VI, bool kFuse, bool kKeep>
 inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& in, size_t slot_count,
                                                              uint8_t* chosen_step, uint32_t* unsettled,
                                                              SettleSums* settled_sums) {
@@ -145,7 +146,7 @@ inline __attribute__((always_inline)) size_t settleSlotsBody(const SettleInput& 
     // its chain fits alone above its cheapest (the hull's base), so that every lane "fits"
     // (every lane fits: its avail is +inf; and the candidate needs not beat "not drawn": that
     // test's price is -inf)
-    const bool keep = (key & kSettleKeep) != 0;
+    const bool keep = kKeep && (key & kSettleKeep) != 0;
     const bool keep_ok = !keep || in_spread[row0] <= keep_avail;
     const float slot_avail = keep ? kInfinity : avail, drop_price = keep ? -kInfinity : hi;
     const int32_t* const other = kLaneMasks.other[cand + 1];
@@ -554,15 +555,15 @@ inline __attribute__((always_inline)) SlotSums writeOutSlotsBody(const WriteOutI
   return SlotSums{predicted, benefit, pixels, tri_sum, vert_sum, line_sum, dropped, drawn};
 }
 
-template <bool kFuse>
+template <bool kFuse, bool kKeep>
 size_t settleSlotsSse2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step, uint32_t* unsettled,
                        SettleSums* settled_sums) {
-  return settleSlotsBody<V4f, V4i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
+  return settleSlotsBody<V4f, V4i, kFuse, kKeep>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
-template <bool kFuse>
+template <bool kFuse, bool kKeep>
 SCENELOD_AVX2_TARGET size_t settleSlotsAvx2(const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
                                             uint32_t* unsettled, SettleSums* settled_sums) {
-  return settleSlotsBody<V8f, V8i, kFuse>(in, slot_count, chosen_step, unsettled, settled_sums);
+  return settleSlotsBody<V8f, V8i, kFuse, kKeep>(in, slot_count, chosen_step, unsettled, settled_sums);
 }
 template <bool kCountRows>
 __attribute__((noinline)) SlotSums writeOutSlotsSse2(const WriteOutInput& in, size_t slot_count, double predicted0,
@@ -589,9 +590,14 @@ SCENELOD_AVX2_TARGET uint32_t settleKeysAvx2(const float* ga, const float* gb, c
 }
 size_t settleSlots(bool avx2, bool fuse, const SettleInput& in, size_t slot_count, uint8_t* chosen_step,
                    uint32_t* unsettled, SettleSums* settled_sums) {
-  return (avx2 ? (fuse ? settleSlotsAvx2<true> : settleSlotsAvx2<false>)
-               : (fuse ? settleSlotsSse2<true> : settleSlotsSse2<false>))(in, slot_count, chosen_step, unsettled,
-                                                                        settled_sums);
+  // without the drop policy no slot is kept: the form without its per-slot terms
+  typedef size_t (*Settle)(const SettleInput&, size_t, uint8_t*, uint32_t*, SettleSums*);
+  static const Settle kForms[2][2][2] = {
+      {{settleSlotsSse2<false, false>, settleSlotsSse2<false, true>},
+       {settleSlotsSse2<true, false>, settleSlotsSse2<true, true>}},
+      {{settleSlotsAvx2<false, false>, settleSlotsAvx2<false, true>},
+       {settleSlotsAvx2<true, false>, settleSlotsAvx2<true, true>}}};
+  return kForms[avx2][fuse][in.keep](in, slot_count, chosen_step, unsettled, settled_sums);
 }
 uint32_t chainsAboveSse2(const uint32_t* chain_of, size_t n, uint32_t last_chain) {
   return chainsAboveBody<V4i>(chain_of, n, last_chain);

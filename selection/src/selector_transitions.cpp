@@ -152,8 +152,14 @@ void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const Sele
   }
 }
 
-void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row0, const float* q,
-                  const int8_t* level_of, size_t m, float* morph_out) {
+namespace {
+
+// The morph factors of m slots at their rows into morph_out by object; kDrawnFlags: drawn[j] is 1 for
+// a drawn slot, 0 for one not drawn (factor 0).
+template <bool kDrawnFlags>
+inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ctx, const uint32_t* object,
+                                                      const uint32_t* row0, const float* q, const int8_t* level_of,
+                                                      size_t m, float* morph_out) {
   const float* const inv_start = ctx.row_morph_inv_start;
   const float* const end = ctx.row_morph_end;
   const float* const inv = ctx.row_morph_inv;
@@ -163,19 +169,38 @@ void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint
   for (size_t j0 = 0; j0 < m; j0 += kSlotBlock) {
     const size_t b = std::min(kSlotBlock, m - j0);
     for (size_t j = 0; j < b; ++j) {
-      const int l = level_of[object[j0 + j]];
-      const uint32_t row = row0[j0 + j] + static_cast<uint32_t>(std::max(l, 0));
+      uint32_t row = row0[j0 + j];
+      if (kDrawnFlags) {
+        const int l = level_of[object[j0 + j]];
+        row += static_cast<uint32_t>(std::max(l, 0));
+        gd[j] = static_cast<float>(l >= 0);  // not drawn (budget mode): 0, without a branch
+      }
       gs[j] = inv_start[row];
       ge[j] = end[row];
       gi[j] = inv[row];
       gq[j] = q[j0 + j];
-      gd[j] = static_cast<float>(l >= 0);  // not drawn (budget mode): 0, without a branch
     }
     for (size_t j = b; j < kSlotBlock; ++j) gs[j] = ge[j] = gi[j] = gq[j] = gd[j] = 0.0f;
     // a constant trip count: one vector loop, no scalar tail
-    for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]) * gd[j];
+    if (kDrawnFlags) {
+      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]) * gd[j];
+    } else {
+      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]);
+    }
     for (size_t j = 0; j < b; ++j) morph_out[object[j0 + j]] = gm[j];
   }
+}
+
+}  // namespace
+
+void morphFactors(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row0, const float* q,
+                  const int8_t* level_of, size_t m, float* morph_out) {
+  morphBlocks<true>(ctx, object, row0, q, level_of, m, morph_out);
+}
+
+void morphFactorsAtRows(const SelectorContext& ctx, const uint32_t* object, const uint32_t* row, const float* q,
+                        size_t m, float* morph_out) {
+  morphBlocks<false>(ctx, object, row, q, nullptr, m, morph_out);
 }
 
 double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, double cap) {
