@@ -1,5 +1,6 @@
 // Output fingerprint of the clustering chains: one line per chain with an FNV-1a hash of every array
-// of every level (positions, normals, colours, uvs, triangles, edges, thicknesses, points) and of its
+// of every level (positions, normals, colours, uvs, triangles, edges, thicknesses, points, geomorph
+// targets and source vertices) and of its
 // cell width, maximum error and bounding sphere. Two builds whose lines are equal produce the same
 // bits; a speed change that must not move the output is checked by diffing the two outputs.
 // With "geometry", the hash is of the primitives as sets instead: each triangle as its three corners
@@ -104,6 +105,9 @@ int run(const char* name, const Mesh& m, const ChainParams& cp) {
     } else {
       f.vec(l.mesh.positions), f.vec(l.mesh.normals), f.vec(l.mesh.colors), f.vec(l.mesh.uvs);
       f.vec(l.mesh.triangles), f.vec(l.mesh.edges), f.vec(l.mesh.edge_thickness), f.vec(l.mesh.points);
+      // the geomorph targets and source vertices, in vertex order like the arrays above
+      f.vec(l.morph.positions), f.vec(l.morph.normals), f.vec(l.morph.colors), f.vec(l.morph.uvs);
+      f.vec(l.morph.tangents), f.vec(l.source_vertex);
     }
     f.pod(l.cell_width), f.pod(l.max_error), f.pod(l.bounds.center), f.pod(l.bounds.radius);
   }
