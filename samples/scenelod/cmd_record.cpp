@@ -29,6 +29,7 @@ const char kUsage[] =
     "  --viewport W H       default 1280 720\n"
     "  --fov DEG            vertical field of view (default 60)\n"
     "  --pixels-per-cell X  default 1\n"
+    "  --from R             approach: start R scene radii from the centre (default 3, > 0.15)\n"
     "  -o, --out FILE       the replay to write";
 
 std::string relativeTo(const std::string& from_file, const std::string& path) {
@@ -52,22 +53,24 @@ int run(const std::vector<std::string>& argv) {
       a[i + 1] = a[i + 1] + "x" + a[i + 2];
       a.erase(a.begin() + static_cast<long>(i) + 2);
     }
-  Args args(a, {}, {"--out", "--path", "--frames", "--fps", "--budget", "--viewport", "--fov", "--pixels-per-cell"});
+  Args args(a, {}, {"--out", "--path", "--frames", "--fps", "--budget", "--viewport", "--fov", "--pixels-per-cell", "--from"});
   if (!args.ok()) return usageError("record", args.error());
   if (args.positional().size() != 1) return usageError("record", "expected one scene");
   if (!args.has("--out")) return usageError("record", "missing -o REPLAY");
   CameraPathKind kind;
   if (!parseCameraPathKind(args.get("--path", "orbit"), kind)) return usageError("record", "--path must be orbit, flythrough or approach");
   long frames = 300;
-  double fps = 60.0, budget = 0.0, fov = 60.0, ppc = 1.0;
+  double fps = 60.0, budget = 0.0, fov = 60.0, ppc = 1.0, from = 3.0;
   if (!args.getInt("--frames", frames) || !args.getDouble("--fps", fps) || !args.getDouble("--budget", budget) ||
-      !args.getDouble("--fov", fov) || !args.getDouble("--pixels-per-cell", ppc))
+      !args.getDouble("--fov", fov) || !args.getDouble("--pixels-per-cell", ppc) || !args.getDouble("--from", from))
     return usageError("record", args.error());
   if (frames < 1 || frames > 10000000) return usageError("record", "--frames must be 1..10000000");
   if (!(fps > 0.0)) return usageError("record", "--fps must be > 0");
   if (args.has("--budget") && !(budget > 0.0)) return usageError("record", "--budget must be > 0");
   if (!(fov > 0.0 && fov < 180.0)) return usageError("record", "--fov must be in (0, 180)");
   if (!(ppc > 0.0)) return usageError("record", "--pixels-per-cell must be > 0");
+  if (!(from > 0.15 && from < 1e6)) return usageError("record", "--from must be in (0.15, 1e6) scene radii");
+  if (args.has("--from") && kind != CameraPathKind::kApproach) return usageError("record", "--from applies to --path approach");
   Replay replay;
   if (args.has("--viewport")) {
     unsigned w = 0, h = 0;
@@ -86,7 +89,7 @@ int run(const std::vector<std::string>& argv) {
   replay.header.pixels_per_cell = ppc;
   replay.header.has_budget = args.has("--budget");
   replay.header.budget_ms = budget;
-  makeCameraPath(sceneBounds(scene), kind, static_cast<size_t>(frames), fps, replay);
+  makeCameraPath(sceneBounds(scene), kind, static_cast<size_t>(frames), fps, replay, from);
   if (Error e = writeReplay(out, replay); !e.ok()) return runError("record", e.message);
   std::printf("wrote %s: %ld frames over %s (%zu objects)\n", out.c_str(), frames, scene_path.c_str(), scene.objectCount());
   return 0;

@@ -5,7 +5,9 @@
 #include <vector>
 
 #include "args.h"
+#include "cluster_options.h"
 #include "command.h"
+#include "replay_popping.h"
 #include "replay_report.h"
 #include "scenelod/lodcore/atomic_file.h"
 #include "scenelod/selection/replay_visibility.h"
@@ -48,12 +50,22 @@ const char kUsage[] =
     "  --morph-band F       share of a level's log pixel-size interval the morph takes, (0, 1] (default 0.3)\n"
     "  --fade-budget-share F  budget mode: share of the objects' budget fades may take, [0, 1] (default 0.1)\n"
     "  --min-drop-px PX     budget mode: objects in view with a projected radius of at least PX pixels\n"
-    "                       (and not hidden) are never dropped, only coarsened (default 4; 0: any may be)";
+    "                       (and not hidden) are never dropped, only coarsened (default 4; 0: any may be)\n"
+    "  --popping            render every frame twice with the OpenGL adapter (last frame's levels, morphs\n"
+    "                       and fades, then this frame's; same camera) and log \"popping\": the share of\n"
+    "                       the covered pixels that differ by more than 16/255 in a channel; the summary\n"
+    "                       gives its maximum and 99th percentile. Needs a glTF/GLB/OBJ scene; exit code\n"
+    "                       77 where EGL or OpenGL 3.3 cannot start\n"
+    "  --popping-supersample K  render --popping's pictures at K x K times the viewport and average each\n"
+    "                       K x K block, as antialiasing would (1..4, default 1)\n"
+    "  --nested, --independent  chains of a glTF/GLB/OBJ scene built here: each level clusters the one\n"
+    "                       before (geomorphs end exactly on the next level) or the original (default)";
 
 int run(const std::vector<std::string>& argv) {
-  Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility"},
+  Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility", "--popping", "--nested", "--independent"},
             {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget",
-             "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share", "--min-drop-px"});
+             "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share", "--min-drop-px",
+             "--popping-supersample"});
   if (!args.ok()) return usageError("replay", args.error());
   if (args.positional().size() != 1) return usageError("replay", "expected one replay file");
   if (!args.has("--out") && !args.has("--report")) return usageError("replay", "nothing to write: give -o LOG and/or --report FILE.md");
@@ -105,7 +117,26 @@ int run(const std::vector<std::string>& argv) {
   const ReplayHeader header = reader.header();
   const std::string scene_path = resolveReplayScene(path, header.scene);
   ReplayScene scene;
-  if (Error e = loadReplayScene(scene_path, scene); !e.ok()) return runError("replay", e.message);
+  ChainParams chain;
+  std::string nesting_error;
+  if (!parseNesting(args, chain, nesting_error)) return usageError("replay", nesting_error);
+  const bool chain_options = args.has("--nested") || args.has("--independent");
+  if (Error e = chain_options ? loadReplayScene(scene_path, scene, chain) : loadReplayScene(scene_path, scene); !e.ok())
+    return runError("replay", e.message);
+  ReplayPopping popping;
+  long supersample = 1;
+  if (!args.getInt("--popping-supersample", supersample)) return usageError("replay", args.error());
+  if (supersample < 1 || supersample > 4) return usageError("replay", "--popping-supersample must be 1..4");
+  if (args.has("--popping-supersample") && !args.has("--popping")) return usageError("replay", "--popping-supersample needs --popping");
+  if (args.has("--popping")) {
+    bool unavailable = false;
+    if (Error e = popping.init(scene, header, scene_path, static_cast<uint32_t>(supersample), &unavailable); !e.ok()) {
+      if (!unavailable) return runError("replay", e.message);
+      std::fprintf(stderr, "scenelod replay: %s\nscenelod replay: headless OpenGL cannot start on this machine (docs/GL.md); "
+                           "exit code 77\n", e.message.c_str());
+      return 77;
+    }
+  }
   ReplayVisibility visibility;
   if (args.has("--visibility")) {
     ReplayVisibilityParams vp;
@@ -118,9 +149,16 @@ int run(const std::vector<std::string>& argv) {
     if (Error e = log.open(args.get("--out")); !e.ok()) return runError("replay", e.message);
   ReplayRunDigest digest;
   size_t frames = 0;
-  auto next = [&](ReplayFrame& f, Error& e) { return reader.next(f, e); };
+  auto next = [&](ReplayFrame& f, Error& e) {
+    const bool more = reader.next(f, e);
+    if (more && args.has("--popping")) popping.setFrame(f);
+    return more;
+  };
   auto sink = [&](const ReplayLogFrame& f) {
-    if (log.stream()) log.write(replayLogLine(f) + "\n");
+    double pop = 0.0;
+    if (args.has("--popping"))
+      if (Error e = popping.measure(scene, f, pop); !e.ok()) return e;
+    if (log.stream()) log.write((args.has("--popping") ? withPopping(replayLogLine(f), pop) : replayLogLine(f)) + "\n");
     digest.add(f);
     ++frames;
     return Error();
@@ -139,6 +177,11 @@ int run(const std::vector<std::string>& argv) {
     std::printf("visibility: %.1f %% of objects hidden on average; occlusion saved %.3f ms of predicted cost per frame "
                 "(%.3f ms went to hidden objects without it); %zu picks hit an object\n",
                 100.0 * s.mean_hidden_share, s.mean_occlusion_saved_ms, s.mean_hidden_cost_without_ms, s.pick_frames);
+  if (args.has("--popping")) {
+    const PoppingSummary p = popping.summary();
+    std::printf("popping: max %.4f (frame %llu), 99th percentile %.4f, mean %.5f; %zu of %zu frames changed pixels\n", p.max,
+                static_cast<unsigned long long>(p.max_frame), p.p99, p.mean, p.popping_frames, p.frames);
+  }
   if (args.has("--report")) {
     ReplayReportInput in;
     in.replay_path = path;
@@ -150,6 +193,16 @@ int run(const std::vector<std::string>& argv) {
     in.frame_count = frames;
     in.run_names = {digest.has_budget ? "budget" : "distance"};
     in.runs = {&digest};
+    if (args.has("--popping")) {
+      const PoppingSummary p = popping.summary();
+      char line[256];
+      std::snprintf(line, sizeof(line), "| %zu | %zu | %.4f (frame %llu) | %.4f | %.5f |", p.frames, p.popping_frames, p.max,
+                    static_cast<unsigned long long>(p.max_frame), p.p99, p.mean);
+      in.extra_sections = "## Popping\n\nShare of the covered pixels that change by more than 16/255 in a channel "
+                          "between last frame's and this frame's levels, same camera (first frame left out).\n\n"
+                          "| frames | frames with popping | max | 99th percentile | mean |\n|---:|---:|---:|---:|---:|\n" +
+                          std::string(line) + "\n";
+    }
     std::vector<std::string> lines;
     if (Error e = writeReplayReport(args.get("--report"), in, lines); !e.ok()) return runError("replay", e.message);
     std::printf("report: %s\n", args.get("--report").c_str());

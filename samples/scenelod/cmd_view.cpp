@@ -14,6 +14,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "args.h"
+#include "cluster_options.h"
 #include "command.h"
 #include "scenelod/eval/image.h"
 #include "scenelod/gl/renderer.h"
@@ -61,6 +62,15 @@ const char kUsage[] =
     "  --shadow-pixels X   pixels (texels) per cell of the shadow view (default 4)\n"
     "  --shadow-map N      shadow map side in texels (default 2048); with --png, each screenshot\n"
     "                      has a DIR/light_NNNN.png beside it: the shadow levels seen from the light\n"
+    "  --distance          distance mode: each object at the coarsest level accurate to --pixels (no budget)\n"
+    "  --transitions MODE  none (default: hard switches), fade (dithered cross-fades) or morph (geomorphs\n"
+    "                      where levels have morph data, fades elsewhere); time between frames from the\n"
+    "                      replay's time_s, or 1000/60 ms on the orbit; the frame lines add the objects\n"
+    "                      fading (docs/GL.md, \"Level transitions\")\n"
+    "  --fade-ms MS        duration of a cross-fade (default 250)\n"
+    "  --morph-band F      share of a level's log pixel-size interval the morph takes, (0, 1] (default 0.3)\n"
+    "  --nested, --independent  chains built here (glTF/GLB/OBJ without MSFT_lod levels, builtin): each\n"
+    "                      level clusters the one before, or the original (default)\n"
     "  --quiet             no per-frame lines";
 
 // World matrix of every node from parents and local transforms (validated scenes have no cycles).
@@ -87,16 +97,18 @@ void computeNodeWorld(const ReplayScene& s, std::vector<glm::mat4>& world) {
 
 // The scene to draw and, in `materials`, the scene data whose materials and textures its chains'
 // groups refer to (chain c is mesh c; empty for scenes without meshes).
-Error loadViewScene(const std::string& path, ReplayScene& out, scene::SceneData& materials) {
+Error loadViewScene(const std::string& path, ReplayScene& out, scene::SceneData& materials, const ChainParams* chain) {
   if (path.empty() || path == "builtin") {
     scene::DemoSceneInfo info;
     if (Error e = scene::makeDemoScene(materials, scene::DemoSceneParams(), &info); !e.ok()) return e;
     if (!info.note.empty()) std::printf("%s\n", info.note.c_str());
     scene::SceneLods lods;
-    if (Error e = scene::buildLods(materials, scene::LodBuildParams(), lods, nullptr, "demo scene"); !e.ok()) return e;
+    scene::LodBuildParams build;
+    if (chain) build.chain = *chain;
+    if (Error e = scene::buildLods(materials, build, lods, nullptr, "demo scene"); !e.ok()) return e;
     return replaySceneFromSceneData(materials, lods.chains, "demo scene", out, &lods.chain_spheres);
   }
-  if (Error e = loadReplayScene(path, out); !e.ok()) return e;
+  if (Error e = chain ? loadReplayScene(path, out, *chain) : loadReplayScene(path, out); !e.ok()) return e;
   std::string ext = path.size() > 4 ? path.substr(path.size() - 4) : "";
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   std::vector<LodChain> unused;
@@ -201,8 +213,9 @@ bool makeDir(const std::string& dir) {
 }
 
 int run(const std::vector<std::string>& raw_argv) {
-  Args args(joinSize(raw_argv), {"--headless", "--no-calibrate", "--quiet", "--shadows"},
-            {"--replay", "--frames", "--png", "--every", "--size", "--budget", "--pixels", "--shadow-pixels", "--shadow-map"});
+  Args args(joinSize(raw_argv), {"--headless", "--no-calibrate", "--quiet", "--shadows", "--distance", "--nested", "--independent"},
+            {"--replay", "--frames", "--png", "--every", "--size", "--budget", "--pixels", "--shadow-pixels", "--shadow-map",
+             "--transitions", "--fade-ms", "--morph-band"});
   if (!args.ok()) return usageError("view", args.error());
   if (args.positional().size() > 1) return usageError("view", "expected at most one scene");
   if (!args.has("--headless"))
@@ -229,6 +242,23 @@ int run(const std::vector<std::string>& raw_argv) {
   long width = 640, height = 360;
   if (args.has("--size") && !parseSize(args.get("--size"), width, height))
     return usageError("view", "--size needs W H (or WxH), each 16..8192, got '" + args.get("--size") + "'");
+  const std::string transition_name = args.get("--transitions", "none");
+  Transitions transitions = Transitions::kNone;
+  if (transition_name == "fade") transitions = Transitions::kFade;
+  else if (transition_name == "morph") transitions = Transitions::kMorph;
+  else if (transition_name != "none") return usageError("view", "--transitions must be none, fade or morph");
+  double fade_ms = 250.0, morph_band = 0.3;
+  if (!args.getDouble("--fade-ms", fade_ms) || !args.getDouble("--morph-band", morph_band)) return usageError("view", args.error());
+  if (!(fade_ms >= 0.0) || !std::isfinite(fade_ms)) return usageError("view", "--fade-ms must be >= 0 and finite");
+  if (!(morph_band > 0.0 && morph_band <= 1.0)) return usageError("view", "--morph-band must be in (0, 1]");
+  if (shadows && transitions != Transitions::kNone)
+    return usageError("view", "--shadows selects with views, which do not support --transitions");
+  const bool distance = args.has("--distance");
+  if (distance && args.has("--budget")) return usageError("view", "--distance and --budget exclude each other");
+  ChainParams chain;
+  std::string nesting_error;
+  if (!parseNesting(args, chain, nesting_error)) return usageError("view", nesting_error);
+  const bool chain_options = args.has("--nested") || args.has("--independent");
   const std::string png_dir = args.get("--png");
   if (!png_dir.empty() && !makeDir(png_dir)) return runError("view", png_dir + ": cannot create the screenshot folder");
 
@@ -244,7 +274,8 @@ int run(const std::vector<std::string>& raw_argv) {
   }
   ReplayScene scene;
   scene::SceneData scene_materials;
-  if (Error e = loadViewScene(scene_path, scene, scene_materials); !e.ok()) return runError("view", e.message);
+  if (Error e = loadViewScene(scene_path, scene, scene_materials, chain_options ? &chain : nullptr); !e.ok())
+    return runError("view", e.message);
   if (Error e = validateReplayScene(scene, scene_path.empty() ? "demo scene" : scene_path); !e.ok()) return runError("view", e.message);
   if (scene.objectCount() == 0) return runError("view", scene_path + ": the scene has no objects");
   const Sphere bounds = sceneBounds(scene);
@@ -273,9 +304,13 @@ int run(const std::vector<std::string>& raw_argv) {
   if (Error e = renderer.uploadMaterials({materials.data(), materials.size()}); !e.ok()) return runError("view", e.message);
   if (Error e = renderer.uploadChains(scene.chains, group_materials); !e.ok()) return runError("view", e.message);
   std::printf("%s\n", renderer.description().c_str());
-  std::printf("scene %s: %zu objects, %zu chains, %zu level rows, %.1f MB on the GPU; %zu frames at %ldx%ld, budget %.3g ms\n",
+  char mode_text[64];
+  if (distance) std::snprintf(mode_text, sizeof(mode_text), "distance mode at X = %.3g", pixels);
+  else std::snprintf(mode_text, sizeof(mode_text), "budget %.3g ms", budget);
+  std::printf("scene %s: %zu objects, %zu chains, %zu level rows, %.1f MB on the GPU; %zu frames at %ldx%ld, %s\n",
               scene_path.empty() ? "builtin (demo)" : scene_path.c_str(), scene.objectCount(), scene.table.chainCount(),
-              scene.table.cell_width.size(), renderer.gpuBytes() / 1e6, frame_count, width, height, budget);
+              scene.table.cell_width.size(), renderer.gpuBytes() / 1e6, frame_count, width, height,
+              mode_text);
 
   const size_t n = scene.objectCount();
   SelectorConfig sc;
@@ -290,7 +325,9 @@ int run(const std::vector<std::string>& raw_argv) {
   std::vector<glm::vec3> centers;
   std::vector<float> radii, max_scales;
   std::vector<glm::mat4> node_world, object_world(n);
-  std::vector<int8_t> levels(n, -1), group_levels(shadows ? 2 * n : 0, -1);
+  std::vector<int8_t> levels(n, -1), group_levels(shadows ? 2 * n : 0, -1), previous_levels(n, -1);
+  std::vector<float> morph(n, 0.0f), fade(n, 1.0f);
+  const bool transitioning = transitions != Transitions::kNone;
   uint64_t sum_triangles = 0, sum_shadow_triangles = 0;
   Camera cam;
   cam.viewport_width_px = rc.width_px;
@@ -323,7 +360,7 @@ int run(const std::vector<std::string>& raw_argv) {
     }
     SelectionJob job;
     job.camera = &cam;
-    job.params.mode = SelectionMode::kBudget;
+    job.params.mode = distance ? SelectionMode::kDistance : SelectionMode::kBudget;
     job.params.budget_ms = static_cast<float>(budget);
     job.params.pixels_per_cell = static_cast<float>(pixels);
     job.params.calibrate = !args.has("--no-calibrate");
@@ -335,6 +372,23 @@ int run(const std::vector<std::string>& raw_argv) {
     job.importance = {scene.importance.data(), scene.importance.size()};
     job.must_draw = {scene.must_draw.data(), scene.must_draw.size()};
     job.levels_out = {levels.data(), n};
+    if (transitioning) {
+      // time between frames: the replay's time_s (the orbit is a 60 Hz one)
+      double dt_ms = 1000.0 / 60.0;
+      if (f == 0) dt_ms = 0.0;
+      else if (has_replay) dt_ms = (rf.time_s - replay.frames[f - 1].time_s) * 1000.0;
+      if (!(dt_ms >= 0.0) || !std::isfinite(dt_ms)) {
+        rc_exit = runError("view", "frame " + std::to_string(rf.frame) + ": time_s goes back; fades need time to run forward");
+        break;
+      }
+      job.params.transitions = transitions;
+      job.params.dt_ms = static_cast<float>(dt_ms);
+      job.params.fade_ms = static_cast<float>(fade_ms);
+      job.params.morph_band = static_cast<float>(morph_band);
+      job.morph_out = {morph.data(), n};
+      job.previous_levels_out = {previous_levels.data(), n};
+      job.fade_out = {fade.data(), n};
+    }
     View views[2];
     if (shadows) {
       views[0].camera = cam;
@@ -360,6 +414,11 @@ int run(const std::vector<std::string>& raw_argv) {
     in.object_world = {object_world.data(), n};
     in.object_chain = {scene.object_chain.data(), n};
     in.levels = {levels.data(), n};
+    if (transitioning) {
+      in.morph = {morph.data(), n};
+      in.previous_levels = {previous_levels.data(), n};
+      in.fade = {fade.data(), n};
+    }
     if (shadows) {
       in.shadow_camera = &views[1].camera;
       in.shadow_levels = {group_levels.data() + n, n};
@@ -383,12 +442,13 @@ int run(const std::vector<std::string>& raw_argv) {
     }
     if (!args.has("--quiet"))
       std::printf("frame %4zu: predicted %8.3f ms, measured %8.3f ms (%+6.1f %%), drawn %u, culled %u, dropped %u, "
-                  "%llu triangles, %llu edges, %llu points, %u draws\n",
+                  "%llu triangles, %llu edges, %llu points, %u draws%s\n",
                   f, stats.predicted_ms, fr.measured_ms,
                   fr.measured_ms > 0 ? 100.0 * (stats.predicted_ms - fr.measured_ms) / fr.measured_ms : 0.0,
                   stats.drawn_count, stats.culled_count, stats.dropped_count,
                   static_cast<unsigned long long>(fr.triangles), static_cast<unsigned long long>(fr.edges),
-                  static_cast<unsigned long long>(fr.points), fr.draw_calls);
+                  static_cast<unsigned long long>(fr.points), fr.draw_calls,
+                  transitioning ? (", fading " + std::to_string(stats.fading_count)).c_str() : "");
     if (!args.has("--quiet") && shadows)
       std::printf("            shadow map: %llu triangles, %u draws\n", static_cast<unsigned long long>(fr.shadow_triangles),
                   fr.shadow_draw_calls);

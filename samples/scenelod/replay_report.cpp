@@ -209,6 +209,7 @@ Error writeReplayReport(const std::string& md_path, const ReplayReportInput& in,
     o << "\n## Plots\n\n";
     for (const auto& im : images) o << "![" << im.first << "](" << im.second << ")\n\n";
   }
+  if (!in.extra_sections.empty()) o << "\n" << in.extra_sections;
 
   const std::string text = o.str();
   return writeFileAtomic(md_path, text.data(), text.size());

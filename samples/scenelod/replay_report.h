@@ -50,6 +50,7 @@ struct ReplayReportInput {
   // one or more runs of the same replay (e.g. distance mode and budget mode)
   std::vector<std::string> run_names;
   std::vector<const ReplayRunDigest*> runs;
+  std::string extra_sections;  // Markdown appended at the end (e.g. replay --popping's "## Popping")
 };
 
 // Writes `md_path` and PNG plots named after it (<stem>_cost.png, <stem>_levels.png,

@@ -36,7 +36,8 @@ Sphere sceneBounds(const ReplayScene& scene) {
   return b;
 }
 
-void makeCameraPath(const Sphere& bounds, CameraPathKind kind, size_t frames, double fps, Replay& replay) {
+void makeCameraPath(const Sphere& bounds, CameraPathKind kind, size_t frames, double fps, Replay& replay,
+                    double approach_from) {
   replay.frames.clear();
   const glm::vec3 c = bounds.center;
   const float r = bounds.radius;
@@ -64,7 +65,8 @@ void makeCameraPath(const Sphere& bounds, CameraPathKind kind, size_t frames, do
       }
       case CameraPathKind::kApproach: {
         const glm::vec3 dir = glm::normalize(glm::vec3(0.3f, 0.25f, 1.0f));
-        const float d = 3.0f * r + (0.15f * r - 3.0f * r) * t;
+        const float from = static_cast<float>(approach_from) * r;
+        const float d = from + (0.15f * r - from) * t;
         f.eye = c + dir * d;
         f.target = c;
         break;

@@ -437,11 +437,20 @@ Error loadPackScene(const std::string& path, ReplayScene& s) {
   return validateReplayScene(s, path);
 }
 
-Error loadReplayScene(const std::string& path, ReplayScene& out) {
-  if (path.rfind("builtin:", 0) == 0) return makeBuiltinScene(path, out);
+namespace {
+
+Error loadSceneWith(const std::string& path, ReplayScene& out, const ChainParams* chain) {
+  const std::string built_elsewhere =
+      path + ": the scene's levels come from the file; chain options (--nested, --independent) apply to "
+             "glTF/GLB/OBJ meshes whose chains are built here";
+  if (path.rfind("builtin:", 0) == 0) {
+    if (chain) return Error(Status::kInvalidArgument, built_elsewhere);
+    return makeBuiltinScene(path, out);
+  }
   const size_t dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? std::string() : path.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (chain && (ext == "json" || ext == "slodpack" || ext == "pack")) return Error(Status::kInvalidArgument, built_elsewhere);
   if (ext == "json") return loadLevelScene(path, out);
   if (ext == "slodpack" || ext == "pack") return loadPackScene(path, out);
   if (ext == "gltf" || ext == "glb" || ext == "obj") {
@@ -458,13 +467,24 @@ Error loadReplayScene(const std::string& path, ReplayScene& out) {
     if (!have_levels) {
       scene::bakeMaterialColors(data);  // the viewer draws levels by vertex colour
       scene::SceneLods lods;
-      if (Error e = scene::buildLods(data, scene::LodBuildParams(), lods, nullptr, path); !e.ok()) return e;
+      scene::LodBuildParams build;
+      if (chain) build.chain = *chain;
+      if (Error e = scene::buildLods(data, build, lods, nullptr, path); !e.ok()) return e;
       return replaySceneFromSceneData(data, lods.chains, path, out, &lods.chain_spheres);
     }
+    if (chain) return Error(Status::kInvalidArgument, built_elsewhere + " (this one has MSFT_lod levels)");
     return replaySceneFromSceneData(data, chains, path, out);
   }
   return Error(Status::kUnsupported, path + ": a replay scene is builtin:NAME, a level-scene .json, a LOD pack (.slodpack) "
                                             "or a .gltf/.glb/.obj file");
+}
+
+}  // namespace
+
+Error loadReplayScene(const std::string& path, ReplayScene& out) { return loadSceneWith(path, out, nullptr); }
+
+Error loadReplayScene(const std::string& path, ReplayScene& out, const ChainParams& chain) {
+  return loadSceneWith(path, out, &chain);
 }
 
 }  // namespace scenelod::selection

@@ -303,6 +303,26 @@ TEST_F(TransitionTest, MorphMovesTheLevelTowardItsTargetsByTheFactor) {
   EXPECT_NEAR(coveredCentreX(img), 99.5, 0.6);
 }
 
+// a level without normals (the renderer computes them) morphs its normals toward the normals of
+// the next-level vertices at its targets: at factor 1 it is shaded exactly as the next level
+TEST_F(TransitionTest, LevelWithoutNormalsMorphsTowardTheNextLevelsNormals) {
+  LodChain c;
+  LodLevel l0;
+  l0.mesh.positions = {{-0.4f, -0.4f, 0.0f}, {0.4f, -0.4f, 0.0f}, {0.4f, 0.4f, 0.0f}, {-0.4f, 0.4f, 0.0f}};
+  l0.mesh.triangles = {0, 1, 2, 0, 2, 3};
+  LodLevel l1 = l0;
+  for (glm::vec3& p : l1.mesh.positions) p.z = 0.6f * p.x;  // tilted: its computed normals lean
+  l0.morph.positions = l1.mesh.positions;
+  c.levels = {l0, l1};
+  ASSERT_TRUE(renderer_.uploadChains({c}).ok());
+  eval::Image flat, morphed, next;
+  drawTransition(0, 0.0f, -1, 1.0f, flat);
+  drawTransition(0, 1.0f, -1, 1.0f, morphed);
+  drawTransition(1, 0.0f, -1, 1.0f, next);
+  EXPECT_FALSE(flat.rgb == next.rgb);  // the tilt shows in the shading
+  EXPECT_TRUE(morphed.rgb == next.rgb);
+}
+
 TEST_F(TransitionTest, LevelWithoutMorphDataIgnoresTheFactor) {
   ASSERT_TRUE(renderer_.uploadChains({morphChain()}, {{-1}}).ok());
   eval::Image still, morphed;

@@ -631,3 +631,35 @@ TEST(Replay, PackScenesGiveTheSameSelectionAsTheirData) {
   writeText(path, bytes.substr(0, bytes.size() / 2));
   EXPECT_FALSE(loadReplayScene(path, from_pack).ok());
 }
+
+TEST(CameraPath, ApproachStartsWhereAsked) {
+  Sphere bounds;
+  bounds.center = {1.0f, 2.0f, 3.0f};
+  bounds.radius = 2.0f;
+  for (double from : {3.0, 40.0}) {
+    Replay r;
+    if (from == 3.0) makeCameraPath(bounds, CameraPathKind::kApproach, 11, 60.0, r);  // the default
+    else makeCameraPath(bounds, CameraPathKind::kApproach, 11, 60.0, r, from);
+    ASSERT_EQ(r.frames.size(), 11u);
+    EXPECT_NEAR(glm::length(r.frames.front().eye - bounds.center), from * 2.0, 1e-3 * from);
+    EXPECT_NEAR(glm::length(r.frames.back().eye - bounds.center), 0.3, 1e-4);
+    EXPECT_NEAR(glm::length(r.frames[5].eye - bounds.center), 0.5 * (from * 2.0 + 0.3), 1e-3 * from);  // constant speed
+  }
+}
+
+TEST(ReplayScene, ChainOptionsApplyOnlyToScenesBuiltHere) {
+  ChainParams nested;
+  nested.nested = true;
+  ReplayScene s;
+  const Error e = loadReplayScene("builtin:small", s, nested);
+  EXPECT_FALSE(e.ok());
+  EXPECT_NE(e.message.find("chain options (--nested, --independent) apply to"), std::string::npos) << e.message;
+  SCENELOD_REQUIRE_BUNNY();
+  ReplayScene independent_scene, nested_scene;
+  ASSERT_TRUE(loadReplayScene(test::bunnyPath(), independent_scene).ok());
+  ASSERT_TRUE(loadReplayScene(test::bunnyPath(), nested_scene, nested).ok());
+  ASSERT_EQ(nested_scene.chains.size(), 1u);
+  ASSERT_EQ(independent_scene.chains.size(), 1u);
+  // the nested chain's level 3 clusters level 2, not the original: other triangles
+  EXPECT_NE(nested_scene.chains[0].levels[3].mesh.triangleCount(), independent_scene.chains[0].levels[3].mesh.triangleCount());
+}

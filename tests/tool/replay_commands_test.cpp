@@ -65,6 +65,12 @@ TEST(ReplayCommands, BadInputGivesClearErrors) {
   r = tool({"record", "builtin:small", "--path", "spiral", "-o", dir + "/x.jsonl"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--path must be orbit, flythrough or approach"), std::string::npos) << r.err;
+  r = tool({"record", "builtin:small", "--path", "approach", "--from", "0.1", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--from must be in (0.15, 1e6)"), std::string::npos) << r.err;
+  r = tool({"record", "builtin:small", "--path", "orbit", "--from", "10", "-o", dir + "/x.jsonl"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--from applies to --path approach"), std::string::npos) << r.err;
   r = tool({"record", dir + "/missing.glb", "-o", dir + "/x.jsonl"});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("missing.glb"), std::string::npos) << r.err;

@@ -308,6 +308,35 @@ const char* eglErrorName(EGLint e) {
 }
 
 // A distinct colour per chain (golden-ratio hue steps), so levels of different meshes are told apart.
+// For every target position, the normal of the vertex of `next` at exactly that position (its own
+// normal, or the area-weighted one the upload computes when it has none); `own[v]` where no vertex
+// of `next` sits there.
+void nextLevelNormals(const Mesh& next, const std::vector<glm::vec3>& targets, const std::vector<glm::vec3>& own,
+                      std::vector<glm::vec3>& out) {
+  Mesh computed;
+  const std::vector<glm::vec3>* normals = &next.normals;
+  if (next.normals.size() != next.positions.size()) {
+    computed.positions = next.positions;
+    computed.triangles = next.triangles;
+    computeVertexNormals(computed);
+    normals = &computed.normals;
+  }
+  auto key = [](const glm::vec3& p) {
+    uint32_t b[3];
+    std::memcpy(b, &p, 12);
+    return std::make_tuple(b[0], b[1], b[2]);
+  };
+  std::vector<std::pair<std::tuple<uint32_t, uint32_t, uint32_t>, uint32_t>> sorted(next.positions.size());
+  for (size_t i = 0; i < next.positions.size(); ++i) sorted[i] = {key(next.positions[i]), static_cast<uint32_t>(i)};
+  std::sort(sorted.begin(), sorted.end());
+  out.resize(targets.size());
+  for (size_t v = 0; v < targets.size(); ++v) {
+    const auto k = key(targets[v]);
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(k, 0u));
+    out[v] = it != sorted.end() && it->first == k ? (*normals)[it->second] : own[v];
+  }
+}
+
 glm::vec3 chainColor(size_t chain) {
   const float h = std::fmod(0.13f + 0.618034f * static_cast<float>(chain), 1.0f) * 6.0f;
   const float s = 0.45f, v = 0.9f;
@@ -575,6 +604,12 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
       const bool uvs = src.uvs.size() == nv;
       const bool colors = gpu.materials && src.colors.size() == nv;
       const bool morphs = !morph.positions.empty();
+      // a level without normals has no normal targets: each vertex takes the normal this upload
+      // computes for the next-level vertex at its target position, so that level k at factor 1 is
+      // shaded as level k + 1 is drawn
+      std::vector<glm::vec3> target_normals;
+      if (morphs && morph.normals.empty() && src.normals.size() != nv && l + 1 < chains[c].levels.size())
+        nextLevelNormals(chains[c].levels[l + 1].mesh, morph.positions, *normals, target_normals);
       const size_t stride = morphs ? 2 * kOwn : kOwn;
       LevelGpu lg;
       vertex_data.assign(nv * stride, 1.0f);
@@ -590,6 +625,7 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
         std::memcpy(t, d, kOwn * 4);
         std::memcpy(t, &morph.positions[v], 12);
         if (!morph.normals.empty()) std::memcpy(t + 3, &morph.normals[v], 12);
+        else if (!target_normals.empty()) std::memcpy(t + 3, &target_normals[v], 12);
         if (uvs && !morph.uvs.empty()) std::memcpy(t + 6, &morph.uvs[v], 8);
         if (colors && !morph.colors.empty()) std::memcpy(t + 8, &morph.colors[v], 12);
       }

@@ -21,8 +21,10 @@ Sphere sceneBounds(const ReplayScene& scene);
 // Frames at `fps` along the path, appended to `replay.frames` (replacing them), camera up = +y:
 //   orbit: one turn at 1.6 radii from the centre, 0.35 radii above it, looking at the centre;
 //   flythrough: across the scene at a tenth of the radius above its centre, weaving, looking ahead;
-//   approach: straight from 3 radii away to 0.15 radii from the centre, looking at it.
+//   approach: straight from `approach_from` radii away (default 3) to 0.15 radii from the centre at
+//   constant speed, looking at it.
 // `frames` 0 gives no frames.
-void makeCameraPath(const Sphere& bounds, CameraPathKind kind, size_t frames, double fps, Replay& replay);
+void makeCameraPath(const Sphere& bounds, CameraPathKind kind, size_t frames, double fps, Replay& replay,
+                    double approach_from = 3.0);
 
 }  // namespace scenelod::selection

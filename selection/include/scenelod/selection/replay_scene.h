@@ -11,6 +11,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "scenelod/lodcore/chain.h"
 #include "scenelod/lodcore/lod_chain.h"
 #include "scenelod/lodcore/status.h"
 #include "scenelod/selection/level_table.h"
@@ -84,5 +85,10 @@ Error loadPackScene(const std::string& path, ReplayScene& out);
 // .gltf/.glb/.obj file (MSFT_lod levels when the file has them, otherwise every mesh's chain built
 // with default parameters by scene::buildLods). Errors name the file.
 Error loadReplayScene(const std::string& path, ReplayScene& out);
+
+// The same with the chain parameters of the meshes whose chains are built here (e.g. nested chains,
+// ChainParams::nested). Errors as above, and a scene whose levels come from the file (builtin:NAME,
+// level-scene, pack, a glTF with MSFT_lod levels): `chain` would not apply.
+Error loadReplayScene(const std::string& path, ReplayScene& out, const ChainParams& chain);
 
 }  // namespace scenelod::selection

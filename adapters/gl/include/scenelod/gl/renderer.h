@@ -112,7 +112,8 @@ class Renderer {
   // Uploads every level of every chain (one vertex and index buffer per level and primitive kind).
   // Meshes without normals get area-weighted vertex normals. A level with morph targets
   // (LodLevel::morph) gets them beside its vertices (positions, normals, texture coordinate set 0,
-  // colours; a missing target array means the vertex's own value), doubling its vertex bytes; a
+  // colours; a missing target array means the vertex's own value, except normals of a level without
+  // normals: the normal of the next-level vertex at the target position), doubling its vertex bytes; a
   // level without keeps its own vertex size. Replaces earlier uploads. With
   // `group_materials` (one list per chain, or empty), chain c's triangle group g (edge group, point
   // group) is drawn with material group_materials[c][g] of the last uploadMaterials (-1 or past the
