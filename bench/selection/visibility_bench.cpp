@@ -157,19 +157,27 @@ GridScene sceneOf(SceneKind kind, size_t n) {
   return kind == SceneKind::kPanels ? panelScene(n) : kind == SceneKind::kOpen ? openScene(n) : gridScene(n);
 }
 
+// The ray scene of `g` and `est` initialised for its objects at the benchmark's ray budget (range
+// 1); null, with the benchmark skipped, when the scene cannot be built.
+std::unique_ptr<RayScene> estimatorScene(benchmark::State& state, const GridScene& g, OcclusionEstimator& est) {
+  auto rs = buildScene(g);
+  if (!rs) {
+    state.SkipWithError("scene build failed");
+    return nullptr;
+  }
+  OcclusionParams p;
+  p.ray_budget = static_cast<uint32_t>(state.range(1));
+  est.init(g.world.size(), p);
+  return rs;
+}
+
 // One estimator frame at the given budget; items are occlusion samples.
 void occlusionFrame(benchmark::State& state, SceneKind kind) {
   const size_t n = static_cast<size_t>(state.range(0));
   const GridScene g = sceneOf(kind, n);
-  auto rs = buildScene(g);
-  if (!rs) {
-    state.SkipWithError("scene build failed");
-    return;
-  }
   OcclusionEstimator est;
-  OcclusionParams p;
-  p.ray_budget = static_cast<uint32_t>(state.range(1));
-  est.init(n, p);
+  auto rs = estimatorScene(state, g, est);
+  if (!rs) return;
   std::vector<float> vis(n);
   uint64_t samples = 0, occlusion_rays = 0, self_hits = 0, tested = 0, occluder_candidates = 0, embree_rays = 0;
   uint64_t hidden_samples = 0;
@@ -220,15 +228,10 @@ BENCHMARK(BM_OcclusionFrame)
 void occlusionFloor(benchmark::State& state, SceneKind kind) {
   const size_t n = static_cast<size_t>(state.range(0));
   const GridScene g = sceneOf(kind, n);
-  auto rs = buildScene(g);
-  if (!rs) {
-    state.SkipWithError("scene build failed");
-    return;
-  }
   OcclusionEstimator est;
-  OcclusionParams p;
-  p.ray_budget = static_cast<uint32_t>(state.range(1));
-  est.init(n, p);
+  auto rs = estimatorScene(state, g, est);
+  if (!rs) return;
+  const OcclusionParams p;  // the estimator's rays per test (estimatorScene changes only the budget)
   for (int f = 0; f < 8; ++f) est.update(*rs, g.camera, {});
   const uint32_t occluder_level = static_cast<uint32_t>(rs->occluderLevel(0));
 
