@@ -30,11 +30,17 @@ std::vector<float> sourceAreas(const Mesh& original);
 
 // The geomorph of level `a` toward level `b` (LevelMorph in lod_chain.h): per cluster of `a`, the
 // cluster of `b` holding the largest area (`area`, sourceAreas) of its original vertices (ties: the
-// lower id); per vertex of `a`, the vertex of that cluster in `b` with the same triangle group, then
-// the nearest texture coordinates, then the nearest normal (ties: the lower index). A cluster of `a`
-// none of whose vertices is in a cluster of `b` (its part vanished) keeps its vertices where they
-// are. `a` null: `ma` is the chain's level 0, every vertex its own cluster (`area` is then not read
-// and may be null). Cost: O(V0 + Va + Vb) time and memory.
+// lower id); per vertex of `a`, the vertex of that cluster in `b` that its triangles become: each
+// triangle of `a` whose corners go to three distinct clusters is matched to the triangle of `b` on
+// them (same triangle group and orientation first, then the nearest texture coordinates) and votes
+// with its area for the corners' vertices there. A vertex no matched triangle uses (edges, points,
+// triangles that collapse, independent levels where no triangle of `b` matches) takes the vertex of
+// its cluster in `b` with the same triangle group, then the nearest texture coordinates, then the
+// nearest normal (ties: the lower index). A cluster of `a` none of whose vertices is in a cluster of
+// `b` (its part vanished) keeps its vertices where they are. `a` null: `ma` is the chain's level 0,
+// every vertex its own cluster (`area` is then not read and may be null). Normal targets exist where
+// `b` has normals (for `a` without normals, vertices that stay keep computeVertexNormals' normal).
+// Cost: O(V0 + Va + Vb) memory, O(Ta log Tb) time.
 void computeMorph(const std::vector<float>* area, const LevelMap* a, const Mesh& ma, const LevelMap& b,
                   const Mesh& mb, LevelMorph& out);
 

@@ -1,11 +1,14 @@
 // Geomorph targets between two levels of a chain (Hoppe 1996, "Progressive meshes", §4.2): every
-// vertex of a level goes to the vertex of the next level that stands for most of its cluster's
-// original surface.
+// vertex of a level goes to the vertex of the next level that its triangles are drawn with there,
+// in the cluster that stands for most of its cluster's original surface.
 #include <algorithm>
+#include <array>
+#include <cstring>
 
 #include <glm/geometric.hpp>
 
 #include "chain_internal.h"
+#include "scenelod/lodcore/mesh.h"
 
 namespace scenelod {
 
@@ -14,6 +17,64 @@ size_t LevelMorph::byteSize() const {
                  colors.size() * sizeof(glm::vec3) + uvs.size() * sizeof(glm::vec2) + tangents.size() * sizeof(glm::vec4);
   for (const std::vector<glm::vec2>& set : extra_uvs) bytes += set.size() * sizeof(glm::vec2);
   return bytes;
+}
+
+std::vector<uint32_t> morphCornerVertices(const LodLevel& level, const Mesh& next, std::vector<uint32_t>* next_triangle) {
+  const Mesh& a = level.mesh;
+  const std::vector<glm::vec3>& target = level.morph.positions;
+  std::vector<uint32_t> corner(a.triangles.size(), UINT32_MAX);
+  if (next_triangle) next_triangle->assign(a.triangleCount(), UINT32_MAX);
+  if (target.size() != a.vertexCount() || next.triangles.empty()) return corner;
+  using Key = std::array<uint32_t, 3>;
+  auto bits = [](const glm::vec3& p) {
+    Key k;
+    std::memcpy(k.data(), &p, sizeof(k));
+    return k;
+  };
+  using Triple = std::array<Key, 3>;
+  auto sortedTriple = [](Triple t) {
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  std::vector<std::pair<Triple, uint32_t>> tris;
+  tris.reserve(next.triangleCount());
+  for (size_t t = 0; t < next.triangleCount(); ++t) {
+    const uint32_t* w = &next.triangles[3 * t];
+    tris.push_back({sortedTriple({bits(next.positions[w[0]]), bits(next.positions[w[1]]), bits(next.positions[w[2]])}),
+                    static_cast<uint32_t>(t)});
+  }
+  std::sort(tris.begin(), tris.end());
+  const bool uvs = !a.uvs.empty() && !next.uvs.empty();
+  for (size_t t = 0; t < a.triangleCount(); ++t) {
+    const uint32_t* u = &a.triangles[3 * t];
+    const Triple c = {bits(target[u[0]]), bits(target[u[1]]), bits(target[u[2]])};
+    if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+    const Triple key = sortedTriple(c);
+    auto it = std::lower_bound(tris.begin(), tris.end(), std::make_pair(key, uint32_t(0)));
+    int best_rank = 0;
+    float best_d2 = 0.0f;
+    bool found = false;
+    for (; it != tris.end() && it->first == key; ++it) {
+      const uint32_t* w = &next.triangles[3 * it->second];
+      uint32_t at[3] = {w[0], w[0], w[0]};  // the vertex of the match at each corner's target
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (bits(next.positions[w[j]]) == c[i]) at[i] = w[j];
+      int j0 = 0;
+      while (j0 < 2 && w[j0] != at[0]) ++j0;
+      const bool same_orientation = w[(j0 + 1) % 3] == at[1];
+      const int rank = (a.triangleGroup(t) == next.triangleGroup(it->second) ? 0 : 2) + (same_orientation ? 0 : 1);
+      float d2 = 0.0f;
+      if (uvs)
+        for (int i = 0; i < 3; ++i) d2 += glm::dot(a.uvs[u[i]] - next.uvs[at[i]], a.uvs[u[i]] - next.uvs[at[i]]);
+      if (!found || rank < best_rank || (rank == best_rank && d2 < best_d2)) {
+        found = true, best_rank = rank, best_d2 = d2;
+        std::copy(at, at + 3, &corner[3 * t]);
+        if (next_triangle) (*next_triangle)[t] = it->second;
+      }
+    }
+  }
+  return corner;
 }
 
 namespace detail {
@@ -114,8 +175,91 @@ bool hasGroups(const Mesh& m) {
   return !m.triangle_groups.empty() || !m.edge_groups.empty() || !m.point_groups.empty();
 }
 
+// Per vertex of `ma`, the vertex of `mb` its triangles are drawn with there: each triangle of `ma`
+// whose corners go to three distinct clusters of `mb` (`cb`) is matched to a triangle of `mb` on
+// those clusters (the same triangle group and orientation preferred, then the nearest texture
+// coordinates), and each corner votes, with the triangle's area, for the vertex of `mb` at its
+// cluster there. The vertex with the most area wins (ties: the lower index); kNone where no
+// triangle of the vertex has a match (it collapses, or the levels are not nested there).
+std::vector<uint32_t> triangleTargets(const std::vector<uint32_t>& cb, const Mesh& ma,
+                                      const std::vector<uint32_t>& b_vertex_cluster, const Mesh& mb) {
+  const size_t n = ma.vertexCount();
+  std::vector<uint32_t> target(n, kNone);
+  if (ma.triangles.empty() || mb.triangles.empty()) return target;
+  using Triple = std::array<uint32_t, 3>;
+  auto sortedTriple = [](uint32_t a, uint32_t b, uint32_t c) {
+    Triple t{a, b, c};
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  // mb's triangles by their sorted cluster triples
+  std::vector<std::pair<Triple, uint32_t>> next;
+  next.reserve(mb.triangleCount());
+  for (size_t t = 0; t < mb.triangleCount(); ++t) {
+    const uint32_t* w = &mb.triangles[3 * t];
+    const uint32_t c0 = b_vertex_cluster[w[0]], c1 = b_vertex_cluster[w[1]], c2 = b_vertex_cluster[w[2]];
+    if (c0 == kNone || c1 == kNone || c2 == kNone) continue;
+    next.push_back({sortedTriple(c0, c1, c2), static_cast<uint32_t>(t)});
+  }
+  std::sort(next.begin(), next.end());
+  const bool uvs = !ma.uvs.empty() && !mb.uvs.empty();
+  struct Vote {
+    uint32_t u, w;
+    double area;
+  };
+  std::vector<Vote> votes;
+  votes.reserve(ma.triangles.size());
+  for (size_t t = 0; t < ma.triangleCount(); ++t) {
+    const uint32_t* u = &ma.triangles[3 * t];
+    const uint32_t c[3] = {cb[u[0]], cb[u[1]], cb[u[2]]};
+    if (c[0] == kNone || c[1] == kNone || c[2] == kNone || c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+    const Triple key = sortedTriple(c[0], c[1], c[2]);
+    auto it = std::lower_bound(next.begin(), next.end(), std::make_pair(key, uint32_t(0)));
+    // the best match: same group, same orientation, nearest texture coordinates
+    uint32_t best = kNone, best_corner[3] = {0, 0, 0};
+    int best_rank = 0;
+    float best_d2 = 0.0f;
+    for (; it != next.end() && it->first == key; ++it) {
+      const uint32_t* w = &mb.triangles[3 * it->second];
+      uint32_t corner[3] = {kNone, kNone, kNone};  // the match's vertex at each corner's cluster
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (b_vertex_cluster[w[j]] == c[i]) corner[i] = w[j];
+      // same orientation: corner 0 -> 1 -> 2 runs as in the match
+      int j0 = 0;
+      while (w[j0] != corner[0]) ++j0;
+      const bool same_orientation = w[(j0 + 1) % 3] == corner[1];
+      const int rank = (ma.triangleGroup(t) == mb.triangleGroup(it->second) ? 0 : 2) + (same_orientation ? 0 : 1);
+      float d2 = 0.0f;
+      if (uvs)
+        for (int i = 0; i < 3; ++i) d2 += glm::dot(ma.uvs[u[i]] - mb.uvs[corner[i]], ma.uvs[u[i]] - mb.uvs[corner[i]]);
+      if (best == kNone || rank < best_rank || (rank == best_rank && d2 < best_d2)) {
+        best = it->second, best_rank = rank, best_d2 = d2;
+        std::copy(corner, corner + 3, best_corner);
+      }
+    }
+    if (best == kNone) continue;
+    const glm::vec3& p = ma.positions[u[0]];
+    const double area = 0.5 * double(glm::length(glm::cross(ma.positions[u[1]] - p, ma.positions[u[2]] - p))) + 1e-30;
+    for (int i = 0; i < 3; ++i) votes.push_back({u[i], best_corner[i], area});
+  }
+  std::sort(votes.begin(), votes.end(), [](const Vote& a, const Vote& b) { return a.u != b.u ? a.u < b.u : a.w < b.w; });
+  for (size_t i = 0; i < votes.size();) {
+    const uint32_t u = votes[i].u;
+    double top = -1.0;
+    while (i < votes.size() && votes[i].u == u) {
+      const uint32_t w = votes[i].w;
+      double sum = 0.0;
+      for (; i < votes.size() && votes[i].u == u && votes[i].w == w; ++i) sum += votes[i].area;
+      if (sum > top) target[u] = w, top = sum;
+    }
+  }
+  return target;
+}
+
 // The second step, from the levels' meshes: each vertex of `ma` (of cluster a_vertex_cluster[u], or
-// u itself where that is null: level 0) to a vertex of `mb` in the cluster `best` gives it
+// u itself where that is null: level 0) to a vertex of `mb` in the cluster `best` gives it: the one
+// its triangles are drawn with in `mb` (triangleTargets), else by the rule of computeMorph
 void morphTargets(const std::vector<uint32_t>& best, const std::vector<uint32_t>* a_vertex_cluster, const Mesh& ma,
                   const std::vector<uint32_t>& b_vertex_cluster, const Mesh& mb, LevelMorph& out) {
   out = LevelMorph();
@@ -128,16 +272,21 @@ void morphTargets(const std::vector<uint32_t>& best, const std::vector<uint32_t>
   const std::vector<uint32_t> gb = groups ? vertexGroups(mb) : std::vector<uint32_t>();
   const size_t n = ma.vertexCount();
   const bool uvs = !ma.uvs.empty() && !mb.uvs.empty(), normals = !ma.normals.empty() && !mb.normals.empty();
-  // the vertex of b each vertex of a goes to (kNone: stays)
-  std::vector<uint32_t> target(n, kNone);
+  // every vertex's cluster in b
+  std::vector<uint32_t> cb(n, kNone);
   for (size_t u = 0; u < n; ++u) {
     const uint32_t ca = a_vertex_cluster ? (*a_vertex_cluster)[u] : static_cast<uint32_t>(u);
-    const uint32_t cb = ca == kNone || ca >= best.size() ? kNone : best[ca];
-    if (cb == kNone || cb >= nb) continue;
+    const uint32_t c = ca == kNone || ca >= best.size() ? kNone : best[ca];
+    cb[u] = c == kNone || c >= nb ? kNone : c;
+  }
+  // the vertex of b each vertex of a goes to (kNone: stays)
+  std::vector<uint32_t> target = triangleTargets(cb, ma, b_vertex_cluster, mb);
+  for (size_t u = 0; u < n; ++u) {
+    if (target[u] != kNone || cb[u] == kNone) continue;
     // lexicographic: group mismatch, texture coordinate distance, normal (larger dot first)
     bool best_other = true;
     float best_d2 = 0.0f, best_dot = 0.0f;
-    for (uint32_t i = offset[cb]; i < offset[cb + 1]; ++i) {
+    for (uint32_t i = offset[cb[u]]; i < offset[cb[u] + 1]; ++i) {
       const uint32_t w = vertices[i];
       const bool other = groups && ga[u] != gb[w];
       const float d2 = uvs ? glm::dot(ma.uvs[u] - mb.uvs[w], ma.uvs[u] - mb.uvs[w]) : 0.0f;
@@ -155,7 +304,18 @@ void morphTargets(const std::vector<uint32_t>& best, const std::vector<uint32_t>
     for (size_t u = 0; u < n; ++u) dst[u] = target[u] == kNone ? own[u] : next[target[u]];
   };
   fill(out.positions, ma.positions, mb.positions);
-  fill(out.normals, ma.normals, mb.normals);
+  if (ma.normals.empty() && !mb.normals.empty() && !ma.triangles.empty()) {
+    // a level without normals (an OBJ without vn at level 0) is drawn with the normals a renderer
+    // computes (computeVertexNormals); it gets targets all the same, so that at factor 1 it is
+    // shaded as the next level is
+    Mesh shape;
+    shape.positions = ma.positions;
+    shape.triangles = ma.triangles;
+    computeVertexNormals(shape);
+    fill(out.normals, shape.normals, mb.normals);
+  } else {
+    fill(out.normals, ma.normals, mb.normals);
+  }
   fill(out.colors, ma.colors, mb.colors);
   fill(out.uvs, ma.uvs, mb.uvs);
   fill(out.tangents, ma.tangents, mb.tangents);

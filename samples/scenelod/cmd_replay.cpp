@@ -58,11 +58,14 @@ const char kUsage[] =
     "                       77 where EGL or OpenGL 3.3 cannot start\n"
     "  --popping-supersample K  render --popping's pictures at K x K times the viewport and average each\n"
     "                       K x K block, as antialiasing would (1..4, default 1)\n"
+    "  --popping-camera     on the frames --popping draws, also render this frame's levels under last\n"
+    "                       frame's camera and log \"camera_popping\": what the camera's own motion changes\n"
     "  --nested, --independent  chains of a glTF/GLB/OBJ scene built here: each level clusters the one\n"
     "                       before (geomorphs end exactly on the next level) or the original (default)";
 
 int run(const std::vector<std::string>& argv) {
-  Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility", "--popping", "--nested", "--independent"},
+  Args args(argv, {"--distance", "--skip", "--no-calibrate", "--visibility", "--popping", "--popping-camera", "--nested",
+                   "--independent"},
             {"--out", "--report", "--budget", "--algorithm", "--hysteresis", "--seed", "--noise", "--ray-budget",
              "--transitions", "--fade-ms", "--morph-band", "--fade-budget-share", "--min-drop-px",
              "--popping-supersample"});
@@ -128,6 +131,7 @@ int run(const std::vector<std::string>& argv) {
   if (!args.getInt("--popping-supersample", supersample)) return usageError("replay", args.error());
   if (supersample < 1 || supersample > 4) return usageError("replay", "--popping-supersample must be 1..4");
   if (args.has("--popping-supersample") && !args.has("--popping")) return usageError("replay", "--popping-supersample needs --popping");
+  if (args.has("--popping-camera") && !args.has("--popping")) return usageError("replay", "--popping-camera needs --popping");
   if (args.has("--popping")) {
     bool unavailable = false;
     if (Error e = popping.init(scene, header, scene_path, static_cast<uint32_t>(supersample), &unavailable); !e.ok()) {
@@ -155,10 +159,11 @@ int run(const std::vector<std::string>& argv) {
     return more;
   };
   auto sink = [&](const ReplayLogFrame& f) {
-    double pop = 0.0;
+    double pop = 0.0, camera_pop = -1.0;
     if (args.has("--popping"))
-      if (Error e = popping.measure(scene, f, pop); !e.ok()) return e;
-    if (log.stream()) log.write((args.has("--popping") ? withPopping(replayLogLine(f), pop) : replayLogLine(f)) + "\n");
+      if (Error e = popping.measure(scene, f, pop, args.has("--popping-camera") ? &camera_pop : nullptr); !e.ok()) return e;
+    if (log.stream())
+      log.write((args.has("--popping") ? withPopping(replayLogLine(f), pop, camera_pop) : replayLogLine(f)) + "\n");
     digest.add(f);
     ++frames;
     return Error();

@@ -333,6 +333,7 @@ int run(const std::vector<std::string>& raw_argv) {
   cam.viewport_width_px = rc.width_px;
   cam.viewport_height_px = rc.height_px;
   cam.fov_y_rad = static_cast<float>(replay.header.fov_y_deg * 3.14159265358979 / 180.0);
+  Sphere draw_bounds = bounds;  // the scene's bounds as moves leave them
   cam.near_plane = std::max(1e-4f, bounds.radius * 1e-3f);
   cam.far_plane = std::max(1.0f, bounds.radius * 100.0f);
   std::vector<double> rel_errors;
@@ -349,6 +350,7 @@ int run(const std::vector<std::string>& raw_argv) {
     if (f == 0 || !rf.moves.empty()) {
       computeWorldSpheres(scene, centers, radii, max_scales);
       computeNodeWorld(scene, node_world);
+      draw_bounds = sceneBounds(scene);
       for (size_t o = 0; o < n; ++o) object_world[o] = node_world[static_cast<size_t>(scene.object_node[o])];
     }
     cam.eye = rf.eye;
@@ -409,8 +411,11 @@ int run(const std::vector<std::string>& raw_argv) {
       rc_exit = runError("view", "frame " + std::to_string(rf.frame) + ": the selection rejected its inputs");
       break;
     }
+    // the drawing camera's depth planes tight around the scene (the selection's are not for a depth buffer)
+    Camera draw_cam = cam;
+    gl::fitDepthPlanes(draw_cam, draw_bounds);
     gl::FrameInput in;
-    in.camera = &cam;
+    in.camera = &draw_cam;
     in.object_world = {object_world.data(), n};
     in.object_chain = {scene.object_chain.data(), n};
     in.levels = {levels.data(), n};

@@ -36,15 +36,19 @@ double poppingShare(const eval::Image& a, const eval::Image& b, const uint8_t ba
   return covered ? static_cast<double>(changed) / static_cast<double>(covered) : 0.0;
 }
 
-std::string withPopping(const std::string& line, double popping) {
-  char buf[48];
-  std::snprintf(buf, sizeof(buf), ", \"popping\": %.5f}", popping);
+std::string withPopping(const std::string& line, double popping, double camera_popping) {
+  char buf[96];
+  if (camera_popping >= 0.0)
+    std::snprintf(buf, sizeof(buf), ", \"popping\": %.5f, \"camera_popping\": %.5f}", popping, camera_popping);
+  else
+    std::snprintf(buf, sizeof(buf), ", \"popping\": %.5f}", popping);
   if (line.empty() || line.back() != '}') return line;
   return line.substr(0, line.size() - 1) + buf;
 }
 
 struct ReplayPopping::Impl {
-  Camera camera;
+  Camera camera, last_camera;
+  bool has_last_camera = false;
   uint64_t frame = 0;
   // last frame's level state
   bool has_last = false;
@@ -60,6 +64,7 @@ struct ReplayPopping::Impl {
   gl::Renderer renderer;
 #endif
   bool ready = false;
+  bool frame_set = false;  // setFrame was called before (last_camera is a frame's)
 };
 
 namespace {
@@ -133,6 +138,9 @@ Error ReplayPopping::init(const ReplayScene& scene, const ReplayHeader& header, 
 void ReplayPopping::setFrame(const ReplayFrame& f) {
   Impl& m = *impl_;
   m.frame = f.frame;
+  m.last_camera = m.camera;
+  m.has_last_camera = m.frame_set;
+  m.frame_set = true;
   const uint32_t w = m.camera.viewport_width_px, h = m.camera.viewport_height_px;
   const float fov = m.camera.fov_y_rad;
   m.camera = Camera();
@@ -151,22 +159,20 @@ void ReplayPopping::setFrame(const ReplayFrame& f) {
     }
 }
 
-Error ReplayPopping::measure(const ReplayScene& scene, const ReplayLogFrame& log, double& popping) {
+Error ReplayPopping::measure(const ReplayScene& scene, const ReplayLogFrame& log, double& popping, double* camera_popping) {
   Impl& m = *impl_;
   (void)scene;  // drawn only in builds with the GL adapter
   popping = 0.0;
+  if (camera_popping) *camera_popping = -1.0;
   if (!m.ready) return Error(Status::kInvalidArgument, "popping: measure before init");
   const bool same = m.has_last && m.levels == log.levels && m.morph == log.morph && m.fade == log.fade &&
                     m.previous_levels == log.previous_levels;
   if (m.has_last && !same) {
 #ifdef SCENELOD_HAVE_GL
-    // near and far planes from the scene's bounds as they are now (the run's camera planes are for
-    // selection, not for a depth buffer)
-    const Sphere bounds = sceneBounds(scene);
+    // near and far planes tight around the scene's bounds as they are now (the run's camera planes
+    // are for selection, not for a depth buffer: a far scene's two sides would share depth steps)
     Camera cam = m.camera;
-    const float r = std::max(bounds.radius, 1e-6f);
-    cam.near_plane = std::max(1e-5f, 1e-3f * r);
-    cam.far_plane = std::max(cam.near_plane * 10.0f, glm::length(cam.eye - bounds.center) + 4.0f * r);
+    gl::fitDepthPlanes(cam, sceneBounds(scene));
     if (!cameraValid(cam))
       return Error(Status::kInvalidArgument, "popping: frame " + std::to_string(m.frame) + ": degenerate camera");
     computeObjectWorlds(scene, m.worlds);
@@ -191,6 +197,16 @@ Error ReplayPopping::measure(const ReplayScene& scene, const ReplayLogFrame& log
     if (Error e = m.renderer.readPixels(m.full); !e.ok()) return Error(e.status, where + ": " + e.message);
     downsample(m.full, m.supersample, m.after);
     popping = poppingShare(m.before, m.after, kBackground);
+    if (camera_popping && m.has_last_camera) {
+      // this frame's state under last frame's camera (its own depth planes)
+      Camera last = m.last_camera;
+      gl::fitDepthPlanes(last, sceneBounds(scene));
+      in.camera = &last;
+      if (!m.renderer.drawFrame(in, nullptr)) return Error(Status::kInvalidArgument, where + ": the renderer refused last frame's camera");
+      if (Error e = m.renderer.readPixels(m.full); !e.ok()) return Error(e.status, where + ": " + e.message);
+      downsample(m.full, m.supersample, m.before);
+      *camera_popping = poppingShare(m.before, m.after, kBackground);
+    }
 #endif
   }
   // the same level state under the same camera renders the same picture: popping 0 without drawing

@@ -56,9 +56,13 @@ class ReplayPopping {
 
   // Renders the frame set by setFrame (the scene as the run left it: moves applied) with last
   // frame's and with this frame's level state and returns the popping in `popping` (0 for the
-  // first frame, which has no last frame). Errors: a degenerate camera, the renderer refusing the
-  // frame or its read-back.
-  Error measure(const selection::ReplayScene& scene, const selection::ReplayLogFrame& log, double& popping);
+  // first frame, which has no last frame). With `camera_popping` (not null), on the frames where
+  // the level state changed it also renders this frame's state under last frame's camera and
+  // returns the popping between that and this frame's picture: what the camera's own motion
+  // changes on the same frame, a floor for transitions that move geometry (-1 on frames not
+  // drawn). Errors: a degenerate camera, the renderer refusing the frame or its read-back.
+  Error measure(const selection::ReplayScene& scene, const selection::ReplayLogFrame& log, double& popping,
+                double* camera_popping = nullptr);
 
   PoppingSummary summary() const;
 
@@ -67,7 +71,8 @@ class ReplayPopping {
   std::unique_ptr<Impl> impl_;
 };
 
-// `line` (a replayLogLine, ending in '}') with `"popping": P` added before its closing brace.
-std::string withPopping(const std::string& line, double popping);
+// `line` (a replayLogLine, ending in '}') with `"popping": P` added before its closing brace, and
+// `"camera_popping": C` after it when `camera_popping` >= 0.
+std::string withPopping(const std::string& line, double popping, double camera_popping = -1.0);
 
 }  // namespace scenelod::tool

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <set>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -139,7 +141,7 @@ TEST(Morph, IndependentTargetsLieInTheirNextClustersCell) {
     for (size_t k = 0; k + 1 < chain.levelCount(); ++k) {
       const LodLevel& level = chain.levels[k];
       ASSERT_EQ(level.morph.positions.size(), level.mesh.vertexCount());
-      ASSERT_EQ(level.morph.normals.size(), level.mesh.normals.empty() ? 0 : level.mesh.vertexCount());
+      ASSERT_EQ(level.morph.normals.size(), chain.levels[k + 1].mesh.normals.empty() ? 0 : level.mesh.vertexCount());
       // this level's and the next level's clusters, as an independent clustering makes them
       ClusterParams at = cp.cluster;
       std::vector<std::vector<uint32_t>> sources(level.mesh.vertexCount());
@@ -256,7 +258,7 @@ TEST(Morph, TexturedTargetsTakeTheNextLevelsAttributes) {
     const Mesh& b = chain.levels[k + 1].mesh;
     const LevelMorph& morph = chain.levels[k].morph;
     ASSERT_EQ(morph.uvs.size(), a.vertexCount());
-    ASSERT_EQ(morph.normals.size(), a.normals.empty() ? 0 : a.vertexCount());  // (level 0 has none)
+    ASSERT_EQ(morph.normals.size(), b.normals.empty() ? 0 : a.vertexCount());  // (level 0 has none: targets all the same)
     std::set<std::tuple<float, float, float, float, float>> next;
     for (size_t w = 0; w < b.vertexCount(); ++w)
       next.insert({b.positions[w].x, b.positions[w].y, b.positions[w].z, b.uvs[w].x, b.uvs[w].y});
@@ -363,5 +365,85 @@ TEST(Morph, RebuiltLevelsGetTheirGeomorphsAgain) {
       }
     }
     EXPECT_TRUE(chain.levels.back().morph.empty()) << what;
+  }
+}
+
+// With nested chains every triangle of level k that keeps three distinct corners at factor 1 is
+// matched to a triangle of level k + 1 whose corners sit on its targets (morphCornerVertices), and
+// every vertex's target (position, normal, texture coordinates) is that of a next-level vertex one
+// of its triangles is drawn with there; most corners are drawn by their vertex's target itself
+// (a vertex drawn by several is a crease of the next level through it).
+TEST(Morph, NestedTargetsAreTheVerticesTheirTrianglesAreDrawnWith) {
+  std::vector<std::pair<std::string, Mesh>> meshes = {{"plain", testMesh()}, {"textured", texturedMesh()}};
+  Mesh bunny;
+  if (readObj(test::bunnyPath(), bunny).ok()) meshes.push_back({"bunny", bunny});
+  for (const auto& [what, m] : meshes) {
+    ChainParams cp;
+    cp.nested = true;
+    cp.level_count = 6;
+    LodChain chain;
+    ASSERT_TRUE(buildChain(m, cp, chain).ok());
+    size_t corners = 0, own_target = 0;
+    for (size_t k = 0; k + 1 < chain.levelCount(); ++k) {
+      const Mesh& a = chain.levels[k].mesh;
+      const Mesh& b = chain.levels[k + 1].mesh;
+      const LevelMorph& morph = chain.levels[k].morph;
+      ASSERT_EQ(morph.normals.size(), b.normals.empty() ? 0 : a.vertexCount()) << what << " level " << k;
+      std::vector<uint32_t> match;
+      const std::vector<uint32_t> at = morphCornerVertices(chain.levels[k], b, &match);
+      ASSERT_EQ(at.size(), a.triangles.size());
+      ASSERT_EQ(match.size(), a.triangleCount());
+      std::vector<uint8_t> drawn_by_target(a.vertexCount(), 0), has_corner(a.vertexCount(), 0);
+      for (size_t t = 0; t < a.triangleCount(); ++t) {
+        const uint32_t* u = &a.triangles[3 * t];
+        const bool collapses = morph.positions[u[0]] == morph.positions[u[1]] ||
+                               morph.positions[u[1]] == morph.positions[u[2]] ||
+                               morph.positions[u[0]] == morph.positions[u[2]];
+        ASSERT_EQ(at[3 * t] == UINT32_MAX, collapses) << what << " level " << k << " triangle " << t;
+        ASSERT_EQ(match[t] == UINT32_MAX, collapses);
+        if (collapses) continue;
+        for (int i = 0; i < 3; ++i) {
+          const uint32_t w = at[3 * t + i];
+          ASSERT_LT(w, b.vertexCount());
+          ASSERT_EQ(b.positions[w], morph.positions[u[i]]) << what << " level " << k;
+          bool same = morph.normals.empty() || morph.normals[u[i]] == b.normals[w];
+          same = same && (morph.uvs.empty() || morph.uvs[u[i]] == b.uvs[w]);
+          has_corner[u[i]] = 1;
+          drawn_by_target[u[i]] |= same;
+          ++corners;
+          own_target += same;
+        }
+      }
+      for (size_t v = 0; v < a.vertexCount(); ++v)
+        if (has_corner[v]) {
+          ASSERT_TRUE(drawn_by_target[v]) << what << " level " << k << " vertex " << v;
+        }
+    }
+    EXPECT_GT(corners, 0u) << what;
+    EXPECT_GT(own_target, corners * 9 / 10) << what;
+    std::printf("%s: %zu of %zu corners drawn by their vertex's own target\n", what.c_str(), own_target, corners);
+  }
+}
+
+// morphCornerVertices on a level without morph targets, and on independent levels: no match is
+// claimed where no next-level triangle lies on the targets
+TEST(Morph, CornerVerticesOnlyWhereATriangleMatches) {
+  const Mesh m = testMesh();
+  ChainParams cp;
+  cp.level_count = 4;
+  cp.nested = false;
+  LodChain chain;
+  ASSERT_TRUE(buildChain(m, cp, chain).ok());
+  LodLevel bare = chain.levels[1];
+  bare.morph = LevelMorph();
+  for (uint32_t w : morphCornerVertices(bare, chain.levels[2].mesh)) EXPECT_EQ(w, UINT32_MAX);
+  for (size_t k = 0; k + 1 < chain.levelCount(); ++k) {
+    const Mesh& a = chain.levels[k].mesh;
+    const Mesh& b = chain.levels[k + 1].mesh;
+    const std::vector<uint32_t> at = morphCornerVertices(chain.levels[k], b);
+    for (size_t i = 0; i < at.size(); ++i)
+      if (at[i] != UINT32_MAX) {
+        ASSERT_EQ(b.positions[at[i]], chain.levels[k].morph.positions[a.triangles[i]]);
+      }
   }
 }

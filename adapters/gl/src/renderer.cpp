@@ -18,6 +18,7 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <tuple>
+#include <unordered_map>
 #include <glm/gtc/type_ptr.hpp>
 
 namespace scenelod::gl {
@@ -45,14 +46,16 @@ out vec3 v_world;
 out vec2 v_uv;
 out vec3 v_color;
 void main() {
-  vec3 n = mix(a_normal, a_normal_target, u_morph);
+  // (at factor 1 the targets themselves: mix may round a + 1 (b - a) away from b)
+  bool at_target = u_morph >= 1.0;
+  vec3 n = at_target ? a_normal_target : mix(a_normal, a_normal_target, u_morph);
   float n_len = length(n);
-  n = n_len > 1e-20 ? n / n_len : a_normal;
-  vec4 w = u_model * vec4(mix(a_pos, a_pos_target, u_morph), 1.0);
+  n = n_len > 1e-20 ? n / n_len : at_target ? n : a_normal;
+  vec4 w = u_model * vec4(at_target ? a_pos_target : mix(a_pos, a_pos_target, u_morph), 1.0);
   v_world = w.xyz;
   v_normal = u_normal_matrix * n;
-  v_uv = mix(a_uv, a_uv_target, u_morph);
-  v_color = mix(a_color, a_color_target, u_morph);
+  v_uv = at_target ? a_uv_target : mix(a_uv, a_uv_target, u_morph);
+  v_color = at_target ? a_color_target : mix(a_color, a_color_target, u_morph);
   gl_Position = u_view_proj * w;
 }
 )";
@@ -79,8 +82,9 @@ out vec3 v_color;
 void main() {
   v_uv = vec2(0.0);
   v_color = vec3(1.0);
-  vec3 w1 = (u_model * vec4(mix(a_v1, a_t1, u_morph), 1.0)).xyz;
-  vec3 w2 = (u_model * vec4(mix(a_v2, a_t2, u_morph), 1.0)).xyz;
+  bool at_target = u_morph >= 1.0;
+  vec3 w1 = (u_model * vec4(at_target ? a_t1 : mix(a_v1, a_t1, u_morph), 1.0)).xyz;
+  vec3 w2 = (u_model * vec4(at_target ? a_t2 : mix(a_v2, a_t2, u_morph), 1.0)).xyz;
   vec3 dir = w2 - w1;
   vec3 p = mix(w1, w2, a_param.x);
   vec3 to_p = p - u_eye;
@@ -111,7 +115,7 @@ out vec3 v_color;
 void main() {
   v_uv = vec2(0.0);
   v_color = vec3(1.0);
-  vec4 w = u_model * vec4(mix(a_pos, a_pos_target, u_morph), 1.0);
+  vec4 w = u_model * vec4(u_morph >= 1.0 ? a_pos_target : mix(a_pos, a_pos_target, u_morph), 1.0);
   v_world = w.xyz;
   v_normal = u_eye - w.xyz;
   gl_PointSize = u_point_size;
@@ -471,6 +475,15 @@ struct Renderer::Impl {
   }
 };
 
+void fitDepthPlanes(selection::Camera& camera, const Sphere& bounds, float min_near) {
+  const float r = std::max(bounds.radius, 1e-6f);
+  const glm::vec3 view = camera.target - camera.eye;
+  const float len = glm::length(view);
+  const float depth = len > 0.0f ? glm::dot(bounds.center - camera.eye, view / len) : 0.0f;
+  camera.near_plane = std::max({1e-6f, min_near * r, 0.99f * (depth - r)});
+  camera.far_plane = std::max(camera.near_plane * 1.01f + 1e-6f, 1.01f * (depth + r));
+}
+
 Renderer::Renderer() = default;
 Renderer::~Renderer() = default;
 
@@ -611,8 +624,50 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
       if (morphs && morph.normals.empty() && src.normals.size() != nv && l + 1 < chains[c].levels.size())
         nextLevelNormals(chains[c].levels[l + 1].mesh, morph.positions, *normals, target_normals);
       const size_t stride = morphs ? 2 * kOwn : kOwn;
+      // triangle corners drawn at factor 1 by a next-level vertex other than their vertex's target
+      // (a crease of the next level through the vertex) get a copy of the vertex with that target
+      std::vector<uint32_t> corners = src.triangles;
+      std::vector<uint32_t> match;  // per triangle: the next level's triangle it becomes
+      std::vector<std::pair<uint32_t, uint32_t>> copies;  // (vertex, next-level vertex)
+      Mesh next_normals_mesh;
+      const Mesh* next = morphs && l + 1 < chains[c].levels.size() ? &chains[c].levels[l + 1].mesh : nullptr;
+      const std::vector<glm::vec3>* next_normals = next ? &next->normals : nullptr;
+      if (next && next->normals.size() != next->positions.size()) {
+        next_normals_mesh.positions = next->positions;
+        next_normals_mesh.triangles = next->triangles;
+        computeVertexNormals(next_normals_mesh);
+        next_normals = &next_normals_mesh.normals;
+      }
+      if (next && validateMesh(*next, what).ok()) {
+        const std::vector<uint32_t> at = morphCornerVertices(chains[c].levels[l], *next, &match);
+        const bool next_uvs = uvs && !morph.uvs.empty() && next->uvs.size() == next->positions.size();
+        const bool next_colors = colors && !morph.colors.empty() && next->colors.size() == next->positions.size();
+        std::unordered_map<uint64_t, uint32_t> made;  // (vertex << 32 | next vertex) -> copy
+        for (size_t i = 0; i < corners.size(); ++i) {
+          const uint32_t u = corners[i], w = at[i];
+          if (w == UINT32_MAX) continue;
+          const glm::vec3 n = !morph.normals.empty() ? morph.normals[u] : !target_normals.empty() ? target_normals[u] : (*normals)[u];
+          const bool same = n == (*next_normals)[w] && (!next_uvs || morph.uvs[u] == next->uvs[w]) &&
+                            (!next_colors || morph.colors[u] == next->colors[w]);
+          if (same) continue;
+          const auto [it, added] = made.emplace(uint64_t(u) << 32 | w, static_cast<uint32_t>(nv + copies.size()));
+          if (added) copies.push_back({u, w});
+          corners[i] = it->second;
+        }
+        // each matched triangle's corners rotated to start where its match starts (the same
+        // triangle given from another first corner may round its edges and attributes otherwise)
+        for (size_t t = 0; t < match.size(); ++t) {
+          if (match[t] == UINT32_MAX) continue;
+          const uint32_t first = next->triangles[3 * size_t(match[t])];
+          for (int r = 1; r < 3; ++r)
+            if (at[3 * t + r] == first && at[3 * t + (r + 1) % 3] == next->triangles[3 * size_t(match[t]) + 1]) {
+              std::rotate(corners.begin() + 3 * t, corners.begin() + 3 * t + r, corners.begin() + 3 * t + 3);
+              break;
+            }
+        }
+      }
       LevelGpu lg;
-      vertex_data.assign(nv * stride, 1.0f);
+      vertex_data.assign((nv + copies.size()) * stride, 1.0f);
       for (size_t v = 0; v < nv; ++v) {
         float* d = &vertex_data[v * stride];
         std::memcpy(d, &src.positions[v], 12);
@@ -628,6 +683,15 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
         else if (!target_normals.empty()) std::memcpy(t + 3, &target_normals[v], 12);
         if (uvs && !morph.uvs.empty()) std::memcpy(t + 6, &morph.uvs[v], 8);
         if (colors && !morph.colors.empty()) std::memcpy(t + 8, &morph.colors[v], 12);
+      }
+      for (size_t i = 0; i < copies.size(); ++i) {
+        const auto [u, w] = copies[i];
+        float* d = &vertex_data[(nv + i) * stride];
+        std::memcpy(d, &vertex_data[u * stride], stride * 4);
+        float* t = d + kOwn;
+        std::memcpy(t + 3, &(*next_normals)[w], 12);
+        if (uvs && !morph.uvs.empty() && next->uvs.size() == next->positions.size()) std::memcpy(t + 6, &next->uvs[w], 8);
+        if (colors && !morph.colors.empty() && next->colors.size() == next->positions.size()) std::memcpy(t + 8, &next->colors[w], 12);
       }
       glGenBuffers(1, &lg.vbo);
       glBindBuffer(GL_ARRAY_BUFFER, lg.vbo);
@@ -657,9 +721,15 @@ Error Renderer::uploadChains(const std::vector<LodChain>& chains, const std::vec
         m.gpu_bytes += data.size() * 4;
       };
       if (!src.triangles.empty()) {
-        const std::vector<uint32_t> order = groupOrder(src.triangleCount(), src.triangle_groups, mats, 3, lg.tri_ranges);
+        std::vector<uint32_t> order = groupOrder(src.triangleCount(), src.triangle_groups, mats, 3, lg.tri_ranges);
+        // within a group, in the order of the next level's triangles they become (then the rest):
+        // coinciding surfaces at factor 1 win their depth ties as in the next level
+        if (!match.empty())
+          for (const Range& r : lg.tri_ranges)
+            std::stable_sort(order.begin() + r.first / 3, order.begin() + (r.first + r.count) / 3,
+                             [&](uint32_t a, uint32_t b) { return match[a] < match[b]; });
         indices.clear();
-        for (uint32_t t : order) indices.insert(indices.end(), src.triangles.begin() + 3 * t, src.triangles.begin() + 3 * t + 3);
+        for (uint32_t t : order) indices.insert(indices.end(), corners.begin() + 3 * t, corners.begin() + 3 * t + 3);
         vertexArray(lg.tri_vao, true);
         indexBuffer(lg.tri_ibo, indices);
         lg.tri_indices = static_cast<GLsizei>(indices.size());

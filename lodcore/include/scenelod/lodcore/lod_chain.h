@@ -36,12 +36,15 @@ struct Sphere {
 // coarser level of its chain. A renderer draws the level with each attribute mixed as
 // (1 - f) x own + f x target for a morph factor f in [0, 1]; at f = 1 the vertex sits on its
 // target, so the switch to the next level moves nothing (exactly, for nested chains:
-// docs/CLUSTERING.md, "Geomorphs"). The target of a vertex is the vertex of the next level whose
-// cluster holds the largest area share of the vertex's cluster's original vertices, taken in the
-// same triangle group, with the nearest texture coordinates, then the nearest normal. Every array is
-// empty or one per vertex of the level's mesh, present where the level's mesh has that attribute;
-// all empty (empty()) on the last level and where the generator records none (SCROOGE). Skin
-// joints and weights have no target (a vertex keeps its own).
+// docs/CLUSTERING.md, "Geomorphs"). The target of a vertex is a vertex of the next level whose
+// cluster holds the largest area share of the vertex's cluster's original vertices: the one the
+// vertex's triangles are drawn with in the next level (position, normal and attributes all of that
+// vertex), else the one in the same triangle group, with the nearest texture coordinates, then the
+// nearest normal. Every array is empty or one per vertex of the level's mesh, present where both
+// levels' meshes have that attribute, normals also where only the next level has them (a level
+// drawn with computed normals: computeVertexNormals); all empty (empty()) on the last level and
+// where the generator records none (SCROOGE). Skin joints and weights have no target (a vertex
+// keeps its own).
 struct LevelMorph {
   std::vector<glm::vec3> positions;
   std::vector<glm::vec3> normals;
@@ -69,6 +72,23 @@ struct LodLevel {
   std::vector<uint32_t> source_vertex;
   LevelMorph morph;  // this level's vertices' targets in the next level (empty when absent)
 };
+
+// Per triangle corner of `level` (3 per triangle, in its triangle order): the vertex of `next`
+// (the chain's next level) that draws that corner when `level` is drawn at morph factor 1: the
+// corner of the triangle of `next` whose corners sit exactly on the targets (level.morph.positions)
+// of the triangle's corners, in the same triangle group and orientation first, then with the
+// nearest texture coordinates; UINT32_MAX where two corners share a target (the triangle
+// collapses), where no triangle of `next` lies there (levels that are not nested) and for a level
+// without morph targets. A vertex has one target, yet its triangles may be drawn with several
+// vertices of the next level (a crease of the next level through it): a renderer that wants level
+// k at factor 1 to be shaded exactly as level k + 1 draws such a corner with a copy of the vertex
+// whose target attributes are this vertex's (the GL adapter does). Cost: O(T log T) time, 16 bytes
+// per triangle of `next`. Thread-safe. With `next_triangle`: per triangle of `level`, the triangle
+// of `next` it was matched to (UINT32_MAX where none): a renderer draws level k's triangles in the
+// order of their matches, so that surfaces that coincide at factor 1 overlap in the order level
+// k + 1 draws them (a depth tie keeps the first).
+std::vector<uint32_t> morphCornerVertices(const LodLevel& level, const Mesh& next,
+                                          std::vector<uint32_t>* next_triangle = nullptr);
 
 struct LodChain {
   std::vector<LodLevel> levels;  // levels[0] is the original; cell widths strictly increase and no

@@ -93,6 +93,14 @@ struct FrameResult {
   uint32_t fade_draw_calls = 0;
 };
 
+// Near and far planes for a perspective `camera` drawing what lies inside `bounds`: the planes
+// tightest around the sphere along the view direction (with a 1 % margin), the near plane at least
+// `min_near` x the radius (the eye inside or close to the sphere). The 24-bit depth buffer resolves
+// about (distance^2 / near) / 2^24 at a distance: a near plane fixed at a thousandth of the radius
+// leaves a far scene's front and back surfaces in one depth step (both sides are lit: the colour
+// flickers as the geometry moves by a hair). Orthographic cameras get the same planes.
+void fitDepthPlanes(selection::Camera& camera, const Sphere& bounds, float min_near = 1e-3f);
+
 class Renderer {
  public:
   Renderer();
