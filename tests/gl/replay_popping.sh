@@ -44,6 +44,19 @@ max() { sed -n 's/^popping: max \([0-9.]*\).*/\1/p' "$1"; }
 none=$(max "$dir/none.out") fade=$(max "$dir/fade.out")
 echo "worst popping: hard switches $none, cross-fades $fade"
 awk -v n="$none" -v f="$fade" 'BEGIN { exit !(n > 0 && f < n) }' || { echo "FAIL: fades do not lower the worst popping"; exit 1; }
+# geomorphs on nested chains with the camera's own popping beside: every drawn frame logs a
+# camera_popping in [0, 1], the others none; a moving camera changes pixels on some frame
+"$tool" replay "$dir/blob.jsonl" -o "$dir/morph.log" --distance --transitions morph --nested --popping --popping-camera \
+  > "$dir/morph.out" 2>&1 || { cat "$dir/morph.out"; echo "FAIL: scenelod replay --popping-camera"; exit 1; }
+awk '{
+  has = match($0, /"camera_popping": [0-9.]+/); c = has ? substr($0, RSTART + 18, RLENGTH - 18) + 0 : -1
+  match($0, /"popping": [0-9.]+/); p = substr($0, RSTART + 11, RLENGTH - 11) + 0
+  if (has) { drawn++; if (c < 0 || c > 1) { print "FAIL: frame " NR - 1 " camera_popping " c; bad = 1 }; if (c > 0) moving++ }
+  if (!has && p > 0) { print "FAIL: frame " NR - 1 " pops " p " but has no camera_popping"; bad = 1 }
+} END {
+  if (drawn < 2 || moving < 1) { print "FAIL: " drawn + 0 " frames with camera_popping, " moving + 0 " above 0"; bad = 1 }
+  print drawn " frames with the camera popping beside"
+  exit bad }' "$dir/morph.log" || exit 1
 # scenelod view follows the same replay with cross-fades: some frames draw objects fading
 out=$("$tool" view --replay "$dir/blob.jsonl" --headless --distance --pixels 4 --transitions fade --size 160 120 2>&1)
 rc=$?
