@@ -5,13 +5,19 @@
 
 namespace scenelod::selection {
 
+// A level morphs into the next only when the next draws triangles alone: a morph moves the level's
+// vertices onto the next level's, but cannot grow the thick edges or points the next level draws
+// where this one had triangles, so such a switch would still pop; it fades instead.
 uint32_t LevelTableData::addChain(const LodChain& chain) {
-  for (const LodLevel& l : chain.levels) {
+  for (size_t k = 0; k < chain.levels.size(); ++k) {
+    const LodLevel& l = chain.levels[k];
+    const bool next_has_lines = k + 1 < chain.levels.size() &&
+                                chain.levels[k + 1].mesh.edgeCount() + chain.levels[k + 1].mesh.pointCount() != 0;
     cell_width.push_back(l.cell_width);
     triangle_count.push_back(static_cast<uint32_t>(l.mesh.triangleCount()));
     vertex_count.push_back(static_cast<uint32_t>(l.mesh.vertexCount()));
     line_point_count.push_back(static_cast<uint32_t>(l.mesh.edgeCount() + l.mesh.pointCount()));
-    has_morph.push_back(l.morph.empty() ? 0 : 1);
+    has_morph.push_back(l.morph.empty() || next_has_lines ? 0 : 1);
   }
   chain_level_offset.push_back(static_cast<uint32_t>(cell_width.size()));
   return static_cast<uint32_t>(chain_level_offset.size() - 2);

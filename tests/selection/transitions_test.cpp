@@ -429,3 +429,28 @@ TEST(Transitions, LevelTableKnowsWhichChainLevelsHaveMorphTargets) {
     EXPECT_EQ(table.has_morph[l] != 0, l + 1 < chain.levelCount()) << "level " << l;
   }
 }
+
+// a level whose next level draws thick edges or points does not morph into it (a morph cannot grow
+// a triangle into an edge, the switch would pop): the table says fade there, and only there
+TEST(Transitions, SwitchIntoALevelWithEdgesFadesInsteadOfMorphing) {
+  LodChain chain;
+  for (int k = 0; k < 4; ++k) {
+    LodLevel l;
+    l.cell_width = 0.1f * float(1 << k);
+    l.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    if (k == 2) {
+      l.mesh.edges = {0, 1};  // level 2 draws a thick edge where level 1 drew a triangle
+    } else {
+      l.mesh.triangles = {0, 1, 2};
+    }
+    if (k + 1 < 4) l.morph.positions.assign(3, glm::vec3(0.0f));
+    chain.levels.push_back(l);
+  }
+  LevelTableData table;
+  table.addChain(chain);
+  ASSERT_EQ(table.has_morph.size(), 4u);
+  EXPECT_EQ(table.has_morph[0], 1);  // 0 -> 1: triangles into triangles
+  EXPECT_EQ(table.has_morph[1], 0);  // 1 -> 2: the next level draws an edge
+  EXPECT_EQ(table.has_morph[2], 1);  // 2 -> 3: triangles again
+  EXPECT_EQ(table.has_morph[3], 0);  // the last level has no next level
+}

@@ -17,8 +17,9 @@ struct LevelTableData {
   std::vector<uint32_t> vertex_count;
   std::vector<uint32_t> line_point_count;
   std::vector<uint8_t> has_morph;  // per row: the level has geomorph targets into the next level
-                                   // (LodLevel::morph; 0 for rows added from counts alone), so a
-                                   // transition from it to the next level may morph instead of fade
+                                   // (LodLevel::morph) and the next level draws triangles only, so
+                                   // a transition between them may morph instead of fade (0 for
+                                   // rows added from counts alone)
 
   // Appends a chain's levels (cell width, counts; edges + points as line_point_count) and returns its
   // chain id. Allocates.
