@@ -104,7 +104,7 @@ void run(benchmark::State& state, bool views) {
   std::vector<int8_t> group_levels(2 * n);
   SelectionStats st;
   double t = 0.0, triangles[2] = {0.0, 0.0};
-  size_t frames = 0, drawn = 0;
+  size_t frames = 0, drawn = 0, settled = 0;
   View frame_views[4];
   for (auto _ : state) {
     t += 6.2831853 / 600.0;
@@ -123,6 +123,7 @@ void run(benchmark::State& state, bool views) {
     benchmark::ClobberMemory();
     ++frames;
     drawn += st.drawn_count;
+    settled += st.settled_count;
     state.PauseTiming();
     for (size_t g = 0; g < (views ? 2u : 1u); ++g)
       for (size_t i = 0; i < n; ++i) {
@@ -134,6 +135,7 @@ void run(benchmark::State& state, bool views) {
   const double f = frames ? static_cast<double>(frames) : 1.0;
   state.SetItemsProcessed(static_cast<int64_t>(frames * n));
   state.counters["drawn"] = static_cast<double>(drawn) / f;
+  state.counters["settled"] = static_cast<double>(settled) / f;
   state.counters["eye_triangles"] = triangles[0] / f;
   state.counters["shadow_triangles"] = triangles[1] / f;
   state.counters["bytes_per_object"] = selectorBytesPerObject(views ? vc.ctx : s.ctx);

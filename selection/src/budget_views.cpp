@@ -129,7 +129,137 @@ size_t jointHull(const TupleHullInput& in, TuplePoint* out) {
   return upperHull(pool, pooled, out);
 }
 
+// ---- settling (docs/SELECTION.md, "Views"): an object whose last tuple is the unique best at
+// every price in the predicted bracket needs no hull
+
+// the settling test's slack on b - lambda c: far above the rounding of the hull's float sums over
+// at most 8 groups (about 2^-21 of the summed magnitudes)
+constexpr double kSettleSlack = 1.0 / 262144.0;
+
+// One group's level points as groupPoints computes them, for the levels it may offer (from the
+// finest candidate on, and last frame's level).
+struct GroupLevels {
+  float c[kMaxViewLevels], b[kMaxViewLevels];
+  int first, finest, prev, levels;
+  float cmax, bmax;
+  bool offered(int l, int min_level) const { return l >= min_level && (l >= finest || l == prev); }
+};
+
+void groupLevels(const TupleHullInput& in, size_t g, GroupLevels* gl) {
+  const SelectorContext& ctx = *in.ctx;
+  const GroupTerms& gt = in.terms->group[g];
+  gl->finest = gt.finest;
+  gl->prev = in.prev[g];
+  gl->levels = in.levels;
+  gl->first = gl->prev >= 0 && gl->prev < gt.finest ? gl->prev : gt.finest;
+  gl->cmax = 0.0f;
+  gl->bmax = 0.0f;
+  for (int l = gl->first; l < in.levels; ++l) {
+    const uint32_t row = in.row0 + static_cast<uint32_t>(l);
+    const float acc = std::min(1.0f, gt.q * ctx.row_inv_w[row]) * (l == gl->prev ? ctx.h1 : 1.0f);
+    gl->c[l] = gt.a + gt.m * ctx.row_cost[row];
+    gl->b[l] = gt.b * acc;
+    gl->cmax = std::max(gl->cmax, gl->c[l]);
+    gl->bmax = std::max(gl->bmax, gl->b[l]);
+  }
+}
+
+// b - lambda c of level l (-1: not drawn, 0)
+inline double valueAt(const GroupLevels& gl, int l, double lambda) {
+  return l < 0 ? 0.0 : static_cast<double>(gl.b[l]) - lambda * static_cast<double>(gl.c[l]);
+}
+
+// The best value over the levels offered from min_level on (not drawn included), except level `skip`.
+double bestOffered(const GroupLevels& gl, int min_level, int skip, double lambda) {
+  double best = skip == -1 ? -std::numeric_limits<double>::infinity() : 0.0;
+  for (int l = std::max(gl.first, min_level); l < gl.levels; ++l)
+    if (l != skip && gl.offered(l, min_level)) best = std::max(best, valueAt(gl, l, lambda));
+  return best;
+}
+
 }  // namespace
+
+bool tupleSettles(const TupleHullInput& in, size_t max_steps, double lo, double hi, double avail, TuplePoint* point,
+                  double* need) {
+  const ViewFrame& f = *in.frame;
+  const SelectorContext& ctx = *in.ctx;
+  if (in.must || in.forced >= 0) return false;
+  // costs that rise with detail (row costs falling strictly along the chain, >= 0): the hull's
+  // steps then make each group's level finer, never coarser (Topkis), so the candidate's step
+  // index is at most the count of coarser options summed over the groups
+  if (!(ctx.row_spread[in.row0] < std::numeric_limits<float>::infinity()) || !(ctx.row_suffix_min[in.row0] >= 0.0f))
+    return false;
+  const uint32_t mask = in.terms->in_mask;
+  const bool joint = f.primary >= 0 && (mask >> f.primary & 1u);
+  GroupLevels gl[kMaxViews];
+  double bsum = 0.0, csum = 0.0, cost = 0.0;
+  size_t coarser = 0;
+  for (size_t g = 0; g < f.groups; ++g) {
+    if (!(mask >> g & 1u)) continue;
+    const GroupTerms& gt = in.terms->group[g];
+    if (!(gt.a > 0.0f) || !(gt.m >= 0.0f)) return false;
+    groupLevels(in, g, &gl[g]);
+    const int p = gl[g].prev;
+    if (p >= in.levels) return false;
+    bsum += gl[g].bmax;
+    csum += gl[g].cmax;
+    if (p >= 0) {
+      cost += gl[g].c[p];
+      coarser += static_cast<size_t>(in.levels - p);  // not drawn and the levels past p
+    }
+  }
+  if (coarser > max_steps) return false;
+  *need = cost + kSettleSlack * csum;
+  if (*need > avail) return false;  // the candidate must fit alone (its hull point within rounding)
+  const int pg = f.primary;
+  const int pp = joint ? gl[pg].prev : -1;
+  for (size_t g = 0; g < f.groups; ++g)  // the candidate obeys the rule
+    if ((mask >> g & 1u) && joint && constrained(in, g) && (pp < 0 ? gl[g].prev >= 0 : gl[g].prev < pp)) return false;
+  for (const double lambda : {lo, hi}) {
+    const double slack = kSettleSlack * (bsum + lambda * csum);
+    // every group outside the joint part (and each constrained one at the candidate's primary
+    // level): the candidate's level beats every other offered one
+    for (size_t g = 0; g < f.groups; ++g) {
+      if (!(mask >> g & 1u) || (joint && static_cast<int>(g) == pg)) continue;
+      const bool c = joint && constrained(in, g);
+      if (c && pp < 0) continue;  // "not drawn" is its only option
+      const int p = gl[g].prev;
+      if (!(valueAt(gl[g], p, lambda) - bestOffered(gl[g], c ? pp : 0, p, lambda) > slack)) return false;
+    }
+    if (!joint) continue;
+    // the joint part: every other primary option with its constrained groups at their best
+    double vp = valueAt(gl[pg], pp, lambda);
+    for (size_t g = 0; g < f.groups; ++g)
+      if ((mask >> g & 1u) && constrained(in, g)) vp += valueAt(gl[g], gl[g].prev, lambda);
+    for (int lp = -1; lp < in.levels; ++lp) {
+      if (lp == pp || (lp >= 0 && !gl[pg].offered(lp, 0))) continue;
+      double v = valueAt(gl[pg], lp, lambda);
+      for (size_t g = 0; g < f.groups; ++g)
+        if ((mask >> g & 1u) && constrained(in, g)) v += lp < 0 ? 0.0 : bestOffered(gl[g], lp, -2, lambda);
+      if (!(vp - v > slack)) return false;
+    }
+  }
+  // the candidate's point, summed in the hull's order (the joint part, then the other groups)
+  TuplePoint pt{0.0f, 0.0f, 0};
+  bool first = true;
+  auto add = [&](size_t g) {
+    const int l = gl[g].prev;
+    const float c = l < 0 ? 0.0f : gl[g].c[l], b = l < 0 ? 0.0f : gl[g].b[l];
+    pt.c = first ? c : pt.c + c;
+    pt.b = first ? b : pt.b + b;
+    pt.t |= static_cast<uint64_t>(l + 1) << (8 * g);
+    first = false;
+  };
+  if (joint) {
+    add(static_cast<size_t>(pg));
+    for (size_t g = 0; g < f.groups; ++g)
+      if ((mask >> g & 1u) && constrained(in, g)) add(g);
+  }
+  for (size_t g = 0; g < f.groups; ++g)
+    if ((mask >> g & 1u) && !(joint && (static_cast<int>(g) == pg || constrained(in, g)))) add(g);
+  *point = pt;
+  return true;
+}
 
 size_t tupleHull(const TupleHullInput& in, uint32_t slot, size_t max_steps, TuplePoint* base, ViewStep* steps) {
   const ViewFrame& f = *in.frame;
