@@ -133,53 +133,12 @@ size_t jointHull(const TupleHullInput& in, TuplePoint* out) {
 // every price in the predicted bracket needs no hull
 
 // the settling test's slack on b - lambda c: far above the rounding of the hull's float sums over
-// at most 8 groups (about 2^-21 of the summed magnitudes)
-constexpr double kSettleSlack = 1.0 / 262144.0;
-
-// One group's level points as groupPoints computes them, for the levels it may offer (from the
-// finest candidate on, and last frame's level).
-struct GroupLevels {
-  float c[kMaxViewLevels], b[kMaxViewLevels];
-  int first, finest, prev, levels;
-  float cmax, bmax;
-  bool offered(int l, int min_level) const { return l >= min_level && (l >= finest || l == prev); }
-};
-
-void groupLevels(const TupleHullInput& in, size_t g, GroupLevels* gl) {
-  const SelectorContext& ctx = *in.ctx;
-  const GroupTerms& gt = in.terms->group[g];
-  gl->finest = gt.finest;
-  gl->prev = in.prev[g];
-  gl->levels = in.levels;
-  gl->first = gl->prev >= 0 && gl->prev < gt.finest ? gl->prev : gt.finest;
-  gl->cmax = 0.0f;
-  gl->bmax = 0.0f;
-  for (int l = gl->first; l < in.levels; ++l) {
-    const uint32_t row = in.row0 + static_cast<uint32_t>(l);
-    const float acc = std::min(1.0f, gt.q * ctx.row_inv_w[row]) * (l == gl->prev ? ctx.h1 : 1.0f);
-    gl->c[l] = gt.a + gt.m * ctx.row_cost[row];
-    gl->b[l] = gt.b * acc;
-    gl->cmax = std::max(gl->cmax, gl->c[l]);
-    gl->bmax = std::max(gl->bmax, gl->b[l]);
-  }
-}
-
-// b - lambda c of level l (-1: not drawn, 0)
-inline double valueAt(const GroupLevels& gl, int l, double lambda) {
-  return l < 0 ? 0.0 : static_cast<double>(gl.b[l]) - lambda * static_cast<double>(gl.c[l]);
-}
-
-// The best value over the levels offered from min_level on (not drawn included), except level `skip`.
-double bestOffered(const GroupLevels& gl, int min_level, int skip, double lambda) {
-  double best = skip == -1 ? -std::numeric_limits<double>::infinity() : 0.0;
-  for (int l = std::max(gl.first, min_level); l < gl.levels; ++l)
-    if (l != skip && gl.offered(l, min_level)) best = std::max(best, valueAt(gl, l, lambda));
-  return best;
-}
+// at most 8 groups and of the test's own float values (about 2^-20 of the summed magnitudes)
+constexpr float kSettleSlack = 1.0f / 65536.0f;
 
 }  // namespace
 
-bool tupleSettles(const TupleHullInput& in, size_t max_steps, double lo, double hi, double avail, TuplePoint* point,
+bool tupleSettles(const TupleHullInput& in, size_t max_steps, double lo_d, double hi_d, double avail, TuplePoint* point,
                   double* need) {
   const ViewFrame& f = *in.frame;
   const SelectorContext& ctx = *in.ctx;
@@ -189,66 +148,121 @@ bool tupleSettles(const TupleHullInput& in, size_t max_steps, double lo, double 
   // index is at most the count of coarser options summed over the groups
   if (!(ctx.row_spread[in.row0] < std::numeric_limits<float>::infinity()) || !(ctx.row_suffix_min[in.row0] >= 0.0f))
     return false;
+  constexpr float kNone = -std::numeric_limits<float>::infinity();
+  const float lo = static_cast<float>(lo_d), hi = static_cast<float>(hi_d);
   const uint32_t mask = in.terms->in_mask;
   const bool joint = f.primary >= 0 && (mask >> f.primary & 1u);
-  GroupLevels gl[kMaxViews];
-  double bsum = 0.0, csum = 0.0, cost = 0.0;
+  const int pg = f.primary;
+  const int levels = in.levels;
+  const int pp = joint ? in.prev[pg] : -1;
+  if (pp >= levels) return false;
+  const float* const row_cost = ctx.row_cost + in.row0;
+  const float* const row_inv_w = ctx.row_inv_w + in.row0;
+  const float h1 = ctx.h1;
+  float bsum = 0.0f, csum = 0.0f, cost = 0.0f;
+  float cand[kMaxViews][2];  // per group: the candidate's cost and benefit
   size_t coarser = 0;
+  // at lo ([0]) and hi ([1]): the joint part's value at the candidate, and per primary option lp
+  // (at [lp + 1]) with the constrained groups at their best; per group the candidate's margin over
+  // the best other offered option (free groups; constrained ones from the primary's candidate on)
+  float vp[2] = {0.0f, 0.0f};
+  float joint_at[kMaxViewLevels + 1][2];
+  if (joint)
+    for (int l = 0; l <= levels; ++l) joint_at[l][0] = joint_at[l][1] = 0.0f;
+  float margin[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
   for (size_t g = 0; g < f.groups; ++g) {
     if (!(mask >> g & 1u)) continue;
     const GroupTerms& gt = in.terms->group[g];
     if (!(gt.a > 0.0f) || !(gt.m >= 0.0f)) return false;
-    groupLevels(in, g, &gl[g]);
-    const int p = gl[g].prev;
-    if (p >= in.levels) return false;
-    bsum += gl[g].bmax;
-    csum += gl[g].cmax;
+    const int p = in.prev[g];
+    if (p >= levels) return false;
+    const bool primary = joint && static_cast<int>(g) == pg;
+    const bool c = joint && !primary && constrained(in, g);
+    if (c && (pp < 0 ? p >= 0 : p < pp)) return false;  // the candidate breaks the rule
+    const int first = p >= 0 && p < gt.finest ? p : gt.finest;
+    const int from = c ? pp : 0;
+    // from the coarsest level to the finest offered: values, the suffix best, the best other
+    float best0 = kNone, best1 = kNone, other0 = p < 0 ? kNone : 0.0f, other1 = other0;
+    float v0p = 0.0f, v1p = 0.0f, cp = 0.0f, bp = 0.0f, cmax = 0.0f, bmax = 0.0f;
+    for (int l = levels - 1; l >= first; --l) {
+      if (l >= gt.finest || l == p) {
+        const float acc = std::min(1.0f, gt.q * row_inv_w[l]) * (l == p ? h1 : 1.0f);
+        const float cl = gt.a + gt.m * row_cost[l], bl = gt.b * acc;
+        const float v0 = bl - lo * cl, v1 = bl - hi * cl;
+        cmax = std::max(cmax, cl);
+        bmax = std::max(bmax, bl);
+        best0 = std::max(best0, v0);
+        best1 = std::max(best1, v1);
+        if (l == p) {
+          v0p = v0;
+          v1p = v1;
+          cp = cl;
+          bp = bl;
+        } else if (l >= from) {
+          other0 = std::max(other0, v0);
+          other1 = std::max(other1, v1);
+        }
+        if (primary) {
+          joint_at[l + 1][0] += v0;
+          joint_at[l + 1][1] += v1;
+        }
+      } else if (primary) {
+        joint_at[l + 1][0] = joint_at[l + 1][1] = kNone;  // not offered
+      }
+      if (c) {
+        joint_at[l + 1][0] += std::max(0.0f, best0);
+        joint_at[l + 1][1] += std::max(0.0f, best1);
+      }
+    }
+    if (joint && first > 0) {
+      // the levels finer than any offered one
+      for (int l = 0; l < first; ++l) {
+        if (primary) joint_at[l + 1][0] = joint_at[l + 1][1] = kNone;
+        if (c) {
+          joint_at[l + 1][0] += std::max(0.0f, best0);
+          joint_at[l + 1][1] += std::max(0.0f, best1);
+        }
+      }
+    }
+    bsum += bmax;
+    csum += cmax;
+    cand[g][0] = cp;
+    cand[g][1] = bp;
     if (p >= 0) {
-      cost += gl[g].c[p];
-      coarser += static_cast<size_t>(in.levels - p);  // not drawn and the levels past p
+      cost += cp;
+      coarser += static_cast<size_t>(levels - p);  // not drawn and the levels past p
+    }
+    if (primary || c) {
+      vp[0] += v0p;
+      vp[1] += v1p;
+    }
+    // the candidate's level beats every other offered one (a constrained group whose primary
+    // candidate is "not drawn" has no other option)
+    if (!primary && !(c && pp < 0)) {
+      margin[0] = std::min(margin[0], v0p - other0);
+      margin[1] = std::min(margin[1], v1p - other1);
     }
   }
   if (coarser > max_steps) return false;
-  *need = cost + kSettleSlack * csum;
+  *need = static_cast<double>(cost) + static_cast<double>(kSettleSlack) * csum;
   if (*need > avail) return false;  // the candidate must fit alone (its hull point within rounding)
-  const int pg = f.primary;
-  const int pp = joint ? gl[pg].prev : -1;
-  for (size_t g = 0; g < f.groups; ++g)  // the candidate obeys the rule
-    if ((mask >> g & 1u) && joint && constrained(in, g) && (pp < 0 ? gl[g].prev >= 0 : gl[g].prev < pp)) return false;
-  for (const double lambda : {lo, hi}) {
-    const double slack = kSettleSlack * (bsum + lambda * csum);
-    // every group outside the joint part (and each constrained one at the candidate's primary
-    // level): the candidate's level beats every other offered one
-    for (size_t g = 0; g < f.groups; ++g) {
-      if (!(mask >> g & 1u) || (joint && static_cast<int>(g) == pg)) continue;
-      const bool c = joint && constrained(in, g);
-      if (c && pp < 0) continue;  // "not drawn" is its only option
-      const int p = gl[g].prev;
-      if (!(valueAt(gl[g], p, lambda) - bestOffered(gl[g], c ? pp : 0, p, lambda) > slack)) return false;
-    }
-    if (!joint) continue;
-    // the joint part: every other primary option with its constrained groups at their best
-    double vp = valueAt(gl[pg], pp, lambda);
-    for (size_t g = 0; g < f.groups; ++g)
-      if ((mask >> g & 1u) && constrained(in, g)) vp += valueAt(gl[g], gl[g].prev, lambda);
-    for (int lp = -1; lp < in.levels; ++lp) {
-      if (lp == pp || (lp >= 0 && !gl[pg].offered(lp, 0))) continue;
-      double v = valueAt(gl[pg], lp, lambda);
-      for (size_t g = 0; g < f.groups; ++g)
-        if ((mask >> g & 1u) && constrained(in, g)) v += lp < 0 ? 0.0 : bestOffered(gl[g], lp, -2, lambda);
-      if (!(vp - v > slack)) return false;
-    }
+  const float slack[2] = {kSettleSlack * (bsum + lo * csum), kSettleSlack * (bsum + hi * csum)};
+  if (!(margin[0] > slack[0] && margin[1] > slack[1])) return false;
+  if (joint) {
+    for (int lp = -1; lp < levels; ++lp)
+      if (lp != pp && !(vp[0] - joint_at[lp + 1][0] > slack[0] && vp[1] - joint_at[lp + 1][1] > slack[1]))
+        return false;  // (a level not offered is at -inf: it passes)
   }
   // the candidate's point, summed in the hull's order (the joint part, then the other groups)
   TuplePoint pt{0.0f, 0.0f, 0};
-  bool first = true;
+  bool first_add = true;
   auto add = [&](size_t g) {
-    const int l = gl[g].prev;
-    const float c = l < 0 ? 0.0f : gl[g].c[l], b = l < 0 ? 0.0f : gl[g].b[l];
-    pt.c = first ? c : pt.c + c;
-    pt.b = first ? b : pt.b + b;
+    const int l = in.prev[g];
+    const float c = l < 0 ? 0.0f : cand[g][0], b = l < 0 ? 0.0f : cand[g][1];
+    pt.c = first_add ? c : pt.c + c;
+    pt.b = first_add ? b : pt.b + b;
     pt.t |= static_cast<uint64_t>(l + 1) << (8 * g);
-    first = false;
+    first_add = false;
   };
   if (joint) {
     add(static_cast<size_t>(pg));
