@@ -4,7 +4,6 @@
 //   BM_ViewsSingle: the one camera through the single-view path (SelectionJob::camera);
 //   BM_ViewsStereoShadows: two eyes 64 mm apart in one group and two shadow cascades at X = 4 in
 //   another (orthographic, looking down: a near cascade around the eye and a far one over the view);
-//   BM_ViewsStereoShadowsEveryHull: the same in budget mode without settling (BudgetAlgorithm::kGreedy);
 //   BM_ViewsStereoShadowsDistance: the same in distance mode (the per-object pass alone).
 // Counters: objects drawn and triangles per group (eyes, shadow) per frame, bytes per object, and
 // from one distance-mode frame at the orbit's start with a primary camera and the two cascades:
@@ -94,7 +93,7 @@ void primaryAndShadowTriangles(BenchScene& s, SelectorContext* ctx, size_t n, fl
   }
 }
 
-void run(benchmark::State& state, bool views, bool distance = false, bool every_hull = false) {
+void run(benchmark::State& state, bool views, bool distance = false) {
   const size_t n = static_cast<size_t>(state.range(0));
   BenchScene& s = scene(n);
   const float budget = budgetFor(s, n);
@@ -106,7 +105,7 @@ void run(benchmark::State& state, bool views, bool distance = false, bool every_
   std::vector<int8_t> group_levels(2 * n);
   SelectionStats st;
   double t = 0.0, triangles[2] = {0.0, 0.0};
-  size_t frames = 0, drawn = 0, settled = 0;
+  size_t frames = 0, drawn = 0;
   View frame_views[4];
   for (auto _ : state) {
     t += 6.2831853 / 600.0;
@@ -115,7 +114,6 @@ void run(benchmark::State& state, bool views, bool distance = false, bool every_
     j.params.budget_ms = budget;
     j.params.calibrate = false;
     if (distance) j.params.mode = SelectionMode::kDistance;
-    if (every_hull) j.params.algorithm = BudgetAlgorithm::kGreedy;
     if (views) {
       stereoShadowViews(n, t, frame_views);
       j.views = Span<const View>(frame_views, 4);
@@ -127,7 +125,6 @@ void run(benchmark::State& state, bool views, bool distance = false, bool every_
     benchmark::ClobberMemory();
     ++frames;
     drawn += st.drawn_count;
-    settled += st.settled_count;
     state.PauseTiming();
     for (size_t g = 0; g < (views ? 2u : 1u); ++g)
       for (size_t i = 0; i < n; ++i) {
@@ -139,7 +136,6 @@ void run(benchmark::State& state, bool views, bool distance = false, bool every_
   const double f = frames ? static_cast<double>(frames) : 1.0;
   state.SetItemsProcessed(static_cast<int64_t>(frames * n));
   state.counters["drawn"] = static_cast<double>(drawn) / f;
-  state.counters["settled"] = static_cast<double>(settled) / f;
   state.counters["eye_triangles"] = triangles[0] / f;
   state.counters["shadow_triangles"] = triangles[1] / f;
   state.counters["bytes_per_object"] = selectorBytesPerObject(views ? vc.ctx : s.ctx);
@@ -150,15 +146,12 @@ void run(benchmark::State& state, bool views, bool distance = false, bool every_
 
 void BM_ViewsSingle(benchmark::State& s) { run(s, false); }
 void BM_ViewsStereoShadows(benchmark::State& s) { run(s, true); }
-// The same four views in budget mode with every object's tuple hull built each frame (no settling)
-void BM_ViewsStereoShadowsEveryHull(benchmark::State& s) { run(s, true, false, true); }
 // The same four views in distance mode: the per-object pass (four frustum tests, the terms per
-// group, the write-out) without the budget's settling, hulls and greedy
+// group, the write-out) without the budget's tuple hulls and greedy: the floor of the budget frame
 void BM_ViewsStereoShadowsDistance(benchmark::State& s) { run(s, true, true); }
 
 }  // namespace
 
 BENCHMARK(BM_ViewsSingle)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ViewsStereoShadows)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ViewsStereoShadowsEveryHull)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ViewsStereoShadowsDistance)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);

@@ -54,16 +54,4 @@ int finestLevel(const SelectorContext& ctx, uint32_t row0, int levels, float q);
 // (ViewStep, order = slot << 8 | step) to `steps`. Returns the step count.
 size_t tupleHull(const TupleHullInput& in, uint32_t slot, size_t max_steps, TuplePoint* base, ViewStep* steps);
 
-// Settling (budget mode, a price predicted from last frame's): true when the object's tuple of last
-// frame's levels is the unique best (largest benefit - lambda cost, by a slack far above the
-// rounding of the hull's float sums) among the tuples the rules allow, at both ends of the price
-// range [lo, hi] and so at every price between; it then is a point of the object's hull whose
-// steps before it have ratios above hi and after it below lo, at most max_steps steps from its
-// start, fitting `avail` alone: at any price in the range the greedy takes it, without its hull.
-// Must-draw and forced objects, chains whose costs do not rise strictly with detail and groups of
-// a level-independent cost <= 0 never settle. *point = the tuple's cost, benefit and levels; *need =
-// its cost with the slack (what must fit alone).
-bool tupleSettles(const TupleHullInput& in, size_t max_steps, double lo, double hi, double avail, TuplePoint* point,
-                  double* need);
-
 }  // namespace scenelod::selection

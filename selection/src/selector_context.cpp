@@ -137,8 +137,6 @@ void resetSelectorHistory(SelectorContext* c) {
   if (!c) return;
   std::memset(c->prev_level, 0xFF, c->max_objects);  // all -1
   if (c->views.prev) std::memset(c->views.prev, 0xFF, c->max_objects * c->views.max_groups);
-  c->views.last_lambda = 0.0;
-  c->views.predict_width = kPredictWidthStart;
   c->last_lambda = 0.0;
   c->predict_width = kPredictWidthStart;
   c->has_history = false;

@@ -120,10 +120,6 @@ struct ViewScratch {
   ViewStep* steps = nullptr;
   size_t step_capacity = 0;
   TuplePoint* pool = nullptr;      // kTuplePoolCap: one object's joint hull's points
-  uint8_t* settled = nullptr;      // per slot: 1 = settled at last frame's tuple, no hull built
-  float* settled_benefit = nullptr;  // per settled slot: that tuple's benefit
-  double last_lambda = 0.0;        // last budget frame's price (0: none), and the predicted range's
-  double predict_width = 0.0;      // relative half-width around it
   void* block = nullptr;
 };
 

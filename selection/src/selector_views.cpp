@@ -279,48 +279,14 @@ void distanceFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
   }
 }
 
-// The price range a budget frame predicts from last frame's price (settling), and what the
-// settled objects add up to.
-struct SettleRange {
-  double lo = 0.0, hi = 0.0;     // the predicted range of the price
-  double test_lo = 0.0, test_hi = 0.0;  // widened: the ends the settling test uses
-  double avail_bound = 0.0;      // the budget left at most (before the mandatory part)
-  double cost = 0.0;             // the settled objects' summed cost (slot order)
-  double need = 0.0;             // the most a settled object needs to fit alone
-  size_t count = 0;
-};
-
-// the settling test's ends lie outside the predicted range by this factor (as kSettleMargin in
-// budget_hulls.cpp): far above the float ratios' rounding
-constexpr double kViewSettleMargin = 1.0 / 4096.0;
-constexpr double kViewWidthMin = 1.0 / 1024.0, kViewWidthMax = 4.0;
-
-// Slot s's tuple hull into vs.steps from `count` on; its base to the slot columns. Returns its
-// step count.
-size_t slotHull(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, size_t s, const ObjectTerms& t,
-                const ObjectChoice& o, size_t count) {
-  ViewScratch& vs = ctx.views;
-  const size_t i = vs.slot_object[s];
-  const TupleHullInput hin{&ctx, &f, &t, vs.prev + i * vs.max_groups, o.row0, o.levels, o.forced, o.must, vs.pool};
-  TuplePoint base;
-  const size_t steps = tupleHull(hin, static_cast<uint32_t>(s), f.groups * kViewStepsPerGroup, &base, vs.steps + count);
-  vs.base_cost[s] = base.c;
-  vs.base_benefit[s] = base.b;
-  vs.base_tuple[s] = base.t;
-  (void)job;
-  return steps;
-}
-
 // Budget mode's first pass: every object in view becomes a slot with its tuple hull's base and
-// steps (in slot order), unless it settles in `range` (no hull; its base is "not drawn").
-// Returns the mandatory part: per-frame constant + the slots' bases.
+// steps (in slot order). Returns the mandatory part: per-frame constant + the slots' bases.
 double tupleHulls(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, double per_frame_ms,
-                  SettleRange* range, size_t* slot_count, size_t* step_count) {
+                  size_t* slot_count, size_t* step_count) {
   ViewScratch& vs = ctx.views;
   ObjectTerms t;
   double mandatory = per_frame_ms;
   size_t slots = 0, count = 0;
-  const size_t max_steps = f.groups * kViewStepsPerGroup;
   alignas(32) uint8_t mask[kSlotBlock];
   for (size_t i = 0; i < job.centers.count; ++i) {
     if (i % kSlotBlock == 0) viewMasks(ctx, f, job, i, std::min(kSlotBlock, job.centers.count - i), mask);
@@ -330,30 +296,17 @@ double tupleHulls(const SelectionJob& job, SelectorContext& ctx, const ViewFrame
     objectTerms(ctx, f, job, i, mask[i % kSlotBlock], o, &t);
     vs.slot_groups[slots] = static_cast<uint8_t>(t.in_mask);
     std::copy(t.group, t.group + f.groups, vs.slot_terms + slots * vs.max_groups);
+    const TupleHullInput hin{&ctx, &f, &t, vs.prev + i * vs.max_groups, o.row0, o.levels, o.forced, o.must,
+                               vs.pool};
+    TuplePoint base;
+    count += tupleHull(hin, static_cast<uint32_t>(slots), f.groups * kViewStepsPerGroup, &base, vs.steps + count);
     vs.slot_object[slots] = static_cast<uint32_t>(i);
+    vs.base_cost[slots] = base.c;
+    vs.base_benefit[slots] = base.b;
+    vs.base_tuple[slots] = base.t;
     vs.best[slots] = 0;
     vs.best_step[slots] = 0;
-    vs.settled[slots] = 0;
-    TuplePoint point;
-    double need = 0.0;
-    if (range) {
-      const TupleHullInput hin{&ctx, &f, &t, vs.prev + i * vs.max_groups, o.row0, o.levels, o.forced, o.must,
-                                 vs.pool};
-      if (tupleSettles(hin, max_steps, range->test_lo, range->test_hi, range->avail_bound, &point, &need)) {
-        vs.settled[slots] = 1;
-        vs.settled_benefit[slots] = point.b;
-        vs.base_cost[slots] = 0.0f;
-        vs.base_benefit[slots] = 0.0f;
-        vs.base_tuple[slots] = 0;
-        range->cost += point.c;
-        range->need = std::max(range->need, need);
-        ++range->count;
-        ++slots;
-        continue;
-      }
-    }
-    count += slotHull(job, ctx, f, slots, t, o, count);
-    mandatory += vs.base_cost[slots];
+    mandatory += base.c;
     ++slots;
   }
   *slot_count = slots;
@@ -361,82 +314,31 @@ double tupleHulls(const SelectionJob& job, SelectorContext& ctx, const ViewFrame
   return mandatory;
 }
 
-// The steps that fit alone (cost above their slot's base within `avail`) of steps[from, count),
-// kept in order after steps[0, from); a hull's costs rise, so each slot keeps a prefix. Returns
-// the count then.
-size_t stepsThatFit(ViewScratch& vs, size_t from, size_t count, double avail) {
-  size_t kept = from;
-  for (size_t k = from; k < count; ++k) {
+// The steps that fit alone (cost above their slot's base within `avail`), kept in order; a
+// hull's costs rise, so each slot keeps a prefix. Returns their count.
+size_t stepsThatFit(ViewScratch& vs, size_t count, double avail) {
+  size_t kept = 0;
+  for (size_t k = 0; k < count; ++k) {
     const ViewStep& e = vs.steps[k];
     if (static_cast<double>(e.cost) - vs.base_cost[e.order >> 8] <= avail) vs.steps[kept++] = e;
   }
   return kept;
 }
 
-// A miss of the predicted range: the settled slots get their hulls (after the others' steps) and
-// settle no more. Returns the step count.
-size_t unsettle(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, size_t slots, size_t count,
-                double avail) {
-  ViewScratch& vs = ctx.views;
-  ObjectTerms t;
-  const size_t from = count;
-  for (size_t s = 0; s < slots; ++s) {
-    if (!vs.settled[s]) continue;
-    vs.settled[s] = 0;
-    t.in_mask = vs.slot_groups[s];
-    std::copy(vs.slot_terms + s * vs.max_groups, vs.slot_terms + s * vs.max_groups + f.groups, t.group);
-    count += slotHull(job, ctx, f, s, t, objectChoice(job, vs.slot_object[s]), count);
-  }
-  return stepsThatFit(vs, from, count, avail);
-}
-
-// Budget mode: the tuple hulls (settling what last frame's price predicts), the greedy on their
-// steps, the 1/2 guarantee, the write-out. Returns the price at the budget's edge.
-//   Settling is exact: a settled slot's steps have ratios above the predicted range up to its
-// tuple and below it after, so when the greedy on the other slots' steps (with the settled
-// tuples' cost taken from the budget) stops inside the range, the greedy on every step stops at
-// the same step with the same steps taken before it. Otherwise (a miss) the settled slots get
-// their hulls and the greedy runs on every step, and the next frame predicts a wider range.
+// Budget mode: the tuple hulls, the greedy on their steps, the 1/2 guarantee, the write-out.
+// Returns the price at the budget's edge.
 double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFrame& f, double per_frame_ms,
                    ViewSums* sums, SelectionStats* st) {
   ViewScratch& vs = ctx.views;
   const double cap = static_cast<double>(job.params.budget_ms);
-  const bool predict = job.params.algorithm == BudgetAlgorithm::kLagrangian && vs.last_lambda > 0.0 &&
-                       std::isfinite(vs.last_lambda);
-  SettleRange range;
-  if (predict) {
-    range.lo = vs.last_lambda / (1.0 + vs.predict_width);
-    range.hi = vs.last_lambda * (1.0 + vs.predict_width);
-    range.test_lo = range.lo / (1.0 + kViewSettleMargin);
-    range.test_hi = range.hi * (1.0 + kViewSettleMargin);
-    range.avail_bound = cap - per_frame_ms;
-  }
   size_t slots = 0, count = 0;
-  const double mandatory = tupleHulls(job, ctx, f, per_frame_ms, predict ? &range : nullptr, &slots, &count);
+  const double mandatory = tupleHulls(job, ctx, f, per_frame_ms, &slots, &count);
   if (mandatory > cap) st->flags |= kFlagOverBudget;
   st->mandatory_ms = mandatory;
   const double avail = cap - mandatory;
-  count = stepsThatFit(vs, 0, count, avail);
+  count = stepsThatFit(vs, count, avail);
   size_t split = count;
-  size_t taken = 0;
-  bool settled = range.count > 0;
-  if (settled) {
-    // the settled tuples' steps come first (ratios above the range): the others share what is left
-    taken = viewGreedy(vs.steps, count, avail - range.cost, &split);
-    const bool hit = range.need <= avail && split < count && static_cast<double>(vs.steps[split].ratio) >= range.lo &&
-                     static_cast<double>(vs.steps[split].ratio) <= range.hi;
-    if (!hit) {
-      count = unsettle(job, ctx, f, slots, count, avail);
-      settled = false;
-    }
-    if (hit) st->settled_count = static_cast<uint32_t>(range.count);
-    vs.predict_width = hit ? std::max(kViewWidthMin, vs.predict_width * 0.75)
-                           : std::min(kViewWidthMax, vs.predict_width * 2.0);
-  }
-  if (!settled) {
-    split = count;
-    taken = viewGreedy(vs.steps, count, avail, &split);
-  }
+  const size_t taken = viewGreedy(vs.steps, count, avail, &split);
   double base_benefit = 0.0;
   for (size_t s = 0; s < slots; ++s) base_benefit += vs.base_benefit[s];
   for (size_t k = 0; k < taken; ++k) {
@@ -448,19 +350,14 @@ double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
     }
   }
   double greedy_benefit = base_benefit;
-  for (size_t s = 0; s < slots; ++s) {
-    if (vs.settled[s])
-      greedy_benefit += vs.settled_benefit[s] - vs.base_benefit[s];
-    else if (vs.best[s])
-      greedy_benefit += vs.steps[vs.best[s] - 1].benefit - vs.base_benefit[s];
-  }
+  for (size_t s = 0; s < slots; ++s)
+    if (vs.best[s]) greedy_benefit += vs.steps[vs.best[s] - 1].benefit - vs.base_benefit[s];
   // the 1/2 guarantee: the first step that did not fit, alone with every other slot at its base
   if (split < count && job.params.half_approximation) {
     const ViewStep& e = vs.steps[split];
     const size_t js = static_cast<size_t>(e.order >> 8);
     if (base_benefit - vs.base_benefit[js] + e.benefit > greedy_benefit) {
       for (size_t s = 0; s < slots; ++s) vs.best[s] = 0;
-      for (size_t s = 0; s < slots; ++s) vs.settled[s] = 0;  // at their base: not drawn
       vs.best[js] = static_cast<uint32_t>(split + 1);
       st->flags |= kFlagSplitFallback;
     }
@@ -472,21 +369,11 @@ double budgetFrame(const SelectionJob& job, SelectorContext& ctx, const ViewFram
       writeObject(job, ctx, f, i, 0, nullptr, ObjectChoice{}, 0, sums);
       continue;
     }
-    uint64_t tuple = vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s];
-    if (vs.settled[s]) {
-      // last frame's levels in the groups that see it
-      const int8_t* prev = vs.prev + i * vs.max_groups;
-      tuple = 0;
-      for (size_t g = 0; g < f.groups; ++g)
-        if (vs.slot_groups[s] >> g & 1u) tuple |= static_cast<uint64_t>(prev[g] + 1) << (8 * g);
-    }
-    writeObject(job, ctx, f, i, vs.slot_groups[s], vs.slot_terms + s * vs.max_groups, objectChoice(job, i), tuple,
-                sums);
+    writeObject(job, ctx, f, i, vs.slot_groups[s], vs.slot_terms + s * vs.max_groups, objectChoice(job, i),
+                vs.best[s] ? vs.steps[vs.best[s] - 1].tuple : vs.base_tuple[s], sums);
     ++s;
   }
-  const double lambda = split < count ? static_cast<double>(vs.steps[split].ratio) : 0.0;
-  vs.last_lambda = lambda;
-  return lambda;
+  return split < count ? static_cast<double>(vs.steps[split].ratio) : 0.0;
 }
 
 }  // namespace
@@ -519,7 +406,6 @@ void runViews(const SelectionJob& job, const CostCoefficients& coef) {
     st.lambda = budgetFrame(job, ctx, f, coef.per_frame_ms, &sums, &st);
   else
     distanceFrame(job, ctx, f, &sums);
-  if (!budget) ctx.views.last_lambda = 0.0;
   st.predicted_ms = coef.per_frame_ms + sums.predicted;
   st.total_benefit = sums.benefit;
   st.features = sums.features;
@@ -538,7 +424,7 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   ViewScratch& vs = ctx.views;
   const size_t n = ctx.max_objects;
   const size_t steps = n * max_groups * kViewStepsPerGroup;
-  const size_t sizes[13] = {steps * sizeof(ViewStep),
+  const size_t sizes[11] = {steps * sizeof(ViewStep),
                             n * max_groups * sizeof(GroupTerms),
                             n * sizeof(uint64_t),
                             n * sizeof(uint32_t),
@@ -548,11 +434,9 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
                             n * max_groups,
                             n,
                             n,
-                            n,
-                            n * sizeof(float),
                             kTuplePoolCap * sizeof(TuplePoint)};
-  size_t at[13], total = 0;
-  for (size_t k = 0; k < 13; ++k) {
+  size_t at[11], total = 0;
+  for (size_t k = 0; k < 11; ++k) {
     at[k] = total;
     total += (sizes[k] + 63) / 64 * 64;
   }
@@ -572,12 +456,9 @@ bool allocateViewScratch(SelectorContext& ctx, size_t max_groups) {
   vs.prev = reinterpret_cast<int8_t*>(base + at[7]);
   vs.best_step = base + at[8];
   vs.slot_groups = base + at[9];
-  vs.settled = base + at[10];
-  vs.settled_benefit = reinterpret_cast<float*>(base + at[11]);
-  vs.pool = reinterpret_cast<TuplePoint*>(base + at[12]);
-  vs.predict_width = kPredictWidthStart;
+  vs.pool = reinterpret_cast<TuplePoint*>(base + at[10]);
   ctx.total_bytes += total;
-  ctx.per_object_bytes += at[12];  // all but the pool scale with the objects
+  ctx.per_object_bytes += at[10];  // all but the pool scale with the objects
   return true;
 }
 

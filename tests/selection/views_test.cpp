@@ -302,52 +302,6 @@ TEST(Views, TheBudgetHoldsAcrossViewsAlongAPath) {
   destroySelectorContext(ctx);
 }
 
-// Settling (the default algorithm) keeps an object's last tuple without building its hull when
-// last frame's price predicts it; the plain greedy (BudgetAlgorithm::kGreedy) builds every hull.
-// Along a smooth path with stereo eyes, two cascades and a split screen (a secondary group), on a
-// seeded random scene with must-draw objects and hysteresis, both choose the same tuples every
-// frame, and most frames settle most objects.
-TEST(Views, SettlingSelectsTheSameTuplesAsEveryHull) {
-  for (const uint32_t seed : {11u, 12u}) {
-    SyntheticScene s = makeScene(seed, 3000, 8, 6);
-    const size_t n = s.centers.size();
-    for (size_t i = 0; i < n; i += 97) s.must_draw[i] = 1;
-    SelectorContext* warm = viewContext(n, 3);
-    SelectorContext* full = viewContext(n, 3);
-    size_t settled_frames = 0, settled = 0, in_view = 0, differ = 0;
-    const int frames = 80;
-    for (int frame = 0; frame < frames; ++frame) {
-      const float dx = 0.05f * static_cast<float>(frame), dz = -0.1f * static_cast<float>(frame);
-      std::vector<View> views = {eyeView(dx - 0.03f), eyeView(dx + 0.03f), shadowView(1, 4.0f, 60.0f),
-                                 shadowView(1, 4.0f, 120.0f), primaryView(glm::vec3(-dx, 0.0f, dz))};
-      for (View* v : {&views[0], &views[1]}) v->camera = makeCamera(v->camera.eye + glm::vec3(0.0f, 0.0f, dz));
-      views[4].kind = ViewKind::kSecondary;
-      views[4].group = 2;
-      SelectionParams warm_params = budgetParams(frame < 40 ? 5.0f : 3.0f);
-      SelectionParams full_params = warm_params;
-      full_params.algorithm = BudgetAlgorithm::kGreedy;
-      ViewRun a, b;
-      ASSERT_TRUE(runViews(s, warm, views, 3, warm_params, &a));
-      ASSERT_TRUE(runViews(s, full, views, 3, full_params, &b));
-      for (size_t k = 0; k < a.group_levels.size(); ++k) differ += a.group_levels[k] != b.group_levels[k] ? 1 : 0;
-      EXPECT_EQ(a.levels, b.levels) << "seed " << seed << " frame " << frame;
-      EXPECT_EQ(a.stats.flags, b.stats.flags) << frame;
-      EXPECT_EQ(a.stats.lambda, b.stats.lambda) << frame;
-      EXPECT_NEAR(a.stats.predicted_ms, b.stats.predicted_ms, 1e-9 * b.stats.predicted_ms) << frame;
-      EXPECT_NEAR(a.stats.total_benefit, b.stats.total_benefit, 1e-9 * b.stats.total_benefit) << frame;
-      EXPECT_EQ(b.stats.settled_count, 0u);
-      settled_frames += a.stats.settled_count > 0 ? 1 : 0;
-      settled += a.stats.settled_count;
-      in_view += n - a.stats.culled_count;
-    }
-    EXPECT_EQ(differ, 0u) << "seed " << seed;
-    EXPECT_GT(settled_frames, static_cast<size_t>(frames) / 2) << "seed " << seed;
-    EXPECT_GT(settled, in_view / 2) << "seed " << seed;
-    destroySelectorContext(warm);
-    destroySelectorContext(full);
-  }
-}
-
 // An orthographic view looking down -z (primary) or -y (shadow) over the box [-10, 10]^3.
 View orthoView(ViewKind kind, uint32_t group, bool from_above) {
   View v;

@@ -171,9 +171,6 @@ struct SelectionStats {
   // most the fades started in this frame, themselves within that share
   uint32_t fading_count = 0;
   double fade_cost_ms = 0.0;
-  // budget frames with views: objects in view whose last frame's levels were kept from the price
-  // predicted from last frame's without building their tuple hulls (0 when the prediction missed)
-  uint32_t settled_count = 0;
 };
 
 class SelectorContext;
