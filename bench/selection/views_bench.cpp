@@ -3,7 +3,8 @@
 // what distance mode costs from the first camera).
 //   BM_ViewsSingle: the one camera through the single-view path (SelectionJob::camera);
 //   BM_ViewsStereoShadows: two eyes 64 mm apart in one group and two shadow cascades at X = 4 in
-//   another (orthographic, looking down: a near cascade around the eye and a far one over the view).
+//   another (orthographic, looking down: a near cascade around the eye and a far one over the view);
+//   BM_ViewsStereoShadowsDistance: the same in distance mode (the per-object pass alone).
 // Counters: objects drawn and triangles per group (eyes, shadow) per frame, bytes per object, and
 // from one distance-mode frame at the orbit's start with a primary camera and the two cascades:
 // the triangles the primary view draws and those the cascades draw at X = 4 and at X = 1
@@ -92,7 +93,7 @@ void primaryAndShadowTriangles(BenchScene& s, SelectorContext* ctx, size_t n, fl
   }
 }
 
-void run(benchmark::State& state, bool views) {
+void run(benchmark::State& state, bool views, bool distance = false) {
   const size_t n = static_cast<size_t>(state.range(0));
   BenchScene& s = scene(n);
   const float budget = budgetFor(s, n);
@@ -112,6 +113,7 @@ void run(benchmark::State& state, bool views) {
     SelectionJob j = job(s, &cam, &st);
     j.params.budget_ms = budget;
     j.params.calibrate = false;
+    if (distance) j.params.mode = SelectionMode::kDistance;
     if (views) {
       stereoShadowViews(n, t, frame_views);
       j.views = Span<const View>(frame_views, 4);
@@ -144,8 +146,12 @@ void run(benchmark::State& state, bool views) {
 
 void BM_ViewsSingle(benchmark::State& s) { run(s, false); }
 void BM_ViewsStereoShadows(benchmark::State& s) { run(s, true); }
+// The same four views in distance mode: the per-object pass (four frustum tests, the terms per
+// group, the write-out) without the budget's tuple hulls and greedy: the floor of the budget frame
+void BM_ViewsStereoShadowsDistance(benchmark::State& s) { run(s, true, true); }
 
 }  // namespace
 
 BENCHMARK(BM_ViewsSingle)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ViewsStereoShadows)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ViewsStereoShadowsDistance)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
