@@ -218,7 +218,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     }
     out.flags = st.flags;
     out.benefit = st.total_benefit;
-    out.triangles = st.features.triangles;
+    out.triangles = st.features.triangles + st.features.shadow_triangles;  // shadow views at their kind's scale
     if (f.has_measured) {
       out.has_measured = true;
       out.measured_from_file = true;
