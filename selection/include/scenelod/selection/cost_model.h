@@ -75,7 +75,7 @@ struct CalibrationParams {
   // ridge weight (ms^2) holding each shadow factor at its prior: it decides where the factors stay
   // while the shadow features move in step with the others (a fixed multiple of them, which one
   // frame time cannot tell apart) and how much a term must vary to be learnt
-  double shadow_prior_weight = 0.1;
+  double shadow_prior_weight = 1.0;
   bool learn_shadow_factors = true;  // false: the shadow factors stay at the prior
 };
 
