@@ -494,6 +494,9 @@ int run(const std::vector<std::string>& raw_argv) {
   std::printf("cost model at the end: %.4g ms/frame + %.4g ms/object + %.4g ms/triangle + %.4g ms/vertex + "
               "%.4g ms/edge-or-point + %.4g ms/pixel\n", model.per_frame_ms, model.per_object_ms, model.per_triangle_ms,
               model.per_vertex_ms, model.per_line_point_ms, model.per_pixel_ms);
+  if (shadows)
+    std::printf("shadow map cost factors (learnt, on the shadow kind's scales 1, 0.25, 0.5): object %.3g, pixel %.3g, "
+                "geometry %.3g\n", model.shadow_object_factor, model.shadow_pixel_factor, model.shadow_geometry_factor);
   if (pngs) std::printf("%zu screenshots in %s\n", pngs, png_dir.c_str());
   if (shadows && sum_triangles > 0)
     std::printf("shadow map at X = %g: %.0f triangles per frame against the camera's %.0f (%.0f %%)\n", shadow_pixels,

@@ -23,7 +23,9 @@ struct ViewFrame {
   float x[kMaxViews];  // X * bias
   bool ortho[kMaxViews];
   const float* visible[kMaxViews];
-  ViewKindWeights weights[kMaxViews];
+  ViewKindWeights weights[kMaxViews];       // the job's view_kinds (the features' scales)
+  ViewKindWeights cost_weights[kMaxViews];  // ... times the learnt shadow factors (the costs' scales)
+  float geometry_factor[kMaxViews];         // per group: the learnt geometry factor of its kind (1 but shadows)
   float c_obj = 0.0f, c_px = 0.0f;
 };
 

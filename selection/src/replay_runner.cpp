@@ -101,6 +101,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
   cfg.max_object_count = std::max<size_t>(n, 1);
   cfg.max_levels_per_chain = std::max<size_t>(scene.table.maxLevelsPerChain(), 1);
   cfg.initial_cost = options.initial_cost;
+  cfg.calibration = options.calibration;
   cfg.max_view_groups = h.version >= 2 ? kMaxViews : 0;
   ContextDeleter ctx{createSelectorContext(cfg)};
   if (!ctx.c) return Error(Status::kOutOfMemory, scene.name + ": cannot create the selector context");
@@ -218,7 +219,7 @@ Error runReplayStream(const ReplayHeader& h, const ReplayFrameSource& next_frame
     }
     out.flags = st.flags;
     out.benefit = st.total_benefit;
-    out.triangles = st.features.triangles;
+    out.triangles = st.features.triangles + st.features.shadow_triangles;  // shadow views at their kind's scale
     if (f.has_measured) {
       out.has_measured = true;
       out.measured_from_file = true;

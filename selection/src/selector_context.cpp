@@ -2,6 +2,7 @@
 // the largest object count), the history that carries from frame to frame, the cost model and the
 // mailbox through which another thread reports measured frame times for the calibration.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -36,7 +37,9 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   if (config.bracket_capacity < 1 || config.max_level_rows < 1 || config.max_level_rows > (size_t(1) << 31)) return nullptr;
   if (config.max_view_groups > kMaxViews) return nullptr;
   if (!(config.calibration.forgetting > 0.0 && config.calibration.forgetting <= 1.0) ||
-      !(config.calibration.prior_weight > 0.0))
+      !(config.calibration.prior_weight > 0.0) ||
+      !(config.calibration.shadow_forgetting > 0.0 && config.calibration.shadow_forgetting <= 1.0) ||
+      !(config.calibration.shadow_prior_weight > 0.0) || !std::isfinite(config.calibration.shadow_prior_weight))
     return nullptr;
   Allocator alloc = config.allocator;
   if (!alloc.allocate || !alloc.free) alloc = defaultAllocator();

@@ -2,7 +2,8 @@
 // level per object and view group (docs/SELECTION.md, "Views").
 //   Per object and group: in view when its sphere meets one of the group's frusta; the accuracy
 //   term from the view needing the finest level (min over its views of X * bias * R / scale); the
-//   level-independent cost summed over the views that see it, each scaled by its kind's weights;
+//   level-independent cost summed over the views that see it, each scaled by its kind's weights
+//   (a shadow view's times the calibration's learnt factors);
 //   the benefit the largest of its views' (pixels * visible fraction of that view), times the kind's
 //   benefit weight and the object's importance, focus and motion.
 //   Distance mode: per group the coarsest accurate-enough level (with hysteresis), then a shadow
@@ -116,6 +117,14 @@ ViewFrame viewFrame(const SelectionJob& job, Span<const View> views, const CostC
     f.x[v] = view.pixels_per_cell * view.lod_bias;
     f.visible[v] = view.visible_fraction.count ? view.visible_fraction.data : nullptr;
     f.weights[v] = kindWeights(job.params, view.kind);
+    f.cost_weights[v] = f.weights[v];
+    f.geometry_factor[g] = 1.0f;
+    if (view.kind == ViewKind::kShadow) {  // the calibration's factors (1 until it learns them)
+      f.cost_weights[v].object_cost *= static_cast<float>(coef.shadow_object_factor);
+      f.cost_weights[v].pixel_cost *= static_cast<float>(coef.shadow_pixel_factor);
+      f.cost_weights[v].geometry_cost *= static_cast<float>(coef.shadow_geometry_factor);
+      f.geometry_factor[g] = static_cast<float>(coef.shadow_geometry_factor);
+    }
   }
   for (ViewKind k : {ViewKind::kPrimary, ViewKind::kEye, ViewKind::kSecondary}) {
     for (size_t g = 0; g < f.groups && f.primary < 0; ++g)
@@ -175,13 +184,13 @@ void objectTerms(const SelectorContext& ctx, const ViewFrame& f, const Selection
     }
     const float r_px = r / pixel;
     const float px = std::min(kPi * r_px * r_px, f.viewport_px[v]);
-    const ViewKindWeights& w = f.weights[v];
+    const ViewKindWeights &w = f.weights[v], &cw = f.cost_weights[v];
     GroupTerms& gt = t->group[f.group_of[v]];
     t->in_mask |= 1u << f.group_of[v];
     gt.feature_objects += w.object_cost;
     gt.feature_pixels += w.pixel_cost * px;
-    gt.a += w.object_cost * f.c_obj + w.pixel_cost * f.c_px * px;
-    gt.m += w.geometry_cost;
+    gt.a += cw.object_cost * f.c_obj + cw.pixel_cost * f.c_px * px;
+    gt.m += cw.geometry_cost;
     gt.b = std::max(gt.b, w.benefit * px * (f.visible[v] ? f.visible[v][i] : 1.0f) * factor);
     gt.q = std::min(gt.q, f.x[v] * pixel / scale);
   }
@@ -237,11 +246,20 @@ void writeObject(const SelectionJob& job, SelectorContext& ctx, const ViewFrame&
       const float acc = std::min(1.0f, gt.q * ctx.row_inv_w[row]) * (level == prev[g] ? ctx.h1 : 1.0f);
       cost += group_cost;
       sums->benefit += gt.b * acc;
-      sums->features.objects += gt.feature_objects;
-      sums->features.pixels += gt.feature_pixels;
-      sums->features.triangles += gt.m * job.levels.triangle_count[row];
-      sums->features.vertices += gt.m * job.levels.vertex_count[row];
-      sums->features.line_points += gt.m * job.levels.line_point_count[row];
+      if (f.kind_of_group[g] == ViewKind::kShadow) {  // at the kind's scales, before the learnt factors
+        const double m = static_cast<double>(gt.m) / f.geometry_factor[g];
+        sums->features.shadow_objects += gt.feature_objects;
+        sums->features.shadow_pixels += gt.feature_pixels;
+        sums->features.shadow_triangles += m * job.levels.triangle_count[row];
+        sums->features.shadow_vertices += m * job.levels.vertex_count[row];
+        sums->features.shadow_line_points += m * job.levels.line_point_count[row];
+      } else {
+        sums->features.objects += gt.feature_objects;
+        sums->features.pixels += gt.feature_pixels;
+        sums->features.triangles += gt.m * job.levels.triangle_count[row];
+        sums->features.vertices += gt.m * job.levels.vertex_count[row];
+        sums->features.line_points += gt.m * job.levels.line_point_count[row];
+      }
       drawn = true;
     }
     prev[g] = static_cast<int8_t>(level);

@@ -213,7 +213,8 @@ void addStereoAndShadowViews(const Sphere& bounds, Replay& r) {
 // addStereoAndShadowViews when `views`), measured by the synthetic renderer: the log, and its
 // summary after 30 warm-up frames.
 ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogFrame>& log,
-                            Transitions transitions = Transitions::kNone) {
+                            Transitions transitions = Transitions::kNone,
+                            const CostCoefficients& true_cost = syntheticTrueCost(), bool learn_shadows = true) {
   Replay r;
   ReplayScene scene;
   EXPECT_TRUE(makeBuiltinScene("builtin:field", scene).ok());
@@ -226,6 +227,8 @@ ReplaySummary runFieldOrbit(double budget_ms, bool views, std::vector<ReplayLogF
   o.override_budget = true;
   o.budget_ms = budget_ms;
   o.params.transitions = transitions;
+  o.true_cost = true_cost;
+  o.calibration.learn_shadow_factors = learn_shadows;
   EXPECT_TRUE(runReplay(r, scene, o, log).ok());
   return summarizeReplay(log, 30);
 }
@@ -287,6 +290,24 @@ TEST(Replay, BudgetHoldsWithStereoEyesAndShadowCascades) {
   }
   EXPECT_GT(shadow_drawn, 0u);
   EXPECT_NE(replayLogLine(log[0]).find("\"view_levels\": [["), std::string::npos);
+}
+
+TEST(Replay, BudgetHoldsWhenTheShadowPassCostsOtherScales) {
+  // as above on a machine whose shadow pass costs 0.4x per object, 0.1x per pixel and 0.3x per
+  // triangle of the shared coefficients (factors 0.4, 0.4, 0.6 on the default shadow scales): the
+  // calibration learns the factors and the budget still holds
+  CostCoefficients truth = syntheticTrueCost();
+  truth.shadow_object_factor = 0.4;
+  truth.shadow_pixel_factor = 0.4;
+  truth.shadow_geometry_factor = 0.6;
+  std::vector<ReplayLogFrame> log;
+  const ReplaySummary s = runFieldOrbit(6.0, true, log, Transitions::kNone, truth);
+  const ReplaySummary f = runFieldOrbit(6.0, true, log, Transitions::kNone, truth, false);
+  std::printf("within +10 %%: learnt %zu, fixed %zu of %zu; error %.4f vs %.4f\n", s.within_10_percent, f.within_10_percent,
+              s.budget_frames, s.mean_abs_prediction_error, f.mean_abs_prediction_error);
+  ASSERT_EQ(s.budget_frames, 120u);
+  EXPECT_GE(s.within_10_percent, 114u);
+  EXPECT_GT(s.mean_measured_ms, 0.8 * 6.0);
 }
 
 TEST(Replay, LevelSceneRoundTrips) {

@@ -33,6 +33,7 @@ struct ReplayRunOptions {
   double noise = 0.05;                 // relative standard deviation of the synthetic measurement
   uint64_t seed = 1;
   CostCoefficients initial_cost;       // the selector's prior
+  CalibrationParams calibration;       // the selector's calibration (SelectorConfig::calibration)
   ReplayVisibility* visibility = nullptr;  // optional occlusion and pick focus (replay_visibility.h),
                                            // initialised on the same scene
 };

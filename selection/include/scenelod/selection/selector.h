@@ -90,8 +90,9 @@ struct View {
 // How a kind of view is priced and valued: the cost model's per-object, per-pixel and geometry
 // (triangles, vertices, line points) coefficients are multiplied by the first three when an object
 // is drawn in a view of that kind; its benefit there by `benefit`. The cost model's coefficients
-// stay shared: the calibration fits them on the scaled features, the scales themselves are not
-// learnt (one frame time cannot tell the passes apart).
+// stay shared. For the shadow kind the three cost scales are also multiplied by the factors the
+// calibration learns from the frame times (CostCoefficients::shadow_*_factor, 1 = as given; they
+// are the prior's scales); the other kinds' scales are not learnt.
 struct ViewKindWeights {
   float object_cost = 1.0f;
   float pixel_cost = 1.0f;
@@ -156,7 +157,8 @@ struct SelectionStats {
                                    // drop policy (min_drop_px) at their cheapest level
   double total_benefit = 0.0;      // sum of benefits of the chosen levels (hysteresis included)
   double lambda = 0.0;             // benefit per ms at the budget's edge (budget mode)
-  CostFeatures features;           // what the chosen levels draw (the calibration's regressors)
+  CostFeatures features;           // what the chosen levels draw (the calibration's regressors;
+                                   // with views, the shadow views' part in its shadow_* fields)
   uint32_t drawn_count = 0;
   uint32_t culled_count = 0;       // outside the view frustum (never drawn)
   uint32_t dropped_count = 0;      // in view but not drawn to fit the budget
@@ -201,7 +203,7 @@ void resetSelectorHistory(SelectorContext* context);
 size_t selectorMemoryBytes(const SelectorContext* context);
 double selectorBytesPerObject(const SelectorContext* context);
 
-// The current cost model (the prior, or the calibrated one).
+// The current cost model (the prior, or the calibrated one), the learnt shadow factors included.
 CostCoefficients selectorCostModel(const SelectorContext* context);
 // Replaces the cost model and restarts its calibration from it.
 void setSelectorCostModel(SelectorContext* context, const CostCoefficients& coefficients);
