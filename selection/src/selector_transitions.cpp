@@ -68,17 +68,23 @@ uint8_t nextViewTag(SelectorContext& ctx, size_t n) {
   return static_cast<uint8_t>(ctx.last_view_tag + 1);
 }
 
-// Calls f(i) for every object i < n with a[i] != b[i] or c[i] != 0, in increasing order: 16
-// objects at a time (a byte compare and a mask; most blocks have none).
+// Calls f(i) for every object i < n with c[i] != 0 (a fade runs) or a[i] != b[i] (a switch),
+// in increasing order; with `skip_none` not for a switch from or to -1: 16 objects at a time (a
+// byte compare and a mask; most blocks have none).
 template <class F>
-inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, F&& f) {
+inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, bool skip_none, F&& f) {
+  const __m128i none = _mm_set1_epi8(-1);
+  const __m128i skip = skip_none ? none : _mm_setzero_si128();
+  const __m128i zero = _mm_setzero_si128();
   size_t i = 0;
   for (; i + 16 <= n; i += 16) {
     const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
     const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
     const __m128i vc = _mm_loadu_si128(reinterpret_cast<const __m128i*>(c + i));
-    const __m128i zero = _mm_setzero_si128();
-    const __m128i same = _mm_and_si128(_mm_cmpeq_epi8(va, vb), _mm_cmpeq_epi8(vc, zero));
+    // unmarked: no fade, and the same level or (skip_none) either level -1
+    const __m128i either_none = _mm_or_si128(_mm_cmpeq_epi8(va, none), _mm_cmpeq_epi8(vb, none));
+    const __m128i quiet = _mm_or_si128(_mm_cmpeq_epi8(va, vb), _mm_and_si128(skip, either_none));
+    const __m128i same = _mm_and_si128(quiet, _mm_cmpeq_epi8(vc, zero));
     uint32_t bits = ~static_cast<uint32_t>(_mm_movemask_epi8(same)) & 0xffffu;
     while (bits) {
       f(i + static_cast<size_t>(__builtin_ctz(bits)));
@@ -86,16 +92,52 @@ inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, si
     }
   }
   for (; i < n; ++i)
-    if (a[i] != b[i] || c[i] != 0) f(i);
+    if (c[i] != 0 || (a[i] != b[i] && !(skip_none && (a[i] < 0 || b[i] < 0)))) f(i);
 }
 
-// The slot of object i, searching forward from *s (objects are visited in increasing order);
-// false when the object is not in view.
+// The slot of object i, searching forward from *s (objects are visited in increasing order, slots
+// hold increasing objects) by doubling steps, then halving; false when the object is not in view.
 inline bool slotOf(const uint32_t* slot_object, size_t slots, uint32_t i, size_t* s) {
-  size_t k = *s;
-  while (k < slots && slot_object[k] < i) ++k;
-  *s = k;
-  return k < slots && slot_object[k] == i;
+  size_t lo = *s;  // slot_object[k] < i for every k < lo
+  if (lo >= slots || slot_object[lo] >= i) return lo < slots && slot_object[lo] == i;
+  // slot_object[lo] < i: find hi with slot_object[hi] >= i (or the end)
+  size_t step = 1, hi = lo + 1;
+  while (hi < slots && slot_object[hi] < i) {
+    lo = hi;
+    step *= 2;
+    hi = lo + step;
+  }
+  hi = std::min(hi, slots);
+  // slot_object[lo] < i, and slot_object[hi] >= i or hi = slots
+  while (hi - lo > 1) {
+    const size_t mid = lo + (hi - lo) / 2;
+    (slot_object[mid] < i ? lo : hi) = mid;
+  }
+  *s = hi;
+  return hi < slots && slot_object[hi] == i;
+}
+
+// The largest float q >= 0 with q * inv_start <= 1 (in float) and q < end: on [0, it] the morph
+// factor is +0 (morphFactor: x = 1, bandLog(1) = +0, t = +0, m = +0; q < end). Both conditions
+// hold up to a point and fail beyond it (the rounded product grows with q), so a search over the
+// bit patterns of the floats >= 0 (in the same order as their values) finds it. -1 when q = 0
+// fails already (inv_start = +inf: 0 * inf is NaN; end = 0).
+float zeroTo(float inv_start, float end) {
+  auto zero = [&](uint32_t bits) {
+    float q;
+    std::memcpy(&q, &bits, sizeof(q));
+    const float product = q * inv_start;  // the float product, as the frame computes it
+    return product <= 1.0f && q < end;
+  };
+  if (!zero(0)) return -1.0f;
+  uint32_t lo = 0, hi = 0x7f800000u;  // zero(lo), !zero(hi): +inf is never below end or gives <= 1
+  while (hi - lo > 1) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    (zero(mid) ? lo : hi) = mid;
+  }
+  float q;
+  std::memcpy(&q, &lo, sizeof(q));
+  return q;
 }
 
 }  // namespace
@@ -148,14 +190,19 @@ void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const Sele
       ctx.row_morph_inv_start[r] = inv_start;
       ctx.row_morph_end[r] = end;
       ctx.row_morph_inv[r] = inv;
+      ctx.row_morph_zero_to[r] = zeroTo(inv_start, end);
     }
   }
 }
 
 namespace {
 
-// The morph factors of m slots at their rows into morph_out by object; kDrawnFlags: drawn[j] is 1 for
-// a drawn slot, 0 for one not drawn (factor 0).
+// The morph factors of m slots at their rows into morph_out by object, which holds 0 for every
+// object on entry; kDrawnFlags: the slot's level is level_of[object] (-1: not drawn, factor 0),
+// else it is at row0 (its row). Most slots have factor 0 (below their row's band, or on a row that
+// never morphs): one compare against the row's zero_to finds them, and only the others (a few per
+// cent on the benchmark scene) are gathered and computed. A slot skipped has factor exactly +0:
+// q in [0, zero_to], or not drawn with q >= 0 (its factor times 0; a factor is finite for q >= 0).
 template <bool kDrawnFlags>
 inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ctx, const uint32_t* object,
                                                       const uint32_t* row0, const float* q, const int8_t* level_of,
@@ -163,31 +210,49 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
   const float* const inv_start = ctx.row_morph_inv_start;
   const float* const end = ctx.row_morph_end;
   const float* const inv = ctx.row_morph_inv;
-  // blocks of kSlotBlock: the rows' terms gathered, the arithmetic in plain loops over local
-  // columns (vectorised), the factors scattered by object
+  const float* const zero_to = ctx.row_morph_zero_to;
+  // blocks of kSlotBlock: the slots that may have a factor above 0 listed, their rows' terms
+  // gathered, the arithmetic in plain loops over local columns (vectorised), the factors scattered
+  // by object
   alignas(32) float gs[kSlotBlock], ge[kSlotBlock], gi[kSlotBlock], gq[kSlotBlock], gd[kSlotBlock], gm[kSlotBlock];
+  alignas(32) uint32_t pick[kSlotBlock], prow[kSlotBlock];
   for (size_t j0 = 0; j0 < m; j0 += kSlotBlock) {
     const size_t b = std::min(kSlotBlock, m - j0);
+    size_t c = 0;
     for (size_t j = 0; j < b; ++j) {
       uint32_t row = row0[j0 + j];
+      float limit;
       if (kDrawnFlags) {
         const int l = level_of[object[j0 + j]];
         row += static_cast<uint32_t>(std::max(l, 0));
-        gd[j] = static_cast<float>(l >= 0);  // not drawn (budget mode): 0, without a branch
+        limit = l >= 0 ? zero_to[row] : kInf;
+      } else {
+        limit = zero_to[row];
       }
-      gs[j] = inv_start[row];
-      ge[j] = end[row];
-      gi[j] = inv[row];
-      gq[j] = q[j0 + j];
+      const float qj = q[j0 + j];
+      pick[c] = static_cast<uint32_t>(j0 + j);
+      prow[c] = row;
+      c += !(qj >= 0.0f && qj <= limit);  // branch-free: the entry stays only when counted
     }
-    for (size_t j = b; j < kSlotBlock; ++j) gs[j] = ge[j] = gi[j] = gq[j] = gd[j] = 0.0f;
-    // a constant trip count: one vector loop, no scalar tail
+    if (c == 0) continue;
+    for (size_t k = 0; k < c; ++k) {
+      const uint32_t row = prow[k];
+      if (kDrawnFlags) gd[k] = static_cast<float>(level_of[object[pick[k]]] >= 0);  // not drawn: 0
+      gs[k] = inv_start[row];
+      ge[k] = end[row];
+      gi[k] = inv[row];
+      gq[k] = q[pick[k]];
+    }
+    static_assert(kSlotBlock % 8 == 0, "whole vectors of 8 fit in a block");
+    // whole vectors: the lanes past c hold zeros (their results are not read)
+    const size_t c8 = (c + 7) & ~size_t(7);
+    for (size_t k = c; k < c8; ++k) gs[k] = ge[k] = gi[k] = gq[k] = gd[k] = 0.0f;
     if (kDrawnFlags) {
-      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]) * gd[j];
+      for (size_t k = 0; k < c8; ++k) gm[k] = morphFactor(gq[k], gs[k], ge[k], gi[k]) * gd[k];
     } else {
-      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]);
+      for (size_t k = 0; k < c8; ++k) gm[k] = morphFactor(gq[k], gs[k], ge[k], gi[k]);
     }
-    for (size_t j = 0; j < b; ++j) morph_out[object[j0 + j]] = gm[j];
+    for (size_t k = 0; k < c; ++k) morph_out[object[pick[k]]] = gm[k];
   }
 }
 
@@ -264,7 +329,10 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   TransitionSums sums;
   double new_fades = 0.0;  // the outgoing levels' cost of the fades started in this frame
   size_t s = 0;
-  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, [&](size_t i) {
+  // in distance mode no object is in view at level -1, and last frame's -1 was out of view unless
+  // last frame's budget dropped it: a switch from or to -1 without a fade running is no fade
+  const bool skip_none = !budget && !tags;
+  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, skip_none, [&](size_t i) {
     const int l = level_of[i];
     const int prev = ctx.prev_level[i];
     if (!slotOf(ctx.slot_object, slots, static_cast<uint32_t>(i), &s)) {
