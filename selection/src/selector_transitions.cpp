@@ -117,27 +117,22 @@ inline bool slotOf(const uint32_t* slot_object, size_t slots, uint32_t i, size_t
   return hi < slots && slot_object[hi] == i;
 }
 
-// The largest float q >= 0 with q * inv_start <= 1 (in float) and q < end: on [0, it] the morph
-// factor is +0 (morphFactor: x = 1, bandLog(1) = +0, t = +0, m = +0; q < end). Both conditions
-// hold up to a point and fail beyond it (the rounded product grows with q), so a search over the
-// bit patterns of the floats >= 0 (in the same order as their values) finds it. -1 when q = 0
-// fails already (inv_start = +inf: 0 * inf is NaN; end = 0).
+// The largest float q >= 0 with q * inv_start <= 1 (the float product, as the frame computes it)
+// and q < end: on [0, it] the morph factor is +0 (morphFactor: x = 1, bandLog(1) = +0, t = +0,
+// m = +0; q < end). Each condition holds up to a point and fails beyond it (the rounded product
+// grows with q): the first's point is 1 / inv_start within an ulp or two, the second's the float
+// below end. -1 when q = 0 fails already (inv_start = +inf: 0 * inf is NaN; end = 0).
 float zeroTo(float inv_start, float end) {
-  auto zero = [&](uint32_t bits) {
-    float q;
-    std::memcpy(&q, &bits, sizeof(q));
-    const float product = q * inv_start;  // the float product, as the frame computes it
-    return product <= 1.0f && q < end;
-  };
-  if (!zero(0)) return -1.0f;
-  uint32_t lo = 0, hi = 0x7f800000u;  // zero(lo), !zero(hi): +inf is never below end or gives <= 1
-  while (hi - lo > 1) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    (zero(mid) ? lo : hi) = mid;
+  if (!(0.0f * inv_start <= 1.0f) || !(0.0f < end)) return -1.0f;
+  constexpr float kMax = std::numeric_limits<float>::max();
+  float below_one = kMax;  // inv_start = 0: every finite q
+  if (inv_start > 0.0f) {
+    below_one = std::min(1.0f / inv_start, kMax);
+    while (below_one > 0.0f && !(below_one * inv_start <= 1.0f)) below_one = std::nextafter(below_one, 0.0f);
+    while (below_one < kMax && std::nextafter(below_one, kInf) * inv_start <= 1.0f)
+      below_one = std::nextafter(below_one, kInf);
   }
-  float q;
-  std::memcpy(&q, &lo, sizeof(q));
-  return q;
+  return std::min(below_one, std::nextafter(end, 0.0f));
 }
 
 }  // namespace
@@ -214,25 +209,42 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
   // blocks of kSlotBlock: the slots that may have a factor above 0 listed, their rows' terms
   // gathered, the arithmetic in plain loops over local columns (vectorised), the factors scattered
   // by object
-  alignas(32) float gs[kSlotBlock], ge[kSlotBlock], gi[kSlotBlock], gq[kSlotBlock], gd[kSlotBlock], gm[kSlotBlock];
+  // (8 lanes more: a vector's padding past the last entry)
+  alignas(32) float gs[kSlotBlock + 8], ge[kSlotBlock + 8], gi[kSlotBlock + 8], gq[kSlotBlock + 8];
+  alignas(32) float gd[kSlotBlock + 8], gm[kSlotBlock + 8], gl[kSlotBlock];
   alignas(32) uint32_t pick[kSlotBlock], prow[kSlotBlock];
   for (size_t j0 = 0; j0 < m; j0 += kSlotBlock) {
     const size_t b = std::min(kSlotBlock, m - j0);
-    size_t c = 0;
+    // each slot's accuracy term and the largest one with factor 0 at its row, 4 lanes compared at
+    // a time into a mask of the slots to compute (lanes past b: 0 and +inf, not picked)
     for (size_t j = 0; j < b; ++j) {
       uint32_t row = row0[j0 + j];
-      float limit;
       if (kDrawnFlags) {
         const int l = level_of[object[j0 + j]];
         row += static_cast<uint32_t>(std::max(l, 0));
-        limit = l >= 0 ? zero_to[row] : kInf;
+        gl[j] = l >= 0 ? zero_to[row] : kInf;
       } else {
-        limit = zero_to[row];
+        gl[j] = zero_to[row];
       }
-      const float qj = q[j0 + j];
+      prow[j] = row;
+      gq[j] = q[j0 + j];
+    }
+    const size_t b4 = (b + 3) & ~size_t(3);
+    for (size_t j = b; j < b4; ++j) {
+      gq[j] = 0.0f;
+      gl[j] = kInf;
+    }
+    uint64_t bits = 0;
+    for (size_t j = 0; j < b4; j += 4) {
+      const __m128 vq = _mm_load_ps(gq + j);
+      const __m128 zero = _mm_and_ps(_mm_cmpge_ps(vq, _mm_setzero_ps()), _mm_cmple_ps(vq, _mm_load_ps(gl + j)));
+      bits |= static_cast<uint64_t>(~_mm_movemask_ps(zero) & 15) << j;
+    }
+    size_t c = 0;
+    for (; bits; bits &= bits - 1, ++c) {
+      const size_t j = static_cast<size_t>(__builtin_ctzll(bits));
       pick[c] = static_cast<uint32_t>(j0 + j);
-      prow[c] = row;
-      c += !(qj >= 0.0f && qj <= limit);  // branch-free: the entry stays only when counted
+      prow[c] = prow[j];  // c <= j: an entry not read again
     }
     if (c == 0) continue;
     for (size_t k = 0; k < c; ++k) {
@@ -243,10 +255,9 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
       gi[k] = inv[row];
       gq[k] = q[pick[k]];
     }
-    static_assert(kSlotBlock % 8 == 0, "whole vectors of 8 fit in a block");
     // whole vectors: the lanes past c hold zeros (their results are not read)
     const size_t c8 = (c + 7) & ~size_t(7);
-    for (size_t k = c; k < c8; ++k) gs[k] = ge[k] = gi[k] = gq[k] = gd[k] = 0.0f;
+    for (size_t k = 0; k < 8; ++k) gs[c + k] = ge[c + k] = gi[c + k] = gq[c + k] = gd[c + k] = 0.0f;
     if (kDrawnFlags) {
       for (size_t k = 0; k < c8; ++k) gm[k] = morphFactor(gq[k], gs[k], ge[k], gi[k]) * gd[k];
     } else {
