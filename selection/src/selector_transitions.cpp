@@ -68,16 +68,19 @@ uint8_t nextViewTag(SelectorContext& ctx, size_t n) {
   return static_cast<uint8_t>(ctx.last_view_tag + 1);
 }
 
-// Calls f(i) for every object i < n with c[i] != 0 (a fade runs) or a[i] != b[i] (a switch),
-// in increasing order; with `skip_none` not for a switch from or to -1: 16 objects at a time (a
-// byte compare and a mask; most blocks have none).
-template <class F>
-inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, bool skip_none, F&& f) {
+// Calls block(i0, count) for every run of 16 objects (the last one shorter), then f(i) for each
+// object i in it with c[i] != 0 (a fade runs) or a[i] != b[i] (a switch), in increasing order; with
+// `skip_none` not for a switch from or to -1: 16 objects at a time (byte compares and a mask; most
+// blocks have none).
+template <class B, class F>
+inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, bool skip_none, B&& block,
+                          F&& f) {
   const __m128i none = _mm_set1_epi8(-1);
   const __m128i skip = skip_none ? none : _mm_setzero_si128();
   const __m128i zero = _mm_setzero_si128();
   size_t i = 0;
   for (; i + 16 <= n; i += 16) {
+    block(i, size_t(16));
     const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
     const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
     const __m128i vc = _mm_loadu_si128(reinterpret_cast<const __m128i*>(c + i));
@@ -91,6 +94,7 @@ inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, si
       bits &= bits - 1;
     }
   }
+  if (i < n) block(i, n - i);
   for (; i < n; ++i)
     if (c[i] != 0 || (a[i] != b[i] && !(skip_none && (a[i] < 0 || b[i] < 0)))) f(i);
 }
@@ -332,9 +336,25 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   const int8_t* const level_of = job.levels_out.data;
   int8_t* const prev_out = job.previous_levels_out.count ? job.previous_levels_out.data : nullptr;
   float* const fade_out = job.fade_out.count ? job.fade_out.data : nullptr;
-  // no fade where nothing below says otherwise (the morph factors were cleared before the slot pass)
-  if (prev_out) std::memcpy(prev_out, level_of, n);
-  if (fade_out) std::fill(fade_out, fade_out + n, 1.0f);
+  // fade mode: every morph factor 0 (morph mode: cleared before the slot pass, and set there)
+  float* const morph_zero = !morph_mode && job.morph_out.count ? job.morph_out.data : nullptr;
+  // each run of objects' outputs before its marked objects': no fade (the level itself, weight 1)
+  auto defaults = [&](size_t i0, size_t count) __attribute__((always_inline)) {
+    if (count == 16) {
+      if (prev_out) std::memcpy(prev_out + i0, level_of + i0, 16);
+      const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+      for (size_t k = 0; k < 16; k += 4) {
+        if (fade_out) _mm_storeu_ps(fade_out + i0 + k, one);
+        if (morph_zero) _mm_storeu_ps(morph_zero + i0 + k, zero);
+      }
+      return;
+    }
+    for (size_t k = i0; k < i0 + count; ++k) {
+      if (prev_out) prev_out[k] = level_of[k];
+      if (fade_out) fade_out[k] = 1.0f;
+      if (morph_zero) morph_zero[k] = 0.0f;
+    }
+  };
 
   // the objects that switched or have a fade running: a handful per frame
   TransitionSums sums;
@@ -343,7 +363,7 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   // in distance mode no object is in view at level -1, and last frame's -1 was out of view unless
   // last frame's budget dropped it: a switch from or to -1 without a fade running is no fade
   const bool skip_none = !budget && !tags;
-  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, skip_none, [&](size_t i) {
+  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, skip_none, defaults, [&](size_t i) {
     const int l = level_of[i];
     const int prev = ctx.prev_level[i];
     if (!slotOf(ctx.slot_object, slots, static_cast<uint32_t>(i), &s)) {
