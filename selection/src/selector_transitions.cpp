@@ -217,19 +217,21 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
   alignas(32) float gs[kSlotBlock + 8], ge[kSlotBlock + 8], gi[kSlotBlock + 8], gq[kSlotBlock + 8];
   alignas(32) float gd[kSlotBlock + 8], gm[kSlotBlock + 8], gl[kSlotBlock];
   alignas(32) uint32_t pick[kSlotBlock], prow[kSlotBlock];
+  alignas(32) int32_t gn[kSlotBlock];  // kDrawnFlags: the slot's level (-1: not drawn)
   for (size_t j0 = 0; j0 < m; j0 += kSlotBlock) {
     const size_t b = std::min(kSlotBlock, m - j0);
     // each slot's accuracy term and the largest one with factor 0 at its row, 4 lanes compared at
     // a time into a mask of the slots to compute (lanes past b: 0 and +inf, not picked)
+    // (kDrawnFlags: a slot not drawn compares as at its level 0 with bound +inf, without a branch:
+    // drawn and not drawn alternate unpredictably)
     for (size_t j = 0; j < b; ++j) {
       uint32_t row = row0[j0 + j];
       if (kDrawnFlags) {
         const int l = level_of[object[j0 + j]];
         row += static_cast<uint32_t>(std::max(l, 0));
-        gl[j] = l >= 0 ? zero_to[row] : kInf;
-      } else {
-        gl[j] = zero_to[row];
+        gn[j] = l;
       }
+      gl[j] = zero_to[row];
       prow[j] = row;
       gq[j] = q[j0 + j];
     }
@@ -237,11 +239,16 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
     for (size_t j = b; j < b4; ++j) {
       gq[j] = 0.0f;
       gl[j] = kInf;
+      gn[j] = 0;
     }
     uint64_t bits = 0;
     for (size_t j = 0; j < b4; j += 4) {
       const __m128 vq = _mm_load_ps(gq + j);
-      const __m128 zero = _mm_and_ps(_mm_cmpge_ps(vq, _mm_setzero_ps()), _mm_cmple_ps(vq, _mm_load_ps(gl + j)));
+      __m128 below = _mm_cmple_ps(vq, _mm_load_ps(gl + j));
+      if (kDrawnFlags)
+        below = _mm_or_ps(below, _mm_castsi128_ps(_mm_cmplt_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(gn + j)),
+                                                                  _mm_setzero_si128())));
+      const __m128 zero = _mm_and_ps(_mm_cmpge_ps(vq, _mm_setzero_ps()), below);
       bits |= static_cast<uint64_t>(~_mm_movemask_ps(zero) & 15) << j;
     }
     size_t c = 0;
@@ -253,7 +260,7 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
     if (c == 0) continue;
     for (size_t k = 0; k < c; ++k) {
       const uint32_t row = prow[k];
-      if (kDrawnFlags) gd[k] = static_cast<float>(level_of[object[pick[k]]] >= 0);  // not drawn: 0
+      if (kDrawnFlags) gd[k] = static_cast<float>(gn[pick[k] - j0] >= 0);  // not drawn: 0
       gs[k] = inv_start[row];
       ge[k] = end[row];
       gi[k] = inv[row];
@@ -288,7 +295,15 @@ double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, 
   if (!ctx.transitions_valid || p.transitions == Transitions::kNone) return 0.0;
   const float dt = p.dt_ms, fade_ms = p.fade_ms;
   const size_t n = job.centers.count;
-  const uint8_t* const fading = ctx.fading;
+  // locals: the byte store below may alias the context's fields
+  uint8_t* const fading = ctx.fading;
+  const int8_t* const fade_from = ctx.fade_from;
+  const float* const fade_elapsed = ctx.fade_elapsed;
+  const uint32_t* const slot_object = ctx.slot_object;
+  const uint8_t* const slot_levels = ctx.slot_levels;
+  const float* const slot_a = ctx.slot_a;
+  const uint32_t* const slot_row0 = ctx.slot_row0;
+  const float* const row_cost = ctx.row_cost;
   double reserve = 0.0;
   size_t s = 0;
   for (size_t i0 = 0; i0 < n; i0 += 16) {
@@ -298,14 +313,16 @@ double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, 
     if ((w[0] | w[1]) == 0) continue;
     for (size_t i = i0; i < std::min(n, i0 + 16); ++i) {
       if (!fading[i]) continue;
-      if (!slotOf(ctx.slot_object, slots, static_cast<uint32_t>(i), &s)) continue;  // out of view: ends
-      const int from = ctx.fade_from[i];
-      if (from < 0 || !(ctx.fade_elapsed[i] + dt < fade_ms) || from >= ctx.slot_levels[s]) continue;
-      const double cost = ctx.slot_a[s] + ctx.row_cost[ctx.slot_row0[s] + static_cast<uint32_t>(from)];
+      // a fade in from nothing or one that ends in this frame reserves nothing
+      const int from = fade_from[i];
+      if (from < 0 || !(fade_elapsed[i] + dt < fade_ms)) continue;
+      if (!slotOf(slot_object, slots, static_cast<uint32_t>(i), &s)) continue;  // out of view: ends
+      if (from >= slot_levels[s]) continue;
+      const double cost = slot_a[s] + row_cost[slot_row0[s] + static_cast<uint32_t>(from)];
       if (reserve + cost <= cap)
         reserve += cost;
       else
-        ctx.fading[i] = 0;  // ends now: the budget has no room for both levels
+        fading[i] = 0;  // ends now: the budget has no room for both levels
     }
   }
   return reserve;
@@ -421,7 +438,10 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   // budget mode: this frame's view tags, and the morph factors
   if (budget) {
     const uint8_t tag = nextViewTag(ctx, n);
-    for (size_t k = 0; k < slots; ++k) ctx.view_tag[ctx.slot_object[k]] = tag;
+    // locals: a byte store may alias the context's fields, which would be reloaded every slot
+    uint8_t* const view_tag = ctx.view_tag;
+    const uint32_t* const slot_object = ctx.slot_object;
+    for (size_t k = 0; k < slots; ++k) view_tag[slot_object[k]] = tag;
     ctx.last_view_tag = tag;
     if (morph_mode && job.morph_out.count)
       morphFactors(ctx, ctx.slot_object, ctx.slot_row0, ctx.slot_q, level_of, slots, job.morph_out.data);
