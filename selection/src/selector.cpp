@@ -678,7 +678,8 @@ bool SelectionJob::run() {
   }
   const bool transitions = params.transitions != Transitions::kNone;
   if (params.transitions == Transitions::kMorph) prepareMorphRows(ctx, levels, params);
-  if (transitions && morph_out.count) std::fill(morph_out.data, morph_out.data + centers.count, 0.0f);
+  if (params.transitions == Transitions::kMorph && morph_out.count)  // fade mode: transitionPass
+    std::fill(morph_out.data, morph_out.data + centers.count, 0.0f);
   const FrameInput in = frameInput(*this, coef);
 
   SlotSums sums{};

@@ -51,7 +51,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   const size_t rows = config.max_level_rows;
   // per-object parts first (they define the bytes per object), then the fixed ones
   constexpr size_t kPerObjectParts = 20;
-  constexpr size_t kParts = 32;
+  constexpr size_t kParts = 33;
   Part parts[kParts] = {
       {n * sizeof(int8_t), 0},     {n * sizeof(uint32_t), 0}, {n * sizeof(float), 0},
       {n * sizeof(float), 0},      {n * sizeof(float), 0},    {n * sizeof(float), 0},
@@ -67,7 +67,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
       {config.bracket_capacity * sizeof(BracketEntry), 0}, {rows * sizeof(uint32_t), 0},
       {(rows + kLanes) * sizeof(float), 0}, {(rows + kLanes) * sizeof(float), 0},
       {(rows + kLanes) * sizeof(float), 0}, {(rows + kLanes) * sizeof(float), 0},
-      {(rows + kLanes) * sizeof(float), 0}};
+      {(rows + kLanes) * sizeof(float), 0}, {rows * sizeof(float), 0}};
   size_t per_object = 0;
   for (size_t i = 0; i < kParts; ++i) {
     parts[i].at = offset;
@@ -114,6 +114,7 @@ SelectorContext* createSelectorContext(const SelectorConfig& config) {
   c->row_morph_inv_start = reinterpret_cast<float*>(base + parts[27].at);
   c->row_morph_end = reinterpret_cast<float*>(base + parts[28].at);
   c->row_morph_inv = reinterpret_cast<float*>(base + parts[29].at);
+  c->row_morph_zero_to = reinterpret_cast<float*>(base + parts[32].at);
   c->row_suffix_min = reinterpret_cast<float*>(base + parts[30].at);
   c->row_spread = reinterpret_cast<float*>(base + parts[31].at);
   c->max_rows = rows;

@@ -207,6 +207,9 @@ class SelectorContext {
   float* row_morph_inv_start = nullptr;
   float* row_morph_end = nullptr;
   float* row_morph_inv = nullptr;
+  // ... and the largest q whose factor is exactly 0 on the row: every q in [0, this] has factor +0
+  // (-1: none), so most slots are told by one compare
+  float* row_morph_zero_to = nullptr;
 
   // cost of drawing slot `s` at level `l` (-1: not drawn)
   float pointCost(size_t s, int l) const {

@@ -68,34 +68,75 @@ uint8_t nextViewTag(SelectorContext& ctx, size_t n) {
   return static_cast<uint8_t>(ctx.last_view_tag + 1);
 }
 
-// Calls f(i) for every object i < n with a[i] != b[i] or c[i] != 0, in increasing order: 16
-// objects at a time (a byte compare and a mask; most blocks have none).
-template <class F>
-inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, F&& f) {
+// Calls block(i0, count) for every run of 16 objects (the last one shorter), then f(i) for each
+// object i in it with c[i] != 0 (a fade runs) or a[i] != b[i] (a switch), in increasing order; with
+// `skip_none` not for a switch from or to -1: 16 objects at a time (byte compares and a mask; most
+// blocks have none).
+template <class B, class F>
+inline void forEachMarked(const int8_t* a, const int8_t* b, const uint8_t* c, size_t n, bool skip_none, B&& block,
+                          F&& f) {
+  const __m128i none = _mm_set1_epi8(-1);
+  const __m128i skip = skip_none ? none : _mm_setzero_si128();
+  const __m128i zero = _mm_setzero_si128();
   size_t i = 0;
   for (; i + 16 <= n; i += 16) {
+    block(i, size_t(16));
     const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
     const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
     const __m128i vc = _mm_loadu_si128(reinterpret_cast<const __m128i*>(c + i));
-    const __m128i zero = _mm_setzero_si128();
-    const __m128i same = _mm_and_si128(_mm_cmpeq_epi8(va, vb), _mm_cmpeq_epi8(vc, zero));
+    // unmarked: no fade, and the same level or (skip_none) either level -1
+    const __m128i either_none = _mm_or_si128(_mm_cmpeq_epi8(va, none), _mm_cmpeq_epi8(vb, none));
+    const __m128i quiet = _mm_or_si128(_mm_cmpeq_epi8(va, vb), _mm_and_si128(skip, either_none));
+    const __m128i same = _mm_and_si128(quiet, _mm_cmpeq_epi8(vc, zero));
     uint32_t bits = ~static_cast<uint32_t>(_mm_movemask_epi8(same)) & 0xffffu;
     while (bits) {
       f(i + static_cast<size_t>(__builtin_ctz(bits)));
       bits &= bits - 1;
     }
   }
+  if (i < n) block(i, n - i);
   for (; i < n; ++i)
-    if (a[i] != b[i] || c[i] != 0) f(i);
+    if (c[i] != 0 || (a[i] != b[i] && !(skip_none && (a[i] < 0 || b[i] < 0)))) f(i);
 }
 
-// The slot of object i, searching forward from *s (objects are visited in increasing order);
-// false when the object is not in view.
+// The slot of object i, searching forward from *s (objects are visited in increasing order, slots
+// hold increasing objects) by doubling steps, then halving; false when the object is not in view.
 inline bool slotOf(const uint32_t* slot_object, size_t slots, uint32_t i, size_t* s) {
-  size_t k = *s;
-  while (k < slots && slot_object[k] < i) ++k;
-  *s = k;
-  return k < slots && slot_object[k] == i;
+  size_t lo = *s;  // slot_object[k] < i for every k < lo
+  if (lo >= slots || slot_object[lo] >= i) return lo < slots && slot_object[lo] == i;
+  // slot_object[lo] < i: find hi with slot_object[hi] >= i (or the end)
+  size_t step = 1, hi = lo + 1;
+  while (hi < slots && slot_object[hi] < i) {
+    lo = hi;
+    step *= 2;
+    hi = lo + step;
+  }
+  hi = std::min(hi, slots);
+  // slot_object[lo] < i, and slot_object[hi] >= i or hi = slots
+  while (hi - lo > 1) {
+    const size_t mid = lo + (hi - lo) / 2;
+    (slot_object[mid] < i ? lo : hi) = mid;
+  }
+  *s = hi;
+  return hi < slots && slot_object[hi] == i;
+}
+
+// The largest float q >= 0 with q * inv_start <= 1 (the float product, as the frame computes it)
+// and q < end: on [0, it] the morph factor is +0 (morphFactor: x = 1, bandLog(1) = +0, t = +0,
+// m = +0; q < end). Each condition holds up to a point and fails beyond it (the rounded product
+// grows with q): the first's point is 1 / inv_start within an ulp or two, the second's the float
+// below end. -1 when q = 0 fails already (inv_start = +inf: 0 * inf is NaN; end = 0).
+float zeroTo(float inv_start, float end) {
+  if (!(0.0f * inv_start <= 1.0f) || !(0.0f < end)) return -1.0f;
+  constexpr float kMax = std::numeric_limits<float>::max();
+  float below_one = kMax;  // inv_start = 0: every finite q
+  if (inv_start > 0.0f) {
+    below_one = std::min(1.0f / inv_start, kMax);
+    while (below_one > 0.0f && !(below_one * inv_start <= 1.0f)) below_one = std::nextafter(below_one, 0.0f);
+    while (below_one < kMax && std::nextafter(below_one, kInf) * inv_start <= 1.0f)
+      below_one = std::nextafter(below_one, kInf);
+  }
+  return std::min(below_one, std::nextafter(end, 0.0f));
 }
 
 }  // namespace
@@ -148,14 +189,19 @@ void prepareMorphRows(SelectorContext& ctx, const LevelTable& levels, const Sele
       ctx.row_morph_inv_start[r] = inv_start;
       ctx.row_morph_end[r] = end;
       ctx.row_morph_inv[r] = inv;
+      ctx.row_morph_zero_to[r] = zeroTo(inv_start, end);
     }
   }
 }
 
 namespace {
 
-// The morph factors of m slots at their rows into morph_out by object; kDrawnFlags: drawn[j] is 1 for
-// a drawn slot, 0 for one not drawn (factor 0).
+// The morph factors of m slots at their rows into morph_out by object, which holds 0 for every
+// object on entry; kDrawnFlags: the slot's level is level_of[object] (-1: not drawn, factor 0),
+// else it is at row0 (its row). Most slots have factor 0 (below their row's band, or on a row that
+// never morphs): one compare against the row's zero_to finds them, and only the others (a few per
+// cent on the benchmark scene) are gathered and computed. A slot skipped has factor exactly +0:
+// q in [0, zero_to], or not drawn with q >= 0 (its factor times 0; a factor is finite for q >= 0).
 template <bool kDrawnFlags>
 inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ctx, const uint32_t* object,
                                                       const uint32_t* row0, const float* q, const int8_t* level_of,
@@ -163,31 +209,72 @@ inline __attribute__((always_inline)) void morphBlocks(const SelectorContext& ct
   const float* const inv_start = ctx.row_morph_inv_start;
   const float* const end = ctx.row_morph_end;
   const float* const inv = ctx.row_morph_inv;
-  // blocks of kSlotBlock: the rows' terms gathered, the arithmetic in plain loops over local
-  // columns (vectorised), the factors scattered by object
-  alignas(32) float gs[kSlotBlock], ge[kSlotBlock], gi[kSlotBlock], gq[kSlotBlock], gd[kSlotBlock], gm[kSlotBlock];
+  const float* const zero_to = ctx.row_morph_zero_to;
+  // blocks of kSlotBlock: the slots that may have a factor above 0 listed, their rows' terms
+  // gathered, the arithmetic in plain loops over local columns (vectorised), the factors scattered
+  // by object
+  // (8 lanes more: a vector's padding past the last entry)
+  alignas(32) float gs[kSlotBlock + 8], ge[kSlotBlock + 8], gi[kSlotBlock + 8], gq[kSlotBlock + 8];
+  alignas(32) float gd[kSlotBlock + 8], gm[kSlotBlock + 8], gl[kSlotBlock];
+  alignas(32) uint32_t pick[kSlotBlock], prow[kSlotBlock];
+  alignas(32) int32_t gn[kSlotBlock];  // kDrawnFlags: the slot's level (-1: not drawn)
   for (size_t j0 = 0; j0 < m; j0 += kSlotBlock) {
     const size_t b = std::min(kSlotBlock, m - j0);
+    // each slot's accuracy term and the largest one with factor 0 at its row, 4 lanes compared at
+    // a time into a mask of the slots to compute (lanes past b: 0 and +inf, not picked)
+    // (kDrawnFlags: a slot not drawn compares as at its level 0 with bound +inf, without a branch:
+    // drawn and not drawn alternate unpredictably)
     for (size_t j = 0; j < b; ++j) {
       uint32_t row = row0[j0 + j];
       if (kDrawnFlags) {
         const int l = level_of[object[j0 + j]];
         row += static_cast<uint32_t>(std::max(l, 0));
-        gd[j] = static_cast<float>(l >= 0);  // not drawn (budget mode): 0, without a branch
+        gn[j] = l;
       }
-      gs[j] = inv_start[row];
-      ge[j] = end[row];
-      gi[j] = inv[row];
+      gl[j] = zero_to[row];
+      prow[j] = row;
       gq[j] = q[j0 + j];
     }
-    for (size_t j = b; j < kSlotBlock; ++j) gs[j] = ge[j] = gi[j] = gq[j] = gd[j] = 0.0f;
-    // a constant trip count: one vector loop, no scalar tail
-    if (kDrawnFlags) {
-      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]) * gd[j];
-    } else {
-      for (size_t j = 0; j < kSlotBlock; ++j) gm[j] = morphFactor(gq[j], gs[j], ge[j], gi[j]);
+    const size_t b4 = (b + 3) & ~size_t(3);
+    for (size_t j = b; j < b4; ++j) {
+      gq[j] = 0.0f;
+      gl[j] = kInf;
+      gn[j] = 0;
     }
-    for (size_t j = 0; j < b; ++j) morph_out[object[j0 + j]] = gm[j];
+    uint64_t bits = 0;
+    for (size_t j = 0; j < b4; j += 4) {
+      const __m128 vq = _mm_load_ps(gq + j);
+      __m128 below = _mm_cmple_ps(vq, _mm_load_ps(gl + j));
+      if (kDrawnFlags)
+        below = _mm_or_ps(below, _mm_castsi128_ps(_mm_cmplt_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(gn + j)),
+                                                                  _mm_setzero_si128())));
+      const __m128 zero = _mm_and_ps(_mm_cmpge_ps(vq, _mm_setzero_ps()), below);
+      bits |= static_cast<uint64_t>(~_mm_movemask_ps(zero) & 15) << j;
+    }
+    size_t c = 0;
+    for (; bits; bits &= bits - 1, ++c) {
+      const size_t j = static_cast<size_t>(__builtin_ctzll(bits));
+      pick[c] = static_cast<uint32_t>(j0 + j);
+      prow[c] = prow[j];  // c <= j: an entry not read again
+    }
+    if (c == 0) continue;
+    for (size_t k = 0; k < c; ++k) {
+      const uint32_t row = prow[k];
+      if (kDrawnFlags) gd[k] = static_cast<float>(gn[pick[k] - j0] >= 0);  // not drawn: 0
+      gs[k] = inv_start[row];
+      ge[k] = end[row];
+      gi[k] = inv[row];
+      gq[k] = q[pick[k]];
+    }
+    // whole vectors: the lanes past c hold zeros (their results are not read)
+    const size_t c8 = (c + 7) & ~size_t(7);
+    for (size_t k = 0; k < 8; ++k) gs[c + k] = ge[c + k] = gi[c + k] = gq[c + k] = gd[c + k] = 0.0f;
+    if (kDrawnFlags) {
+      for (size_t k = 0; k < c8; ++k) gm[k] = morphFactor(gq[k], gs[k], ge[k], gi[k]) * gd[k];
+    } else {
+      for (size_t k = 0; k < c8; ++k) gm[k] = morphFactor(gq[k], gs[k], ge[k], gi[k]);
+    }
+    for (size_t k = 0; k < c; ++k) morph_out[object[pick[k]]] = gm[k];
   }
 }
 
@@ -208,7 +295,15 @@ double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, 
   if (!ctx.transitions_valid || p.transitions == Transitions::kNone) return 0.0;
   const float dt = p.dt_ms, fade_ms = p.fade_ms;
   const size_t n = job.centers.count;
-  const uint8_t* const fading = ctx.fading;
+  // locals: the byte store below may alias the context's fields
+  uint8_t* const fading = ctx.fading;
+  const int8_t* const fade_from = ctx.fade_from;
+  const float* const fade_elapsed = ctx.fade_elapsed;
+  const uint32_t* const slot_object = ctx.slot_object;
+  const uint8_t* const slot_levels = ctx.slot_levels;
+  const float* const slot_a = ctx.slot_a;
+  const uint32_t* const slot_row0 = ctx.slot_row0;
+  const float* const row_cost = ctx.row_cost;
   double reserve = 0.0;
   size_t s = 0;
   for (size_t i0 = 0; i0 < n; i0 += 16) {
@@ -218,14 +313,16 @@ double fadeReserve(SelectorContext& ctx, const SelectionJob& job, size_t slots, 
     if ((w[0] | w[1]) == 0) continue;
     for (size_t i = i0; i < std::min(n, i0 + 16); ++i) {
       if (!fading[i]) continue;
-      if (!slotOf(ctx.slot_object, slots, static_cast<uint32_t>(i), &s)) continue;  // out of view: ends
-      const int from = ctx.fade_from[i];
-      if (from < 0 || !(ctx.fade_elapsed[i] + dt < fade_ms) || from >= ctx.slot_levels[s]) continue;
-      const double cost = ctx.slot_a[s] + ctx.row_cost[ctx.slot_row0[s] + static_cast<uint32_t>(from)];
+      // a fade in from nothing or one that ends in this frame reserves nothing
+      const int from = fade_from[i];
+      if (from < 0 || !(fade_elapsed[i] + dt < fade_ms)) continue;
+      if (!slotOf(slot_object, slots, static_cast<uint32_t>(i), &s)) continue;  // out of view: ends
+      if (from >= slot_levels[s]) continue;
+      const double cost = slot_a[s] + row_cost[slot_row0[s] + static_cast<uint32_t>(from)];
       if (reserve + cost <= cap)
         reserve += cost;
       else
-        ctx.fading[i] = 0;  // ends now: the budget has no room for both levels
+        fading[i] = 0;  // ends now: the budget has no room for both levels
     }
   }
   return reserve;
@@ -256,15 +353,34 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   const int8_t* const level_of = job.levels_out.data;
   int8_t* const prev_out = job.previous_levels_out.count ? job.previous_levels_out.data : nullptr;
   float* const fade_out = job.fade_out.count ? job.fade_out.data : nullptr;
-  // no fade where nothing below says otherwise (the morph factors were cleared before the slot pass)
-  if (prev_out) std::memcpy(prev_out, level_of, n);
-  if (fade_out) std::fill(fade_out, fade_out + n, 1.0f);
+  // fade mode: every morph factor 0 (morph mode: cleared before the slot pass, and set there)
+  float* const morph_zero = !morph_mode && job.morph_out.count ? job.morph_out.data : nullptr;
+  // each run of objects' outputs before its marked objects': no fade (the level itself, weight 1)
+  auto defaults = [&](size_t i0, size_t count) __attribute__((always_inline)) {
+    if (count == 16) {
+      if (prev_out) std::memcpy(prev_out + i0, level_of + i0, 16);
+      const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+      for (size_t k = 0; k < 16; k += 4) {
+        if (fade_out) _mm_storeu_ps(fade_out + i0 + k, one);
+        if (morph_zero) _mm_storeu_ps(morph_zero + i0 + k, zero);
+      }
+      return;
+    }
+    for (size_t k = i0; k < i0 + count; ++k) {
+      if (prev_out) prev_out[k] = level_of[k];
+      if (fade_out) fade_out[k] = 1.0f;
+      if (morph_zero) morph_zero[k] = 0.0f;
+    }
+  };
 
   // the objects that switched or have a fade running: a handful per frame
   TransitionSums sums;
   double new_fades = 0.0;  // the outgoing levels' cost of the fades started in this frame
   size_t s = 0;
-  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, [&](size_t i) {
+  // in distance mode no object is in view at level -1, and last frame's -1 was out of view unless
+  // last frame's budget dropped it: a switch from or to -1 without a fade running is no fade
+  const bool skip_none = !budget && !tags;
+  forEachMarked(level_of, ctx.prev_level, ctx.fading, n, skip_none, defaults, [&](size_t i) {
     const int l = level_of[i];
     const int prev = ctx.prev_level[i];
     if (!slotOf(ctx.slot_object, slots, static_cast<uint32_t>(i), &s)) {
@@ -322,7 +438,10 @@ TransitionSums transitionPass(SelectorContext& ctx, const SelectionJob& job, siz
   // budget mode: this frame's view tags, and the morph factors
   if (budget) {
     const uint8_t tag = nextViewTag(ctx, n);
-    for (size_t k = 0; k < slots; ++k) ctx.view_tag[ctx.slot_object[k]] = tag;
+    // locals: a byte store may alias the context's fields, which would be reloaded every slot
+    uint8_t* const view_tag = ctx.view_tag;
+    const uint32_t* const slot_object = ctx.slot_object;
+    for (size_t k = 0; k < slots; ++k) view_tag[slot_object[k]] = tag;
     ctx.last_view_tag = tag;
     if (morph_mode && job.morph_out.count)
       morphFactors(ctx, ctx.slot_object, ctx.slot_row0, ctx.slot_q, level_of, slots, job.morph_out.data);

@@ -121,6 +121,72 @@ TEST(Transitions, MorphFactorIsContinuousAlongAPathAndOneAtTheSwitch) {
   for (int k = 0; k < 5; ++k) EXPECT_EQ(max_morph[k], 1.0f) << "level " << k;
 }
 
+// Many objects in one frame (full blocks of slots), from near to far: each object's factor is 0
+// below its level's band, the smoothstep of its log position inside it (the selector's log is a
+// series, within 1e-3) and 1 from the band's end; the objects skipped as "factor 0" are exactly
+// those below the band.
+TEST(Transitions, MorphFactorsOfManyObjectsFollowTheirBands) {
+  SyntheticScene s = oneObject(6, true);
+  s.centers.clear();
+  s.radii.clear();
+  s.scales.clear();
+  s.importance.clear();
+  s.chains.clear();
+  s.must_draw.clear();
+  std::vector<float> dist;
+  for (float d = 3.0f; d < 3000.0f; d *= 1.001f) dist.push_back(d);
+  for (float d : dist) {
+    s.centers.push_back(glm::vec3(0.0f, 0.0f, -d));
+    s.radii.push_back(1.0f);
+    s.scales.push_back(1.0f);
+    s.importance.push_back(1.0f);
+    s.chains.push_back(0);
+    s.must_draw.push_back(0);
+  }
+  const size_t n = dist.size();
+  Owned o(makeContext(n));
+  const Camera cam = makeCamera();
+  Outputs out;
+  SelectionStats st;
+  SelectionJob job = makeJob(s, o.ctx, &cam, out.levels, &st);
+  job.params.mode = SelectionMode::kDistance;
+  job.params.transitions = Transitions::kMorph;
+  out.attach(job, n);
+  ASSERT_TRUE(job.run()) << job.error();
+  const float h1 = 1.0f + job.params.hysteresis;
+  const double band = job.params.morph_band;
+  size_t below = 0, inside = 0, at_one = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const int l = out.levels[i];
+    const float m = out.morph[i];
+    ASSERT_GE(l, 0) << "object " << i;
+    if (l == 5) {
+      EXPECT_EQ(m, 0.0f) << "object " << i;
+      continue;
+    }
+    // q = X R / scale with R the pixel size at the sphere's nearest point
+    const double q = static_cast<double>(pixelSize(cam, dist[i] - 1.0f));
+    const double hi = s.table.cell_width[l + 1] / h1;
+    const double lo = l == 0 ? 0.5 * hi : s.table.cell_width[l];
+    const double start = hi * std::pow(lo / hi, band);
+    if (q < start * (1.0 - 1e-5)) {
+      EXPECT_EQ(m, 0.0f) << "object " << i << " level " << l;
+      ++below;
+    } else if (q > start * (1.0 + 1e-5) && q < hi * (1.0 - 1e-5)) {
+      const double t = std::log(q / start) / std::log(hi / start);
+      EXPECT_GT(m, 0.0f) << "object " << i << " level " << l;
+      EXPECT_NEAR(m, t * t * (3.0 - 2.0 * t), 5e-3) << "object " << i << " level " << l;
+      ++inside;
+    } else if (q > hi * (1.0 + 1e-5)) {
+      EXPECT_EQ(m, 1.0f) << "object " << i << " level " << l;
+      ++at_one;
+    }
+  }
+  EXPECT_GT(below, 500u);
+  EXPECT_GT(inside, 500u);
+  EXPECT_GT(at_one, 50u);
+}
+
 // Without morph data (or in fade mode) the same path fades at every switch: a fade lasts fade_ms
 // at the caller's dt_ms, the new level's weight rising as elapsed / fade_ms.
 TEST(Transitions, AFadeLastsItsDurationAtTheGivenFrameTime) {
