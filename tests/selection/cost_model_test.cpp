@@ -34,6 +34,15 @@ CostFeatures randomFeatures(std::mt19937& rng, bool collinear) {
   return f;
 }
 
+// shadow features a fixed multiple of the others (a shadow pass drawing a share of what the eyes draw)
+void addShadowShare(CostFeatures& f, double share) {
+  f.shadow_objects = share * f.objects;
+  f.shadow_triangles = share * f.triangles;
+  f.shadow_vertices = share * f.vertices;
+  f.shadow_line_points = share * f.line_points;
+  f.shadow_pixels = share * f.pixels;
+}
+
 }  // namespace
 
 TEST(CostModel, PredictionIsTheLinearSum) {
@@ -290,11 +299,7 @@ TEST(CostModel, ShadowsInAFixedProportionLeaveTheFactorsAtThePrior) {
   double worst = 0.0;  // the largest distance of a factor from the prior, any frame
   for (int i = 0; i < 500; ++i) {
     CostFeatures f = randomFeatures(rng, false);
-    f.shadow_objects = 0.3 * f.objects;
-    f.shadow_triangles = 0.3 * f.triangles;
-    f.shadow_vertices = 0.3 * f.vertices;
-    f.shadow_line_points = 0.3 * f.line_points;
-    f.shadow_pixels = 0.3 * f.pixels;
+    addShadowShare(f, 0.3);
     const double y = predictFrameMs(t, f) * (1.0 + n(rng));
     ASSERT_TRUE(cal.update(f, y));
     const CostCoefficients c = cal.coefficients();
@@ -310,20 +315,12 @@ TEST(CostModel, ShadowsInAFixedProportionLeaveTheFactorsAtThePrior) {
   std::normal_distribution<double> n2(0.0, 0.05);
   for (int i = 0; i < 500; ++i) {
     CostFeatures f = randomFeatures(replay, false);
-    f.shadow_objects = 0.3 * f.objects;
-    f.shadow_triangles = 0.3 * f.triangles;
-    f.shadow_vertices = 0.3 * f.vertices;
-    f.shadow_line_points = 0.3 * f.line_points;
-    f.shadow_pixels = 0.3 * f.pixels;
+    addShadowShare(f, 0.3);
     fixed.update(f, predictFrameMs(t, f) * (1.0 + n2(replay)));
   }
   for (int i = 0; i < 50; ++i) {
     CostFeatures f = randomFeatures(rng, false);
-    f.shadow_objects = 0.3 * f.objects;
-    f.shadow_triangles = 0.3 * f.triangles;
-    f.shadow_vertices = 0.3 * f.vertices;
-    f.shadow_line_points = 0.3 * f.line_points;
-    f.shadow_pixels = 0.3 * f.pixels;
+    addShadowShare(f, 0.3);
     const double want = predictFrameMs(fixed.coefficients(), f);
     EXPECT_NEAR(predictFrameMs(cal.coefficients(), f), want, 0.01 * want);
   }

@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "scenelod/selection/replay_runner.h"
 #include "selection_fixtures.h"
 
 namespace scenelod::selection {
@@ -24,12 +25,7 @@ using test::SyntheticScene;
 // pixel and 0.3x per triangle, vertex and line point of them (factors 0.4, 0.4 and 0.6 on the
 // default shadow scales 1, 0.25 and 0.5).
 CostCoefficients machine() {
-  CostCoefficients t;
-  t.per_frame_ms = 0.8;
-  t.per_object_ms = 3.0e-3;
-  t.per_triangle_ms = 1.5e-6;
-  t.per_vertex_ms = 0.4e-6;
-  t.per_line_point_ms = 2.0e-6;
+  CostCoefficients t = syntheticTrueCost();  // the replays' synthetic clock, with dearer pixels
   t.per_pixel_ms = 4.0e-7;
   t.shadow_object_factor = 0.4;
   t.shadow_pixel_factor = 0.4;
