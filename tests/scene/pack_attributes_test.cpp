@@ -10,9 +10,11 @@
 
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/pack.h"
+#include "pack_bytes.h"
 
 using namespace scenelod;
 using namespace scenelod::scene;
+using scenelod::test::resign;
 
 namespace {
 
@@ -108,12 +110,6 @@ std::multiset<std::tuple<uint32_t, Corner, Corner, Corner>> triangleSet(const Me
     set.insert({m.triangleGroup(t), corner(m, m.triangles[3 * t]), corner(m, m.triangles[3 * t + 1]),
                 corner(m, m.triangles[3 * t + 2])});
   return set;
-}
-
-void resign(std::vector<uint8_t>& bytes) {
-  std::memset(bytes.data() + 24, 0, 4);
-  const uint32_t crc = crc32(bytes.data(), bytes.size());
-  std::memcpy(bytes.data() + 24, &crc, 4);
 }
 
 // writes `value` over the first element of a view into `bytes` (a loaded copy of the same bytes), re-signed

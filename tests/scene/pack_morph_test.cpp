@@ -10,10 +10,13 @@
 #include "scenelod/lodcore/chain.h"
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/pack.h"
+#include "pack_bytes.h"
 #include "test_support.h"
 
 using namespace scenelod;
 using namespace scenelod::scene;
+using scenelod::test::resign;
+using scenelod::test::sectionEntry;
 
 namespace {
 
@@ -64,26 +67,6 @@ std::vector<uint8_t> write(const MorphInput& in, bool optimize, size_t max_level
 Error parse(const std::vector<uint8_t>& bytes) {
   Pack p;
   return Pack::fromBytes(bytes.data(), bytes.size(), p, "morphs.slodpack");
-}
-
-void resign(std::vector<uint8_t>& bytes) {
-  std::memset(bytes.data() + 24, 0, 4);
-  const uint32_t crc = crc32(bytes.data(), bytes.size());
-  std::memcpy(bytes.data() + 24, &crc, 4);
-}
-
-// the byte offset of section `kind`'s table entry (kind, element bytes, offset, count, reserved)
-size_t sectionEntry(const std::vector<uint8_t>& bytes, uint32_t kind) {
-  uint32_t count;
-  uint64_t table;
-  std::memcpy(&count, bytes.data() + 28, 4);
-  std::memcpy(&table, bytes.data() + 32, 8);
-  for (uint32_t s = 0; s < count; ++s) {
-    uint32_t k;
-    std::memcpy(&k, bytes.data() + table + 32 * s, 4);
-    if (k == kind) return size_t(table + 32 * s);
-  }
-  return 0;
 }
 
 // per vertex: (position, target position, target uv, target colour), to compare reordered levels

@@ -9,10 +9,13 @@
 
 #include "scenelod/scene/bounding_sphere.h"
 #include "scenelod/scene/scene.h"
+#include "pack_bytes.h"
 #include "test_support.h"
 
 using namespace scenelod;
 using namespace scenelod::scene;
+using scenelod::test::resign;
+using scenelod::test::sectionOffset;
 
 namespace {
 
@@ -298,10 +301,7 @@ TEST(Pack, OtherVersionsAreRefusedWithTheVersionNamed) {
   std::vector<uint8_t> bytes = makePack();
   const uint32_t v2 = 2;
   std::memcpy(bytes.data() + 8, &v2, 4);
-  // a well-formed version-2 file: fix the checksum so only the version is wrong
-  std::memset(bytes.data() + 24, 0, 4);
-  const uint32_t crc = crc32(bytes.data(), bytes.size());
-  std::memcpy(bytes.data() + 24, &crc, 4);
+  resign(bytes);  // a well-formed version-2 file: only the version is wrong
   Pack p;
   const Error e = Pack::fromBytes(bytes.data(), bytes.size(), p, "future.slodpack");
   EXPECT_EQ(e.status, Status::kUnsupported);
@@ -317,9 +317,7 @@ TEST(Pack, HandMadeBadIndexIsCaughtEvenWithAValidChecksum) {
   const size_t at = size_t(reinterpret_cast<const uint8_t*>(good.level(0, 0).triangles.data) - good.bytes());
   const uint32_t huge = 999999;
   std::memcpy(bytes.data() + at, &huge, 4);
-  std::memset(bytes.data() + 24, 0, 4);
-  const uint32_t crc = crc32(bytes.data(), bytes.size());
-  std::memcpy(bytes.data() + 24, &crc, 4);
+  resign(bytes);
   Pack p;
   const Error e = Pack::fromBytes(bytes.data(), bytes.size(), p, "handmade");
   EXPECT_EQ(e.status, Status::kCorrupt);
@@ -329,31 +327,6 @@ TEST(Pack, HandMadeBadIndexIsCaughtEvenWithAValidChecksum) {
 }
 
 namespace {
-
-// the checksum of hand-edited bytes made valid again, so that only the edit is wrong
-void resign(std::vector<uint8_t>& bytes) {
-  const uint64_t size = bytes.size();
-  std::memcpy(bytes.data() + 16, &size, 8);  // file_bytes
-  std::memset(bytes.data() + 24, 0, 4);
-  const uint32_t crc = crc32(bytes.data(), bytes.size());
-  std::memcpy(bytes.data() + 24, &crc, 4);
-}
-
-// the byte offset of the first record of section `kind` (1 nodes, 5 chains), from the section table
-size_t sectionOffset(const std::vector<uint8_t>& bytes, uint32_t kind) {
-  uint32_t count;
-  uint64_t table;
-  std::memcpy(&count, bytes.data() + 28, 4);
-  std::memcpy(&table, bytes.data() + 32, 8);
-  for (uint32_t s = 0; s < count; ++s) {
-    uint32_t k;
-    uint64_t offset;
-    std::memcpy(&k, bytes.data() + table + 32 * s, 4);
-    std::memcpy(&offset, bytes.data() + table + 32 * s + 8, 8);
-    if (k == kind) return static_cast<size_t>(offset);
-  }
-  return 0;
-}
 
 Error parseBytes(const std::vector<uint8_t>& bytes) {
   Pack p;

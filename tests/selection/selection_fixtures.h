@@ -84,6 +84,15 @@ inline SelectionJob makeJob(const SyntheticScene& s, SelectorContext* ctx, const
   return job;
 }
 
+// a selector context destroyed with the test's scope
+struct Owned {
+  SelectorContext* ctx;
+  explicit Owned(SelectorContext* c) : ctx(c) {}
+  ~Owned() { destroySelectorContext(ctx); }
+  Owned(const Owned&) = delete;
+  Owned& operator=(const Owned&) = delete;
+};
+
 inline SelectorContext* makeContext(size_t objects, size_t bracket = 4096) {
   SelectorConfig cfg;
   cfg.max_object_count = objects;

@@ -37,12 +37,6 @@ using namespace scenelod::selection::test;
 
 namespace {
 
-struct Owned {
-  SelectorContext* ctx;
-  explicit Owned(SelectorContext* c) : ctx(c) {}
-  ~Owned() { destroySelectorContext(ctx); }
-};
-
 struct CountingAllocator {
   size_t allocations = 0, frees = 0;
   static void* allocate(void* user, size_t bytes, size_t alignment) {

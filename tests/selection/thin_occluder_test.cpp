@@ -20,25 +20,19 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "eval/test_meshes.h"
+
 using namespace scenelod;
 using namespace scenelod::selection;
+using scenelod::test::makeBox;  // an axis-aligned box, 12 outward-facing triangles
 
 namespace {
-
-Mesh boxMesh(glm::vec3 lo, glm::vec3 hi) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
-  const uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) m.triangles.insert(m.triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
-  return m;
-}
 
 // Several boxes in one mesh.
 Mesh boxesMesh(const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
   Mesh m;
   for (const auto& b : boxes) {
-    const Mesh one = boxMesh(b.first, b.second);
+    const Mesh one = makeBox(b.first, b.second);
     const uint32_t base = static_cast<uint32_t>(m.positions.size());
     m.positions.insert(m.positions.end(), one.positions.begin(), one.positions.end());
     for (uint32_t t : one.triangles) m.triangles.push_back(base + t);
@@ -226,11 +220,11 @@ TEST(ThinOccluders, ThinWallsHideWhatIsBehindThemAtEveryThickness) {
     SCOPED_TRACE("thickness " + std::to_string(thickness));
     Scene s;
     s.chains.resize(3);
-    s.chains[0].levels.push_back(level(boxMesh({-20.0f, 0.0f, -0.5f * thickness}, {20.0f, 20.0f, 0.5f * thickness}), 0.0f));
+    s.chains[0].levels.push_back(level(makeBox({-20.0f, 0.0f, -0.5f * thickness}, {20.0f, 20.0f, 0.5f * thickness}), 0.0f));
     s.chains[0].levels.push_back(level(quadMesh({-20, 0, 0}, {20, 0, 0}, {20, 20, 0}, {-20, 20, 0}), 0.5f * thickness));
     s.chains[1].levels.push_back(level(sphereMesh(), 0.0f));
     s.chains[1].levels.push_back(level(sphereMesh(6, 12), 0.14f));
-    s.chains[2].levels.push_back(level(boxMesh(glm::vec3(-0.2f), glm::vec3(0.2f)), 0.0f));
+    s.chains[2].levels.push_back(level(makeBox(glm::vec3(-0.2f), glm::vec3(0.2f)), 0.0f));
     const uint32_t wall = s.add(0, at({0.0f, 0.0f, 0.0f}));
     std::vector<uint32_t> hidden, partly, open;
     for (float x : {-14.0f, -5.0f, 5.0f, 14.0f})
@@ -266,10 +260,10 @@ TEST(ThinOccluders, ThinWallsHideWhatIsBehindThemAtEveryThickness) {
 TEST(ThinOccluders, GroundPlaneAtAGrazingAngleHidesWhatIsBelowIt) {
   Scene s;
   s.chains.resize(3);
-  s.chains[0].levels.push_back(level(boxMesh({-100.0f, -0.1f, -100.0f}, {100.0f, 0.1f, 100.0f}), 0.0f));
+  s.chains[0].levels.push_back(level(makeBox({-100.0f, -0.1f, -100.0f}, {100.0f, 0.1f, 100.0f}), 0.0f));
   s.chains[0].levels.push_back(level(quadMesh({-100, 0, -100}, {-100, 0, 100}, {100, 0, 100}, {100, 0, -100}), 0.1f));
-  s.chains[1].levels.push_back(level(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
-  s.chains[2].levels.push_back(level(boxMesh(glm::vec3(-0.15f), glm::vec3(0.15f)), 0.0f));
+  s.chains[1].levels.push_back(level(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
+  s.chains[2].levels.push_back(level(makeBox(glm::vec3(-0.15f), glm::vec3(0.15f)), 0.0f));
   s.add(0, at({0.0f, 0.0f, 0.0f}));
   std::vector<uint32_t> below, cut, above;
   for (float z : {0.0f, -10.0f, -25.0f, -40.0f, -60.0f})
@@ -317,7 +311,7 @@ TEST(ThinOccluders, ObjectsSeenThroughAWindowStayVisible) {
                                      0.0f));
   s.chains[0].levels.push_back(level(quadMesh({-10, 0, 0}, {10, 0, 0}, {10, 10, 0}, {-10, 10, 0}), 2.0f));
   s.chains[1].levels.push_back(level(sphereMesh(), 0.0f));
-  s.chains[2].levels.push_back(level(boxMesh(glm::vec3(-0.2f), glm::vec3(0.2f)), 0.0f));
+  s.chains[2].levels.push_back(level(makeBox(glm::vec3(-0.2f), glm::vec3(0.2f)), 0.0f));
   s.add(0, at({0.0f, 0.0f, 0.0f}));
   std::vector<uint32_t> through, edge, behind;
   through.push_back(s.add(1, at({-0.6f, 5.0f, -3.0f}, 0.5f)));

@@ -15,12 +15,6 @@ using namespace scenelod::selection::test;
 
 namespace {
 
-struct Owned {
-  SelectorContext* ctx;
-  explicit Owned(SelectorContext* c) : ctx(c) {}
-  ~Owned() { destroySelectorContext(ctx); }
-};
-
 // One object at the origin on a chain of `levels` levels (w_k = 0.01 * 2^(k-1)), every level with
 // morph data when `morph` is set.
 SyntheticScene oneObject(size_t levels, bool morph) {

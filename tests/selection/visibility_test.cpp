@@ -18,20 +18,13 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "eval/test_meshes.h"
+
 using namespace scenelod;
 using namespace scenelod::selection;
+using scenelod::test::makeBox;  // an axis-aligned box, 12 outward-facing triangles
 
 namespace {
-
-// An axis-aligned box mesh from lo to hi (12 triangles, outward counter-clockwise faces).
-Mesh boxMesh(glm::vec3 lo, glm::vec3 hi) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
-  const uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) m.triangles.insert(m.triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
-  return m;
-}
 
 LodLevel level(Mesh mesh, float max_error) {
   LodLevel l;
@@ -87,9 +80,9 @@ float denseVisibleFraction(const std::vector<const LodChain*>& chains, const std
 
 // Chains: 0 = unit cube (half size 0.5), 1 = wall 8 x 8 x 0.1, 2 = small cube (half size 0.2).
 struct WallScene {
-  LodChain cube = singleLevel(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)));
-  LodChain wall = singleLevel(boxMesh({-4.0f, -4.0f, -0.05f}, {4.0f, 4.0f, 0.05f}));
-  LodChain small = singleLevel(boxMesh(glm::vec3(-0.2f), glm::vec3(0.2f)));
+  LodChain cube = singleLevel(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)));
+  LodChain wall = singleLevel(makeBox({-4.0f, -4.0f, -0.05f}, {4.0f, 4.0f, 0.05f}));
+  LodChain small = singleLevel(makeBox(glm::vec3(-0.2f), glm::vec3(0.2f)));
   std::vector<const LodChain*> chains{&cube, &wall, &small};
   std::vector<glm::mat4> world;
   std::vector<uint32_t> chain_ids;
@@ -142,10 +135,10 @@ TEST(Visibility, PixelRayThroughCentreLooksAtTarget) {
 
 TEST(Visibility, OccluderLevelIsCoarsestWithinRelativeError) {
   LodChain c;
-  c.levels.push_back(level(boxMesh(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.0f));
-  c.levels.push_back(level(boxMesh(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.01f));
-  c.levels.push_back(level(boxMesh(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.03f));
-  c.levels.push_back(level(boxMesh(glm::vec3(-1.0f), glm::vec3(1.0f)), 1.0f));
+  c.levels.push_back(level(makeBox(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.0f));
+  c.levels.push_back(level(makeBox(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.01f));
+  c.levels.push_back(level(makeBox(glm::vec3(-1.0f), glm::vec3(1.0f)), 0.03f));
+  c.levels.push_back(level(makeBox(glm::vec3(-1.0f), glm::vec3(1.0f)), 1.0f));
   const LodChain* chains[] = {&c};
   RaySceneParams p;
   p.occluder_relative_error = 0.01f;  // radius sqrt(3): allowance 0.0173
@@ -169,7 +162,7 @@ TEST(Visibility, BadInputIsRefusedWithAMessage) {
   e = rs.init(Span<const LodChain* const>(empty_chain, 1));
   EXPECT_NE(e.message.find("chain 0 has no levels"), std::string::npos) << e.message;
 
-  LodChain bad = singleLevel(boxMesh(glm::vec3(0.0f), glm::vec3(1.0f)));
+  LodChain bad = singleLevel(makeBox(glm::vec3(0.0f), glm::vec3(1.0f)));
   bad.levels[0].mesh.triangles[5] = 99;
   const LodChain* bad_chain[] = {&bad};
   e = rs.init(Span<const LodChain* const>(bad_chain, 1));
@@ -321,10 +314,10 @@ TEST(Visibility, CoarseOccluderErrorIsOnlyTrustedWhenItProjectsBelowThePixelLimi
   // the wall's coarse level bulges far past its true surface (level 0 misses the target, level 1
   // covers it) and says so in max_error: hits on it are ignored unless that error projects under
   // occluder_error_px pixels at the hit distance
-  LodChain cube = singleLevel(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)));
+  LodChain cube = singleLevel(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)));
   LodChain wall;
-  wall.levels.push_back(level(boxMesh({1.5f, -0.5f, -0.05f}, {2.5f, 0.5f, 0.05f}), 0.0f));
-  wall.levels.push_back(level(boxMesh({-0.5f, -0.5f, -0.05f}, {2.5f, 0.5f, 0.05f}), 2.0f));
+  wall.levels.push_back(level(makeBox({1.5f, -0.5f, -0.05f}, {2.5f, 0.5f, 0.05f}), 0.0f));
+  wall.levels.push_back(level(makeBox({-0.5f, -0.5f, -0.05f}, {2.5f, 0.5f, 0.05f}), 2.0f));
   std::vector<const LodChain*> chains{&cube, &wall};
   std::vector<glm::mat4> world{at({0, 0, 0}), at({0, 0, 4})};
   std::vector<uint32_t> ids{0, 1};
@@ -356,9 +349,9 @@ TEST(Visibility, PickReturnsNearerObjectAndTheLevelActuallyDrawn) {
   // object 0 (near): level 0 a cube of half size 0.5, level 1 a cube of half size 0.25;
   // object 1 (far): a big cube behind it
   LodChain near_chain;
-  near_chain.levels.push_back(level(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
-  near_chain.levels.push_back(level(boxMesh(glm::vec3(-0.25f), glm::vec3(0.25f)), 0.25f));
-  LodChain far_chain = singleLevel(boxMesh(glm::vec3(-2.0f), glm::vec3(2.0f)));
+  near_chain.levels.push_back(level(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
+  near_chain.levels.push_back(level(makeBox(glm::vec3(-0.25f), glm::vec3(0.25f)), 0.25f));
+  LodChain far_chain = singleLevel(makeBox(glm::vec3(-2.0f), glm::vec3(2.0f)));
   std::vector<const LodChain*> chains{&near_chain, &far_chain};
   std::vector<glm::mat4> world{at({0, 0, 2}), at({0, 0, -3})};
   std::vector<uint32_t> ids{0, 1};
@@ -486,7 +479,7 @@ float slabHit(const Ray& r, glm::vec3 lo, glm::vec3 hi) {
 TEST(Visibility, TopLevelMatchesBruteForceThroughMovesAddsAndRemoves) {
   // 400 cubes (translation and uniform scale keep them axis-aligned, so a slab test is the truth);
   // then rounds of moving every object (refits), removing and adding some (pending list, rebuilds)
-  LodChain cube = singleLevel(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)));
+  LodChain cube = singleLevel(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)));
   const LodChain* chains[] = {&cube};
   RayScene rs;
   ASSERT_TRUE(rs.init(Span<const LodChain* const>(chains, 1)).ok());
@@ -559,8 +552,8 @@ TEST(Visibility, SyncFromSceneMirrorsMovesAndSwapRemovals) {
   // root -> a (unit cube at x = -2), b (small cube at x = 0), c (unit cube at x = 2)
   scene::SceneData data;
   data.meshes.resize(2);
-  data.meshes[0].mesh = boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f));
-  data.meshes[1].mesh = boxMesh(glm::vec3(-0.2f), glm::vec3(0.2f));
+  data.meshes[0].mesh = makeBox(glm::vec3(-0.5f), glm::vec3(0.5f));
+  data.meshes[1].mesh = makeBox(glm::vec3(-0.2f), glm::vec3(0.2f));
   data.nodes.resize(4);
   data.roots = {0};
   data.nodes[0].children = {1, 2, 3};
@@ -625,7 +618,7 @@ TEST(Visibility, SelectorGivesAnOccludedObjectItsCoarsestLevelOrNone) {
   // counts make detail expensive); budget mode with room for both cubes at full detail
   WallScene s;
   LodChain cube4;
-  for (int k = 0; k < 4; ++k) cube4.levels.push_back(level(boxMesh(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
+  for (int k = 0; k < 4; ++k) cube4.levels.push_back(level(makeBox(glm::vec3(-0.5f), glm::vec3(0.5f)), 0.0f));
   s.chains[0] = &cube4;
   s.add(0, at({0.0f, 0.0f, 0.0f}));   // hidden
   s.add(1, at({0.0f, 0.0f, 4.0f}));   // wall
