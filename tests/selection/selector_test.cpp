@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -75,6 +76,21 @@ TEST(Selector, ContextCreationRefusesBadConfigs) {
   cfg.calibration.forgetting = 0.0;
   EXPECT_EQ(createSelectorContext(cfg), nullptr);
   cfg.calibration.forgetting = 0.9;
+  // the shadow scales' fit: forgetting in (0, 1], a positive finite ridge
+  for (const double bad : {0.0, -0.5, 1.5, std::nan("")}) {
+    cfg.calibration.shadow_forgetting = bad;
+    EXPECT_EQ(createSelectorContext(cfg), nullptr) << "shadow_forgetting " << bad;
+  }
+  cfg.calibration.shadow_forgetting = 0.998;
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    cfg.calibration.shadow_prior_weight = bad;
+    EXPECT_EQ(createSelectorContext(cfg), nullptr) << "shadow_prior_weight " << bad;
+  }
+  cfg.calibration.shadow_prior_weight = 1.0;
+  {
+    Owned good(createSelectorContext(cfg));
+    EXPECT_NE(good.ctx, nullptr);  // the same config with sane settings is accepted
+  }
   Allocator failing;
   failing.allocate = [](void*, size_t, size_t) -> void* { return nullptr; };
   failing.free = [](void*, void*) {};
